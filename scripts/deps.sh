@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs the Debian packages mpmlab needs, only those missing (idempotent, fast when nothing
+# is missing). Run as root (or with sudo available).
+set -euo pipefail
+PACKAGES=(g++ cmake make ninja-build pkg-config libeigen3-dev libtomlplusplus-dev libcli11-dev
+  libfmt-dev libmuparser-dev nlohmann-json3-dev libgtest-dev)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  SUDO=""
+  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  echo "installing: ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi

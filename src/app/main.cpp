@@ -1,0 +1,150 @@
+// mpm: the mpmlab command line. Subcommands: run, study, bench, keys, list.
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <fmt/format.h>
+#include <iostream>
+
+#include "core/perf.hpp"
+#include "core/registry.hpp"
+#include "core/run.hpp"
+#include "core/study.hpp"
+#include "io/config.hpp"
+#include "mpm/version.hpp"
+
+namespace {
+
+std::string default_out(const std::string& prefix, const std::string& config) {
+  return (std::filesystem::path(prefix) / std::filesystem::path(config).stem()).string();
+}
+
+std::string fmt_err(const std::optional<double>& v) {
+  return v ? fmt::format("{:.6e}", *v) : std::string("n/a (no exact solution)");
+}
+
+void print_list() {
+  auto section = [](const char* title, const auto& entries) {
+    std::cout << title << ":\n";
+    for (const auto& e : entries) std::cout << fmt::format("  {:<22} {}\n", e.name, e.description);
+    std::cout << "\n";
+  };
+  section("benchmarks (benchmark)", mpm::registry::kBenchmarks);
+  section("bases (method.basis)", mpm::registry::kBases);
+  section("mappings (method.mapping)", mpm::registry::kMappings);
+  section("schemes (method.scheme)", mpm::registry::kSchemes);
+  section("mass matrices (method.mass)", mpm::registry::kMassTypes);
+  section("materials (material.model)", mpm::registry::kMaterials);
+}
+
+int cmd_run(const std::string& config, const std::vector<std::string>& sets, std::string out,
+            bool quiet) {
+  const auto cfg = mpm::Config::load(config, sets);
+  if (out.empty()) out = default_out("runs", config);
+  mpm::RunOptions ro{out, quiet};
+  const auto r = mpm::run(cfg, ro);
+  if (!quiet) {
+    std::cout << fmt::format("{}: {} particles, {} cells, {} steps in {:.3f} s ({:.1f} ns per "
+                             "particle-step)\n",
+                             r.benchmark, r.particles, r.cells, r.steps, r.wall_seconds,
+                             r.ns_per_particle_step);
+    std::cout << fmt::format("  displacement_rms     {}\n", fmt_err(r.errors.displacement_rms));
+    std::cout << fmt::format("  velocity_rms         {}\n", fmt_err(r.errors.velocity_rms));
+    std::cout << fmt::format("  velocity_rms_midstep {}\n",
+                             fmt_err(r.errors.velocity_rms_midstep));
+    std::cout << fmt::format("  velocity_rms_scheme_time {} (t_end {:+g} dt)\n",
+                             fmt_err(r.errors.velocity_rms_scheme_time),
+                             r.summary.value("velocity_time_offset_dt", 0.0));
+    std::cout << fmt::format("  stress_rms           {}\n", fmt_err(r.errors.stress_rms));
+    std::cout << fmt::format("  stress_rel_l2        {}\n", fmt_err(r.errors.stress_rel_l2));
+    std::cout << fmt::format("  conservation: mass {:.3e}, momentum {:.3e}; grid crossings {}\n",
+                             r.diag.max_rel_mass_error, r.diag.max_rel_momentum_error,
+                             r.diag.grid_crossings);
+    std::cout << fmt::format("  outputs in {}/\n", out);
+  }
+  if (r.exit_code != 0) std::cerr << "mpm: run failed: " << r.failure << "\n";
+  return r.exit_code;
+}
+
+int cmd_study(const std::string& config, const std::string& refine,
+              const std::vector<std::string>& sets, std::string out, int jobs) {
+  const auto cfg = mpm::Config::load(config, sets);
+  auto opt = mpm::parse_refine(refine);
+  opt.out_dir = out.empty() ? default_out("studies", config) : out;
+  opt.jobs = jobs;
+  const auto r = mpm::run_study(cfg, opt);
+  std::cout << mpm::study_table(opt, r);
+  std::cout << fmt::format("study.csv and each run's outputs in {}/\n", opt.out_dir);
+  for (const auto& run : r.runs)
+    if (run.exit_code != 0) return run.exit_code;
+  return 0;
+}
+
+int cmd_bench(const mpm::BenchOptions& opt) {
+  const auto r = mpm::bench_1d(opt);
+  std::cout << fmt::format(
+      "1D {} step, linear basis, direct mapping, lumped mass: {} particles, {} cells, {} steps, "
+      "best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes per particle "
+      "(particle state, cached stencil, grid share)\n",
+      opt.scheme, r.particles, r.cells, r.steps, opt.repeats, r.best_ns_per_particle_step,
+      r.median_ns_per_particle_step, r.bytes_per_particle);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"mpmlab: material point methods, verified side by side"};
+  app.set_version_flag("--version", fmt::format("mpm (mpmlab) {}", mpm::kVersion));
+  app.require_subcommand(1);
+
+  std::string config, out, refine;
+  std::vector<std::string> sets;
+  bool quiet = false;
+  int jobs = 0;
+
+  auto* run = app.add_subcommand("run", "run one configuration and write its outputs");
+  run->add_option("config", config, "TOML configuration file")->required();
+  run->add_option("--set", sets, "override a key: section.key=value (repeatable)");
+  run->add_option("--out", out, "output directory (default runs/<config name>)");
+  run->add_flag("--quiet,-q", quiet, "no progress line or report");
+
+  auto* study = app.add_subcommand("study", "run a refinement series and print observed orders");
+  study->add_option("config", config, "TOML configuration file")->required();
+  study->add_option("--refine", refine, "key and values, e.g. grid.cells=5,10,20,40")->required();
+  study->add_option("--set", sets, "override a key: section.key=value (repeatable)");
+  study->add_option("--out", out, "output directory (default studies/<config name>)");
+  study->add_option("--jobs,-j", jobs, "parallel runs (default: hardware threads)");
+
+  mpm::BenchOptions bopt;
+  auto* bench = app.add_subcommand("bench", "time the explicit step (ns per particle-step)");
+  bench->add_option("--particles", bopt.particles, "number of particles")->capture_default_str();
+  bench->add_option("--steps", bopt.steps, "steps per repeat")->capture_default_str();
+  bench->add_option("--repeats", bopt.repeats, "repeats (best and median reported)")
+      ->capture_default_str();
+  bench->add_option("--scheme", bopt.scheme, "usl, usf, musl or usavg")->capture_default_str();
+
+  auto* keys = app.add_subcommand("keys", "print every configuration key with type, unit, "
+                                          "default, range and description");
+  auto* list = app.add_subcommand("list", "list benchmarks, bases, mappings, schemes, materials");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (*run) return cmd_run(config, sets, out, quiet);
+    if (*study) return cmd_study(config, refine, sets, out, jobs);
+    if (*bench) return cmd_bench(bopt);
+    if (*keys) {
+      mpm::print_schema(std::cout);
+      return 0;
+    }
+    if (*list) {
+      print_list();
+      return 0;
+    }
+  } catch (const mpm::InputError& e) {
+    std::cerr << "mpm: error: " << e.what() << "\n";
+    return mpm::exit_code::kInput;
+  } catch (const std::exception& e) {
+    std::cerr << "mpm: internal error: " << e.what() << "\n";
+    return mpm::exit_code::kInternal;
+  }
+  return 0;
+}

@@ -1,0 +1,80 @@
+#pragma once
+// Piecewise-linear Lagrange (P1) basis on a uniform grid, tensor product in Dim > 1
+// (D eq. 2.56-2.57). DOFs are the grid nodes, x fastest.
+#include <string_view>
+#include <vector>
+
+#include "basis/stencil.hpp"
+#include "grid/grid.hpp"
+#include "particles/particles.hpp"
+
+namespace mpm {
+
+template <int Dim>
+class LinearBasis {
+ public:
+  static constexpr std::string_view kName = "linear";
+  static constexpr int kPerDim = 2;
+  using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
+
+  explicit LinearBasis(const Grid<Dim>& g) : grid_(g) {
+    for (int d = 0; d < Dim; ++d) {
+      n_[d] = g.cells[d] + 1;
+      inv_h_[d] = 1.0 / g.h[d];
+    }
+  }
+
+  const Grid<Dim>& grid() const { return grid_; }
+  IVec<Dim> dofs_per_dim() const { return n_; }
+  Index num_dofs() const {
+    Index n = 1;
+    for (int d = 0; d < Dim; ++d) n *= n_[d];
+    return n;
+  }
+  // Position of a DOF (the node), for output and boundary conditions.
+  Vec<Dim> dof_position(Index i) const {
+    Vec<Dim> x;
+    for (int d = 0; d < Dim; ++d) {
+      x[d] = grid_.origin[d] + grid_.h[d] * static_cast<double>(i % n_[d]);
+      i /= n_[d];
+    }
+    return x;
+  }
+  // DOFs prescribed by a Dirichlet condition on the grid side `side` (0 lower, 1 upper) normal
+  // to direction d: the nodes on that side (P1 is interpolatory there).
+  std::vector<Index> boundary_dofs(int d, int side) const {
+    std::vector<Index> out;
+    for (Index i = 0; i < num_dofs(); ++i) {
+      Index rem = i;
+      for (int e = 0; e < d; ++e) rem /= n_[e];
+      const Index k = rem % n_[d];
+      if (k == (side == 0 ? 0 : n_[d] - 1)) out.push_back(i);
+    }
+    return out;
+  }
+
+  // Requires grid().inside(P.x[p]); the caller checks.
+  void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
+    const Vec<Dim>& x = P.x[static_cast<std::size_t>(p)];
+    IVec<Dim> first;
+    std::array<std::array<double, 2>, Dim> w, dw;
+    for (int d = 0; d < Dim; ++d) {
+      // Same rounding as Grid::cell_of, so xi = s - c lies in [0, 1] exactly (no negative
+      // weights from round-off at the nodes).
+      const double s_d = (x[d] - grid_.origin[d]) / grid_.h[d];
+      const Index c = grid_.cell_of(x[d], d);
+      const double xi = s_d - static_cast<double>(c);
+      first[d] = c;
+      w[d] = {1.0 - xi, xi};
+      dw[d] = {-inv_h_[d], inv_h_[d]};
+    }
+    tensor_product<Dim, 2>(first, w, dw, n_, s);
+  }
+
+ private:
+  Grid<Dim> grid_;
+  IVec<Dim> n_{};
+  Vec<Dim> inv_h_;
+};
+
+}  // namespace mpm

@@ -1,0 +1,54 @@
+#pragma once
+// A benchmark owns its geometry, initial and boundary conditions and (where known) its exact
+// solution; it hands the runner a Problem. Exact solutions are evaluated only for outputs and
+// error norms, never inside the time-step loops.
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "core/simulation.hpp"
+#include "grid/grid.hpp"
+#include "material/materials.hpp"
+#include "particles/particles.hpp"
+
+namespace mpm {
+
+class Config;
+
+template <int Dim>
+struct ExactState {
+  Vec<Dim> u;        // displacement at the material point X [m]
+  Vec<Dim> v;        // velocity [m/s]
+  Mat<Dim> stress;   // Cauchy stress [Pa]
+};
+
+template <int Dim>
+using ExactSolution = std::function<ExactState<Dim>(const Vec<Dim>& X, double t)>;
+
+template <int Dim>
+struct Problem {
+  static constexpr int kDim = Dim;
+  std::string benchmark;
+  Grid<Dim> grid;
+  Particles<Dim> particles;
+  Material material;
+  std::vector<std::pair<int, int>> fixed_sides;  // (direction, side 0 lower / 1 upper)
+  BodyForce<Dim> body_force;
+  ExactSolution<Dim> exact;  // empty when the benchmark has no exact solution
+};
+
+using AnyProblem = std::variant<Problem<1>>;
+
+// Particles evenly spaced over the body [lo, hi] (per direction), `per_cell` per grid cell
+// width, each carrying an equal share of the volume; mass = rho0 V, F = I, zero stress.
+template <int Dim>
+Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
+                              int per_cell, double rho0);
+
+// Builds the problem selected by `benchmark` (registry::kBenchmarks). Throws InputError.
+AnyProblem make_problem(const Config& cfg);
+
+}  // namespace mpm

@@ -1,0 +1,58 @@
+#include <cmath>
+#include <fmt/format.h>
+#include <numbers>
+
+#include "benchmarks/benchmarks.hpp"
+#include "io/config.hpp"
+
+namespace mpm {
+
+Material material_from_config(const Config& cfg, int dim) {
+  ElasticParameters p;
+  p.density = cfg.get_real("material.density");
+  p.youngs_modulus = cfg.get_real("material.youngs_modulus");
+  p.poisson_ratio = cfg.get_real("material.poisson_ratio");
+  try {
+    return make_material(cfg.get_string("material.model"), p, dim);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", cfg.where("material.model"), e.what()));
+  }
+}
+
+ExactState<1> VibratingBarExact::operator()(const Vec<1>& X, double t) const {
+  using std::numbers::pi;
+  const double omega = pi * wave_speed / length;
+  const double k = pi / length;
+  ExactState<1> s;
+  s.u[0] = v0 / omega * std::sin(omega * t) * std::sin(k * X[0]);
+  s.v[0] = v0 * std::cos(omega * t) * std::sin(k * X[0]);
+  s.stress(0, 0) = v0 * density * wave_speed * std::sin(omega * t) * std::cos(k * X[0]);
+  return s;
+}
+
+Problem<1> make_vibrating_bar(const Config& cfg, bool large) {
+  Problem<1> pb;
+  pb.benchmark = large ? "vibrating_bar_large" : "vibrating_bar";
+  const double L = cfg.get_real("bar.length");
+  const double v0 = cfg.get_real("bar.v0");
+  const double rho = cfg.get_real("material.density");
+  pb.material = material_from_config(cfg, 1);
+  const std::string model{material_name(pb.material)};
+  if (!large && model != "elastic_1d_small" && model != "linear_elastic")
+    throw InputError(fmt::format(
+        "{}: benchmark \"vibrating_bar\" compares with the small-deformation exact solution, "
+        "which holds for material.model = \"elastic_1d_small\" or \"linear_elastic\", not \"{}\"; "
+        "use benchmark = \"vibrating_bar_large\" for large deformation",
+        cfg.where("material.model"), model));
+  const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
+  pb.grid = Grid<1>(Vec<1>(0.0), Vec<1>(L), IVec<1>{cells});
+  pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L),
+                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+  for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
+    pb.particles.v[i][0] = v0 * std::sin(std::numbers::pi * pb.particles.x0[i][0] / L);
+  pb.fixed_sides = {{0, 0}, {0, 1}};
+  if (!large) pb.exact = VibratingBarExact{L, v0, rho, wave_speed(pb.material)};
+  return pb;
+}
+
+}  // namespace mpm

@@ -1,0 +1,55 @@
+#pragma once
+// The single list of every run-time choice (config values and `mpm list`). The configuration
+// schema takes its allowed choices from here, so a name exists in exactly one place.
+#include <span>
+#include <string_view>
+
+namespace mpm::registry {
+
+struct Entry {
+  std::string_view name;
+  std::string_view description;
+};
+
+inline constexpr Entry kBenchmarks[] = {
+    {"vibrating_bar",
+     "1D bar with fixed ends, small deformation, exact solution (D 3.4.1, 5.4.1; Table 3.1)"},
+    {"vibrating_bar_large",
+     "1D bar with fixed ends, large deformation (D 5.4.1, Table 5.4); no exact solution"},
+    {"custom", "1D problem built from the config alone: extents, fields by expression, ends"},
+};
+
+inline constexpr Entry kBases[] = {
+    {"linear", "piecewise-linear (P1) nodal basis, tensor product (D 2.5)"},
+};
+
+inline constexpr Entry kMappings[] = {
+    {"direct", "standard MPM mapping: particles are the quadrature points (D 3.2, 004 4.4)"},
+};
+
+inline constexpr Entry kSchemes[] = {
+    {"usl", "update stress last: grid velocity advanced from grid acceleration (D Algorithm 1)"},
+    {"usf", "update stress first: stress from the start-of-step grid velocity (D 2.6.3)"},
+    {"musl", "modified USL: grid velocity remapped from updated particle velocity (D Alg. 2)"},
+    {"usavg", "update stress averaged: half USF, half MUSL stress increment (D 2.6.3, Nairn)"},
+};
+
+inline constexpr Entry kMassTypes[] = {
+    {"lumped", "row-sum lumped (diagonal) mass matrix (D eq. 2.22-2.24)"},
+    {"consistent", "consistent mass matrix, solved exactly each step (D eq. 2.31/2.44)"},
+};
+
+inline constexpr Entry kMaterials[] = {
+    {"elastic_1d_small", "1D linear elastic, small deformation: sigma += E d_eps (004 eq. 4.15)"},
+    {"elastic_1d_large",
+     "1D elastic, large deformation: sigma += (E - sigma) d_eps (004 eq. 4.16)"},
+    {"linear_elastic", "linear elastic in F, any dimension (D eq. 2.13); 1D modulus lambda+2mu"},
+    {"neo_hookean", "compressible neo-Hookean, any dimension (D eq. 2.14)"},
+};
+
+inline constexpr Entry kBoundaryTypes[] = {
+    {"fixed", "all velocity components zero at the boundary degrees of freedom"},
+    {"free", "traction-free (natural) boundary"},
+};
+
+}  // namespace mpm::registry

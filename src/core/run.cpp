@@ -1,0 +1,324 @@
+#include "core/run.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fmt/format.h>
+#include <iostream>
+
+#include "benchmarks/problem.hpp"
+#include "core/variants.hpp"
+#include "io/config.hpp"
+#include "io/output.hpp"
+#include "mpm/version.hpp"
+
+namespace mpm {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Terminal progress for runs longer than a second: steps, simulated time, rate, time left.
+class Progress {
+ public:
+  Progress(bool enabled, Index total, Index particles)
+      : enabled_(enabled), total_(total), particles_(particles), tty_(isatty(STDERR_FILENO)) {}
+  void update(Index step, double t) {
+    if (!enabled_) return;
+    const double el = seconds_since(start_);
+    if (el < 1.0 || el - last_ < (tty_ ? 0.25 : 10.0)) return;
+    last_ = el;
+    const double rate = static_cast<double>(step) / el;
+    const double left = rate > 0 ? static_cast<double>(total_ - step) / rate : 0.0;
+    std::cerr << fmt::format("{}step {}/{}  t = {:.4g} s  {:.3g} particle-steps/s  {:.0f} s left{}",
+                             tty_ ? "\r" : "", step, total_, t,
+                             rate * static_cast<double>(particles_), left, tty_ ? "   " : "\n");
+    shown_ = true;
+  }
+  void finish() {
+    if (shown_ && tty_) std::cerr << "\n";
+  }
+
+ private:
+  bool enabled_;
+  Index total_, particles_;
+  bool tty_;
+  Clock::time_point start_ = Clock::now();
+  double last_ = 0.0;
+  bool shown_ = false;
+};
+
+template <int Dim>
+ErrorNorms error_norms(const Particles<Dim>& P, const ExactSolution<Dim>& exact, double t,
+                       double dt, double velocity_time) {
+  ErrorNorms e;
+  if (!exact) return e;
+  double su = 0, sv = 0, svm = 0, svs = 0, ss = 0, num = 0, den = 0;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    const auto ex = exact(P.x0[i], t);
+    const auto exm = exact(P.x0[i], t - 0.5 * dt);
+    su += (ex.u - P.u[i]).squaredNorm();
+    sv += (ex.v - P.v[i]).squaredNorm();
+    svm += (exm.v - P.v[i]).squaredNorm();
+    svs += (exact(P.x0[i], t + velocity_time * dt).v - P.v[i]).squaredNorm();
+    const double es = (ex.stress - P.stress[i]).squaredNorm();
+    ss += es;
+    num += P.volume0[i] * es;
+    den += P.volume0[i] * ex.stress.squaredNorm();
+  }
+  const double n = static_cast<double>(P.x.size());
+  e.displacement_rms = std::sqrt(su / n);
+  e.velocity_rms = std::sqrt(sv / n);
+  e.velocity_rms_midstep = std::sqrt(svm / n);
+  e.velocity_rms_scheme_time = std::sqrt(svs / n);
+  e.stress_rms = std::sqrt(ss / n);
+  if (den > 0.0) e.stress_rel_l2 = std::sqrt(num / den);
+  return e;
+}
+
+nlohmann::json opt_json(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
+// Everything written into the output directory during a run.
+template <int Dim>
+class OutputSession {
+ public:
+  OutputSession(const RunOptions& opt, const Config& cfg, const Problem<Dim>& pb)
+      : dir_(opt.out_dir), exact_(pb.exact) {
+    if (dir_.empty()) return;
+    std::error_code ec;
+    std::filesystem::create_directories(dir_, ec);
+    if (ec)
+      throw InputError(fmt::format("cannot create output directory '{}': {}", dir_.string(),
+                                   ec.message()));
+    csv_ = cfg.get_bool("output.csv");
+    vtk_ = cfg.get_bool("output.vtk");
+    io::write_file_atomic(dir_ / "config.toml", cfg.to_toml());
+    if (vtk_) io::write_file_atomic(dir_ / "grid.vtu", io::grid_vtu(pb.grid));
+    history_ = "time,kinetic_energy,strain_energy,total_energy,mass";
+    for (int d = 0; d < Dim; ++d) history_ += fmt::format(",momentum_{}", d + 1);
+    history_ += "\n";
+  }
+
+  bool enabled() const { return !dir_.empty(); }
+
+  template <class Sim>
+  void history_row(const Sim& sim) {
+    if (!enabled()) return;
+    const auto& P = sim.particles;
+    double kin = 0.0, strain = 0.0, mass = 0.0;
+    Vec<Dim> mom = Vec<Dim>::Zero();
+    std::visit(
+        [&](const auto& law) {
+          for (std::size_t i = 0; i < P.x.size(); ++i) {
+            kin += 0.5 * P.mass[i] * P.v[i].squaredNorm();
+            strain += law.energy(P.stress[i], P.F[i], P.volume[i], P.volume0[i]);
+            mass += P.mass[i];
+            mom += P.mass[i] * P.v[i];
+          }
+        },
+        sim.material);
+    history_ += fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", sim.time, kin, strain,
+                            kin + strain, mass);
+    for (int d = 0; d < Dim; ++d) history_ += fmt::format(",{:.17g}", mom[d]);
+    history_ += "\n";
+  }
+
+  template <class Sim>
+  void frame(const Sim& sim) {
+    if (!enabled()) return;
+    const auto& P = sim.particles;
+    std::vector<io::ScalarField> extra;
+    std::vector<double> ue, ve, se;
+    if (exact_) {
+      for (std::size_t i = 0; i < P.x.size(); ++i) {
+        const auto ex = exact_(P.x0[i], sim.time);
+        ue.push_back(ex.u[0]);
+        ve.push_back(ex.v[0]);
+        se.push_back(ex.stress(0, 0));
+      }
+      extra = {{"u_exact", &ue}, {"v_exact", &ve}, {"stress_exact", &se}};
+    }
+    const std::string stem = fmt::format("particles_{:05d}", frames_);
+    if (csv_) io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(P, extra));
+    if (vtk_) {
+      io::write_file_atomic(dir_ / (stem + ".vtu"), io::particles_vtu(P, sim.time, extra));
+      pvd_.add(sim.time, stem + ".vtu");
+      io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
+    }
+    io::write_file_atomic(dir_ / "history.csv", history_);
+    ++frames_;
+  }
+
+  void summary(const nlohmann::json& j) {
+    if (enabled()) io::write_file_atomic(dir_ / "summary.json", j.dump(2) + "\n");
+  }
+
+ private:
+  std::filesystem::path dir_;
+  ExactSolution<Dim> exact_;
+  bool csv_ = true, vtk_ = true;
+  std::string history_;
+  io::PvdSeries pvd_;
+  int frames_ = 0;
+};
+
+struct TimeSetup {
+  double dt;
+  Index steps;
+};
+
+TimeSetup time_setup(const Config& cfg) {
+  const double dt = cfg.get_real("time.dt"), end = cfg.get_real("time.end");
+  const double ratio = end / dt;
+  const auto steps = static_cast<Index>(std::llround(ratio));
+  if (steps < 1 || std::abs(ratio - static_cast<double>(steps)) > 1e-6 * std::max(1.0, ratio))
+    throw InputError(fmt::format(
+        "{}: time.end = {} must be a positive whole multiple of time.dt = {} (it is {:.6g} "
+        "steps)",
+        cfg.where("time.end"), end, dt, ratio));
+  return {dt, steps};
+}
+
+template <int Dim, class Basis, class Mapping, class Scheme>
+RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) {
+  const auto t_start = Clock::now();
+  const TimeSetup ts = time_setup(cfg);
+  OutputSession<Dim> out(opt, cfg, pb);
+
+  using Sim = Simulation<Dim, Basis, Mapping>;
+  Sim sim(pb.grid, Basis(pb.grid), Mapping{}, std::move(pb.particles), pb.material);
+  sim.mass_type =
+      cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
+  sim.mass_tolerance = cfg.get_real("method.mass_tolerance");
+  for (auto [d, side] : pb.fixed_sides) sim.fix_side(d, side);
+  sim.body_force = pb.body_force;
+  if (sim.body_force.fill) sim.body_force.fill(sim.particles, 0.0, sim.particles.body);
+
+  const int frames = static_cast<int>(cfg.get_int("output.frames"));
+  const Index history_every = cfg.get_int("output.history_every");
+  Index next_frame = 1;
+  auto frame_step = [&](Index k) {
+    return frames > 0 ? (k * ts.steps + frames - 1) / frames : ts.steps;
+  };
+
+  RunResult res;
+  res.benchmark = pb.benchmark;
+  res.dim = Dim;
+  res.cells = sim.grid.num_cells();
+  res.h = sim.grid.h[0];
+  res.particles = sim.particles.size();
+
+  out.history_row(sim);
+  out.frame(sim);
+  Progress progress(!opt.quiet, ts.steps, sim.particles.size());
+  double step_seconds = 0.0;
+  try {
+    while (sim.step < ts.steps) {
+      const auto t0 = Clock::now();
+      Scheme::step(sim, ts.dt);
+      step_seconds += seconds_since(t0);
+      ++sim.step;
+      sim.time = static_cast<double>(sim.step) * ts.dt;
+      const bool last = sim.step == ts.steps;
+      if (sim.step % history_every == 0 || last) out.history_row(sim);
+      if (last || (frames > 0 && sim.step >= frame_step(next_frame))) {
+        while (next_frame <= frames && sim.step >= frame_step(next_frame)) ++next_frame;
+        out.frame(sim);
+      }
+      progress.update(sim.step, sim.time);
+    }
+  } catch (const RunError& e) {
+    res.exit_code = e.exit_code();
+    res.failure = e.what();
+    out.history_row(sim);
+    out.frame(sim);  // the state the failure was detected in, for diagnosis
+  }
+  progress.finish();
+
+  res.steps = sim.step;
+  if (res.exit_code == exit_code::kOk)
+    res.errors = error_norms<Dim>(sim.particles, pb.exact, sim.time, ts.dt, Scheme::kVelocityTime);
+  res.diag = sim.diag;
+  res.ns_per_particle_step =
+      sim.step > 0 ? 1e9 * step_seconds /
+                         (static_cast<double>(sim.step) * static_cast<double>(res.particles))
+                   : 0.0;
+  res.wall_seconds = seconds_since(t_start);
+
+  nlohmann::json j;
+  j["mpmlab_version"] = kVersion;
+  j["status"] = res.exit_code == exit_code::kOk ? "ok" : "failed";
+  if (res.exit_code != exit_code::kOk) {
+    j["exit_code"] = res.exit_code;
+    j["failure"] = res.failure;
+  }
+  j["benchmark"] = res.benchmark;
+  j["dim"] = Dim;
+  j["method"] = {{"basis", std::string(Basis::kName)},
+                 {"mapping", std::string(Mapping::kName)},
+                 {"scheme", std::string(Scheme::kName)},
+                 {"mass", cfg.get_string("method.mass")}};
+  j["material"] = {{"model", std::string(material_name(sim.material))},
+                   {"density", cfg.get_real("material.density")},
+                   {"youngs_modulus", cfg.get_real("material.youngs_modulus")},
+                   {"poisson_ratio", cfg.get_real("material.poisson_ratio")}};
+  j["cells"] = res.cells;
+  j["h"] = res.h;
+  j["particles"] = res.particles;
+  j["dt"] = ts.dt;
+  j["t_end"] = sim.time;
+  j["steps"] = res.steps;
+  j["velocity_time_offset_dt"] = Scheme::kVelocityTime;
+  j["wall_seconds"] = res.wall_seconds;
+  j["ns_per_particle_step"] = res.ns_per_particle_step;
+  j["errors"] = {{"displacement_rms", opt_json(res.errors.displacement_rms)},
+                 {"velocity_rms", opt_json(res.errors.velocity_rms)},
+                 {"velocity_rms_midstep", opt_json(res.errors.velocity_rms_midstep)},
+                 {"velocity_rms_scheme_time", opt_json(res.errors.velocity_rms_scheme_time)},
+                 {"stress_rms", opt_json(res.errors.stress_rms)},
+                 {"stress_rel_l2", opt_json(res.errors.stress_rel_l2)}};
+  j["conservation"] = {{"max_rel_mass_error", res.diag.max_rel_mass_error},
+                       {"max_rel_momentum_error", res.diag.max_rel_momentum_error}};
+  j["grid_crossings"] = res.diag.grid_crossings;
+  res.summary = j;
+  out.summary(j);
+  return res;
+}
+
+}  // namespace
+
+RunResult run(const Config& cfg, const RunOptions& opt) {
+  AnyProblem problem = make_problem(cfg);
+  auto with_key = [&](const char* key, auto&& fn) {
+    try {
+      return fn();
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", cfg.where(key), e.what()));
+    }
+  };
+  const auto basis = with_key("method.basis", [&] {
+    return choose_alternative<BasisKind>(cfg.get_string("method.basis"), "method.basis");
+  });
+  const auto mapping = with_key("method.mapping", [&] {
+    return choose_alternative<MappingKind>(cfg.get_string("method.mapping"), "method.mapping");
+  });
+  const auto scheme = with_key("method.scheme", [&] {
+    return choose_alternative<Scheme>(cfg.get_string("method.scheme"), "method.scheme");
+  });
+  return std::visit(
+      [&](auto& pb, auto b, auto m, auto s) {
+        constexpr int Dim = std::decay_t<decltype(pb)>::kDim;
+        using B = typename decltype(b)::template type<Dim>;
+        return run_typed<Dim, B, decltype(m), decltype(s)>(pb, cfg, opt);
+      },
+      problem, basis, mapping, scheme);
+}
+
+}  // namespace mpm

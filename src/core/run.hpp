@@ -1,0 +1,51 @@
+#pragma once
+// Running one configuration: build the problem, choose the variants once, step, write outputs.
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "core/simulation.hpp"
+#include "core/types.hpp"
+
+namespace mpm {
+
+class Config;
+
+struct RunOptions {
+  std::string out_dir;       // empty: write nothing
+  bool quiet = false;        // no progress line
+};
+
+// Particle error norms at the final time (D eq. 4.92); empty when there is no exact solution.
+struct ErrorNorms {
+  std::optional<double> displacement_rms;      // RMS of u(X_p, T) - u_p
+  std::optional<double> velocity_rms;          // RMS of v(X_p, T) - v_p
+  std::optional<double> velocity_rms_midstep;  // RMS of v(X_p, T - dt/2) - v_p (leapfrog time)
+  // RMS of v(X_p, T + c dt) - v_p with c the scheme's velocity time (-1/2 USL/MUSL, +1/2 USF,
+  // 0 USAVG): the comparison in which every scheme is second-order consistent in time.
+  std::optional<double> velocity_rms_scheme_time;
+  std::optional<double> stress_rms;            // RMS of |sigma(X_p, T) - sigma_p|
+  std::optional<double> stress_rel_l2;         // (sum V0 |err|^2 / sum V0 |sigma|^2)^(1/2)
+};
+
+struct RunResult {
+  int exit_code = exit_code::kOk;
+  std::string failure;  // the diagnosis when exit_code != 0
+  std::string benchmark;
+  int dim = 1;
+  Index cells = 0;
+  double h = 0.0;
+  Index particles = 0;
+  Index steps = 0;
+  double wall_seconds = 0.0;
+  double ns_per_particle_step = 0.0;
+  ErrorNorms errors;
+  Diagnostics diag;
+  nlohmann::json summary;  // what summary.json holds
+};
+
+// Runs `cfg`; input errors throw InputError before the first step, numerical failures are
+// reported in the result (exit_code, failure) after the last good state has been written.
+RunResult run(const Config& cfg, const RunOptions& opt);
+
+}  // namespace mpm

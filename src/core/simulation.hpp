@@ -1,0 +1,74 @@
+#pragma once
+// The state of one run: grid, basis, mapping, particles, material, grid quantities and the
+// cached basis stencils. Stages (scheme/stages.hpp) operate on it; schemes order the stages.
+#include <functional>
+#include <string_view>
+#include <vector>
+
+#include "grid/grid.hpp"
+#include "grid/grid_state.hpp"
+#include "material/materials.hpp"
+#include "particles/particles.hpp"
+#include "solver/mass_matrix.hpp"
+
+namespace mpm {
+
+enum class MassType { Lumped, Consistent };
+
+// Body force per unit mass b(x, t) [m/s^2]. `fill` writes b for all particles at once (one
+// indirect call per step, the loop inside); skipped when the force is constant in time.
+template <int Dim>
+struct BodyForce {
+  std::function<void(const Particles<Dim>&, double t, std::vector<Vec<Dim>>& b)> fill;
+  bool time_dependent = false;
+  bool position_dependent = false;
+};
+
+// Conservation and grid-crossing bookkeeping reported in summary.json (D 5.4).
+struct Diagnostics {
+  double max_rel_mass_error = 0.0;      // max over steps |sum M_ij - sum m_p| / sum m_p
+  double max_rel_momentum_error = 0.0;  // max over steps |sum q_i - sum m_p v_p| / sum m_p|v_p|
+  Index grid_crossings = 0;             // particle moves into another cell, summed over steps
+};
+
+template <int Dim, class Basis, class Mapping>
+struct Simulation {
+  static constexpr int kDim = Dim;
+  using BasisT = Basis;
+  using MappingT = Mapping;
+  using StencilT = typename Basis::StencilT;
+
+  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat)
+      : grid(g), basis(std::move(b)), mapping(std::move(m)), particles(std::move(p)),
+        material(std::move(mat)) {
+    nodes.resize(basis.num_dofs());
+    stencils.resize(static_cast<std::size_t>(particles.size()));
+    cell.assign(static_cast<std::size_t>(particles.size()), -1);
+  }
+
+  Grid<Dim> grid;
+  Basis basis;
+  Mapping mapping;
+  Particles<Dim> particles;
+  Material material;
+  MassType mass_type = MassType::Lumped;
+  double mass_tolerance = 1e-10;  // relative to the largest nodal mass
+  BodyForce<Dim> body_force;
+
+  GridState<Dim> nodes;
+  ConsistentMass consistent;
+  std::vector<StencilT> stencils;  // basis at x_p^s, refreshed by evaluate_basis()
+  std::vector<Index> cell;         // cell of each particle at the last evaluation
+
+  double time = 0.0;  // t^s [s]
+  Index step = 0;     // s
+  Diagnostics diag;
+
+  // Prescribe zero velocity in every component on a grid side (d: direction, side 0/1).
+  void fix_side(int d, int side) {
+    for (Index i : basis.boundary_dofs(d, side))
+      nodes.fixed[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>((1u << Dim) - 1u);
+  }
+};
+
+}  // namespace mpm

@@ -1,0 +1,53 @@
+#pragma once
+// Fundamental types shared by every concept. Dimension is a template parameter everywhere:
+// 1D runs today, 2D and 3D reuse the same code paths.
+#include <Eigen/Dense>
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace mpm {
+
+using Index = std::int64_t;
+
+template <int Dim>
+using Vec = Eigen::Matrix<double, Dim, 1>;
+template <int Dim>
+using Mat = Eigen::Matrix<double, Dim, Dim>;
+template <int Dim>
+using IVec = std::array<Index, Dim>;
+
+// Compile-time integer power, used for tensor-product stencil sizes (n^Dim).
+constexpr int ipow(int base, int exp) { return exp == 0 ? 1 : base * ipow(base, exp - 1); }
+
+// Error raised for invalid user input (configuration, command line). The message is meant for
+// the user and is printed without decoration; exit code 2.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A numerical failure during a run (NaN, particle leaving the grid, ...). Raised outside the
+// per-particle loops, after they have recorded what went wrong.
+class RunError : public std::runtime_error {
+ public:
+  RunError(int exit_code, const std::string& what)
+      : std::runtime_error(what), exit_code_(exit_code) {}
+  int exit_code() const { return exit_code_; }
+
+ private:
+  int exit_code_;
+};
+
+// Documented exit codes of `mpm` (README, "Exit codes").
+namespace exit_code {
+inline constexpr int kOk = 0;
+inline constexpr int kInternal = 1;
+inline constexpr int kInput = 2;
+inline constexpr int kNonFinite = 3;
+inline constexpr int kLeftGrid = 4;
+inline constexpr int kInvertedDeformation = 5;
+}  // namespace exit_code
+
+}  // namespace mpm

@@ -1,0 +1,33 @@
+#pragma once
+// Per-DOF grid quantities of one time step (D Algorithm 2, steps 4-9). Sized by the basis.
+#include <cstdint>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace mpm {
+
+template <int Dim>
+struct GridState {
+  std::vector<double> mass;           // lumped nodal mass m_i (row sums of M) [kg]
+  std::vector<Vec<Dim>> momentum;     // q_i [kg m/s]
+  std::vector<Vec<Dim>> force;        // f_i = f_ext - f_int [N]
+  std::vector<Vec<Dim>> velocity;     // v_i [m/s]
+  std::vector<Vec<Dim>> accel;        // a_i [m/s^2]
+  std::vector<std::uint8_t> active;   // 1 where the DOF carries enough mass to be solved for
+  std::vector<std::uint8_t> fixed;    // bit d set: component d is prescribed zero (Dirichlet)
+
+  Index size() const { return static_cast<Index>(mass.size()); }
+  void resize(Index n) {
+    const auto s = static_cast<std::size_t>(n);
+    mass.assign(s, 0.0);
+    momentum.assign(s, Vec<Dim>::Zero());
+    force.assign(s, Vec<Dim>::Zero());
+    velocity.assign(s, Vec<Dim>::Zero());
+    accel.assign(s, Vec<Dim>::Zero());
+    active.assign(s, 0);
+    fixed.resize(s, 0);
+  }
+};
+
+}  // namespace mpm

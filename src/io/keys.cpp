@@ -1,0 +1,147 @@
+// The configuration schema: every key `mpm` understands is declared here, once. Parsing,
+// validation, `mpm keys`, the defaults and the written-back config.toml all read this table.
+// Choices for String keys come from core/registry.hpp, so a model/scheme name exists in one place.
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/registry.hpp"
+#include "io/config.hpp"
+
+namespace mpm {
+namespace {
+
+// Allowed numeric interval; unbounded sides are nullopt.
+struct Range {
+  std::optional<double> min, max;
+  bool min_exclusive = false, max_exclusive = false;
+};
+Range any() {
+  return {};
+}
+Range at_least(double lo) {
+  return {lo, std::nullopt, false, false};
+}
+Range greater_than(double lo) {
+  return {lo, std::nullopt, true, false};
+}
+Range closed(double lo, double hi) {
+  return {lo, hi, false, false};
+}
+Range open(double lo, double hi) {
+  return {lo, hi, true, true};
+}
+
+// Marks a key without default that the user must give.
+constexpr std::nullopt_t kRequired = std::nullopt;
+
+KeySpec numeric(std::string name, KeyType type, std::string unit, std::optional<Value> def,
+                Range range, std::string description) {
+  KeySpec k;
+  k.name = std::move(name);
+  k.type = type;
+  k.unit = std::move(unit);
+  k.default_value = std::move(def);
+  k.min = range.min;
+  k.max = range.max;
+  k.min_exclusive = range.min_exclusive;
+  k.max_exclusive = range.max_exclusive;
+  k.description = std::move(description);
+  return k;
+}
+
+KeySpec integer(std::string name, std::optional<std::int64_t> def, Range range,
+                std::string description) {
+  std::optional<Value> v;
+  if (def) v = Value(*def);
+  return numeric(std::move(name), KeyType::Integer, "", v, range, std::move(description));
+}
+
+KeySpec real(std::string name, std::string unit, std::optional<double> def, Range range,
+             std::string description) {
+  std::optional<Value> v;
+  if (def) v = Value(*def);
+  return numeric(std::move(name), KeyType::Real, std::move(unit), v, range, std::move(description));
+}
+
+KeySpec boolean(std::string name, bool def, std::string description) {
+  return numeric(std::move(name), KeyType::Boolean, "", Value(def), any(), std::move(description));
+}
+
+KeySpec choice(std::string name, std::optional<std::string> def,
+               std::span<const registry::Entry> entries, std::string description) {
+  std::optional<Value> v;
+  if (def) v = Value(*def);
+  KeySpec k = numeric(std::move(name), KeyType::String, "", v, any(), std::move(description));
+  for (const registry::Entry& e : entries) k.choices.emplace_back(e.name);
+  return k;
+}
+
+KeySpec expression(std::string name, std::string unit, std::string def, std::string description) {
+  return numeric(std::move(name), KeyType::Expression, std::move(unit), Value(std::move(def)),
+                 any(), std::move(description));
+}
+
+std::vector<KeySpec> declare() {
+  using namespace registry;
+  return {
+      choice("benchmark", kRequired, kBenchmarks, "benchmark problem to run"),
+
+      integer("grid.cells", 20, at_least(1), "number of cells (knot spans) per direction"),
+      real("grid.min", "m", 0.0, any(), "lower end of the background grid (custom benchmark)"),
+      real("grid.max", "m", 1.0, any(), "upper end of the background grid (custom benchmark)"),
+
+      integer("particles.per_cell", 4, at_least(1),
+              "material points per cell per direction, evenly spaced"),
+
+      real("time.dt", "s", kRequired, greater_than(0), "time-step size"),
+      real("time.end", "s", kRequired, greater_than(0), "end time of the simulation"),
+
+      choice("method.scheme", "musl", kSchemes, "update scheme"),
+      choice("method.basis", "linear", kBases, "grid basis functions"),
+      integer("method.degree", 2, closed(1, 5), "B-spline degree (method.basis = \"bspline\")"),
+      choice("method.mapping", "direct", kMappings, "particle-to-grid mapping"),
+      choice("method.mass", "lumped", kMassTypes, "mass matrix"),
+      real("method.mass_tolerance", "", 1e-10, at_least(0),
+           "degrees of freedom with mass below this fraction of the largest nodal mass are "
+           "inactive"),
+
+      choice("material.model", "elastic_1d_small", kMaterials, "constitutive law"),
+      real("material.density", "kg/m^3", kRequired, greater_than(0), "initial density rho0"),
+      real("material.youngs_modulus", "Pa", kRequired, greater_than(0), "Young's modulus E"),
+      real("material.poisson_ratio", "", 0.0, open(-1, 0.5),
+           "Poisson's ratio nu (multi-dimensional laws)"),
+
+      real("bar.length", "m", 1.0, greater_than(0), "length L of the vibrating bar"),
+      real("bar.v0", "m/s", 0.1, any(), "amplitude v0 of the initial velocity v0 sin(pi x/L)"),
+
+      real("body.min", "m", 0.0, any(), "lower end of the material body (custom benchmark)"),
+      real("body.max", "m", 1.0, any(), "upper end of the material body (custom benchmark)"),
+
+      expression("initial.velocity", "m/s", "0",
+                 "initial velocity as a function of position x (custom)"),
+      expression("initial.stress", "Pa", "0",
+                 "initial stress as a function of position x (custom)"),
+      expression("loading.body_force", "m/s^2", "0",
+                 "body force per unit mass as a function of x and t (custom)"),
+
+      choice("boundary.left", "fixed", kBoundaryTypes, "condition at the lower grid end (custom)"),
+      choice("boundary.right", "fixed", kBoundaryTypes, "condition at the upper grid end (custom)"),
+
+      integer("output.frames", 10, at_least(0),
+              "frames evenly spaced in time after the initial one, the final state always "
+              "written (0: initial and final only)"),
+      boolean("output.csv", true, "write particle frames as CSV"),
+      boolean("output.vtk", true, "write particle and grid frames as VTK XML (.vtu + .pvd)"),
+      integer("output.history_every", 1, at_least(1), "write a history.csv row every N steps"),
+  };
+}
+
+}  // namespace
+
+const std::vector<KeySpec>& schema() {
+  static const std::vector<KeySpec> keys = declare();
+  return keys;
+}
+
+}  // namespace mpm

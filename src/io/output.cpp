@@ -1,0 +1,490 @@
+#include "io/output.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <iterator>
+#include <set>
+#include <stdexcept>
+#include <system_error>
+
+namespace mpm::io {
+
+namespace {
+
+using Buffer = fmt::memory_buffer;
+
+// 17 significant digits: enough for any double to parse back to the same value (IEEE 754
+// binary64 needs at most 17, see std::numeric_limits<double>::max_digits10).
+void put_num(Buffer& b, double x) {
+  fmt::format_to(std::back_inserter(b), "{:.17g}", x);
+}
+void put_int(Buffer& b, Index i) {
+  fmt::format_to(std::back_inserter(b), "{}", i);
+}
+void put(Buffer& b, std::string_view s) {
+  b.append(s.data(), s.data() + s.size());
+}
+
+std::string system_error_text(int err) {
+  return std::strerror(err);
+}
+
+[[noreturn]] void throw_write_error(const std::filesystem::path& path, std::string_view what,
+                                    int err) {
+  throw std::runtime_error(
+      fmt::format("cannot write '{}' ({}): {}", path.string(), what, system_error_text(err)));
+}
+
+// Escape the five XML special characters for use in attribute values (XML 1.0, section 2.4).
+std::string xml_escape(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (const char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+// Quote a CSV header field only when it needs it (RFC 4180: fields with commas, quotes or line
+// breaks are enclosed in double quotes, embedded quotes doubled).
+std::string csv_field(std::string_view s) {
+  if (s.find_first_of(",\"\r\n") == std::string_view::npos) return std::string(s);
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  out += '"';
+  return out;
+}
+
+// Check the extra fields against the number of entities (particles or grid nodes) and against
+// the names the writer already uses, so that a frame never has two columns/arrays of one name.
+void check_fields(const std::vector<ScalarField>& fields, std::size_t n, std::set<std::string> used,
+                  std::string_view what) {
+  for (const auto& f : fields) {
+    if (f.name.empty()) throw std::invalid_argument("output field with an empty name");
+    if (f.values == nullptr) {
+      throw std::invalid_argument(fmt::format("output field '{}' has no values", f.name));
+    }
+    if (f.values->size() != n) {
+      throw std::invalid_argument(
+          fmt::format("output field '{}' has {} values, expected {} (one per {})", f.name,
+                      f.values->size(), n, what));
+    }
+    if (!used.insert(f.name).second) {
+      throw std::invalid_argument(fmt::format("output field name '{}' is already used", f.name));
+    }
+  }
+}
+
+template <int Dim>
+void check_particles(const Particles<Dim>& p) {
+  const auto n = static_cast<std::size_t>(p.size());
+  if (p.x0.size() != n || p.u.size() != n || p.v.size() != n || p.mass.size() != n ||
+      p.volume.size() != n || p.density.size() != n || p.F.size() != n || p.stress.size() != n) {
+    throw std::invalid_argument("particle arrays have inconsistent sizes");
+  }
+}
+
+// ---- VTK XML pieces ----------------------------------------------------------------------
+
+// VTK cell type ids (vtkCellType.h).
+constexpr int kVtkVertex = 1;
+constexpr int kVtkLine = 3;
+constexpr int kVtkQuad = 9;
+constexpr int kVtkHexahedron = 12;
+
+void open_array(Buffer& b, std::string_view type, std::string_view name, int components) {
+  fmt::format_to(std::back_inserter(b), "        <DataArray type=\"{}\" Name=\"{}\"", type,
+                 xml_escape(name));
+  if (components != 1)
+    fmt::format_to(std::back_inserter(b), " NumberOfComponents=\"{}\"", components);
+  put(b, " format=\"ascii\">\n");
+}
+void close_array(Buffer& b) {
+  put(b, "\n        </DataArray>\n");
+}
+
+void scalar_array(Buffer& b, std::string_view name, const std::vector<double>& values) {
+  open_array(b, "Float64", name, 1);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) put(b, "\n");
+    put_num(b, values[i]);
+  }
+  close_array(b);
+}
+
+// A vector field padded with zeros to 3 components (VTK vectors are always 3D).
+template <int Dim>
+void vector_array(Buffer& b, std::string_view name, const std::vector<Vec<Dim>>& values) {
+  open_array(b, "Float64", name, 3);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) put(b, "\n");
+    for (int d = 0; d < 3; ++d) {
+      if (d > 0) put(b, " ");
+      put_num(b, d < Dim ? values[i][d] : 0.0);
+    }
+  }
+  close_array(b);
+}
+
+// A Dim x Dim tensor embedded in 3x3 (row-major, 9 components); pad is the value on the
+// padded diagonal (1 for F: no deformation out of plane; 0 for stress).
+template <int Dim>
+void tensor_array(Buffer& b, std::string_view name, const std::vector<Mat<Dim>>& values,
+                  double pad) {
+  open_array(b, "Float64", name, 9);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) put(b, "\n");
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        if (r + c > 0) put(b, " ");
+        if (r < Dim && c < Dim) {
+          put_num(b, values[i](r, c));
+        } else {
+          put_num(b, r == c ? pad : 0.0);
+        }
+      }
+    }
+  }
+  close_array(b);
+}
+
+void vtu_header(Buffer& b) {
+  put(b,
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+      "  <UnstructuredGrid>\n");
+}
+void vtu_footer(Buffer& b) {
+  put(b,
+      "    </Piece>\n"
+      "  </UnstructuredGrid>\n"
+      "</VTKFile>\n");
+}
+
+// <Cells>: connectivity (nodes_per_cell node ids per cell), offsets (end of each cell's
+// connectivity, VTK convention), types.
+void cells_block(Buffer& b, const std::vector<Index>& connectivity, Index num_cells,
+                 int nodes_per_cell, int cell_type) {
+  put(b, "      <Cells>\n");
+  open_array(b, "Int64", "connectivity", 1);
+  for (std::size_t i = 0; i < connectivity.size(); ++i) {
+    if (i > 0) put(b, (i % static_cast<std::size_t>(nodes_per_cell) == 0) ? "\n" : " ");
+    put_int(b, connectivity[i]);
+  }
+  close_array(b);
+  open_array(b, "Int64", "offsets", 1);
+  for (Index c = 0; c < num_cells; ++c) {
+    if (c > 0) put(b, "\n");
+    put_int(b, (c + 1) * nodes_per_cell);
+  }
+  close_array(b);
+  open_array(b, "UInt8", "types", 1);
+  for (Index c = 0; c < num_cells; ++c) {
+    if (c > 0) put(b, "\n");
+    put_int(b, cell_type);
+  }
+  close_array(b);
+  put(b, "      </Cells>\n");
+}
+
+}  // namespace
+
+// ---- write_file_atomic ---------------------------------------------------------------------
+
+void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+  std::filesystem::path tmp = path;
+  tmp += ".tmp." + std::to_string(static_cast<long long>(::getpid()));
+
+  // 0666 & ~umask, the same permissions std::ofstream would give the file.
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) throw_write_error(path, "open " + tmp.string(), errno);
+
+  const auto fail = [&](std::string_view what, int err) {
+    ::close(fd);  // only used while fd is open; the close() failure is handled below
+    ::unlink(tmp.c_str());
+    throw_write_error(path, what, err);
+  };
+
+  const char* data = content.data();
+  std::size_t left = content.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, data, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("write", errno);
+    }
+    data += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  // fsync before rename: otherwise a crash after the rename can leave an empty or partial file
+  // under the final name on file systems that reorder metadata and data writes (ext4, xfs).
+  if (::fsync(fd) != 0) fail("fsync", errno);
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw_write_error(path, "close", err);
+  }
+
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    ::unlink(tmp.c_str());
+    throw_write_error(path, "rename from " + tmp.string(), ec.value());
+  }
+
+  // Make the rename itself durable. Best effort: some file systems refuse fsync on a
+  // directory, and the data is already complete either way.
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    (void)::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+// ---- particles -----------------------------------------------------------------------------
+
+template <int Dim>
+std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField>& extra) {
+  static_assert(Dim >= 1 && Dim <= 3);
+  check_particles(p);
+  const auto n = static_cast<std::size_t>(p.size());
+
+  std::vector<std::string> header = {"id"};
+  for (const char* v : {"x0", "x", "u", "v"}) {
+    for (int d = 1; d <= Dim; ++d) header.push_back(fmt::format("{}_{}", v, d));
+  }
+  for (const char* s : {"mass", "volume", "density"}) header.emplace_back(s);
+  for (const char* t : {"F", "stress"}) {
+    for (int r = 1; r <= Dim; ++r) {
+      for (int c = 1; c <= Dim; ++c) header.push_back(fmt::format("{}_{}{}", t, r, c));
+    }
+  }
+  check_fields(extra, n, std::set<std::string>(header.begin(), header.end()), "particle");
+
+  Buffer b;
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (i > 0) put(b, ",");
+    put(b, header[i]);
+  }
+  for (const auto& f : extra) {
+    put(b, ",");
+    put(b, csv_field(f.name));
+  }
+  put(b, "\n");
+
+  for (std::size_t i = 0; i < n; ++i) {
+    put_int(b, static_cast<Index>(i));
+    const auto vec = [&](const Vec<Dim>& a) {
+      for (int d = 0; d < Dim; ++d) {
+        put(b, ",");
+        put_num(b, a[d]);
+      }
+    };
+    const auto mat = [&](const Mat<Dim>& a) {
+      for (int r = 0; r < Dim; ++r) {
+        for (int c = 0; c < Dim; ++c) {
+          put(b, ",");
+          put_num(b, a(r, c));
+        }
+      }
+    };
+    vec(p.x0[i]);
+    vec(p.x[i]);
+    vec(p.u[i]);
+    vec(p.v[i]);
+    for (const double s : {p.mass[i], p.volume[i], p.density[i]}) {
+      put(b, ",");
+      put_num(b, s);
+    }
+    mat(p.F[i]);
+    mat(p.stress[i]);
+    for (const auto& f : extra) {
+      put(b, ",");
+      put_num(b, (*f.values)[i]);
+    }
+    put(b, "\n");
+  }
+  return fmt::to_string(b);
+}
+
+template <int Dim>
+std::string particles_vtu(const Particles<Dim>& p, double time,
+                          const std::vector<ScalarField>& extra) {
+  static_assert(Dim >= 1 && Dim <= 3);
+  check_particles(p);
+  const auto n = static_cast<std::size_t>(p.size());
+  check_fields(extra, n, {"id", "x0", "u", "v", "mass", "volume", "density", "F", "stress"},
+               "particle");
+
+  Buffer b;
+  vtu_header(b);
+  // TimeValue in FieldData is what ParaView reads as the data set's time.
+  put(b, "    <FieldData>\n");
+  put(b,
+      "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+      "format=\"ascii\">\n");
+  put_num(b, time);
+  put(b, "\n      </DataArray>\n    </FieldData>\n");
+  fmt::format_to(std::back_inserter(b), "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
+                 n, n);
+
+  put(b, "      <PointData>\n");
+  open_array(b, "Int64", "id", 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i > 0) put(b, "\n");
+    put_int(b, static_cast<Index>(i));
+  }
+  close_array(b);
+  vector_array<Dim>(b, "x0", p.x0);
+  vector_array<Dim>(b, "u", p.u);
+  vector_array<Dim>(b, "v", p.v);
+  scalar_array(b, "mass", p.mass);
+  scalar_array(b, "volume", p.volume);
+  scalar_array(b, "density", p.density);
+  tensor_array<Dim>(b, "F", p.F, 1.0);
+  tensor_array<Dim>(b, "stress", p.stress, 0.0);
+  for (const auto& f : extra) scalar_array(b, f.name, *f.values);
+  put(b, "      </PointData>\n");
+
+  put(b, "      <Points>\n");
+  vector_array<Dim>(b, "Points", p.x);
+  put(b, "      </Points>\n");
+
+  std::vector<Index> conn(n);
+  for (std::size_t i = 0; i < n; ++i) conn[i] = static_cast<Index>(i);
+  cells_block(b, conn, static_cast<Index>(n), 1, kVtkVertex);
+  vtu_footer(b);
+  return fmt::to_string(b);
+}
+
+// ---- grid ----------------------------------------------------------------------------------
+
+template <int Dim>
+std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fields) {
+  static_assert(Dim >= 1 && Dim <= 3);
+  std::array<Index, 3> nodes{1, 1, 1};  // corner nodes per direction, 1 in unused directions
+  std::array<Index, 3> cells{1, 1, 1};
+  for (int d = 0; d < Dim; ++d) {
+    if (g.cells[d] < 1) throw std::invalid_argument("grid_vtu: grid has no cells");
+    cells[d] = g.cells[d];
+    nodes[d] = g.cells[d] + 1;
+  }
+  const Index num_nodes = nodes[0] * nodes[1] * nodes[2];
+  const Index num_cells = g.num_cells();
+  check_fields(node_fields, static_cast<std::size_t>(num_nodes), {}, "grid node");
+
+  Buffer b;
+  vtu_header(b);
+  fmt::format_to(std::back_inserter(b), "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
+                 num_nodes, num_cells);
+  if (!node_fields.empty()) {
+    put(b, "      <PointData>\n");
+    for (const auto& f : node_fields) scalar_array(b, f.name, *f.values);
+    put(b, "      </PointData>\n");
+  }
+
+  put(b, "      <Points>\n");
+  open_array(b, "Float64", "Points", 3);
+  for (Index k = 0; k < nodes[2]; ++k) {
+    for (Index j = 0; j < nodes[1]; ++j) {
+      for (Index i = 0; i < nodes[0]; ++i) {
+        if (i + j + k > 0) put(b, "\n");
+        const std::array<Index, 3> ijk{i, j, k};
+        for (int d = 0; d < 3; ++d) {
+          if (d > 0) put(b, " ");
+          // origin + i h rather than accumulating h, so rounding does not grow along the grid.
+          put_num(b, d < Dim ? g.origin[d] + g.h[d] * static_cast<double>(ijk[d]) : 0.0);
+        }
+      }
+    }
+  }
+  close_array(b);
+  put(b, "      </Points>\n");
+
+  // VTK corner order (vtkCellType.h / VTK file format figures): counter-clockwise around the
+  // bottom face, then the same around the top face. Bits: 1 = +x, 2 = +y, 4 = +z. The first
+  // 2^Dim entries give the line, quad and hexahedron orderings.
+  constexpr std::array<int, 8> kCorner{0, 1, 3, 2, 4, 5, 7, 6};
+  constexpr int kNodesPerCell = ipow(2, Dim);
+  constexpr int kType = Dim == 1 ? kVtkLine : (Dim == 2 ? kVtkQuad : kVtkHexahedron);
+  std::vector<Index> conn;
+  conn.reserve(static_cast<std::size_t>(num_cells * kNodesPerCell));
+  for (Index k = 0; k < cells[2]; ++k) {
+    for (Index j = 0; j < cells[1]; ++j) {
+      for (Index i = 0; i < cells[0]; ++i) {
+        for (int c = 0; c < kNodesPerCell; ++c) {
+          const int bits = kCorner[static_cast<std::size_t>(c)];
+          const Index ci = i + (bits & 1), cj = j + ((bits >> 1) & 1), ck = k + ((bits >> 2) & 1);
+          conn.push_back(ci + nodes[0] * (cj + nodes[1] * ck));
+        }
+      }
+    }
+  }
+  cells_block(b, conn, num_cells, kNodesPerCell, kType);
+  vtu_footer(b);
+  return fmt::to_string(b);
+}
+
+// ---- pvd -----------------------------------------------------------------------------------
+
+void PvdSeries::add(double time, const std::string& file) {
+  entries_.emplace_back(time, file);
+}
+
+std::string PvdSeries::str() const {
+  Buffer b;
+  put(b,
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+      "  <Collection>\n");
+  for (const auto& [time, file] : entries_) {
+    fmt::format_to(std::back_inserter(b),
+                   "    <DataSet timestep=\"{:.17g}\" group=\"\" part=\"0\" file=\"{}\"/>\n", time,
+                   xml_escape(file));
+  }
+  put(b,
+      "  </Collection>\n"
+      "</VTKFile>\n");
+  return fmt::to_string(b);
+}
+
+// ---- explicit instantiations -----------------------------------------------------------------
+
+#define MPM_IO_INSTANTIATE(D)                                                                  \
+  template std::string particles_csv<D>(const Particles<D>&, const std::vector<ScalarField>&); \
+  template std::string particles_vtu<D>(const Particles<D>&, double,                           \
+                                        const std::vector<ScalarField>&);                      \
+  template std::string grid_vtu<D>(const Grid<D>&, const std::vector<ScalarField>&);
+MPM_IO_INSTANTIATE(1)
+MPM_IO_INSTANTIATE(2)
+MPM_IO_INSTANTIATE(3)
+#undef MPM_IO_INSTANTIATE
+
+}  // namespace mpm::io

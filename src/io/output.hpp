@@ -1,0 +1,70 @@
+#pragma once
+// Writers for run output: particle frames (CSV, VTK .vtu), the background grid (.vtu), the
+// ParaView time series (.pvd) and an atomic file writer for all of them. Every writer returns
+// the file content as a string; only write_file_atomic touches the file system, so the
+// formatting can be tested without files and a killed run never leaves a half-written frame.
+//
+// Formats: VTK XML file formats, "VTK File Formats" (VTK User's Guide, Kitware), section
+// "XML File Formats"; cell type ids from vtkCellType.h.
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "grid/grid.hpp"
+#include "particles/particles.hpp"
+
+namespace mpm::io {
+
+// Write content to path atomically: write "<path>.tmp.<pid>" in the same directory, flush and
+// fsync it, then rename it over path (rename is atomic within one file system, POSIX). Readers
+// see either the old file or the complete new one. Creates no directories. Throws
+// std::runtime_error naming the path and the system error (strerror) on failure; the temporary
+// file is removed in that case.
+void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+
+// An extra per-particle (or per-grid-node) scalar field to add to a frame, e.g. the exact
+// solution or the error. values must outlive the writer call and hold one value per particle
+// (or node); the writers throw std::invalid_argument otherwise.
+struct ScalarField {
+  std::string name;
+  const std::vector<double>* values = nullptr;
+};
+
+// CSV of the particle state: a header line, then one row per particle. Columns:
+// id, x0_1..x0_D, x_1..x_D, u_1..u_D, v_1..v_D, mass, volume, density, F_11..F_DD (row-major),
+// stress_11..stress_DD (row-major), then each extra field. id is the particle's index.
+// Numbers are printed with 17 significant digits, so they parse back to the same double.
+template <int Dim>
+std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField>& extra = {});
+
+// VTK XML UnstructuredGrid (.vtu, ASCII) with one VTK_VERTEX cell per particle at its current
+// position (padded to 3 components). PointData: id (Int64), x0, u, v (3 components, zero
+// padded), mass, volume, density, F and stress (9 components, row-major: the Dim x Dim tensor
+// embedded in 3x3 with identity padding for F and zero padding for stress), then the extra
+// scalars. The time [s] is stored in FieldData as "TimeValue", which ParaView reads.
+template <int Dim>
+std::string particles_vtu(const Particles<Dim>& p, double time,
+                          const std::vector<ScalarField>& extra = {});
+
+// The background grid as a .vtu: points at the cell corners (x fastest, then y, then z), cells
+// VTK_LINE in 1D, VTK_QUAD in 2D, VTK_HEXAHEDRON in 3D (linear cell index x fastest, like
+// Grid::cell_index). node_fields are PointData scalars with one value per corner node.
+template <int Dim>
+std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fields = {});
+
+// A ParaView .pvd collection: one DataSet entry per frame, in the order added.
+class PvdSeries {
+ public:
+  // file is written as given; it should be relative to the .pvd file's directory.
+  void add(double time, const std::string& file);
+  std::string str() const;
+  std::size_t size() const { return entries_.size(); }
+
+ private:
+  std::vector<std::pair<double, std::string>> entries_;
+};
+
+}  // namespace mpm::io

@@ -1,0 +1,112 @@
+#pragma once
+// Constitutive laws. Each law is a small value type with an inline per-particle update; the
+// stress stage visits the material variant once and then loops over particles (no virtual
+// calls in the loop). Stress is the Cauchy stress [Pa]; F the deformation gradient.
+#include <cmath>
+#include <string_view>
+#include <variant>
+
+#include "core/types.hpp"
+
+namespace mpm {
+
+struct ElasticParameters {
+  double density = 1.0;         // rho0 [kg/m^3]
+  double youngs_modulus = 1.0;  // E [Pa]
+  double poisson_ratio = 0.0;   // nu [-]
+  double lambda() const {
+    return youngs_modulus * poisson_ratio / ((1.0 + poisson_ratio) * (1.0 - 2.0 * poisson_ratio));
+  }
+  double mu() const { return youngs_modulus / (2.0 * (1.0 + poisson_ratio)); }
+};
+
+// 1D small deformation, incremental: sigma^{s+1} = sigma^s + E d_eps, d_eps = dt dv/dx
+// (004 eq. 4.15).
+struct Elastic1DSmall {
+  static constexpr std::string_view kName = "elastic_1d_small";
+  ElasticParameters p;
+  template <int Dim>
+  void update(Mat<Dim>& sigma, const Mat<Dim>& /*F*/, const Mat<Dim>& dtL) const {
+    // One-dimensional law: make_material() rejects it for Dim > 1.
+    if constexpr (Dim == 1) sigma(0, 0) += p.youngs_modulus * dtL(0, 0);
+  }
+  // Stored energy [J] of a particle: sigma^2 / (2E) per current volume.
+  template <int Dim>
+  double energy(const Mat<Dim>& sigma, const Mat<Dim>& /*F*/, double V, double /*V0*/) const {
+    return 0.5 * sigma(0, 0) * sigma(0, 0) / p.youngs_modulus * V;
+  }
+  double wave_speed() const { return std::sqrt(p.youngs_modulus / p.density); }
+};
+
+// 1D large deformation, incremental: sigma^{s+1} = sigma^s + (E - sigma^s) d_eps (004 eq. 4.16),
+// whose closed form is sigma = E (1 - 1/F).
+struct Elastic1DLarge {
+  static constexpr std::string_view kName = "elastic_1d_large";
+  ElasticParameters p;
+  template <int Dim>
+  void update(Mat<Dim>& sigma, const Mat<Dim>& /*F*/, const Mat<Dim>& dtL) const {
+    if constexpr (Dim == 1) sigma(0, 0) += (p.youngs_modulus - sigma(0, 0)) * dtL(0, 0);
+  }
+  // Energy of the closed form: W(F) = E (F - 1 - ln F) per reference volume (P = sigma in 1D).
+  template <int Dim>
+  double energy(const Mat<Dim>& /*sigma*/, const Mat<Dim>& F, double /*V*/, double V0) const {
+    const double f = F(0, 0);
+    return p.youngs_modulus * (f - 1.0 - std::log(f)) * V0;
+  }
+  double wave_speed() const { return std::sqrt(p.youngs_modulus / p.density); }
+};
+
+// Linear elastic in F (D eq. 2.13): sigma = lambda tr(eps) I + 2 mu eps, eps = sym(F) - I.
+// In 1D this is sigma = (lambda + 2 mu) (F - 1); with nu = 0 the modulus is E.
+struct LinearElastic {
+  static constexpr std::string_view kName = "linear_elastic";
+  ElasticParameters p;
+  template <int Dim>
+  void update(Mat<Dim>& sigma, const Mat<Dim>& F, const Mat<Dim>& /*dtL*/) const {
+    const Mat<Dim> eps = 0.5 * (F + F.transpose()) - Mat<Dim>::Identity();
+    sigma = p.lambda() * eps.trace() * Mat<Dim>::Identity() + 2.0 * p.mu() * eps;
+  }
+  template <int Dim>
+  double energy(const Mat<Dim>& /*sigma*/, const Mat<Dim>& F, double /*V*/, double V0) const {
+    const Mat<Dim> eps = 0.5 * (F + F.transpose()) - Mat<Dim>::Identity();
+    const double tr = eps.trace();
+    return (0.5 * p.lambda() * tr * tr + p.mu() * eps.squaredNorm()) * V0;
+  }
+  double wave_speed() const { return std::sqrt((p.lambda() + 2.0 * p.mu()) / p.density); }
+};
+
+// Compressible neo-Hookean (D eq. 2.14): sigma = lambda ln(J)/J I + mu/J (F F^T - I).
+struct NeoHookean {
+  static constexpr std::string_view kName = "neo_hookean";
+  ElasticParameters p;
+  template <int Dim>
+  void update(Mat<Dim>& sigma, const Mat<Dim>& F, const Mat<Dim>& /*dtL*/) const {
+    const double J = F.determinant();
+    sigma = (p.lambda() * std::log(J) / J) * Mat<Dim>::Identity() +
+            (p.mu() / J) * (F * F.transpose() - Mat<Dim>::Identity());
+  }
+  // W = mu/2 (tr(F^T F) - d) - mu ln J + lambda/2 (ln J)^2 per reference volume.
+  template <int Dim>
+  double energy(const Mat<Dim>& /*sigma*/, const Mat<Dim>& F, double /*V*/, double V0) const {
+    const double lnJ = std::log(F.determinant());
+    return (0.5 * p.mu() * ((F.transpose() * F).trace() - Dim) - p.mu() * lnJ +
+            0.5 * p.lambda() * lnJ * lnJ) *
+           V0;
+  }
+  double wave_speed() const { return std::sqrt((p.lambda() + 2.0 * p.mu()) / p.density); }
+};
+
+using Material = std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean>;
+
+// Build the material named by `model` (a registry::kMaterials name). Throws InputError when the
+// law does not exist in dimension `dim`.
+Material make_material(std::string_view model, const ElasticParameters& p, int dim);
+
+inline double wave_speed(const Material& m) {
+  return std::visit([](const auto& law) { return law.wave_speed(); }, m);
+}
+inline std::string_view material_name(const Material& m) {
+  return std::visit([](const auto& law) { return law.kName; }, m);
+}
+
+}  // namespace mpm

@@ -1,0 +1,46 @@
+#pragma once
+// Material points as a struct of arrays (one contiguous array per field), D Algorithm 2 input.
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace mpm {
+
+template <int Dim>
+struct Particles {
+  std::vector<Vec<Dim>> x;      // current position x_p^s [m]
+  std::vector<Vec<Dim>> x0;     // initial (material) position x_p^0 [m]
+  std::vector<Vec<Dim>> u;      // displacement u_p = x_p - x_p^0 accumulated from grid [m]
+  std::vector<Vec<Dim>> v;      // velocity v_p [m/s]
+  std::vector<double> mass;     // m_p [kg] (per unit area in 1D), constant in time
+  std::vector<double> volume;   // V_p [m^Dim]
+  std::vector<double> volume0;  // V_p^0 [m^Dim]
+  std::vector<double> density;  // rho_p = m_p / V_p [kg/m^3]
+  std::vector<Mat<Dim>> F;      // deformation gradient F_p
+  std::vector<Mat<Dim>> stress; // Cauchy stress sigma_p [Pa]
+  std::vector<Vec<Dim>> body;   // body force per unit mass b_p [m/s^2], refreshed every step
+
+  Index size() const { return static_cast<Index>(x.size()); }
+
+  void resize(Index n) {
+    const auto s = static_cast<std::size_t>(n);
+    x.resize(s, Vec<Dim>::Zero());
+    x0.resize(s, Vec<Dim>::Zero());
+    u.resize(s, Vec<Dim>::Zero());
+    v.resize(s, Vec<Dim>::Zero());
+    mass.resize(s, 0.0);
+    volume.resize(s, 0.0);
+    volume0.resize(s, 0.0);
+    density.resize(s, 0.0);
+    F.resize(s, Mat<Dim>::Identity());
+    stress.resize(s, Mat<Dim>::Zero());
+    body.resize(s, Vec<Dim>::Zero());
+  }
+
+  // Bytes of particle state per particle (for the benchmark's memory figure).
+  static constexpr std::size_t bytes_per_particle() {
+    return 5 * sizeof(Vec<Dim>) + 4 * sizeof(double) + 2 * sizeof(Mat<Dim>) + sizeof(Vec<Dim>);
+  }
+};
+
+}  // namespace mpm

@@ -1,0 +1,104 @@
+#pragma once
+// The four explicit update schemes as orders of the shared stages. Each step() reads like the
+// algorithm it implements; none of them copies a loop.
+#include <string_view>
+#include <variant>
+
+#include "scheme/stages.hpp"
+
+namespace mpm {
+
+// Update stress last, D Algorithm 1.
+struct Usl {
+  static constexpr std::string_view kName = "usl";
+  // The particle velocity after a step approximates v(t + kVelocityTime dt): Euler-Cromer's
+  // velocity is the leapfrog half-step velocity when the stress is updated last (D 2.3.2).
+  static constexpr double kVelocityTime = -0.5;
+  template <class Sim>
+  static void step(Sim& sim, double dt) {
+    using namespace stages;
+    evaluate_basis(sim);                 // phi_i(x_p^s), grad phi_i(x_p^s)
+    refresh_body_force(sim);
+    map_mass(sim);                       // M^s       (2.31)
+    map_momentum(sim);                   // q^s       (2.32)
+    map_forces(sim);                     // f^s       (2.33)
+    solve_acceleration(sim);             // a^s       (2.34)
+    solve_velocity(sim);                 // v_i^s     (2.35)
+    advance_grid_velocity(sim, dt);      // v_i^{s+1} (2.36)
+    update_particle_position(sim, dt);   // x_p^{s+1} (2.38)
+    update_particle_velocity(sim, dt);   // v_p^{s+1} (2.39)
+    update_stress(sim, dt);              // F, V, rho, sigma from v_i^{s+1} (2.40-2.43)
+  }
+};
+
+// Modified update stress last, D Algorithm 2 (004 4.2.2).
+struct Musl {
+  static constexpr std::string_view kName = "musl";
+  static constexpr double kVelocityTime = -0.5;
+  template <class Sim>
+  static void step(Sim& sim, double dt) {
+    using namespace stages;
+    evaluate_basis(sim);
+    refresh_body_force(sim);
+    map_mass(sim);                       // M^s                    (2.44)
+    map_forces(sim);                     // f^s                    (2.45)
+    solve_acceleration(sim);             // a^s                    (2.46)
+    update_particle_velocity(sim, dt);   // v_p^{s+1}              (2.47)
+    map_momentum(sim);                   // q from v_p^{s+1}       (2.48)
+    solve_velocity(sim);                 // v_i^{s+1}              (2.49)
+    update_particle_position(sim, dt);   // x_p^{s+1}              (2.50-2.51)
+    update_stress(sim, dt);              // F, V, rho, sigma       (2.52-2.55)
+  }
+};
+
+// Update stress first (D 2.6.3): the stress is updated at the start of the step from the grid
+// velocity of v_p^s, then forces use the new stress.
+struct Usf {
+  static constexpr std::string_view kName = "usf";
+  // The stress leads: sigma^{s+1} uses v^s, so v_p^s plays the role of v^{s+1/2}.
+  static constexpr double kVelocityTime = +0.5;
+  template <class Sim>
+  static void step(Sim& sim, double dt) {
+    using namespace stages;
+    evaluate_basis(sim);
+    refresh_body_force(sim);
+    map_mass(sim);
+    map_momentum(sim);                   // q from v_p^s
+    solve_velocity(sim);                 // v_i^s
+    update_stress(sim, dt);              // sigma^{s+1} from v_i^s
+    map_forces(sim);                     // f with the updated stress and volume
+    solve_acceleration(sim);
+    update_particle_velocity(sim, dt);   // v_p^{s+1}
+    advance_grid_velocity(sim, dt);      // v_i^{s+1} = v_i^s + dt a_i
+    update_particle_position(sim, dt);
+  }
+};
+
+// Update stress averaged (D 2.6.3, after Nairn): half the stress increment from the
+// start-of-step grid velocity (USF), half from the remapped end-of-step velocity (MUSL).
+struct Usavg {
+  static constexpr std::string_view kName = "usavg";
+  // Half of each: the velocity is centred on the step end.
+  static constexpr double kVelocityTime = 0.0;
+  template <class Sim>
+  static void step(Sim& sim, double dt) {
+    using namespace stages;
+    evaluate_basis(sim);
+    refresh_body_force(sim);
+    map_mass(sim);
+    map_momentum(sim);                   // q from v_p^s
+    solve_velocity(sim);                 // v_i^s
+    update_stress(sim, 0.5 * dt);        // USF half
+    map_forces(sim);
+    solve_acceleration(sim);
+    update_particle_velocity(sim, dt);   // v_p^{s+1}
+    map_momentum(sim);                   // q from v_p^{s+1}
+    solve_velocity(sim);                 // v_i^{s+1}
+    update_particle_position(sim, dt);
+    update_stress(sim, 0.5 * dt);        // MUSL half
+  }
+};
+
+using Scheme = std::variant<Usl, Usf, Musl, Usavg>;
+
+}  // namespace mpm

@@ -1,0 +1,249 @@
+#pragma once
+// The shared stages of every update scheme (D Algorithms 1-2, D 2.6.3). A scheme is an order of
+// these calls; no stage knows which scheme calls it. Per-particle loops are plain loops over the
+// struct-of-arrays with the basis and material resolved at compile time.
+#include <cmath>
+#include <fmt/format.h>
+#include <string>
+#include <vector>
+
+#include "core/simulation.hpp"
+
+namespace mpm::stages {
+
+namespace detail {
+// Formats at most `limit` particle ids with their positions for failure messages.
+template <int Dim>
+std::string describe_particles(const Particles<Dim>& P, const std::vector<Index>& ids,
+                               std::size_t limit = 8) {
+  std::string out;
+  for (std::size_t k = 0; k < ids.size() && k < limit; ++k) {
+    const auto i = static_cast<std::size_t>(ids[k]);
+    out += fmt::format("{}particle {} at x = (", k ? "; " : "", ids[k]);
+    for (int d = 0; d < Dim; ++d) out += fmt::format("{}{:.6g}", d ? ", " : "", P.x[i][d]);
+    out += ")";
+  }
+  if (ids.size() > limit) out += fmt::format("; and {} more", ids.size() - limit);
+  return out;
+}
+}  // namespace detail
+
+// D Alg. 2 step 3: basis values and gradients at x_p^s. Stops the run (exit code 4) when a
+// particle has left the grid, and counts grid crossings.
+template <class Sim>
+void evaluate_basis(Sim& sim) {
+  auto& P = sim.particles;
+  bool outside = false;
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    if (!sim.grid.inside(P.x[i])) {
+      outside = true;
+      continue;
+    }
+    const Index c = sim.grid.cell_index(P.x[i]);
+    if (sim.cell[i] >= 0 && c != sim.cell[i]) ++sim.diag.grid_crossings;
+    sim.cell[i] = c;
+    sim.basis.evaluate(P, p, sim.stencils[i]);
+  }
+  if (outside) {
+    std::vector<Index> ids;
+    for (Index p = 0; p < P.size(); ++p)
+      if (!sim.grid.inside(P.x[static_cast<std::size_t>(p)])) ids.push_back(p);
+    throw RunError(exit_code::kLeftGrid,
+                   fmt::format("step {}, t = {:.9g} s: {} particle(s) left the grid [{:.6g}, "
+                               "{:.6g}]: {}",
+                               sim.step, sim.time, ids.size(), sim.grid.origin[0],
+                               sim.grid.upper()[0], detail::describe_particles(P, ids)));
+  }
+}
+
+// Body force b_p(x, t) for this step (constant forces were filled once at set-up).
+template <class Sim>
+void refresh_body_force(Sim& sim) {
+  if (sim.body_force.time_dependent || sim.body_force.position_dependent)
+    sim.body_force.fill(sim.particles, sim.time, sim.particles.body);
+}
+
+// Nodal (lumped) masses, the consistent matrix if requested, the active set, and the mass
+// conservation check of the mapping.
+template <class Sim>
+void map_mass(Sim& sim) {
+  sim.mapping.map_mass(sim);
+  const auto& m = sim.nodes.mass;
+  double total = 0.0, largest = 0.0;
+  for (double mi : m) {
+    total += mi;
+    largest = std::max(largest, mi);
+  }
+  double particle_mass = 0.0;
+  for (double mp : sim.particles.mass) particle_mass += mp;
+  if (particle_mass > 0.0)
+    sim.diag.max_rel_mass_error =
+        std::max(sim.diag.max_rel_mass_error, std::abs(total - particle_mass) / particle_mass);
+  const double threshold = sim.mass_tolerance * largest;
+  for (std::size_t i = 0; i < m.size(); ++i) sim.nodes.active[i] = m[i] > threshold ? 1 : 0;
+  if (sim.mass_type == MassType::Consistent) {
+    const auto& act = sim.nodes.active;
+    const auto& fixed = sim.nodes.fixed;
+    // Fixed DOFs are eliminated: the prescribed value is zero, so M y = r with identity rows.
+    // Per-component fixing would need one factorisation per component; every boundary
+    // condition of this release fixes all components.
+    if (!sim.consistent.factorize([&](Index i) {
+          const auto k = static_cast<std::size_t>(i);
+          return act[k] && !fixed[k];
+        }))
+      throw RunError(exit_code::kNonFinite,
+                     fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
+                                 "(a cell with too few particles); use method.mass = \"lumped\"",
+                                 sim.step, sim.time));
+  }
+}
+
+template <class Sim>
+void map_momentum(Sim& sim) {
+  sim.mapping.map_momentum(sim);
+  constexpr int Dim = Sim::kDim;
+  Vec<Dim> grid_p = Vec<Dim>::Zero(), part_p = Vec<Dim>::Zero();
+  double scale = 0.0;
+  for (const auto& q : sim.nodes.momentum) grid_p += q;
+  const auto& P = sim.particles;
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    part_p += P.mass[i] * P.v[i];
+    scale += P.mass[i] * P.v[i].norm();
+  }
+  if (scale > 0.0)
+    sim.diag.max_rel_momentum_error =
+        std::max(sim.diag.max_rel_momentum_error, (grid_p - part_p).norm() / scale);
+}
+
+template <class Sim>
+void map_forces(Sim& sim) {
+  sim.mapping.map_forces(sim);
+}
+
+namespace detail {
+// y = M^{-1} r on the active, unconstrained DOFs; zero elsewhere (D eq. 2.46 / 2.49).
+template <class Sim, class V>
+void solve_grid(const Sim& sim, const std::vector<V>& r, std::vector<V>& y) {
+  constexpr int Dim = Sim::kDim;
+  const auto& nd = sim.nodes;
+  const auto n = r.size();
+  if (sim.mass_type == MassType::Lumped) {
+    for (std::size_t i = 0; i < n; ++i) y[i] = nd.active[i] ? V(r[i] / nd.mass[i]) : V::Zero();
+  } else {
+    Eigen::VectorXd rhs(static_cast<Index>(n));
+    for (int d = 0; d < Dim; ++d) {
+      for (std::size_t i = 0; i < n; ++i)
+        rhs[static_cast<Index>(i)] = (nd.active[i] && !nd.fixed[i]) ? r[i][d] : 0.0;
+      const Eigen::VectorXd sol = sim.consistent.solve(rhs);
+      for (std::size_t i = 0; i < n; ++i) y[i][d] = sol[static_cast<Index>(i)];
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (nd.fixed[i])
+      for (int d = 0; d < Dim; ++d)
+        if (nd.fixed[i] & (1u << d)) y[i][d] = 0.0;
+}
+}  // namespace detail
+
+// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46).
+template <class Sim>
+void solve_acceleration(Sim& sim) {
+  detail::solve_grid(sim, sim.nodes.force, sim.nodes.accel);
+}
+
+// v_i = M^{-1} q_i with Dirichlet components zero (D eq. 2.35 / 2.49).
+template <class Sim>
+void solve_velocity(Sim& sim) {
+  detail::solve_grid(sim, sim.nodes.momentum, sim.nodes.velocity);
+}
+
+// Euler-Cromer on the grid: v_i^{s+1} = v_i^s + dt a_i^s (D eq. 2.36; USL, USF).
+template <class Sim>
+void advance_grid_velocity(Sim& sim, double dt) {
+  auto& nd = sim.nodes;
+  for (std::size_t i = 0; i < nd.velocity.size(); ++i) nd.velocity[i] += dt * nd.accel[i];
+}
+
+// v_p^{s+1} = v_p^s + dt sum_i phi_i(x_p^s) a_i^s (D eq. 2.39 / 2.47).
+template <class Sim>
+void update_particle_velocity(Sim& sim, double dt) {
+  auto& P = sim.particles;
+  const auto& a = sim.nodes.accel;
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    const auto& s = sim.stencils[i];
+    Vec<Sim::kDim> acc = Vec<Sim::kDim>::Zero();
+    for (int k = 0; k < s.kSize; ++k) acc += s.w[k] * a[static_cast<std::size_t>(s.dof[k])];
+    P.v[i] += dt * acc;
+  }
+}
+
+// x_p^{s+1} = x_p^s + dt sum_i phi_i(x_p^s) v_i^{s+1}, and the same increment for u_p
+// (Euler-Cromer: positions use the new velocity; D eq. 2.38 / 2.51).
+template <class Sim>
+void update_particle_position(Sim& sim, double dt) {
+  auto& P = sim.particles;
+  const auto& v = sim.nodes.velocity;
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    const auto& s = sim.stencils[i];
+    Vec<Sim::kDim> dx = Vec<Sim::kDim>::Zero();
+    for (int k = 0; k < s.kSize; ++k) dx += s.w[k] * v[static_cast<std::size_t>(s.dof[k])];
+    dx *= dt;
+    P.x[i] += dx;
+    P.u[i] += dx;
+  }
+}
+
+// Velocity gradient from the current grid velocity, then F, V, rho and the stress
+// (D eq. 2.52-2.55 and step 14). dt is the increment this update covers (dt/2 in USAVG).
+template <class Sim>
+void update_stress(Sim& sim, double dt) {
+  constexpr int Dim = Sim::kDim;
+  auto& P = sim.particles;
+  const auto& v = sim.nodes.velocity;
+  bool bad = false;
+  std::visit(
+      [&](const auto& law) {
+        for (Index p = 0; p < P.size(); ++p) {
+          const auto i = static_cast<std::size_t>(p);
+          const auto& s = sim.stencils[i];
+          Mat<Dim> L = Mat<Dim>::Zero();  // L_ab = dv_a/dx_b
+          for (int k = 0; k < s.kSize; ++k)
+            L.noalias() += v[static_cast<std::size_t>(s.dof[k])] * s.grad[k].transpose();
+          const Mat<Dim> dtL = dt * L;
+          P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
+          const double J = P.F[i].determinant();
+          P.volume[i] = J * P.volume0[i];
+          P.density[i] = P.mass[i] / P.volume[i];
+          law.update(P.stress[i], P.F[i], dtL);
+          bad |= !(J > 0.0) || !std::isfinite(P.stress[i].sum());
+        }
+      },
+      sim.material);
+  if (bad) {
+    std::vector<Index> inverted, nonfinite;
+    for (Index p = 0; p < P.size(); ++p) {
+      const auto i = static_cast<std::size_t>(p);
+      if (!std::isfinite(P.stress[i].sum()) || !std::isfinite(P.F[i].sum()))
+        nonfinite.push_back(p);
+      else if (!(P.F[i].determinant() > 0.0))
+        inverted.push_back(p);
+    }
+    if (!nonfinite.empty())
+      throw RunError(exit_code::kNonFinite,
+                     fmt::format("step {}, t = {:.9g} s: non-finite stress or deformation "
+                                 "gradient at {} particle(s): {}",
+                                 sim.step, sim.time, nonfinite.size(),
+                                 detail::describe_particles(P, nonfinite)));
+    throw RunError(exit_code::kInvertedDeformation,
+                   fmt::format("step {}, t = {:.9g} s: det F <= 0 (inverted or degenerate "
+                               "deformation) at {} particle(s): {}",
+                               sim.step, sim.time, inverted.size(),
+                               detail::describe_particles(P, inverted)));
+  }
+}
+
+}  // namespace mpm::stages

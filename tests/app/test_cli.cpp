@@ -1,0 +1,153 @@
+// The command line as a user meets it: version, list, keys, promised error messages and exit
+// codes, the files a run and a study write.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out;  // stdout and stderr together
+};
+
+Result sh(const std::string& args) {
+  const std::string cmd = std::string(MPM_BINARY) + " " + args + " 2>&1";
+  FILE* f = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf{};
+  while (std::size_t n = fread(buf.data(), 1, buf.size(), f)) out.append(buf.data(), n);
+  const int status = pclose(f);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+std::string src(const std::string& rel) { return std::string(MPM_SOURCE_DIR) + "/" + rel; }
+
+std::filesystem::path temp_dir(const std::string& name) {
+  auto d = std::filesystem::temp_directory_path() / ("mpm_cli_" + name + "_" +
+                                                      std::to_string(::getpid()));
+  std::filesystem::remove_all(d);
+  return d;
+}
+
+TEST(Cli, VersionListKeys) {
+  auto v = sh("--version");
+  EXPECT_EQ(v.code, 0);
+  EXPECT_NE(v.out.find("mpmlab"), std::string::npos);
+  auto l = sh("list");
+  EXPECT_EQ(l.code, 0);
+  for (const char* name : {"vibrating_bar", "custom", "linear", "direct", "usl", "usf", "musl",
+                           "usavg", "lumped", "consistent", "elastic_1d_small", "neo_hookean"})
+    EXPECT_NE(l.out.find(name), std::string::npos) << name;
+  auto k = sh("keys");
+  EXPECT_EQ(k.code, 0);
+  for (const char* key : {"grid.cells", "particles.per_cell", "time.dt", "time.end",
+                          "method.scheme", "method.basis", "method.mapping", "method.mass"})
+    EXPECT_NE(k.out.find(key), std::string::npos) << key;
+  auto h = sh("--help");
+  EXPECT_EQ(h.code, 0);
+  EXPECT_NE(h.out.find("study"), std::string::npos);
+}
+
+TEST(Cli, UnknownKeyNamesFileLineKeyAndSuggestion) {
+  auto r = sh("run " + src("tests/data/unknown_key.toml") + " --quiet --out " +
+              temp_dir("unknown").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("unknown_key.toml:4:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("grid.cell"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("grid.cells"), std::string::npos) << r.out;  // the suggestion
+}
+
+TEST(Cli, WrongTypeBadChoiceAndRangeErrors) {
+  auto t = sh("run " + src("tests/data/wrong_type.toml") + " -q");
+  EXPECT_EQ(t.code, 2);
+  EXPECT_NE(t.out.find("wrong_type.toml:4:"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find("integer"), std::string::npos) << t.out;
+  auto c = sh("run " + src("tests/data/bad_choice.toml") + " -q");
+  EXPECT_EQ(c.code, 2);
+  EXPECT_NE(c.out.find("bad_choice.toml:4:"), std::string::npos) << c.out;
+  for (const char* s : {"usl", "usf", "musl", "usavg"})
+    EXPECT_NE(c.out.find(s), std::string::npos) << c.out;
+  auto n = sh("run " + src("tests/data/negative_modulus.toml") + " -q");
+  EXPECT_EQ(n.code, 2);
+  EXPECT_NE(n.out.find("material.youngs_modulus"), std::string::npos) << n.out;
+  EXPECT_NE(n.out.find("negative_modulus.toml:"), std::string::npos) << n.out;
+  auto s = sh("run " + src("examples/vibrating_bar_small.toml") +
+              " -q --set method.scheme=leapfrog");
+  EXPECT_EQ(s.code, 2);
+  EXPECT_NE(s.out.find("--set method.scheme=leapfrog"), std::string::npos) << s.out;
+}
+
+TEST(Cli, ParticleLeavingTheGridStopsWithStepIdsAndKeepsOutput) {
+  const auto out = temp_dir("leave");
+  auto r = sh("run " + src("tests/data/leaves_grid.toml") + " -q --out " + out.string());
+  EXPECT_EQ(r.code, 4) << r.out;
+  EXPECT_NE(r.out.find("step "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("left the grid"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("particle "), std::string::npos) << r.out;
+  std::ifstream f(out / "summary.json");
+  ASSERT_TRUE(f.good());
+  const auto j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["status"], "failed");
+  EXPECT_EQ(j["exit_code"], 4);
+  EXPECT_TRUE(std::filesystem::exists(out / "history.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "particles_00000.csv"));
+  std::filesystem::remove_all(out);
+}
+
+TEST(Cli, RunWritesSummaryFramesHistoryAndVtk) {
+  const auto out = temp_dir("run");
+  auto r = sh("run " + src("examples/vibrating_bar_small.toml") + " -q --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream f(out / "summary.json");
+  const auto j = nlohmann::json::parse(f);
+  for (const char* key : {"benchmark", "dim", "method", "cells", "particles", "steps",
+                          "wall_seconds", "ns_per_particle_step", "errors", "conservation"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["method"]["scheme"], "musl");
+  EXPECT_EQ(j["steps"], 19);
+  EXPECT_EQ(j["particles"], 240);
+  for (const char* e : {"displacement_rms", "velocity_rms", "velocity_rms_midstep", "stress_rms",
+                        "stress_rel_l2"})
+    EXPECT_TRUE(j["errors"][e].is_number()) << e;
+  EXPECT_LT(j["conservation"]["max_rel_mass_error"].get<double>(), 1e-13);
+  for (const char* file : {"history.csv", "particles.pvd", "grid.vtu", "config.toml",
+                           "particles_00000.csv", "particles_00000.vtu"})
+    EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
+  // Initial frame plus 4 evenly spaced frames, the last one at the end time.
+  EXPECT_TRUE(std::filesystem::exists(out / "particles_00004.vtu"));
+  EXPECT_FALSE(std::filesystem::exists(out / "particles_00005.vtu"));
+  std::ifstream h(out / "history.csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(h, line)) ++rows;
+  EXPECT_EQ(rows, 1 + 20);  // header, t = 0 and 19 steps
+  std::filesystem::remove_all(out);
+}
+
+TEST(Cli, StudyWritesCsvAndPrintsOrders) {
+  const auto out = temp_dir("study");
+  auto r = sh("study " + src("examples/vibrating_bar_small.toml") +
+              " --refine grid.cells=5,10 --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("order"), std::string::npos);
+  std::ifstream f(out / "study.csv");
+  std::string header, row1, row2, extra;
+  std::getline(f, header);
+  std::getline(f, row1);
+  std::getline(f, row2);
+  EXPECT_FALSE(std::getline(f, extra));
+  EXPECT_EQ(header.rfind("grid.cells,cells,h,particles", 0), 0u) << header;
+  EXPECT_EQ(row1.rfind("5,5,", 0), 0u) << row1;
+  EXPECT_EQ(row2.rfind("10,10,", 0), 0u) << row2;
+  std::filesystem::remove_all(out);
+}
+
+}  // namespace
