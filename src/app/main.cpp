@@ -1,7 +1,7 @@
 // mpm: the mpmlab command line. Subcommands: run, study, bench, keys, list.
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 #include <filesystem>
-#include <fmt/format.h>
 #include <iostream>
 
 #include "core/perf.hpp"
@@ -42,14 +42,13 @@ int cmd_run(const std::string& config, const std::vector<std::string>& sets, std
   mpm::RunOptions ro{out, quiet};
   const auto r = mpm::run(cfg, ro);
   if (!quiet) {
-    std::cout << fmt::format("{}: {} particles, {} cells, {} steps in {:.3f} s ({:.1f} ns per "
-                             "particle-step)\n",
-                             r.benchmark, r.particles, r.cells, r.steps, r.wall_seconds,
-                             r.ns_per_particle_step);
+    std::cout << fmt::format(
+        "{}: {} particles, {} cells, {} steps in {:.3f} s ({:.1f} ns per "
+        "particle-step)\n",
+        r.benchmark, r.particles, r.cells, r.steps, r.wall_seconds, r.ns_per_particle_step);
     std::cout << fmt::format("  displacement_rms     {}\n", fmt_err(r.errors.displacement_rms));
     std::cout << fmt::format("  velocity_rms         {}\n", fmt_err(r.errors.velocity_rms));
-    std::cout << fmt::format("  velocity_rms_midstep {}\n",
-                             fmt_err(r.errors.velocity_rms_midstep));
+    std::cout << fmt::format("  velocity_rms_midstep {}\n", fmt_err(r.errors.velocity_rms_midstep));
     std::cout << fmt::format("  velocity_rms_scheme_time {} (t_end {:+g} dt)\n",
                              fmt_err(r.errors.velocity_rms_scheme_time),
                              r.summary.value("velocity_time_offset_dt", 0.0));
@@ -122,8 +121,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench->add_option("--scheme", bopt.scheme, "usl, usf, musl or usavg")->capture_default_str();
 
-  auto* keys = app.add_subcommand("keys", "print every configuration key with type, unit, "
-                                          "default, range and description");
+  auto* keys = app.add_subcommand("keys",
+                                  "print every configuration key with type, unit, "
+                                  "default, range and description");
   auto* list = app.add_subcommand("list", "list benchmarks, bases, mappings, schemes, materials");
 
   CLI11_PARSE(app, argc, argv);

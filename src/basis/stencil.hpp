@@ -10,9 +10,9 @@ namespace mpm {
 template <int Dim, int N>
 struct Stencil {
   static constexpr int kSize = N;
-  std::array<Index, N> dof;          // linear DOF indices
-  std::array<double, N> w;           // phi_i(x_p)
-  std::array<Vec<Dim>, N> grad;      // grad phi_i(x_p) [1/m]
+  std::array<Index, N> dof;      // linear DOF indices
+  std::array<double, N> w;       // phi_i(x_p)
+  std::array<Vec<Dim>, N> grad;  // grad phi_i(x_p) [1/m]
 };
 
 // Tensor-product assembly from 1D factors: K functions per direction starting at first[d].

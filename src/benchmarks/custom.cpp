@@ -12,15 +12,15 @@ Problem<1> make_custom_1d(const Config& cfg) {
   const double g0 = cfg.get_real("grid.min"), g1 = cfg.get_real("grid.max");
   const double b0 = cfg.get_real("body.min"), b1 = cfg.get_real("body.max");
   if (!(g1 > g0))
-    throw InputError(fmt::format("{}: grid.max = {} must exceed grid.min = {}",
-                                 cfg.where("grid.max"), g1, g0));
+    throw InputError(
+        fmt::format("{}: grid.max = {} must exceed grid.min = {}", cfg.where("grid.max"), g1, g0));
   if (!(b1 > b0))
-    throw InputError(fmt::format("{}: body.max = {} must exceed body.min = {}",
-                                 cfg.where("body.max"), b1, b0));
+    throw InputError(
+        fmt::format("{}: body.max = {} must exceed body.min = {}", cfg.where("body.max"), b1, b0));
   if (b0 < g0 || b1 > g1)
-    throw InputError(fmt::format(
-        "{}: the body [{}, {}] must lie inside the grid [{}, {}] (grid.min, grid.max)",
-        cfg.where(b0 < g0 ? "body.min" : "body.max"), b0, b1, g0, g1));
+    throw InputError(
+        fmt::format("{}: the body [{}, {}] must lie inside the grid [{}, {}] (grid.min, grid.max)",
+                    cfg.where(b0 < g0 ? "body.min" : "body.max"), b0, b1, g0, g1));
   pb.material = material_from_config(cfg, 1);
   const double rho = cfg.get_real("material.density");
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
@@ -38,10 +38,10 @@ Problem<1> make_custom_1d(const Config& cfg) {
     P.v[i][0] = v0(P.x0[i][0]);
     P.stress[i](0, 0) = s0(P.x0[i][0]);
     if (P.stress[i](0, 0) != 0.0 && !incremental_law)
-      throw InputError(fmt::format(
-          "{}: an initial stress needs an incremental law (elastic_1d_small or "
-          "elastic_1d_large); material.model = \"{}\" computes the stress from F = I",
-          cfg.where("initial.stress"), material_name(pb.material)));
+      throw InputError(
+          fmt::format("{}: an initial stress needs an incremental law (elastic_1d_small or "
+                      "elastic_1d_large); material.model = \"{}\" computes the stress from F = I",
+                      cfg.where("initial.stress"), material_name(pb.material)));
   }
 
   const Expression b(cfg.get_string("loading.body_force"), constants);

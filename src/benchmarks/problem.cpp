@@ -1,7 +1,7 @@
 #include "benchmarks/problem.hpp"
 
-#include <cmath>
 #include <fmt/format.h>
+#include <cmath>
 
 #include "benchmarks/benchmarks.hpp"
 #include "io/config.hpp"
@@ -46,8 +46,8 @@ AnyProblem make_problem(const Config& cfg) {
   if (name == "vibrating_bar") return make_vibrating_bar(cfg, /*large=*/false);
   if (name == "vibrating_bar_large") return make_vibrating_bar(cfg, /*large=*/true);
   if (name == "custom") return make_custom_1d(cfg);
-  throw InputError(fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"),
-                               name));
+  throw InputError(
+      fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));
 }
 
 }  // namespace mpm

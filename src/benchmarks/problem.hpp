@@ -20,9 +20,9 @@ class Config;
 
 template <int Dim>
 struct ExactState {
-  Vec<Dim> u;        // displacement at the material point X [m]
-  Vec<Dim> v;        // velocity [m/s]
-  Mat<Dim> stress;   // Cauchy stress [Pa]
+  Vec<Dim> u;       // displacement at the material point X [m]
+  Vec<Dim> v;       // velocity [m/s]
+  Mat<Dim> stress;  // Cauchy stress [Pa]
 };
 
 template <int Dim>

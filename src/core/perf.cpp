@@ -1,7 +1,7 @@
 #include "core/perf.hpp"
 
-#include <algorithm>
 #include <fmt/format.h>
+#include <algorithm>
 #include <vector>
 
 #include "basis/linear.hpp"
@@ -38,8 +38,7 @@ BenchResult bench_1d(const BenchOptions& opt) {
   r.best_ns_per_particle_step = ns.front();
   r.median_ns_per_particle_step = ns[ns.size() / 2];
   const double dofs = static_cast<double>(r.cells + 1);
-  const double grid_bytes =
-      dofs * (sizeof(double) + 4 * sizeof(Vec<1>) + 2 * sizeof(std::uint8_t));
+  const double grid_bytes = dofs * (sizeof(double) + 4 * sizeof(Vec<1>) + 2 * sizeof(std::uint8_t));
   r.bytes_per_particle = static_cast<double>(Particles<1>::bytes_per_particle() +
                                              sizeof(LinearBasis<1>::StencilT) + sizeof(Index)) +
                          grid_bytes / static_cast<double>(r.particles);

@@ -2,10 +2,10 @@
 
 #include <unistd.h>
 
+#include <fmt/format.h>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fmt/format.h>
 #include <iostream>
 
 #include "benchmarks/problem.hpp"
@@ -95,8 +95,8 @@ class OutputSession {
     std::error_code ec;
     std::filesystem::create_directories(dir_, ec);
     if (ec)
-      throw InputError(fmt::format("cannot create output directory '{}': {}", dir_.string(),
-                                   ec.message()));
+      throw InputError(
+          fmt::format("cannot create output directory '{}': {}", dir_.string(), ec.message()));
     csv_ = cfg.get_bool("output.csv");
     vtk_ = cfg.get_bool("output.vtk");
     io::write_file_atomic(dir_ / "config.toml", cfg.to_toml());

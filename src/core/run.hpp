@@ -12,8 +12,8 @@ namespace mpm {
 class Config;
 
 struct RunOptions {
-  std::string out_dir;       // empty: write nothing
-  bool quiet = false;        // no progress line
+  std::string out_dir;  // empty: write nothing
+  bool quiet = false;   // no progress line
 };
 
 // Particle error norms at the final time (D eq. 4.92); empty when there is no exact solution.
@@ -24,8 +24,8 @@ struct ErrorNorms {
   // RMS of v(X_p, T + c dt) - v_p with c the scheme's velocity time (-1/2 USL/MUSL, +1/2 USF,
   // 0 USAVG): the comparison in which every scheme is second-order consistent in time.
   std::optional<double> velocity_rms_scheme_time;
-  std::optional<double> stress_rms;            // RMS of |sigma(X_p, T) - sigma_p|
-  std::optional<double> stress_rel_l2;         // (sum V0 |err|^2 / sum V0 |sigma|^2)^(1/2)
+  std::optional<double> stress_rms;     // RMS of |sigma(X_p, T) - sigma_p|
+  std::optional<double> stress_rel_l2;  // (sum V0 |err|^2 / sum V0 |sigma|^2)^(1/2)
 };
 
 struct RunResult {

@@ -39,7 +39,10 @@ struct Simulation {
   using StencilT = typename Basis::StencilT;
 
   Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat)
-      : grid(g), basis(std::move(b)), mapping(std::move(m)), particles(std::move(p)),
+      : grid(g),
+        basis(std::move(b)),
+        mapping(std::move(m)),
+        particles(std::move(p)),
         material(std::move(mat)) {
     nodes.resize(basis.num_dofs());
     stencils.resize(static_cast<std::size_t>(particles.size()));

@@ -1,9 +1,9 @@
 #include "core/study.hpp"
 
+#include <fmt/format.h>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
-#include <fmt/format.h>
 #include <limits>
 #include <mutex>
 #include <thread>
@@ -45,7 +45,8 @@ StudyOptions parse_refine(const std::string& text) {
   std::size_t pos = 0;
   while (pos <= rest.size()) {
     const auto comma = rest.find(',', pos);
-    const auto item = rest.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    const auto item =
+        rest.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     if (item.empty()) throw InputError(fmt::format("--refine '{}' has an empty value", text));
     o.values.push_back(item);
     if (comma == std::string::npos) break;
@@ -82,9 +83,9 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
       RunOptions ro;
       ro.quiet = true;
       if (!opt.out_dir.empty())
-        ro.out_dir = (std::filesystem::path(opt.out_dir) /
-                      fmt::format("{}_{}", opt.key, opt.values[k]))
-                         .string();
+        ro.out_dir =
+            (std::filesystem::path(opt.out_dir) / fmt::format("{}_{}", opt.key, opt.values[k]))
+                .string();
       try {
         res.runs[k] = run(configs[k], ro);
       } catch (const InputError& e) {
@@ -100,8 +101,7 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
     if (!e.empty()) throw InputError(e);
   if (!opt.out_dir.empty()) {
     io::write_file_atomic(std::filesystem::path(opt.out_dir) / "study.csv", study_csv(opt, res));
-    io::write_file_atomic(std::filesystem::path(opt.out_dir) / "study.txt",
-                          study_table(opt, res));
+    io::write_file_atomic(std::filesystem::path(opt.out_dir) / "study.txt", study_table(opt, res));
   }
   return res;
 }
@@ -137,8 +137,8 @@ std::string study_table(const StudyOptions& opt, const StudyResult& r) {
       const auto& v = run.errors.*(c.member);
       std::string order;
       if (k > 0 && v && (r.runs[k - 1].errors.*(c.member))) {
-        const double o = observed_order(*(r.runs[k - 1].errors.*(c.member)), *v,
-                                        r.runs[k - 1].h, run.h);
+        const double o =
+            observed_order(*(r.runs[k - 1].errors.*(c.member)), *v, r.runs[k - 1].h, run.h);
         if (std::isfinite(o)) order = fmt::format("{:.2f}", o);
       }
       s += fmt::format(" {:>20} {:>5}", fmt_opt(v), order);

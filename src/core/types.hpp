@@ -19,7 +19,9 @@ template <int Dim>
 using IVec = std::array<Index, Dim>;
 
 // Compile-time integer power, used for tensor-product stencil sizes (n^Dim).
-constexpr int ipow(int base, int exp) { return exp == 0 ? 1 : base * ipow(base, exp - 1); }
+constexpr int ipow(int base, int exp) {
+  return exp == 0 ? 1 : base * ipow(base, exp - 1);
+}
 
 // Error raised for invalid user input (configuration, command line). The message is meant for
 // the user and is printed without decoration; exit code 2.

@@ -33,8 +33,8 @@ Variant choose_alternative(std::string_view name, std::string_view key, std::str
     choices += std::string(Alt::kName);
     return choose_alternative<Variant, I + 1>(name, key, std::move(choices));
   } else {
-    throw InputError(fmt::format("{} = \"{}\" is not available; choose one of: {}", key, name,
-                                 choices));
+    throw InputError(
+        fmt::format("{} = \"{}\" is not available; choose one of: {}", key, name, choices));
   }
 }
 

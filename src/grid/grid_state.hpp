@@ -9,13 +9,13 @@ namespace mpm {
 
 template <int Dim>
 struct GridState {
-  std::vector<double> mass;           // lumped nodal mass m_i (row sums of M) [kg]
-  std::vector<Vec<Dim>> momentum;     // q_i [kg m/s]
-  std::vector<Vec<Dim>> force;        // f_i = f_ext - f_int [N]
-  std::vector<Vec<Dim>> velocity;     // v_i [m/s]
-  std::vector<Vec<Dim>> accel;        // a_i [m/s^2]
-  std::vector<std::uint8_t> active;   // 1 where the DOF carries enough mass to be solved for
-  std::vector<std::uint8_t> fixed;    // bit d set: component d is prescribed zero (Dirichlet)
+  std::vector<double> mass;          // lumped nodal mass m_i (row sums of M) [kg]
+  std::vector<Vec<Dim>> momentum;    // q_i [kg m/s]
+  std::vector<Vec<Dim>> force;       // f_i = f_ext - f_int [N]
+  std::vector<Vec<Dim>> velocity;    // v_i [m/s]
+  std::vector<Vec<Dim>> accel;       // a_i [m/s^2]
+  std::vector<std::uint8_t> active;  // 1 where the DOF carries enough mass to be solved for
+  std::vector<std::uint8_t> fixed;   // bit d set: component d is prescribed zero (Dirichlet)
 
   Index size() const { return static_cast<Index>(mass.size()); }
   void resize(Index n) {

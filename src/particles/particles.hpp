@@ -8,17 +8,17 @@ namespace mpm {
 
 template <int Dim>
 struct Particles {
-  std::vector<Vec<Dim>> x;      // current position x_p^s [m]
-  std::vector<Vec<Dim>> x0;     // initial (material) position x_p^0 [m]
-  std::vector<Vec<Dim>> u;      // displacement u_p = x_p - x_p^0 accumulated from grid [m]
-  std::vector<Vec<Dim>> v;      // velocity v_p [m/s]
-  std::vector<double> mass;     // m_p [kg] (per unit area in 1D), constant in time
-  std::vector<double> volume;   // V_p [m^Dim]
-  std::vector<double> volume0;  // V_p^0 [m^Dim]
-  std::vector<double> density;  // rho_p = m_p / V_p [kg/m^3]
-  std::vector<Mat<Dim>> F;      // deformation gradient F_p
-  std::vector<Mat<Dim>> stress; // Cauchy stress sigma_p [Pa]
-  std::vector<Vec<Dim>> body;   // body force per unit mass b_p [m/s^2], refreshed every step
+  std::vector<Vec<Dim>> x;       // current position x_p^s [m]
+  std::vector<Vec<Dim>> x0;      // initial (material) position x_p^0 [m]
+  std::vector<Vec<Dim>> u;       // displacement u_p = x_p - x_p^0 accumulated from grid [m]
+  std::vector<Vec<Dim>> v;       // velocity v_p [m/s]
+  std::vector<double> mass;      // m_p [kg] (per unit area in 1D), constant in time
+  std::vector<double> volume;    // V_p [m^Dim]
+  std::vector<double> volume0;   // V_p^0 [m^Dim]
+  std::vector<double> density;   // rho_p = m_p / V_p [kg/m^3]
+  std::vector<Mat<Dim>> F;       // deformation gradient F_p
+  std::vector<Mat<Dim>> stress;  // Cauchy stress sigma_p [Pa]
+  std::vector<Vec<Dim>> body;    // body force per unit mass b_p [m/s^2], refreshed every step
 
   Index size() const { return static_cast<Index>(x.size()); }
 

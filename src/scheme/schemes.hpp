@@ -17,17 +17,17 @@ struct Usl {
   template <class Sim>
   static void step(Sim& sim, double dt) {
     using namespace stages;
-    evaluate_basis(sim);                 // phi_i(x_p^s), grad phi_i(x_p^s)
+    evaluate_basis(sim);  // phi_i(x_p^s), grad phi_i(x_p^s)
     refresh_body_force(sim);
-    map_mass(sim);                       // M^s       (2.31)
-    map_momentum(sim);                   // q^s       (2.32)
-    map_forces(sim);                     // f^s       (2.33)
-    solve_acceleration(sim);             // a^s       (2.34)
-    solve_velocity(sim);                 // v_i^s     (2.35)
-    advance_grid_velocity(sim, dt);      // v_i^{s+1} (2.36)
-    update_particle_position(sim, dt);   // x_p^{s+1} (2.38)
-    update_particle_velocity(sim, dt);   // v_p^{s+1} (2.39)
-    update_stress(sim, dt);              // F, V, rho, sigma from v_i^{s+1} (2.40-2.43)
+    map_mass(sim);                      // M^s       (2.31)
+    map_momentum(sim);                  // q^s       (2.32)
+    map_forces(sim);                    // f^s       (2.33)
+    solve_acceleration(sim);            // a^s       (2.34)
+    solve_velocity(sim);                // v_i^s     (2.35)
+    advance_grid_velocity(sim, dt);     // v_i^{s+1} (2.36)
+    update_particle_position(sim, dt);  // x_p^{s+1} (2.38)
+    update_particle_velocity(sim, dt);  // v_p^{s+1} (2.39)
+    update_stress(sim, dt);             // F, V, rho, sigma from v_i^{s+1} (2.40-2.43)
   }
 };
 
@@ -40,14 +40,14 @@ struct Musl {
     using namespace stages;
     evaluate_basis(sim);
     refresh_body_force(sim);
-    map_mass(sim);                       // M^s                    (2.44)
-    map_forces(sim);                     // f^s                    (2.45)
-    solve_acceleration(sim);             // a^s                    (2.46)
-    update_particle_velocity(sim, dt);   // v_p^{s+1}              (2.47)
-    map_momentum(sim);                   // q from v_p^{s+1}       (2.48)
-    solve_velocity(sim);                 // v_i^{s+1}              (2.49)
-    update_particle_position(sim, dt);   // x_p^{s+1}              (2.50-2.51)
-    update_stress(sim, dt);              // F, V, rho, sigma       (2.52-2.55)
+    map_mass(sim);                      // M^s                    (2.44)
+    map_forces(sim);                    // f^s                    (2.45)
+    solve_acceleration(sim);            // a^s                    (2.46)
+    update_particle_velocity(sim, dt);  // v_p^{s+1}              (2.47)
+    map_momentum(sim);                  // q from v_p^{s+1}       (2.48)
+    solve_velocity(sim);                // v_i^{s+1}              (2.49)
+    update_particle_position(sim, dt);  // x_p^{s+1}              (2.50-2.51)
+    update_stress(sim, dt);             // F, V, rho, sigma       (2.52-2.55)
   }
 };
 
@@ -63,13 +63,13 @@ struct Usf {
     evaluate_basis(sim);
     refresh_body_force(sim);
     map_mass(sim);
-    map_momentum(sim);                   // q from v_p^s
-    solve_velocity(sim);                 // v_i^s
-    update_stress(sim, dt);              // sigma^{s+1} from v_i^s
-    map_forces(sim);                     // f with the updated stress and volume
+    map_momentum(sim);       // q from v_p^s
+    solve_velocity(sim);     // v_i^s
+    update_stress(sim, dt);  // sigma^{s+1} from v_i^s
+    map_forces(sim);         // f with the updated stress and volume
     solve_acceleration(sim);
-    update_particle_velocity(sim, dt);   // v_p^{s+1}
-    advance_grid_velocity(sim, dt);      // v_i^{s+1} = v_i^s + dt a_i
+    update_particle_velocity(sim, dt);  // v_p^{s+1}
+    advance_grid_velocity(sim, dt);     // v_i^{s+1} = v_i^s + dt a_i
     update_particle_position(sim, dt);
   }
 };
@@ -86,16 +86,16 @@ struct Usavg {
     evaluate_basis(sim);
     refresh_body_force(sim);
     map_mass(sim);
-    map_momentum(sim);                   // q from v_p^s
-    solve_velocity(sim);                 // v_i^s
-    update_stress(sim, 0.5 * dt);        // USF half
+    map_momentum(sim);             // q from v_p^s
+    solve_velocity(sim);           // v_i^s
+    update_stress(sim, 0.5 * dt);  // USF half
     map_forces(sim);
     solve_acceleration(sim);
-    update_particle_velocity(sim, dt);   // v_p^{s+1}
-    map_momentum(sim);                   // q from v_p^{s+1}
-    solve_velocity(sim);                 // v_i^{s+1}
+    update_particle_velocity(sim, dt);  // v_p^{s+1}
+    map_momentum(sim);                  // q from v_p^{s+1}
+    solve_velocity(sim);                // v_i^{s+1}
     update_particle_position(sim, dt);
-    update_stress(sim, 0.5 * dt);        // MUSL half
+    update_stress(sim, 0.5 * dt);  // MUSL half
   }
 };
 

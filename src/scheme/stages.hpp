@@ -2,8 +2,8 @@
 // The shared stages of every update scheme (D Algorithms 1-2, D 2.6.3). A scheme is an order of
 // these calls; no stage knows which scheme calls it. Per-particle loops are plain loops over the
 // struct-of-arrays with the basis and material resolved at compile time.
-#include <cmath>
 #include <fmt/format.h>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -238,11 +238,11 @@ void update_stress(Sim& sim, double dt) {
                                  "gradient at {} particle(s): {}",
                                  sim.step, sim.time, nonfinite.size(),
                                  detail::describe_particles(P, nonfinite)));
-    throw RunError(exit_code::kInvertedDeformation,
-                   fmt::format("step {}, t = {:.9g} s: det F <= 0 (inverted or degenerate "
-                               "deformation) at {} particle(s): {}",
-                               sim.step, sim.time, inverted.size(),
-                               detail::describe_particles(P, inverted)));
+    throw RunError(
+        exit_code::kInvertedDeformation,
+        fmt::format("step {}, t = {:.9g} s: det F <= 0 (inverted or degenerate "
+                    "deformation) at {} particle(s): {}",
+                    sim.step, sim.time, inverted.size(), detail::describe_particles(P, inverted)));
   }
 }
 

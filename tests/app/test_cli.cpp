@@ -2,6 +2,7 @@
 // codes, the files a run and a study write.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -9,7 +10,6 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 
 namespace {
 
@@ -28,11 +28,13 @@ Result sh(const std::string& args) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
-std::string src(const std::string& rel) { return std::string(MPM_SOURCE_DIR) + "/" + rel; }
+std::string src(const std::string& rel) {
+  return std::string(MPM_SOURCE_DIR) + "/" + rel;
+}
 
 std::filesystem::path temp_dir(const std::string& name) {
-  auto d = std::filesystem::temp_directory_path() / ("mpm_cli_" + name + "_" +
-                                                      std::to_string(::getpid()));
+  auto d = std::filesystem::temp_directory_path() /
+           ("mpm_cli_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(d);
   return d;
 }
@@ -79,8 +81,8 @@ TEST(Cli, WrongTypeBadChoiceAndRangeErrors) {
   EXPECT_EQ(n.code, 2);
   EXPECT_NE(n.out.find("material.youngs_modulus"), std::string::npos) << n.out;
   EXPECT_NE(n.out.find("negative_modulus.toml:"), std::string::npos) << n.out;
-  auto s = sh("run " + src("examples/vibrating_bar_small.toml") +
-              " -q --set method.scheme=leapfrog");
+  auto s =
+      sh("run " + src("examples/vibrating_bar_small.toml") + " -q --set method.scheme=leapfrog");
   EXPECT_EQ(s.code, 2);
   EXPECT_NE(s.out.find("--set method.scheme=leapfrog"), std::string::npos) << s.out;
 }
@@ -114,8 +116,8 @@ TEST(Cli, RunWritesSummaryFramesHistoryAndVtk) {
   EXPECT_EQ(j["method"]["scheme"], "musl");
   EXPECT_EQ(j["steps"], 19);
   EXPECT_EQ(j["particles"], 240);
-  for (const char* e : {"displacement_rms", "velocity_rms", "velocity_rms_midstep", "stress_rms",
-                        "stress_rel_l2"})
+  for (const char* e :
+       {"displacement_rms", "velocity_rms", "velocity_rms_midstep", "stress_rms", "stress_rel_l2"})
     EXPECT_TRUE(j["errors"][e].is_number()) << e;
   EXPECT_LT(j["conservation"]["max_rel_mass_error"].get<double>(), 1e-13);
   for (const char* file : {"history.csv", "particles.pvd", "grid.vtu", "config.toml",

@@ -46,8 +46,8 @@ void check_basis(const Grid<Dim>& g, int samples) {
     }
     EXPECT_NEAR(sum, 1.0, 1e-14);
     EXPECT_LT(gsum.norm(), 1e-10 * g.h.cwiseInverse().norm());
-    EXPECT_LT((xr - x).norm(), 1e-13);                             // sum phi_i x_i = x
-    EXPECT_LT((gr - Mat<Dim>::Identity()).norm(), 1e-12);         // sum x_i grad phi_i^T = I
+    EXPECT_LT((xr - x).norm(), 1e-13);                     // sum phi_i x_i = x
+    EXPECT_LT((gr - Mat<Dim>::Identity()).norm(), 1e-12);  // sum x_i grad phi_i^T = I
   }
 }
 

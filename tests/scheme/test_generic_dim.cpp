@@ -31,10 +31,18 @@ void rigid_translation_2d() {
   EXPECT_GT(sim.diag.grid_crossings, 0);
 }
 
-TEST(GenericDimension, RigidTranslation2DMusl) { rigid_translation_2d<Musl>(); }
-TEST(GenericDimension, RigidTranslation2DUsl) { rigid_translation_2d<Usl>(); }
-TEST(GenericDimension, RigidTranslation2DUsf) { rigid_translation_2d<Usf>(); }
-TEST(GenericDimension, RigidTranslation2DUsavg) { rigid_translation_2d<Usavg>(); }
+TEST(GenericDimension, RigidTranslation2DMusl) {
+  rigid_translation_2d<Musl>();
+}
+TEST(GenericDimension, RigidTranslation2DUsl) {
+  rigid_translation_2d<Usl>();
+}
+TEST(GenericDimension, RigidTranslation2DUsf) {
+  rigid_translation_2d<Usf>();
+}
+TEST(GenericDimension, RigidTranslation2DUsavg) {
+  rigid_translation_2d<Usavg>();
+}
 
 }  // namespace
 }  // namespace mpm

@@ -4,8 +4,8 @@
 // momentum to round-off.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <fmt/format.h>
+#include <cmath>
 
 #include "core/run.hpp"
 #include "core/study.hpp"
