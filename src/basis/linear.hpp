@@ -55,7 +55,11 @@ class LinearBasis {
 
   // Requires grid().inside(P.x[p]); the caller checks.
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
-    const Vec<Dim>& x = P.x[static_cast<std::size_t>(p)];
+    evaluate_point(P.x[static_cast<std::size_t>(p)], s);
+  }
+
+  // The basis at any point inside the grid (tractions, quadrature points).
+  void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     IVec<Dim> first;
     std::array<std::array<double, 2>, Dim> w, dw;
     for (int d = 0; d < Dim; ++d) {

@@ -16,6 +16,31 @@ struct VibratingBarExact {
   ExactState<1> operator()(const Vec<1>& X, double t) const;
 };
 
+// Column compaction (D 5.4.2, after Bardenhagen & Kober): a column of height H, fixed at the
+// bottom, free at the top, under a body force b(t) = b_max min(t / T_ramp, 1). The grid has one
+// empty cell above the column (h = H / grid.cells). Quasi-static exact solution of the 1D
+// large-deformation law at the current load: sigma(X) = rho0 b (H - X), F = 1/(1 - sigma/E),
+// u(X) = int_0^X (F - 1) dX' = (1/k) ln((1 - k (H - X)) / (1 - k H)) - X with k = rho0 b / E.
+Problem<1> make_column_compaction(const Config& cfg);
+
+struct ColumnExact {
+  double height, density, youngs_modulus, body_force_max, ramp_time;
+  double body_force(double t) const;
+  ExactState<1> operator()(const Vec<1>& X, double t) const;
+};
+
+// Bar with a dynamic traction at its free end (D 4.6.2, Steffen et al.): neo-Hookean, fixed at
+// X = 0, traction tau(t) = -A sin(omega c t) at X = L, omega = pi / L, c = sqrt(E / rho0). The
+// exact stress is D eq. 4.93 (written there for c = 1 and A = 1; here t -> c t, amplitude A),
+// the linear-wave (d'Alembert) solution, valid for c t <= 4 L; velocity and displacement follow
+// from the same travelling waves (v = +-sigma / (rho0 c) for left/right-going waves).
+Problem<1> make_traction_bar(const Config& cfg);
+
+struct TractionBarExact {
+  double length, density, wave_speed, amplitude;
+  ExactState<1> operator()(const Vec<1>& X, double t) const;
+};
+
 // 1D problem from the configuration alone: grid and body extents, initial velocity and stress
 // as expressions of x, body force as an expression of x and t, fixed or free ends.
 Problem<1> make_custom_1d(const Config& cfg);

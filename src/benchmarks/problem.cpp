@@ -45,6 +45,8 @@ AnyProblem make_problem(const Config& cfg) {
   const std::string name = cfg.get_string("benchmark");
   if (name == "vibrating_bar") return make_vibrating_bar(cfg, /*large=*/false);
   if (name == "vibrating_bar_large") return make_vibrating_bar(cfg, /*large=*/true);
+  if (name == "column_compaction") return make_column_compaction(cfg);
+  if (name == "traction_bar") return make_traction_bar(cfg);
   if (name == "custom") return make_custom_1d(cfg);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));

@@ -37,6 +37,7 @@ struct Problem {
   Material material;
   std::vector<std::pair<int, int>> fixed_sides;  // (direction, side 0 lower / 1 upper)
   BodyForce<Dim> body_force;
+  std::vector<EndTraction<Dim>> tractions;
   ExactSolution<Dim> exact;  // empty when the benchmark has no exact solution
 };
 

@@ -16,11 +16,21 @@ inline constexpr Entry kBenchmarks[] = {
      "1D bar with fixed ends, small deformation, exact solution (D 3.4.1, 5.4.1; Table 3.1)"},
     {"vibrating_bar_large",
      "1D bar with fixed ends, large deformation (D 5.4.1, Table 5.4); no exact solution"},
+    {"column_compaction",
+     "1D column under a ramped body force, quasi-static exact solution (D 5.4.2, Table 5.6)"},
+    {"traction_bar",
+     "1D neo-Hookean bar, fixed end, dynamic end traction, exact stress (D 4.6.2, eq. 4.93)"},
     {"custom", "1D problem built from the config alone: extents, fields by expression, ends"},
 };
 
 inline constexpr Entry kBases[] = {
     {"linear", "piecewise-linear (P1) nodal basis, tensor product (D 2.5)"},
+    {"ugimp", "uniform GIMP: P1 averaged over the initial particle domain (D 2.6.4, eq. 2.61)"},
+    {"cpgimp", "contiguous-particle GIMP: particle domain sized by the diagonal of F (D 2.6.4)"},
+    {"cpdi", "CPDI: domain convected by F, P1 interpolated at its corners (D 2.6.4, eq. 2.64)"},
+    {"bspline",
+     "B-splines of degree method.degree (1-5) from one open uniform knot vector (D 3.1)"},
+    {"ddmpm", "dual domain MPM: P1 values, smoothed gradients (D 2.6.4; 1D)"},
 };
 
 inline constexpr Entry kMappings[] = {

@@ -26,6 +26,12 @@ struct ErrorNorms {
   std::optional<double> velocity_rms_scheme_time;
   std::optional<double> stress_rms;     // RMS of |sigma(X_p, T) - sigma_p|
   std::optional<double> stress_rel_l2;  // (sum V0 |err|^2 / sum V0 |sigma|^2)^(1/2)
+  // The same RMS norms over the interior particles only: those whose initial position is not
+  // in the first or last cell of the body, or the first or last p cells for B-splines of degree
+  // p (boundary errors of BSMPM, D Fig. 5.10).
+  std::optional<double> displacement_rms_interior;
+  std::optional<double> velocity_rms_scheme_time_interior;
+  std::optional<double> stress_rms_interior;
 };
 
 struct RunResult {

@@ -24,6 +24,16 @@ struct BodyForce {
   bool position_dependent = false;
 };
 
+// A traction on the free end of a 1D body, applied at the outer edge of the end particle's
+// domain: f_i += phi_i(x_end) tau(t) (the boundary integral of D eq. 2.21; unit area).
+// side = +1: the upper end x_p + V_p/2; -1: the lower end x_p - V_p/2 (1D: V_p is a length).
+template <int Dim>
+struct EndTraction {
+  Index particle = 0;
+  int side = 1;
+  std::function<Vec<Dim>(double t)> value;  // traction vector tau(t) [Pa]
+};
+
 // Conservation and grid-crossing bookkeeping reported in summary.json (D 5.4).
 struct Diagnostics {
   double max_rel_mass_error = 0.0;      // max over steps |sum M_ij - sum m_p| / sum m_p
@@ -57,6 +67,7 @@ struct Simulation {
   MassType mass_type = MassType::Lumped;
   double mass_tolerance = 1e-10;  // relative to the largest nodal mass
   BodyForce<Dim> body_force;
+  std::vector<EndTraction<Dim>> tractions;
 
   GridState<Dim> nodes;
   ConsistentMass consistent;

@@ -7,6 +7,10 @@
 #include <string_view>
 #include <variant>
 
+#include "basis/bspline.hpp"
+#include "basis/cpdi.hpp"
+#include "basis/ddmpm.hpp"
+#include "basis/gimp.hpp"
 #include "basis/linear.hpp"
 #include "core/types.hpp"
 #include "mapping/direct.hpp"
@@ -21,7 +25,44 @@ struct LinearKind {
   using type = LinearBasis<Dim>;
 };
 
-using BasisKind = std::variant<LinearKind>;
+// One kind per B-spline degree (method.degree selects it); the degree is a template parameter so
+// the stencil size is fixed at compile time.
+template <int P>
+struct BSplineKind {
+  static constexpr std::string_view kName = "bspline";
+  static constexpr int kDegree = P;
+  template <int Dim>
+  using type = BSplineBasis<Dim, P>;
+};
+
+struct DdmpmKind {
+  static constexpr std::string_view kName = "ddmpm";
+  template <int Dim>
+  using type = DdmpmBasis<Dim>;
+};
+
+// Domain-averaged bases (D 2.6.4): GIMP with the initial or F-diagonal particle size, and CPDI.
+struct UGimpKind {
+  static constexpr std::string_view kName = "ugimp";
+  template <int Dim>
+  using type = UGimpBasis<Dim>;
+};
+
+struct CpGimpKind {
+  static constexpr std::string_view kName = "cpgimp";
+  template <int Dim>
+  using type = CpGimpBasis<Dim>;
+};
+
+struct CpdiKind {
+  static constexpr std::string_view kName = "cpdi";
+  template <int Dim>
+  using type = CpdiBasis<Dim>;
+};
+
+using BasisKind =
+    std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, DdmpmKind, BSplineKind<1>,
+                 BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>>;
 using MappingKind = std::variant<DirectMapping>;
 
 template <class Variant, std::size_t I = 0>

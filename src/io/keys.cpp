@@ -114,6 +114,14 @@ std::vector<KeySpec> declare() {
 
       real("bar.length", "m", 1.0, greater_than(0), "length L of the vibrating bar"),
       real("bar.v0", "m/s", 0.1, any(), "amplitude v0 of the initial velocity v0 sin(pi x/L)"),
+      real("column.height", "m", 50.0, greater_than(0),
+           "initial height H of the compacted column (D 5.4.2)"),
+      real("column.body_force", "m/s^2", -200.0, any(),
+           "body force per unit mass reached at the end of the ramp (D Table 5.6)"),
+      real("column.ramp_time", "s", 0.5, greater_than(0),
+           "time over which the body force grows linearly from zero"),
+      real("traction.amplitude", "Pa", 1.0, any(),
+           "amplitude A of the end traction -A sin(pi c t / L) of the traction bar (D 4.6.2)"),
 
       real("body.min", "m", 0.0, any(), "lower end of the material body (custom benchmark)"),
       real("body.max", "m", 1.0, any(), "upper end of the material body (custom benchmark)"),

@@ -33,17 +33,42 @@ std::string describe_particles(const Particles<Dim>& P, const std::vector<Index>
 template <class Sim>
 void evaluate_basis(Sim& sim) {
   auto& P = sim.particles;
-  bool outside = false;
+  auto& basis = sim.basis;
+  // Bases built from the particle distribution (DDMPM node volumes) refresh it first.
+  if constexpr (requires { basis.prepare(P); }) basis.prepare(P);
+  constexpr bool kHasDomain = requires {
+    basis.fits(P, Index{0});
+  };
+  bool outside = false, unfit = false;
   for (Index p = 0; p < P.size(); ++p) {
     const auto i = static_cast<std::size_t>(p);
     if (!sim.grid.inside(P.x[i])) {
       outside = true;
       continue;
     }
+    if constexpr (kHasDomain) {
+      if (!basis.fits(P, p)) {
+        unfit = true;
+        continue;
+      }
+    }
     const Index c = sim.grid.cell_index(P.x[i]);
     if (sim.cell[i] >= 0 && c != sim.cell[i]) ++sim.diag.grid_crossings;
     sim.cell[i] = c;
-    sim.basis.evaluate(P, p, sim.stencils[i]);
+    basis.evaluate(P, p, sim.stencils[i]);
+  }
+  if constexpr (kHasDomain) {
+    if (unfit && !outside) {
+      std::vector<Index> ids;
+      for (Index p = 0; p < P.size(); ++p)
+        if (!basis.fits(P, p)) ids.push_back(p);
+      throw RunError(exit_code::kInvertedDeformation,
+                     fmt::format("step {}, t = {:.9g} s: the domain of {} particle(s) cannot be "
+                                 "represented by the {} basis (stretched beyond its stencil or "
+                                 "reaching outside the grid): {}",
+                                 sim.step, sim.time, ids.size(), Sim::BasisT::kName,
+                                 detail::describe_particles(P, ids)));
+    }
   }
   if (outside) {
     std::vector<Index> ids;
@@ -117,9 +142,26 @@ void map_momentum(Sim& sim) {
         std::max(sim.diag.max_rel_momentum_error, (grid_p - part_p).norm() / scale);
 }
 
+// Internal and body forces from the mapping, then end tractions (a handful of points).
 template <class Sim>
 void map_forces(Sim& sim) {
   sim.mapping.map_forces(sim);
+  constexpr int Dim = Sim::kDim;
+  for (const auto& tr : sim.tractions) {
+    const auto i = static_cast<std::size_t>(tr.particle);
+    Vec<Dim> x_end = sim.particles.x[i];
+    x_end[0] += 0.5 * tr.side * sim.particles.volume[i];
+    if (!sim.grid.inside(x_end))
+      throw RunError(exit_code::kLeftGrid,
+                     fmt::format("step {}, t = {:.9g} s: the loaded end of the body (particle {}, "
+                                 "edge at x = {:.6g}) left the grid",
+                                 sim.step, sim.time, tr.particle, x_end[0]));
+    typename Sim::StencilT s;
+    sim.basis.evaluate_point(x_end, s);
+    const Vec<Dim> tau = tr.value(sim.time);
+    for (int a = 0; a < s.kSize; ++a)
+      sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * tau;
+  }
 }
 
 namespace detail {

@@ -1,0 +1,146 @@
+#pragma once
+// B-spline basis of degree p on a uniform grid, tensor product in Dim > 1 (D 3.1.1, 004 sec. 4.3,
+// 001 eq. 2-5). One open uniform knot vector per direction: p+1 copies of the lower end, the
+// interior cell boundaries, p+1 copies of the upper end, so the knot spans are the grid cells and
+// there are cells+p functions per direction. The parametric and physical domains coincide
+// (D 3.1.1), so derivatives are taken directly with respect to x. DOFs are the control points,
+// x fastest; degree 1 reproduces LinearBasis (D 3.1: linear B-splines are the P1 functions).
+#include <algorithm>
+#include <array>
+#include <string_view>
+#include <vector>
+
+#include "basis/stencil.hpp"
+#include "grid/grid.hpp"
+#include "particles/particles.hpp"
+
+namespace mpm {
+
+// Non-zero B-splines of degree P on one span of an open uniform knot vector with n spans, and
+// their derivatives with respect to the span coordinate (units: 1/cell). c is the span (cell)
+// index, t in [0, 1] the position inside it; value r belongs to function c + r.
+//
+// Knots are measured in cell units relative to the span's lower knot, so the knots needed are
+// small integers computed on the fly (repeated end knots are clamped indices): no knot array and
+// no dependence on the number of knots. With knot U_k = clamp(k - P, 0, n) and span index
+// i = c + P, The NURBS Book's left[j] = u - U_{i+1-j} and right[j] = U_{i+j} - u become
+//   left[j] = t + min(j - 1, c),   right[j] = min(j, n - c) - t,
+// both >= 0 for t in [0, 1]. The triangular recursion (Piegl & Tiller A2.2/A2.3) then only adds
+// and multiplies non-negative numbers and divides by knot differences >= 1, so no weight can
+// come out negative from round-off.
+template <int P>
+inline void bspline_span(Index c, double t, Index n, std::array<double, P + 1>& N,
+                         std::array<double, P + 1>& dN) {
+  static_assert(P >= 1, "degree 0 has no derivative");
+  std::array<double, P + 1> left{}, right{};
+  // ndu[r][j] (r <= j): value of function r of degree j on this span (upper triangle);
+  // ndu[j][r] (r < j): knot difference U_{i+r+1} - U_{i+r+1-j} used at degree j (lower one).
+  std::array<std::array<double, P + 1>, P + 1> ndu{};
+  ndu[0][0] = 1.0;
+  for (int j = 1; j <= P; ++j) {
+    left[j] = t + static_cast<double>(std::min<Index>(j - 1, c));
+    right[j] = static_cast<double>(std::min<Index>(j, n - c)) - t;
+    double saved = 0.0;
+    for (int r = 0; r < j; ++r) {
+      ndu[j][r] = right[r + 1] + left[j - r];
+      const double temp = ndu[r][j - 1] / ndu[j][r];
+      ndu[r][j] = saved + right[r + 1] * temp;
+      saved = left[j - r] * temp;
+    }
+    ndu[j][j] = saved;
+  }
+  // First derivative from the degree P-1 functions (A2.3 with one derivative; D 3.1.1):
+  //   dN_r = P (N_{r-1,P-1} / (U_{i+r} - U_{i+r-P}) - N_{r,P-1} / (U_{i+r+1} - U_{i+r+1-P})),
+  // where the out-of-span degree P-1 functions (r-1 = -1, r = P) vanish. 001 eq. 3 prints a '+'
+  // between the terms; the minus (D 3.1.1, 004 eq. 4.23) is the correct sign.
+  for (int r = 0; r <= P; ++r) {
+    N[r] = ndu[r][P];
+    double d = 0.0;
+    if (r >= 1) d += ndu[r - 1][P - 1] / ndu[P][r - 1];
+    if (r <= P - 1) d -= ndu[r][P - 1] / ndu[P][r];
+    dN[r] = static_cast<double>(P) * d;
+  }
+}
+
+template <int Dim, int Degree>
+class BSplineBasis {
+  static_assert(Degree >= 1, "B-spline MPM needs gradients: degree >= 1");
+
+ public:
+  static constexpr std::string_view kName = "bspline";
+  static constexpr int kDegree = Degree;
+  static constexpr int kPerDim = Degree + 1;
+  using StencilT = Stencil<Dim, ipow(Degree + 1, Dim)>;
+
+  explicit BSplineBasis(const Grid<Dim>& g) : grid_(g) {
+    for (int d = 0; d < Dim; ++d) {
+      n_[d] = g.cells[d] + Degree;  // functions = knots - degree - 1 = cells + degree
+      inv_h_[d] = 1.0 / g.h[d];
+    }
+  }
+
+  const Grid<Dim>& grid() const { return grid_; }
+  IVec<Dim> dofs_per_dim() const { return n_; }
+  Index num_dofs() const {
+    Index n = 1;
+    for (int d = 0; d < Dim; ++d) n *= n_[d];
+    return n;
+  }
+  // Greville abscissa of a DOF, xi*_j = (U_{j+1} + ... + U_{j+p}) / p per direction: the point
+  // with sum_j phi_j xi*_j = x, so it is where a control value "sits" (output, boundary
+  // conditions, linear initial fields). For p = 1 these are the grid nodes.
+  Vec<Dim> dof_position(Index i) const {
+    Vec<Dim> x;
+    for (int d = 0; d < Dim; ++d) {
+      const Index j = i % n_[d];
+      i /= n_[d];
+      Index sum = 0;  // knots in cell units from the origin, end knots clamped
+      for (int k = 1; k <= Degree; ++k) sum += std::clamp<Index>(j + k - Degree, 0, grid_.cells[d]);
+      x[d] = grid_.origin[d] + grid_.h[d] * static_cast<double>(sum) / static_cast<double>(Degree);
+    }
+    return x;
+  }
+  // DOFs prescribed by a Dirichlet condition on the grid side `side` (0 lower, 1 upper) normal to
+  // direction d: the first / last function in that direction. With an open knot vector these are
+  // the only functions non-zero on that side and equal 1 there (D 3.1.1, interpolatory ends), so
+  // fixing them prescribes the boundary value.
+  std::vector<Index> boundary_dofs(int d, int side) const {
+    std::vector<Index> out;
+    for (Index i = 0; i < num_dofs(); ++i) {
+      Index rem = i;
+      for (int e = 0; e < d; ++e) rem /= n_[e];
+      const Index k = rem % n_[d];
+      if (k == (side == 0 ? 0 : n_[d] - 1)) out.push_back(i);
+    }
+    return out;
+  }
+
+  // Requires grid().inside(P.x[p]); the caller checks.
+  void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
+    evaluate_point(P.x[static_cast<std::size_t>(p)], s);
+  }
+
+  // Basis at any point with grid().inside(x).
+  void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
+    IVec<Dim> first;
+    std::array<std::array<double, Degree + 1>, Dim> w, dw;
+    for (int d = 0; d < Dim; ++d) {
+      // Same rounding as Grid::cell_of (upper end in the last span), so t = s - c lies in [0, 1]
+      // exactly, which keeps every left/right term in bspline_span non-negative.
+      const double s_d = (x[d] - grid_.origin[d]) / grid_.h[d];
+      const Index c = grid_.cell_of(x[d], d);
+      const double t = s_d - static_cast<double>(c);
+      bspline_span<Degree>(c, t, grid_.cells[d], w[d], dw[d]);
+      for (double& v : dw[d]) v *= inv_h_[d];  // d/dx = (1/h) d/dt [1/m]
+      first[d] = c;  // span c (0-based) supports functions c .. c + Degree
+    }
+    tensor_product<Dim, Degree + 1>(first, w, dw, n_, s);
+  }
+
+ private:
+  Grid<Dim> grid_;
+  IVec<Dim> n_{};
+  Vec<Dim> inv_h_;
+};
+
+}  // namespace mpm

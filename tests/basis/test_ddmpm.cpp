@@ -1,0 +1,83 @@
+// DDMPM (D 2.6.4): P1 values, smoothed gradients. Checks: partition of unity of the values,
+// zero gradient sum, linear reproduction of the smoothed gradient where every node carries
+// volume, continuity of the gradient across a node (the grid-crossing fix, alpha = 0 there),
+// and the interior closed form for uniformly spaced particles.
+#include <gtest/gtest.h>
+
+#include "basis/ddmpm.hpp"
+#include "benchmarks/problem.hpp"
+
+namespace mpm {
+namespace {
+
+struct DdmpmSetup {
+  Grid<1> g{Vec<1>(0.0), Vec<1>(1.0), IVec<1>{10}};
+  Particles<1> P = seed_particles<1>(g, Vec<1>(0.0), Vec<1>(1.0), 8, 1.0);
+  DdmpmBasis<1> basis{g};
+  DdmpmSetup() { basis.prepare(P); }
+};
+
+TEST(Ddmpm, PartitionOfUnityZeroGradientSumLinearReproduction) {
+  DdmpmSetup s;
+  DdmpmBasis<1>::StencilT st;
+  for (Index p = 0; p < s.P.size(); ++p) {
+    s.basis.evaluate(s.P, p, st);
+    double w = 0.0, gsum = 0.0, xg = 0.0, xw = 0.0;
+    for (int a = 0; a < st.kSize; ++a) {
+      EXPECT_GE(st.w[a], 0.0);
+      w += st.w[a];
+      gsum += st.grad[a][0];
+      xg += s.basis.dof_position(st.dof[a])[0] * st.grad[a][0];
+      xw += s.basis.dof_position(st.dof[a])[0] * st.w[a];
+    }
+    EXPECT_NEAR(w, 1.0, 1e-14);
+    EXPECT_NEAR(gsum, 0.0, 1e-10);
+    EXPECT_NEAR(xg, 1.0, 1e-12) << "particle " << p;
+    EXPECT_NEAR(xw, s.P.x[static_cast<std::size_t>(p)][0], 1e-14);
+  }
+}
+
+TEST(Ddmpm, GradientIsContinuousAcrossANode) {
+  DdmpmSetup s;
+  DdmpmBasis<1>::StencilT left, right;
+  Particles<1> probe;
+  probe.resize(1);
+  const double node = 0.5, eps = 1e-10;
+  probe.x[0][0] = node - eps;
+  s.basis.evaluate(probe, 0, left);
+  probe.x[0][0] = node + eps;
+  s.basis.evaluate(probe, 0, right);
+  // Gradient of the node-5 function (DOF 5) on both sides: P1 jumps by 2/h = 20, DDMPM not.
+  auto grad_of = [](const DdmpmBasis<1>::StencilT& st, Index dof) {
+    double g = 0.0;
+    for (int a = 0; a < st.kSize; ++a)
+      if (st.dof[a] == dof) g += st.grad[a][0];
+    return g;
+  };
+  for (Index dof = 3; dof <= 7; ++dof)
+    EXPECT_NEAR(grad_of(left, dof), grad_of(right, dof), 1e-6) << "dof " << dof;
+}
+
+TEST(Ddmpm, InteriorNodesGiveCentralDifferenceGradients) {
+  // With uniformly spaced particles the particle sums are the exact integrals in the interior:
+  // (1/V_j) int phi_j dphi_{j+-1}/dx = +-1/(2h), and 0 for i = j. At a node (alpha = 0) the
+  // gradient of phi_{j+1} is then 1/(2h) and that of phi_{j-1} is -1/(2h).
+  DdmpmSetup s;
+  DdmpmBasis<1>::StencilT st;
+  Particles<1> probe;
+  probe.resize(1);
+  probe.x[0][0] = 0.5;  // node 5
+  s.basis.evaluate(probe, 0, st);
+  const double h = 0.1;
+  for (int a = 0; a < st.kSize; ++a) {
+    if (st.dof[a] == 6) {
+      EXPECT_NEAR(st.grad[a][0], 1.0 / (2 * h), 1e-9);
+    }
+    if (st.dof[a] == 4) {
+      EXPECT_NEAR(st.grad[a][0], -1.0 / (2 * h), 1e-9);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mpm
