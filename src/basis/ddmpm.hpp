@@ -61,15 +61,21 @@ class DdmpmBasis {
 
   // Values of P1 at x_p; gradients smoothed. Slots 0 and 3 (nodes c-1, c+2) have zero weight.
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
+    evaluate_point(P.x[static_cast<std::size_t>(p)], s);
+  }
+
+  // The DDMPM basis at any point of the grid: quadrature points of the reconstruction mappings
+  // (DDMPM-TLS, D 5.3) need the smoothed gradients there too.
+  void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     typename LinearBasis<Dim>::StencilT q;
-    p1_.evaluate(P, p, q);
+    p1_.evaluate_point(x, q);
     const Index c = q.dof[0];
     const double alpha = 2.0 * q.w[0] * q.w[1];
     for (int k = 0; k < 4; ++k) {
       const Index node = c - 1 + k;
       s.dof[k] = std::clamp<Index>(node, 0, n_ - 1);
       s.w[k] = (k == 1 || k == 2) ? q.w[k - 1] : 0.0;
-      double smooth = 0.0;  // grad_tilde phi_node at x_p
+      double smooth = 0.0;  // grad_tilde phi_node at x
       for (int a = 0; a < 2; ++a) {
         const Index j = c + a;
         const Index off = node - j + 1;
@@ -79,15 +85,6 @@ class DdmpmBasis {
       const double plain = (k == 1 || k == 2) ? q.grad[k - 1][0] : 0.0;
       s.grad[k][0] = (node >= 0 && node < n_) ? alpha * plain + (1.0 - alpha) * smooth : 0.0;
     }
-  }
-
-  // The plain P1 basis at a point (tractions, quadrature points), padded to the stencil size.
-  void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
-    typename LinearBasis<Dim>::StencilT q;
-    p1_.evaluate_point(x, q);
-    s.dof = {q.dof[0], q.dof[0], q.dof[1], q.dof[1]};
-    s.w = {0.0, q.w[0], q.w[1], 0.0};
-    s.grad = {Vec<Dim>::Zero(), q.grad[0], q.grad[1], Vec<Dim>::Zero()};
   }
 
  private:

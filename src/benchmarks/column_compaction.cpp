@@ -22,7 +22,7 @@ ExactState<1> ColumnExact::operator()(const Vec<1>& X, double t) const {
     e.u[0] = 0.5 * k * (2.0 * height * X[0] - X[0] * X[0]);
   else
     e.u[0] = std::log1p(k * X[0] / (1.0 - k * height)) / k - X[0];  // log1p: no cancellation
-  e.v[0] = 0.0;  // quasi-static
+  e.v[0] = 0.0;                                                     // quasi-static
   return e;
 }
 
@@ -43,6 +43,9 @@ Problem<1> make_column_compaction(const Config& cfg) {
   pb.grid = Grid<1>(Vec<1>(0.0), Vec<1>(ex.height + h), IVec<1>{cells + 1});
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(ex.height),
                                    static_cast<int>(cfg.get_int("particles.per_cell")), ex.density);
+  pb.body_min = Vec<1>(0.0);
+  pb.body_max = Vec<1>(ex.height);
+  pb.initial_velocity = [](const Vec<1>&) { return Vec<1>(0.0); };
   pb.fixed_sides = {{0, 0}};
   pb.body_force.time_dependent = true;
   pb.body_force.fill = [ex](const Particles<1>&, double t, std::vector<Vec<1>>& b) {

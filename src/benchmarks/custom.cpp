@@ -31,6 +31,14 @@ Problem<1> make_custom_1d(const Config& cfg) {
   const auto& constants = cfg.constants();
   const Expression v0(cfg.get_string("initial.velocity"), constants);
   const Expression s0(cfg.get_string("initial.stress"), constants);
+  pb.body_min = Vec<1>(b0);
+  pb.body_max = Vec<1>(b1);
+  pb.initial_velocity = [v0](const Vec<1>& X) { return Vec<1>(v0(X[0])); };
+  pb.initial_stress = [s0](const Vec<1>& X) {
+    Mat<1> m;
+    m(0, 0) = s0(X[0]);
+    return m;
+  };
   const bool incremental_law = std::holds_alternative<Elastic1DSmall>(pb.material) ||
                                std::holds_alternative<Elastic1DLarge>(pb.material);
   auto& P = pb.particles;

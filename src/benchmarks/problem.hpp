@@ -38,6 +38,11 @@ struct Problem {
   std::vector<std::pair<int, int>> fixed_sides;  // (direction, side 0 lower / 1 upper)
   BodyForce<Dim> body_force;
   std::vector<EndTraction<Dim>> tractions;
+  // The body before deformation and its initial fields as functions of the material position,
+  // for solvers that discretise the body themselves (the updated-Lagrangian FEM reference).
+  Vec<Dim> body_min = Vec<Dim>::Zero(), body_max = Vec<Dim>::Zero();
+  std::function<Vec<Dim>(const Vec<Dim>& X)> initial_velocity;
+  std::function<Mat<Dim>(const Vec<Dim>& X)> initial_stress;  // empty: zero
   ExactSolution<Dim> exact;  // empty when the benchmark has no exact solution
 };
 

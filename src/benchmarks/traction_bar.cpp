@@ -55,6 +55,9 @@ Problem<1> make_traction_bar(const Config& cfg) {
   pb.grid = Grid<1>(Vec<1>(g0), Vec<1>(g1), IVec<1>{cells});
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L),
                                    static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+  pb.body_min = Vec<1>(0.0);
+  pb.body_max = Vec<1>(L);
+  pb.initial_velocity = [](const Vec<1>&) { return Vec<1>(0.0); };
   pb.fixed_sides = {{0, 0}};
   const TractionBarExact ex{L, rho, wave_speed(pb.material), cfg.get_real("traction.amplitude")};
   EndTraction<1> tr;

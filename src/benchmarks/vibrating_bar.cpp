@@ -48,8 +48,13 @@ Problem<1> make_vibrating_bar(const Config& cfg, bool large) {
   pb.grid = Grid<1>(Vec<1>(0.0), Vec<1>(L), IVec<1>{cells});
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L),
                                    static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+  pb.body_min = Vec<1>(0.0);
+  pb.body_max = Vec<1>(L);
+  pb.initial_velocity = [v0, L](const Vec<1>& X) {
+    return Vec<1>(v0 * std::sin(std::numbers::pi * X[0] / L));
+  };
   for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
-    pb.particles.v[i][0] = v0 * std::sin(std::numbers::pi * pb.particles.x0[i][0] / L);
+    pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
   pb.fixed_sides = {{0, 0}, {0, 1}};
   if (!large) pb.exact = VibratingBarExact{L, v0, rho, wave_speed(pb.material)};
   return pb;

@@ -35,6 +35,22 @@ inline constexpr Entry kBases[] = {
 
 inline constexpr Entry kMappings[] = {
     {"direct", "standard MPM mapping: particles are the quadrature points (D 3.2, 004 4.4)"},
+    {"cubic_spline",
+     "global natural cubic spline through particle values, 2x2 Gauss points per element (D 3.2)"},
+    {"tls",
+     "Taylor least squares per element, mass and momentum conservative (D 5.3, 000, 004 4.4)"},
+};
+
+inline constexpr Entry kSolvers[] = {
+    {"mpm", "material point method with the chosen basis, mapping and scheme"},
+    {"ulfem", "1D updated-Lagrangian FEM, linear elements (reference solutions, D 5.4.1)"},
+};
+
+inline constexpr Entry kTlsCompletions[] = {
+    {"none", "stop the run when an element cannot support the Taylor basis"},
+    {"reduce", "use fewer Taylor terms in that element (D 5.2.3)"},
+    {"virtual", "add virtual points from the neighbouring elements' reconstructions (D 5.2.3)"},
+    {"neighbour", "borrow the nearest particles of the neighbouring elements (D 5.2.3)"},
 };
 
 inline constexpr Entry kSchemes[] = {

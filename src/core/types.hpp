@@ -50,6 +50,7 @@ inline constexpr int kInput = 2;
 inline constexpr int kNonFinite = 3;
 inline constexpr int kLeftGrid = 4;
 inline constexpr int kInvertedDeformation = 5;
+inline constexpr int kReconstruction = 6;  // a reconstruction mapping cannot fit an element
 }  // namespace exit_code
 
 }  // namespace mpm

@@ -105,6 +105,18 @@ std::vector<KeySpec> declare() {
       real("method.mass_tolerance", "", 1e-10, at_least(0),
            "degrees of freedom with mass below this fraction of the largest nodal mass are "
            "inactive"),
+      choice("method.solver", "mpm", kSolvers, "time-stepping method"),
+      integer("method.tls_terms", 3, closed(1, 3),
+              "Taylor basis functions per element of the TLS mapping (1: constant, 3: quadratic)"),
+      choice("method.tls_completion", "virtual", kTlsCompletions,
+             "what TLS does in an element with too few or badly placed particles (D 5.2.3)"),
+      real("method.tls_max_condition", "", 1e8, greater_than(1),
+           "largest condition number of an element's least-squares matrix before completion"),
+      integer("method.gauss_points", 0, closed(0, 10),
+              "Gauss points per element of a reconstruction mapping (0: the method's own: 2 "
+              "for TLS, 2 per half element for the cubic spline)"),
+      integer("reference.dofs", 120, at_least(2),
+              "nodes of the updated-Lagrangian FEM reference of vibrating_bar_large (D: 120)"),
 
       choice("material.model", "elastic_1d_small", kMaterials, "constitutive law"),
       real("material.density", "kg/m^3", kRequired, greater_than(0), "initial density rho0"),

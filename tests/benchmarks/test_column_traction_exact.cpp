@@ -23,7 +23,7 @@ TEST(ColumnExact, SatisfiesEquilibriumKinematicsAndTheLargeDeformationLaw) {
     const double F = 1.0 + (s(X + dX).u[0] - s(X - dX).u[0]) / (2 * dX);
     EXPECT_NEAR(s(X).stress(0, 0), E * (1.0 - 1.0 / F), 1e-5);  // sigma = E (1 - 1/F)
   }
-  EXPECT_NEAR(ex(Vec<1>(0.0), t).u[0], 0.0, 1e-14);       // fixed bottom
+  EXPECT_NEAR(ex(Vec<1>(0.0), t).u[0], 0.0, 1e-14);          // fixed bottom
   EXPECT_NEAR(ex(Vec<1>(50.0), t).stress(0, 0), 0.0, 1e-9);  // free top
   // Published: the top moves by about 0.27 m (D 5.4.2, "maximal strain 0.27 m" = displacement).
   EXPECT_NEAR(ex(Vec<1>(50.0), t).u[0], -0.25, 0.03);

@@ -1,0 +1,142 @@
+#pragma once
+// Gauss-Legendre rules and per-step bookkeeping shared by the reconstruction mappings
+// (D 3.2.2: Gauss quadrature; 5.3.1: element-wise integration of the reconstructions).
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <vector>
+
+#include "core/simulation.hpp"
+
+namespace mpm {
+
+// n-point Gauss-Legendre rule on [-1, 1], exact for polynomials of degree 2n - 1, from the
+// Golub-Welsch eigenvalue problem of the Jacobi matrix (nodes ascending).
+struct GaussRule {
+  std::vector<double> xi, w;
+};
+
+inline GaussRule gauss_legendre(int n) {
+  GaussRule r;
+  if (n == 1) {
+    r.xi = {0.0};
+    r.w = {2.0};
+    return r;
+  }
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 1; k < n; ++k) {
+    const double b = k / std::sqrt(4.0 * k * k - 1.0);
+    J(k - 1, k) = J(k, k - 1) = b;
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
+  for (int k = 0; k < n; ++k) {
+    r.xi.push_back(es.eigenvalues()[k]);
+    const double v0 = es.eigenvectors()(0, k);
+    r.w.push_back(2.0 * v0 * v0);
+  }
+  return r;
+}
+
+// Particles grouped by the grid cell (element, knot span) containing them: a counting sort,
+// O(particles + cells) per step, no allocation after the first step.
+template <int Dim>
+struct ElementBins {
+  std::vector<Index> start;  // particles of cell e: order[start[e] .. start[e + 1])
+  std::vector<Index> order;
+
+  void build(const Grid<Dim>& g, const Particles<Dim>& P) {
+    const Index ne = g.num_cells();
+    start.assign(static_cast<std::size_t>(ne + 1), 0);
+    order.resize(static_cast<std::size_t>(P.size()));
+    for (const auto& x : P.x) ++start[static_cast<std::size_t>(g.cell_index(x) + 1)];
+    for (Index e = 0; e < ne; ++e)
+      start[static_cast<std::size_t>(e + 1)] += start[static_cast<std::size_t>(e)];
+    std::vector<Index> fill(start.begin(), start.end() - 1);
+    for (Index p = 0; p < P.size(); ++p) {
+      const Index e = g.cell_index(P.x[static_cast<std::size_t>(p)]);
+      order[static_cast<std::size_t>(fill[static_cast<std::size_t>(e)]++)] = p;
+    }
+  }
+  Index count(Index e) const {
+    return start[static_cast<std::size_t>(e + 1)] - start[static_cast<std::size_t>(e)];
+  }
+  const Index* begin(Index e) const { return order.data() + start[static_cast<std::size_t>(e)]; }
+  const Index* end(Index e) const { return order.data() + start[static_cast<std::size_t>(e + 1)]; }
+};
+
+// Quadrature points of one step with the basis evaluated once at each (D eq. 3.7-3.9, 5.16-5.17).
+// A reconstruction mapping fills x, w and element, then calls evaluate(); the assemble_*
+// functions integrate reconstructed fields given at the points.
+template <class Sim>
+struct QuadraturePoints {
+  static constexpr int Dim = Sim::kDim;
+  std::vector<Vec<Dim>> x;  // position [m]
+  std::vector<double> w;    // weight [m^Dim]
+  std::vector<Index> element;
+  std::vector<typename Sim::StencilT> stencil;
+
+  void clear() {
+    x.clear();
+    w.clear();
+    element.clear();
+  }
+  void add(const Vec<Dim>& xg, double wg, Index e) {
+    x.push_back(xg);
+    w.push_back(wg);
+    element.push_back(e);
+  }
+  std::size_t size() const { return x.size(); }
+  void evaluate(const Sim& sim) {
+    stencil.resize(x.size());
+    for (std::size_t g = 0; g < x.size(); ++g) sim.basis.evaluate_point(x[g], stencil[g]);
+  }
+};
+
+// m_i = sum_g phi_i rho_g w_g (lumped row sums); with consistent mass also
+// M_ij = sum_g phi_i rho_g phi_j w_g (D eq. 3.9, 5.17).
+template <class Sim>
+void assemble_mass(Sim& sim, const QuadraturePoints<Sim>& q, const std::vector<double>& rho) {
+  auto& m = sim.nodes.mass;
+  std::fill(m.begin(), m.end(), 0.0);
+  const bool consistent = sim.mass_type == MassType::Consistent;
+  if (consistent) sim.consistent.begin(sim.nodes.size());
+  for (std::size_t g = 0; g < q.size(); ++g) {
+    const auto& s = q.stencil[g];
+    const double rw = rho[g] * q.w[g];
+    for (int a = 0; a < s.kSize; ++a) m[static_cast<std::size_t>(s.dof[a])] += s.w[a] * rw;
+    if (consistent)
+      for (int a = 0; a < s.kSize; ++a)
+        for (int b = 0; b < s.kSize; ++b)
+          if (s.w[a] != 0.0 && s.w[b] != 0.0)
+            sim.consistent.add(s.dof[a], s.dof[b], s.w[a] * rw * s.w[b]);
+  }
+}
+
+// q_i = sum_g phi_i (rho v)_g w_g (D eq. 3.8, 5.16).
+template <class Sim>
+void assemble_momentum(Sim& sim, const QuadraturePoints<Sim>& q,
+                       const std::vector<Vec<Sim::kDim>>& rhov) {
+  auto& out = sim.nodes.momentum;
+  std::fill(out.begin(), out.end(), Vec<Sim::kDim>::Zero());
+  for (std::size_t g = 0; g < q.size(); ++g) {
+    const auto& s = q.stencil[g];
+    for (int a = 0; a < s.kSize; ++a)
+      out[static_cast<std::size_t>(s.dof[a])] += (s.w[a] * q.w[g]) * rhov[g];
+  }
+}
+
+// f_i = sum_g ( phi_i (rho b)_g - sigma_g grad phi_i ) w_g (D eq. 3.7 and 5.11 with the body
+// force integrated the same way).
+template <class Sim>
+void assemble_forces(Sim& sim, const QuadraturePoints<Sim>& q,
+                     const std::vector<Vec<Sim::kDim>>& rhob,
+                     const std::vector<Mat<Sim::kDim>>& sigma) {
+  auto& out = sim.nodes.force;
+  std::fill(out.begin(), out.end(), Vec<Sim::kDim>::Zero());
+  for (std::size_t g = 0; g < q.size(); ++g) {
+    const auto& s = q.stencil[g];
+    for (int a = 0; a < s.kSize; ++a)
+      out[static_cast<std::size_t>(s.dof[a])] += q.w[g] * (s.w[a] * rhob[g] - sigma[g] * s.grad[a]);
+  }
+}
+
+}  // namespace mpm
