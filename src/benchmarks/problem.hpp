@@ -43,7 +43,10 @@ struct Problem {
   Vec<Dim> body_min = Vec<Dim>::Zero(), body_max = Vec<Dim>::Zero();
   std::function<Vec<Dim>(const Vec<Dim>& X)> initial_velocity;
   std::function<Mat<Dim>(const Vec<Dim>& X)> initial_stress;  // empty: zero
-  ExactSolution<Dim> exact;  // empty when the benchmark has no exact solution
+  ExactSolution<Dim> exact;
+  // No exact solution: compare with an updated-Lagrangian FEM reference computed alongside
+  // (reference.dofs nodes, D 5.4.1).
+  bool fem_reference = false;  // empty when the benchmark has no exact solution
 };
 
 using AnyProblem = std::variant<Problem<1>>;

@@ -14,6 +14,7 @@
 #include "io/config.hpp"
 #include "io/output.hpp"
 #include "mpm/version.hpp"
+#include "solver/ulfem.hpp"
 
 namespace mpm {
 namespace {
@@ -108,8 +109,8 @@ ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
   return e;
 }
 
-nlohmann::json opt_json(const std::optional<double>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+nlohmann::ordered_json opt_json(const std::optional<double>& v) {
+  return v ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
 }
 
 // Everything written into the output directory during a run.
@@ -183,7 +184,7 @@ class OutputSession {
     ++frames_;
   }
 
-  void summary(const nlohmann::json& j) {
+  void summary(const nlohmann::ordered_json& j) {
     if (enabled()) io::write_file_atomic(dir_ / "summary.json", j.dump(2) + "\n");
   }
 
@@ -221,75 +222,67 @@ TimeSetup time_setup(const Config& cfg) {
   return {dt, steps};
 }
 
-template <int Dim, class Basis, class Mapping, class Scheme>
-RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) {
-  const auto t_start = Clock::now();
-  const TimeSetup ts = time_setup(cfg);
-  OutputSession<Dim> out(opt, cfg, pb);
+// What the time loop sees of a solver's state: the particles (MPM) or element midpoints (FEM)
+// with the time and the material, for history rows and frames.
+template <int Dim>
+struct StateView {
+  const Particles<Dim>& particles;
+  double time;
+  const Material& material;
+};
 
-  using Sim = Simulation<Dim, Basis, Mapping>;
-  Sim sim(pb.grid, Basis(pb.grid), Mapping{}, std::move(pb.particles), pb.material);
-  sim.mass_type =
-      cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
-  sim.mass_tolerance = cfg.get_real("method.mass_tolerance");
-  for (auto [d, side] : pb.fixed_sides) sim.fix_side(d, side);
-  sim.body_force = pb.body_force;
-  sim.tractions = pb.tractions;
-  if (sim.body_force.fill) sim.body_force.fill(sim.particles, 0.0, sim.particles.body);
-
+// The time loop shared by every solver: `advance(s)` takes step s to s + 1 (timed; may throw
+// RunError), `after()` runs untimed companions (the FEM reference), `view()` exposes the state.
+// Writes history rows and frames, shows progress, and on a RunError keeps the failing state as
+// the last frame and records the failure in `res`.
+template <int Dim, class Advance, class After, class View>
+void drive(const TimeSetup& ts, const Config& cfg, const RunOptions& opt, OutputSession<Dim>& out,
+           Advance&& advance, After&& after, View&& view, RunResult& res) {
   const int frames = static_cast<int>(cfg.get_int("output.frames"));
   const Index history_every = cfg.get_int("output.history_every");
   Index next_frame = 1;
   auto frame_step = [&](Index k) {
     return frames > 0 ? (k * ts.steps + frames - 1) / frames : ts.steps;
   };
-
-  RunResult res;
-  res.benchmark = pb.benchmark;
-  res.dim = Dim;
-  res.cells = sim.grid.num_cells();
-  res.h = sim.grid.h[0];
-  res.particles = sim.particles.size();
-
-  out.history_row(sim);
-  out.frame(sim);
-  Progress progress(!opt.quiet, ts.steps, sim.particles.size());
+  out.history_row(view());
+  out.frame(view());
+  Progress progress(!opt.quiet, ts.steps, res.particles);
   double step_seconds = 0.0;
+  Index step = 0;
   try {
-    while (sim.step < ts.steps) {
+    while (step < ts.steps) {
       const auto t0 = Clock::now();
-      Scheme::step(sim, ts.dt);
+      advance(step);
       step_seconds += seconds_since(t0);
-      ++sim.step;
-      sim.time = static_cast<double>(sim.step) * ts.dt;
-      const bool last = sim.step == ts.steps;
-      if (sim.step % history_every == 0 || last) out.history_row(sim);
-      if (last || (frames > 0 && sim.step >= frame_step(next_frame))) {
-        while (next_frame <= frames && sim.step >= frame_step(next_frame)) ++next_frame;
-        out.frame(sim);
+      ++step;
+      after();
+      const bool last = step == ts.steps;
+      if (step % history_every == 0 || last) out.history_row(view());
+      if (last || (frames > 0 && step >= frame_step(next_frame))) {
+        while (next_frame <= frames && step >= frame_step(next_frame)) ++next_frame;
+        out.frame(view());
       }
-      progress.update(sim.step, sim.time);
+      progress.update(step, view().time);
     }
   } catch (const RunError& e) {
     res.exit_code = e.exit_code();
     res.failure = e.what();
-    out.history_row(sim);
-    out.frame(sim);  // the state the failure was detected in, for diagnosis
+    out.history_row(view());
+    out.frame(view());  // the state the failure was detected in, for diagnosis
   }
   progress.finish();
-
-  res.steps = sim.step;
-  if (res.exit_code == exit_code::kOk)
-    res.errors = error_norms<Dim>(sim.particles, sim.grid, pb.exact, sim.time, ts.dt,
-                                  Scheme::kVelocityTime, boundary_cells<Basis>());
-  res.diag = sim.diag;
+  res.steps = step;
   res.ns_per_particle_step =
-      sim.step > 0 ? 1e9 * step_seconds /
-                         (static_cast<double>(sim.step) * static_cast<double>(res.particles))
-                   : 0.0;
-  res.wall_seconds = seconds_since(t_start);
+      step > 0
+          ? 1e9 * step_seconds / (static_cast<double>(step) * static_cast<double>(res.particles))
+          : 0.0;
+}
 
-  nlohmann::json j;
+// The fields of summary.json common to every solver; `method` describes the solver.
+nlohmann::ordered_json make_summary(const RunResult& res, const Config& cfg,
+                                    const Material& material, const TimeSetup& ts, double t_end,
+                                    nlohmann::ordered_json method, double velocity_time) {
+  nlohmann::ordered_json j;
   j["mpmlab_version"] = kVersion;
   j["status"] = res.exit_code == exit_code::kOk ? "ok" : "failed";
   if (res.exit_code != exit_code::kOk) {
@@ -297,12 +290,9 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
     j["failure"] = res.failure;
   }
   j["benchmark"] = res.benchmark;
-  j["dim"] = Dim;
-  j["method"] = {{"basis", std::string(Basis::kName)},
-                 {"mapping", std::string(Mapping::kName)},
-                 {"scheme", std::string(Scheme::kName)},
-                 {"mass", cfg.get_string("method.mass")}};
-  j["material"] = {{"model", std::string(material_name(sim.material))},
+  j["dim"] = res.dim;
+  j["method"] = std::move(method);
+  j["material"] = {{"model", std::string(material_name(material))},
                    {"density", cfg.get_real("material.density")},
                    {"youngs_modulus", cfg.get_real("material.youngs_modulus")},
                    {"poisson_ratio", cfg.get_real("material.poisson_ratio")}};
@@ -310,9 +300,9 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
   j["h"] = res.h;
   j["particles"] = res.particles;
   j["dt"] = ts.dt;
-  j["t_end"] = sim.time;
+  j["t_end"] = t_end;
   j["steps"] = res.steps;
-  j["velocity_time_offset_dt"] = Scheme::kVelocityTime;
+  j["velocity_time_offset_dt"] = velocity_time;
   j["wall_seconds"] = res.wall_seconds;
   j["ns_per_particle_step"] = res.ns_per_particle_step;
   j["errors"] = {
@@ -328,8 +318,133 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
   j["conservation"] = {{"max_rel_mass_error", res.diag.max_rel_mass_error},
                        {"max_rel_momentum_error", res.diag.max_rel_momentum_error}};
   j["grid_crossings"] = res.diag.grid_crossings;
-  res.summary = j;
-  out.summary(j);
+  return j;
+}
+
+// Stress errors of the particles against the FEM reference at their material positions
+// (D 5.4.1: the large-deformation bar is compared with ULFEM, 120 DOFs).
+void reference_errors(const Particles<1>& P, const Ulfem1D& ref, ErrorNorms& e) {
+  double ss = 0, num = 0, den = 0;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    const double sr = ref.stress_at(P.x0[i][0]);
+    const double d = P.stress[i](0, 0) - sr;
+    ss += d * d;
+    num += P.volume0[i] * d * d;
+    den += P.volume0[i] * sr * sr;
+  }
+  e.stress_rms = std::sqrt(ss / static_cast<double>(P.x.size()));
+  if (den > 0.0) e.stress_rel_l2 = std::sqrt(num / den);
+}
+
+// The mapping built with its settings from the configuration (reconstruction mappings).
+template <class Mapping>
+Mapping make_mapping(const Config& cfg) {
+  if constexpr (requires { Mapping::from_config(cfg); })
+    return Mapping::from_config(cfg);
+  else
+    return Mapping{};
+}
+
+template <int Dim, class Basis, class Mapping, class Scheme>
+RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) {
+  const auto t_start = Clock::now();
+  const TimeSetup ts = time_setup(cfg);
+  OutputSession<Dim> out(opt, cfg, pb);
+
+  // The FEM reference of benchmarks without an exact solution, stepped alongside (untimed).
+  std::optional<Ulfem1D> reference;
+  if constexpr (Dim == 1)
+    if (pb.fem_reference) reference.emplace(pb, cfg.get_int("reference.dofs") - 1);
+
+  using Sim = Simulation<Dim, Basis, Mapping>;
+  Sim sim(pb.grid, Basis(pb.grid), make_mapping<Mapping>(cfg), std::move(pb.particles),
+          pb.material);
+  sim.mass_type =
+      cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
+  sim.mass_tolerance = cfg.get_real("method.mass_tolerance");
+  for (auto [d, side] : pb.fixed_sides) sim.fix_side(d, side);
+  sim.body_force = pb.body_force;
+  sim.tractions = pb.tractions;
+  if (sim.body_force.fill) sim.body_force.fill(sim.particles, 0.0, sim.particles.body);
+
+  RunResult res;
+  res.benchmark = pb.benchmark;
+  res.dim = Dim;
+  res.cells = sim.grid.num_cells();
+  res.h = sim.grid.h[0];
+  res.particles = sim.particles.size();
+  drive<Dim>(
+      ts, cfg, opt, out,
+      [&](Index s) {
+        Scheme::step(sim, ts.dt);
+        sim.step = s + 1;
+        sim.time = static_cast<double>(sim.step) * ts.dt;
+      },
+      [&] {
+        if (reference) reference->step(ts.dt);
+      },
+      [&] {
+        return StateView<Dim>{sim.particles, sim.time, sim.material};
+      },
+      res);
+
+  if (res.exit_code == exit_code::kOk) {
+    res.errors = error_norms<Dim>(sim.particles, sim.grid, pb.exact, sim.time, ts.dt,
+                                  Scheme::kVelocityTime, boundary_cells<Basis>());
+    if constexpr (Dim == 1)
+      if (reference) reference_errors(sim.particles, *reference, res.errors);
+  }
+  res.diag = sim.diag;
+  res.wall_seconds = seconds_since(t_start);
+
+  nlohmann::ordered_json method = {{"solver", "mpm"},
+                                   {"basis", std::string(Basis::kName)},
+                                   {"mapping", std::string(Mapping::kName)},
+                                   {"scheme", std::string(Scheme::kName)},
+                                   {"mass", cfg.get_string("method.mass")}};
+  if constexpr (requires { Basis::kDegree; }) method["degree"] = Basis::kDegree;
+  res.summary =
+      make_summary(res, cfg, sim.material, ts, sim.time, std::move(method), Scheme::kVelocityTime);
+  if (reference)
+    res.summary["reference"] = {{"solver", "ulfem"},
+                                {"dofs", cfg.get_int("reference.dofs")},
+                                {"compared", "stress at the particles' material positions"}};
+  out.summary(res.summary);
+  return res;
+}
+
+// method.solver = "ulfem": the updated-Lagrangian FEM on the problem's body, one linear element
+// per grid cell covered by the body; outputs and errors at the element midpoints.
+RunResult run_ulfem(Problem<1>& pb, const Config& cfg, const RunOptions& opt) {
+  const auto t_start = Clock::now();
+  const TimeSetup ts = time_setup(cfg);
+  OutputSession<1> out(opt, cfg, pb);
+  const auto elements =
+      std::max<Index>(1, std::llround((pb.body_max[0] - pb.body_min[0]) / pb.grid.h[0]));
+  Ulfem1D fem(pb, elements);
+  RunResult res;
+  res.benchmark = pb.benchmark;
+  res.dim = 1;
+  res.cells = elements;
+  res.h = (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements);
+  res.particles = elements;
+  drive<1>(
+      ts, cfg, opt, out, [&](Index) { fem.step(ts.dt); }, [] {},
+      [&] {
+        return StateView<1>{fem.elements(), fem.time(), pb.material};
+      },
+      res);
+  if (res.exit_code == exit_code::kOk) {
+    // Element midpoints of equal length: no cell of the body is special, so no interior cut.
+    Grid<1> element_grid(pb.body_min, pb.body_max, IVec<1>{elements});
+    res.errors = error_norms<1>(fem.elements(), element_grid, pb.exact, fem.time(), ts.dt,
+                                /*velocity_time=*/-0.5, /*boundary_cells=*/1);
+  }
+  res.wall_seconds = seconds_since(t_start);
+  res.summary =
+      make_summary(res, cfg, pb.material, ts, fem.time(),
+                   {{"solver", "ulfem"}, {"elements", elements}, {"mass", "lumped"}}, -0.5);
+  out.summary(res.summary);
   return res;
 }
 
@@ -356,6 +471,11 @@ BasisKind choose_basis(std::string_view name, int degree) {
 
 RunResult run(const Config& cfg, const RunOptions& opt) {
   AnyProblem problem = make_problem(cfg);
+  if (cfg.get_string("method.solver") == "ulfem") {
+    if (auto* pb = std::get_if<Problem<1>>(&problem)) return run_ulfem(*pb, cfg, opt);
+    throw InputError(fmt::format("{}: method.solver = \"ulfem\" is one-dimensional",
+                                 cfg.where("method.solver")));
+  }
   auto with_key = [&](const char* key, auto&& fn) {
     try {
       return fn();

@@ -47,7 +47,7 @@ struct RunResult {
   double ns_per_particle_step = 0.0;
   ErrorNorms errors;
   Diagnostics diag;
-  nlohmann::json summary;  // what summary.json holds
+  nlohmann::ordered_json summary;  // what summary.json holds
 };
 
 // Runs `cfg`; input errors throw InputError before the first step, numerical failures are
