@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "core/perf.hpp"
+#include "core/reconstruct.hpp"
 #include "core/registry.hpp"
 #include "core/run.hpp"
 #include "core/study.hpp"
@@ -117,6 +118,34 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench->add_option("--scheme", bopt.scheme, "usl, usf, musl or usavg")->capture_default_str();
 
+  mpm::ReconstructOptions ropt;
+  auto* rec = app.add_subcommand(
+      "reconstruct", "reconstruct f(x) from points with a mapping's reconstruction (D 5.2.3)");
+  rec->add_option("--function", ropt.function, "f(x), muparser syntax")->capture_default_str();
+  rec->add_option("--lower", ropt.lower, "lower end of the domain")->capture_default_str();
+  rec->add_option("--upper", ropt.upper, "upper end of the domain")->capture_default_str();
+  rec->add_option("--cells", ropt.cells, "elements")->capture_default_str();
+  rec->add_option("--mapping", ropt.mapping, "tls or cubic_spline")->capture_default_str();
+  rec->add_option("--terms", ropt.terms, "TLS Taylor terms (1-3)")->capture_default_str();
+  rec->add_option("--completion", ropt.completion,
+                  "TLS completion: none, reduce, virtual, "
+                  "neighbour")
+      ->capture_default_str();
+  rec->add_option("--max-condition", ropt.max_condition, "TLS condition-number limit")
+      ->capture_default_str();
+  rec->add_flag("!--plain", ropt.conservative,
+                "TLS: plain least squares instead of keeping the element integrals");
+  rec->add_option("--points", ropt.points, "uniform:N, random:N (per element) or list:X1,X2,...")
+      ->capture_default_str();
+  rec->add_option("--seed", ropt.seed, "seed of random:N")->capture_default_str();
+  rec->add_flag("--share-faces", ropt.share_faces,
+                "a point on an interior face belongs to both elements");
+  rec->add_option("--error-points", ropt.error_points, "Gauss points per element for the RMS")
+      ->capture_default_str();
+  rec->add_option("--integration-points", ropt.integration_points,
+                  "Gauss points per element for the integral")
+      ->capture_default_str();
+
   auto* keys = app.add_subcommand("keys",
                                   "print every configuration key with type, unit, "
                                   "default, range and description");
@@ -127,6 +156,20 @@ int main(int argc, char** argv) {
     if (*run) return cmd_run(config, sets, out, quiet);
     if (*study) return cmd_study(config, refine, sets, out, jobs);
     if (*bench) return cmd_bench(bopt);
+    if (*rec) {
+      const auto r = mpm::reconstruct(ropt);
+      std::cout << fmt::format("f(x) = {} on [{}, {}], {} elements, {} points, {}\n", ropt.function,
+                               ropt.lower, ropt.upper, ropt.cells, r.x.size(), ropt.mapping);
+      std::cout << r.details;
+      std::cout << fmt::format("RMS error ({} Gauss points per element)   {:.6e}\n",
+                               ropt.error_points, r.rms_error);
+      std::cout << fmt::format(
+          "integral: exact {:.15g}, reconstructed {:.15g} ({} Gauss points "
+          "per element)\nrelative integral error               {:.6e}\n",
+          r.integral_exact, r.integral_reconstructed, ropt.integration_points,
+          r.relative_integral_error);
+      return 0;
+    }
     if (*keys) {
       mpm::print_schema(std::cout);
       return 0;

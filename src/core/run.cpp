@@ -341,6 +341,8 @@ template <class Mapping>
 Mapping make_mapping(const Config& cfg) {
   if constexpr (requires { Mapping::from_config(cfg); })
     return Mapping::from_config(cfg);
+  else if constexpr (std::is_same_v<Mapping, TlsMapping>)
+    return TlsMapping(tls_settings_from_config(cfg));
   else
     return Mapping{};
 }
@@ -405,6 +407,17 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
   if constexpr (requires { Basis::kDegree; }) method["degree"] = Basis::kDegree;
   res.summary =
       make_summary(res, cfg, sim.material, ts, sim.time, std::move(method), Scheme::kVelocityTime);
+  if constexpr (std::is_same_v<Mapping, TlsMapping>) {
+    // How often the TLS completions were needed over the run (D 5.2.3).
+    const auto& t = sim.mapping.totals();
+    res.summary["tls"] = {{"element_fits", t.active},
+                          {"full", t.full},
+                          {"reduced", t.reduced},
+                          {"with_virtual", t.with_virtual},
+                          {"with_neighbours", t.with_neighbours},
+                          {"min_terms", t.min_terms},
+                          {"max_condition", t.max_condition}};
+  }
   if (reference)
     res.summary["reference"] = {{"solver", "ulfem"},
                                 {"dofs", cfg.get_int("reference.dofs")},

@@ -13,7 +13,9 @@
 #include "basis/gimp.hpp"
 #include "basis/linear.hpp"
 #include "core/types.hpp"
+#include "mapping/cubic_spline.hpp"
 #include "mapping/direct.hpp"
+#include "mapping/tls.hpp"
 #include "scheme/schemes.hpp"
 
 namespace mpm {
@@ -63,7 +65,7 @@ struct CpdiKind {
 using BasisKind =
     std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, DdmpmKind, BSplineKind<1>,
                  BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>>;
-using MappingKind = std::variant<DirectMapping>;
+using MappingKind = std::variant<DirectMapping, CubicSplineMapping, TlsMapping>;
 
 template <class Variant, std::size_t I = 0>
 Variant choose_alternative(std::string_view name, std::string_view key, std::string choices = {}) {
