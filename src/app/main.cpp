@@ -77,11 +77,11 @@ int cmd_study(const std::string& config, const std::string& refine,
 int cmd_bench(const mpm::BenchOptions& opt) {
   const auto r = mpm::bench_1d(opt);
   std::cout << fmt::format(
-      "1D {} step, linear basis, direct mapping, lumped mass: {} particles, {} cells, {} steps, "
+      "1D {} step, {} basis, {} mapping, lumped mass: {} particles, {} cells, {} steps, "
       "best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes per particle "
-      "(particle state, cached stencil, grid share)\n",
-      opt.scheme, r.particles, r.cells, r.steps, opt.repeats, r.best_ns_per_particle_step,
-      r.median_ns_per_particle_step, r.bytes_per_particle);
+      "(particle state, cached P1 stencil, grid share)\n",
+      opt.scheme, opt.basis, opt.mapping, r.particles, r.cells, r.steps, opt.repeats,
+      r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
   return 0;
 }
 
@@ -117,6 +117,9 @@ int main(int argc, char** argv) {
   bench->add_option("--repeats", bopt.repeats, "repeats (best and median reported)")
       ->capture_default_str();
   bench->add_option("--scheme", bopt.scheme, "usl, usf, musl or usavg")->capture_default_str();
+  bench->add_option("--basis", bopt.basis, "grid basis (mpm list)")->capture_default_str();
+  bench->add_option("--degree", bopt.degree, "B-spline degree")->capture_default_str();
+  bench->add_option("--mapping", bopt.mapping, "particle-to-grid mapping")->capture_default_str();
 
   mpm::ReconstructOptions ropt;
   auto* rec = app.add_subcommand(
@@ -125,7 +128,10 @@ int main(int argc, char** argv) {
   rec->add_option("--lower", ropt.lower, "lower end of the domain")->capture_default_str();
   rec->add_option("--upper", ropt.upper, "upper end of the domain")->capture_default_str();
   rec->add_option("--cells", ropt.cells, "elements")->capture_default_str();
-  rec->add_option("--mapping", ropt.mapping, "tls or cubic_spline")->capture_default_str();
+  rec->add_option("--mapping", ropt.mapping, "tls, cubic_spline, mls or imls")
+      ->capture_default_str();
+  rec->add_option("--mls-degree", ropt.mls_degree, "MLS/IMLS polynomial degree (1 or 2)")
+      ->capture_default_str();
   rec->add_option("--terms", ropt.terms, "TLS Taylor terms (1-3)")->capture_default_str();
   rec->add_option("--completion", ropt.completion,
                   "TLS completion: none, reduce, virtual, "

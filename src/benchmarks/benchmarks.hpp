@@ -41,6 +41,19 @@ struct TractionBarExact {
   ExactState<1> operator()(const Vec<1>& X, double t) const;
 };
 
+// 1D neo-Hookean manufactured solution (003 eq. 41-47): u = A sin(2 pi X/L) sin(c pi t/L),
+// c = sqrt(E / rho0), fixed ends, body force b(X, t) = u_tt - (1/rho0) dP/dX evaluated at each
+// particle's material position (closed form; 003 eq. 47 with pi^2 u / L^2, METHODS.md errata).
+Problem<1> make_mms_1d(const Config& cfg);
+
+struct Mms1DExact {
+  double length, density, lambda, mu, wave_speed, amplitude;
+  double deformation_gradient(double X, double t) const;  // F = 1 + du/dX
+  double piola_stress(double F) const;                    // P(F) = sigma(F) in 1D
+  double body_force(double X, double t) const;            // b(X, t) [m/s^2]
+  ExactState<1> operator()(const Vec<1>& X, double t) const;
+};
+
 // 1D problem from the configuration alone: grid and body extents, initial velocity and stress
 // as expressions of x, body force as an expression of x and t, fixed or free ends.
 Problem<1> make_custom_1d(const Config& cfg);

@@ -47,6 +47,7 @@ AnyProblem make_problem(const Config& cfg) {
   if (name == "vibrating_bar_large") return make_vibrating_bar(cfg, /*large=*/true);
   if (name == "column_compaction") return make_column_compaction(cfg);
   if (name == "traction_bar") return make_traction_bar(cfg);
+  if (name == "mms_1d") return make_mms_1d(cfg);
   if (name == "custom") return make_custom_1d(cfg);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));

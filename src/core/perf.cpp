@@ -24,9 +24,10 @@ BenchResult bench_1d(const BenchOptions& opt) {
       "benchmark = \"vibrating_bar\"\n"
       "[grid]\ncells = {}\n[particles]\nper_cell = {}\n"
       "[time]\ndt = {:.17g}\nend = {:.17g}\n"
-      "[method]\nscheme = \"{}\"\n"
+      "[method]\nscheme = \"{}\"\nbasis = \"{}\"\ndegree = {}\nmapping = \"{}\"\n"
       "[material]\ndensity = 2000.0\nyoungs_modulus = 7e6\n[bar]\nv0 = 0.28\n",
-      r.cells, opt.per_cell, dt, dt * static_cast<double>(opt.steps), opt.scheme);
+      r.cells, opt.per_cell, dt, dt * static_cast<double>(opt.steps), opt.scheme, opt.basis,
+      opt.degree, opt.mapping);
   const Config cfg = Config::parse(toml, "<bench>");
   std::vector<double> ns;
   for (int k = 0; k < opt.repeats; ++k) {

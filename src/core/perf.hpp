@@ -12,6 +12,9 @@ struct BenchOptions {
   Index steps = 20;
   int repeats = 3;
   std::string scheme = "musl";
+  std::string basis = "linear";
+  int degree = 2;
+  std::string mapping = "direct";
 };
 
 struct BenchResult {
@@ -20,10 +23,11 @@ struct BenchResult {
   Index steps = 0;
   double best_ns_per_particle_step = 0.0;
   double median_ns_per_particle_step = 0.0;
-  double bytes_per_particle = 0.0;  // particle state + cached stencils + grid share
+  double bytes_per_particle = 0.0;  // particle state + cached stencils + grid share (linear)
 };
 
-// 1D vibrating bar (D Table 3.1 set 2 material), linear basis, direct mapping, lumped mass.
+// 1D vibrating bar (D Table 3.1 set 2 material) with the given scheme, basis and mapping,
+// lumped mass.
 BenchResult bench_1d(const BenchOptions& opt);
 
 }  // namespace mpm

@@ -7,6 +7,7 @@
 
 #include "io/expression.hpp"
 #include "mapping/cubic_spline.hpp"
+#include "mapping/mls.hpp"
 #include "mapping/quadrature.hpp"
 #include "mapping/tls.hpp"
 
@@ -98,6 +99,8 @@ ReconstructResult reconstruct(const ReconstructOptions& opt) {
   TlsReconstruction tls;
   TlsCoefficients coeffs;
   NaturalCubicSpline spline;
+  MovingLeastSquares mls(opt.mapping == "imls",
+                         opt.mapping == "mls" || opt.mapping == "imls" ? opt.mls_degree : 1);
   if (opt.mapping == "tls") {
     TlsSettings s;
     s.terms = opt.terms;
@@ -129,8 +132,14 @@ ReconstructResult reconstruct(const ReconstructOptions& opt) {
     value = [&](Index, double x) { return spline.value(x); };
     res.details =
         fmt::format("natural cubic spline through {} distinct points\n", spline.num_knots());
+  } else if (opt.mapping == "mls" || opt.mapping == "imls") {
+    // Quadratic-spline weight of support 3 l (001 eq. 17, 003 eq. 27), l the cell size.
+    mls.set_points(g, res.x);
+    value = [&](Index, double x) { return mls.evaluate(x, MlsWeight::QuadraticSpline, fx); };
+    // The report covers the RMS and integration points evaluated below; filled in afterwards.
   } else {
-    throw InputError(fmt::format("--mapping {}: choose tls or cubic_spline", opt.mapping));
+    throw InputError(
+        fmt::format("--mapping {}: choose tls, cubic_spline, mls or imls", opt.mapping));
   }
 
   const GaussRule err_rule = gauss_legendre(opt.error_points);
@@ -145,6 +154,16 @@ ReconstructResult reconstruct(const ReconstructOptions& opt) {
     for (std::size_t k = 0; k < int_rule.xi.size(); ++k)
       res.integral_reconstructed +=
           half * int_rule.w[k] * value(e, centre(e) + half * int_rule.xi[k]);
+  }
+  if (opt.mapping == "mls" || opt.mapping == "imls") {
+    const MlsReport& r = mls.report();
+    res.details = fmt::format(
+        "{} degree {} through {} points: {} evaluations, {} without data, {} {}\n", opt.mapping,
+        opt.mls_degree, res.x.size(), r.points, r.empty,
+        opt.mapping == "mls" ? r.ill_conditioned + r.singular : r.reduced,
+        opt.mapping == "mls"
+            ? fmt::format("ill-conditioned or singular (max cond(A) {:.4g})", r.max_condition)
+            : std::string("with dropped terms"));
   }
   res.rms_error = std::sqrt(sq / static_cast<double>(opt.cells * opt.error_points));
   res.relative_integral_error =

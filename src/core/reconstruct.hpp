@@ -14,10 +14,11 @@ struct ReconstructOptions {
   std::string function = "sin(x) + 2";      // f(x), muparser syntax
   std::string lower = "0", upper = "4*pi";  // domain ends (expressions of constants)
   Index cells = 4;
-  std::string mapping = "tls";  // tls | cubic_spline
+  std::string mapping = "tls";  // tls | cubic_spline | mls | imls
   int terms = 3;                // TLS Taylor terms
   std::string completion = "virtual";
   double max_condition = 1e8;
+  int mls_degree = 1;        // MLS/IMLS polynomial degree (1 or 2); weight support from the cell
   bool conservative = true;  // TLS: keep the exact element integrals (D eq. 5.9)
   // uniform:N (N evenly spaced per element), random:N (N per element, --seed), or
   // list:X1,X2,... (expressions); a point on an interior face belongs to both elements when

@@ -20,6 +20,8 @@ inline constexpr Entry kBenchmarks[] = {
      "1D column under a ramped body force, quasi-static exact solution (D 5.4.2, Table 5.6)"},
     {"traction_bar",
      "1D neo-Hookean bar, fixed end, dynamic end traction, exact stress (D 4.6.2, eq. 4.93)"},
+    {"mms_1d",
+     "1D neo-Hookean manufactured solution, body force from the exact displacement (003)"},
     {"custom", "1D problem built from the config alone: extents, fields by expression, ends"},
 };
 
@@ -39,6 +41,9 @@ inline constexpr Entry kMappings[] = {
      "global natural cubic spline through particle values, 2x2 Gauss points per element (D 3.2)"},
     {"tls",
      "Taylor least squares per element, mass and momentum conservative (D 5.3, 000, 004 4.4)"},
+    {"mls", "moving least squares at Gauss points, quadratic-spline weight (001 eq. 6-37)"},
+    {"imls",
+     "improved MLS: Gram-Schmidt orthogonal basis, no moment-matrix inverse (003 eq. 1-40)"},
 };
 
 inline constexpr Entry kSolvers[] = {

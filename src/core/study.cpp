@@ -17,19 +17,19 @@ namespace {
 struct ErrorColumn {
   const char* name;
   std::optional<double> ErrorNorms::*member;
-  bool in_table;  // printed in the terminal table (every column is in study.csv)
+  const char* label;  // heading in the terminal table; nullptr: study.csv only
 };
 
 constexpr ErrorColumn kColumns[] = {
-    {"displacement_rms", &ErrorNorms::displacement_rms, true},
-    {"velocity_rms", &ErrorNorms::velocity_rms, false},
-    {"velocity_rms_midstep", &ErrorNorms::velocity_rms_midstep, true},
-    {"velocity_rms_scheme_time", &ErrorNorms::velocity_rms_scheme_time, true},
-    {"stress_rms", &ErrorNorms::stress_rms, true},
-    {"stress_rel_l2", &ErrorNorms::stress_rel_l2, true},
-    {"displacement_rms_interior", &ErrorNorms::displacement_rms_interior, false},
-    {"velocity_rms_scheme_time_interior", &ErrorNorms::velocity_rms_scheme_time_interior, false},
-    {"stress_rms_interior", &ErrorNorms::stress_rms_interior, false},
+    {"displacement_rms", &ErrorNorms::displacement_rms, "u_rms"},
+    {"velocity_rms", &ErrorNorms::velocity_rms, nullptr},
+    {"velocity_rms_midstep", &ErrorNorms::velocity_rms_midstep, "v_rms_mid"},
+    {"velocity_rms_scheme_time", &ErrorNorms::velocity_rms_scheme_time, "v_rms_scheme"},
+    {"stress_rms", &ErrorNorms::stress_rms, "stress_rms"},
+    {"stress_rel_l2", &ErrorNorms::stress_rel_l2, "stress_rel_l2"},
+    {"displacement_rms_interior", &ErrorNorms::displacement_rms_interior, nullptr},
+    {"velocity_rms_scheme_time_interior", &ErrorNorms::velocity_rms_scheme_time_interior, nullptr},
+    {"stress_rms_interior", &ErrorNorms::stress_rms_interior, nullptr},
 };
 
 std::string fmt_opt(const std::optional<double>& v) {
@@ -133,13 +133,13 @@ std::string study_csv(const StudyOptions& opt, const StudyResult& r) {
 std::string study_table(const StudyOptions& opt, const StudyResult& r) {
   std::string s = fmt::format("{:>12} {:>11} {:>9}", opt.key, "h", "particles");
   for (const auto& c : kColumns)
-    if (c.in_table) s += fmt::format(" {:>12.12} {:>5}", c.name, "order");
+    if (c.label) s += fmt::format(" {:>13} {:>5}", c.label, "order");
   s += "\n";
   for (std::size_t k = 0; k < r.runs.size(); ++k) {
     const auto& run = r.runs[k];
     s += fmt::format("{:>12} {:>11.4e} {:>9}", opt.values[k], run.h, run.particles);
     for (const auto& c : kColumns) {
-      if (!c.in_table) continue;
+      if (!c.label) continue;
       const auto& v = run.errors.*(c.member);
       std::string order;
       if (k > 0 && v && (r.runs[k - 1].errors.*(c.member))) {
@@ -147,7 +147,7 @@ std::string study_table(const StudyOptions& opt, const StudyResult& r) {
             observed_order(*(r.runs[k - 1].errors.*(c.member)), *v, r.runs[k - 1].h, run.h);
         if (std::isfinite(o)) order = fmt::format("{:.2f}", o);
       }
-      s += fmt::format(" {:>12} {:>5}", fmt_opt(v), order);
+      s += fmt::format(" {:>13} {:>5}", fmt_opt(v), order);
     }
     if (run.exit_code != 0) s += fmt::format("  FAILED: {}", run.failure);
     s += "\n";

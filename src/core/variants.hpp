@@ -15,6 +15,7 @@
 #include "core/types.hpp"
 #include "mapping/cubic_spline.hpp"
 #include "mapping/direct.hpp"
+#include "mapping/mls.hpp"
 #include "mapping/tls.hpp"
 #include "scheme/schemes.hpp"
 
@@ -65,7 +66,8 @@ struct CpdiKind {
 using BasisKind =
     std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, DdmpmKind, BSplineKind<1>,
                  BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>>;
-using MappingKind = std::variant<DirectMapping, CubicSplineMapping, TlsMapping>;
+using MappingKind =
+    std::variant<DirectMapping, CubicSplineMapping, TlsMapping, MlsMapping, ImlsMapping>;
 
 template <class Variant, std::size_t I = 0>
 Variant choose_alternative(std::string_view name, std::string_view key, std::string choices = {}) {

@@ -115,6 +115,10 @@ std::vector<KeySpec> declare() {
       integer("method.gauss_points", 0, closed(0, 10),
               "Gauss points per element of a reconstruction mapping (0: the method's own: 2 "
               "for TLS, 2 per half element for the cubic spline)"),
+      integer("method.mls_degree", 1, closed(1, 2),
+              "polynomial degree of the MLS and IMLS reconstructions (1: [1, x], 2: [1, x, x^2])"),
+      real("mms.amplitude", "m", 0.1, any(),
+           "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (003)"),
       integer("reference.dofs", 120, at_least(2),
               "nodes of the updated-Lagrangian FEM reference of vibrating_bar_large (D: 120)"),
 

@@ -11,9 +11,9 @@
 #include <array>
 #include <concepts>
 #include <cstddef>
+#include <limits>
 #include <span>
 #include <string_view>
-#include <limits>
 #include <vector>
 
 #include "core/simulation.hpp"

@@ -52,7 +52,7 @@ TEST(Reconstruct, DegenerateElementOfFigure55) {
 
 TEST(Reconstruct, BadOptionsAreInputErrors) {
   ReconstructOptions o;
-  o.mapping = "mls";
+  o.mapping = "sph";
   EXPECT_THROW(reconstruct(o), InputError);
   o = {};
   o.points = "grid:3";
