@@ -422,6 +422,18 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
                           {"min_terms", t.min_terms},
                           {"max_condition", t.max_condition}};
   }
+  if constexpr (std::is_same_v<Mapping, MlsMapping> || std::is_same_v<Mapping, ImlsMapping>) {
+    // Where MLS moment matrices were ill-conditioned or IMLS dropped terms (001, 003).
+    const auto& t = sim.mapping.totals();
+    res.summary["mls"] = {{"evaluations", t.points},
+                          {"empty_support", t.empty},
+                          {"ill_conditioned", t.ill_conditioned},
+                          {"singular", t.singular},
+                          {"reduced", t.reduced},
+                          {"widened", t.widened},
+                          {"max_condition", t.max_condition},
+                          {"worst_x", t.worst_x}};
+  }
   if (reference)
     res.summary["reference"] = {{"solver", "ulfem"},
                                 {"dofs", cfg.get_int("reference.dofs")},

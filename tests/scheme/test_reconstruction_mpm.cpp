@@ -169,3 +169,25 @@ TEST(ManufacturedSolution1D, ImlsKeepsSecondOrderWhereMpmDoesNotConverge) {
 
 }  // namespace
 }  // namespace mpm
+
+namespace mpm {
+namespace {
+
+TEST(MlsInTheStep, BothMappingsRunInEverySchemeWithLinearAndBSplineBases) {
+  for (const char* mapping : {"mls", "imls"})
+    for (const char* basis : {"linear", "bspline"})
+      for (const char* scheme : {"usl", "usf", "musl", "usavg"}) {
+        SCOPED_TRACE(fmt::format("{} {} {}", mapping, basis, scheme));
+        const auto r = run_example(
+            "vibrating_bar_small",
+            {"grid.cells=10", fmt::format("method.basis={}", basis),
+             fmt::format("method.mapping={}", mapping), fmt::format("method.scheme={}", scheme)});
+        // Displacement amplitude v0 T ~ 5.3e-7 m: the reconstructions stay accurate.
+        EXPECT_LT(*r.errors.displacement_rms, 0.1 * 0.28 * 1.9e-6);
+        ASSERT_TRUE(r.summary.contains("mls"));
+        EXPECT_GT(r.summary["mls"]["evaluations"].get<Index>(), 0);
+      }
+}
+
+}  // namespace
+}  // namespace mpm
