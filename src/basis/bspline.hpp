@@ -81,11 +81,7 @@ class BSplineBasis {
 
   const Grid<Dim>& grid() const { return grid_; }
   IVec<Dim> dofs_per_dim() const { return n_; }
-  Index num_dofs() const {
-    Index n = 1;
-    for (int d = 0; d < Dim; ++d) n *= n_[d];
-    return n;
-  }
+  Index num_dofs() const { return dof_count<Dim>(n_); }
   // Greville abscissa of a DOF, xi*_j = (U_{j+1} + ... + U_{j+p}) / p per direction: the point
   // with sum_j phi_j xi*_j = x, so it is where a control value "sits" (output, boundary
   // conditions, linear initial fields). For p = 1 these are the grid nodes.
@@ -104,16 +100,7 @@ class BSplineBasis {
   // direction d: the first / last function in that direction. With an open knot vector these are
   // the only functions non-zero on that side and equal 1 there (D 3.1.1, interpolatory ends), so
   // fixing them prescribes the boundary value.
-  std::vector<Index> boundary_dofs(int d, int side) const {
-    std::vector<Index> out;
-    for (Index i = 0; i < num_dofs(); ++i) {
-      Index rem = i;
-      for (int e = 0; e < d; ++e) rem /= n_[e];
-      const Index k = rem % n_[d];
-      if (k == (side == 0 ? 0 : n_[d] - 1)) out.push_back(i);
-    }
-    return out;
-  }
+  std::vector<Index> boundary_dofs(int d, int side) const { return side_dofs<Dim>(n_, d, side); }
 
   // Requires grid().inside(P.x[p]); the caller checks.
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {

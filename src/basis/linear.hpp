@@ -26,32 +26,12 @@ class LinearBasis {
 
   const Grid<Dim>& grid() const { return grid_; }
   IVec<Dim> dofs_per_dim() const { return n_; }
-  Index num_dofs() const {
-    Index n = 1;
-    for (int d = 0; d < Dim; ++d) n *= n_[d];
-    return n;
-  }
+  Index num_dofs() const { return dof_count<Dim>(n_); }
   // Position of a DOF (the node), for output and boundary conditions.
-  Vec<Dim> dof_position(Index i) const {
-    Vec<Dim> x;
-    for (int d = 0; d < Dim; ++d) {
-      x[d] = grid_.origin[d] + grid_.h[d] * static_cast<double>(i % n_[d]);
-      i /= n_[d];
-    }
-    return x;
-  }
+  Vec<Dim> dof_position(Index i) const { return node_position<Dim>(grid_.origin, grid_.h, n_, i); }
   // DOFs prescribed by a Dirichlet condition on the grid side `side` (0 lower, 1 upper) normal
   // to direction d: the nodes on that side (P1 is interpolatory there).
-  std::vector<Index> boundary_dofs(int d, int side) const {
-    std::vector<Index> out;
-    for (Index i = 0; i < num_dofs(); ++i) {
-      Index rem = i;
-      for (int e = 0; e < d; ++e) rem /= n_[e];
-      const Index k = rem % n_[d];
-      if (k == (side == 0 ? 0 : n_[d] - 1)) out.push_back(i);
-    }
-    return out;
-  }
+  std::vector<Index> boundary_dofs(int d, int side) const { return side_dofs<Dim>(n_, d, side); }
 
   // Requires grid().inside(P.x[p]); the caller checks.
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {

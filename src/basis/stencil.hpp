@@ -2,6 +2,7 @@
 // A particle's view of the grid basis: the degrees of freedom whose functions do not vanish at
 // the particle, with values and gradients. Fixed size per basis, so stages never allocate.
 #include <array>
+#include <vector>
 
 #include "core/types.hpp"
 
@@ -45,6 +46,37 @@ inline void tensor_product(const IVec<Dim>& first, const std::array<std::array<d
     s.w[n] = value;
     s.grad[n] = g;
   }
+}
+
+// DOF layout of a tensor-product basis with n[d] functions per direction, x fastest: the
+// count and the DOFs whose index in direction d is the first (side 0) or last (side 1).
+template <int Dim>
+Index dof_count(const IVec<Dim>& n) {
+  Index c = 1;
+  for (int d = 0; d < Dim; ++d) c *= n[d];
+  return c;
+}
+
+template <int Dim>
+std::vector<Index> side_dofs(const IVec<Dim>& n, int d, int side) {
+  std::vector<Index> out;
+  for (Index i = 0; i < dof_count<Dim>(n); ++i) {
+    Index rem = i;
+    for (int e = 0; e < d; ++e) rem /= n[e];
+    if (rem % n[d] == (side == 0 ? 0 : n[d] - 1)) out.push_back(i);
+  }
+  return out;
+}
+
+// Position of grid node i (the DOFs of nodal bases), x fastest.
+template <int Dim>
+Vec<Dim> node_position(const Vec<Dim>& origin, const Vec<Dim>& h, const IVec<Dim>& n, Index i) {
+  Vec<Dim> x;
+  for (int d = 0; d < Dim; ++d) {
+    x[d] = origin[d] + h[d] * static_cast<double>(i % n[d]);
+    i /= n[d];
+  }
+  return x;
 }
 
 }  // namespace mpm
