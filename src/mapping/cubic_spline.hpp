@@ -171,7 +171,7 @@ class CubicSplineMapping {
   // Quadrature points of the current step; nullptr before the first map_mass for this Sim.
   template <class Sim>
   const QuadraturePoints<Sim>* quadrature() const {
-    return std::any_cast<QuadraturePoints<Sim>>(&workspace_);
+    return quad_.get<Sim>();
   }
 
   // rho_hat through (x_p, rho_p); m_i = sum_g phi_i rho_hat w_g and, with consistent mass,
@@ -179,7 +179,7 @@ class CubicSplineMapping {
   template <class Sim>
   void map_mass(Sim& sim) {
     static_assert(Sim::kDim == 1, "the cubic-spline mapping is one-dimensional (D 3.2)");
-    auto& q = workspace<Sim>();
+    auto& q = quad_.prepare<Sim>();
     place_points(sim, q);
     const auto& P = sim.particles;
     spline_.fit([&](std::size_t i) { return P.density[i]; });
@@ -192,7 +192,7 @@ class CubicSplineMapping {
   template <class Sim>
   void map_momentum(Sim& sim) {
     static_assert(Sim::kDim == 1, "the cubic-spline mapping is one-dimensional (D 3.2)");
-    const auto& q = workspace<Sim>();
+    const auto& q = quad_.prepared<Sim>();
     const auto& P = sim.particles;
     spline_.fit([&](std::size_t i) { return P.density[i] * P.v[i][0]; });
     vec_g_.resize(samples_.size());
@@ -205,7 +205,7 @@ class CubicSplineMapping {
   template <class Sim>
   void map_forces(Sim& sim) {
     static_assert(Sim::kDim == 1, "the cubic-spline mapping is one-dimensional (D 3.2)");
-    const auto& q = workspace<Sim>();
+    const auto& q = quad_.prepared<Sim>();
     const auto& P = sim.particles;
     const std::size_t ng = samples_.size();
     spline_.fit([&](std::size_t i) { return P.stress[i](0, 0); });
@@ -218,15 +218,6 @@ class CubicSplineMapping {
   }
 
  private:
-  // The quadrature points' stencils depend on the basis, the mapping type must not (it is
-  // chosen before the basis), so they live in a std::any typed once per call (no allocation
-  // after the first step: the vectors inside keep their capacity).
-  template <class Sim>
-  QuadraturePoints<Sim>& workspace() {
-    if (auto* q = std::any_cast<QuadraturePoints<Sim>>(&workspace_)) return *q;
-    return workspace_.emplace<QuadraturePoints<Sim>>();
-  }
-
   // Knots from the particle positions; n Gauss points in each half of every element holding a
   // particle (D Fig. 3.4), ascending; the basis and the spline coefficients at them. The n-point
   // rule is exact for degree 2n - 1 on each half; rho_hat has knots at the particles inside the
@@ -285,7 +276,7 @@ class CubicSplineMapping {
   GaussRule rule_;  // on [-1, 1], settings_.gauss_points_per_half points
   NaturalCubicSpline spline_;
   ElementBins<1> bins_;
-  std::any workspace_;                 // QuadraturePoints<Sim>
+  QuadratureStore quad_;
   std::vector<double> xg_;             // Gauss abscissae [m], ascending
   std::vector<SplineSample> samples_;  // spline coefficients at xg_
   std::vector<double> rho_g_;          // rho_hat at xg_ [kg/m^3]

@@ -179,7 +179,7 @@ class MovingLeastSquaresMapping {
   const MlsReport& totals() const { return totals_; }
   template <class Sim>
   const QuadraturePoints<Sim>* quadrature() const {
-    return std::any_cast<QuadraturePoints<Sim>>(&quad_);
+    return quad_.get<Sim>();
   }
 
   template <class Sim>
@@ -190,7 +190,7 @@ class MovingLeastSquaresMapping {
     const auto& P = sim.particles;
     const auto& grid = sim.grid;
     mls_.set_points(grid, P);
-    auto& q = workspace<Sim>();
+    auto& q = quad_.prepare<Sim>();
     q.clear();
     gauss_.clear();
     const double h = grid.h[0], half = 0.5 * h;
@@ -235,7 +235,7 @@ class MovingLeastSquaresMapping {
   void map_momentum(Sim& sim) {
     static_assert(Sim::kDim == 1, "the MLS/IMLS mappings are one-dimensional");
     const auto& P = sim.particles;
-    const auto& q = prepared<Sim>();
+    const auto& q = quad_.prepared<Sim>();
     if constexpr (Improved) {
       auto& out = sim.nodes.momentum;
       std::fill(out.begin(), out.end(), Vec<1>::Zero());
@@ -256,7 +256,7 @@ class MovingLeastSquaresMapping {
   void map_forces(Sim& sim) {
     static_assert(Sim::kDim == 1, "the MLS/IMLS mappings are one-dimensional");
     const auto& P = sim.particles;
-    const auto& q = prepared<Sim>();
+    const auto& q = quad_.prepared<Sim>();
     sig_.resize(q.size());
     vec_.resize(q.size());
     for (std::size_t g = 0; g < q.size(); ++g) {
@@ -267,23 +267,10 @@ class MovingLeastSquaresMapping {
   }
 
  private:
-  template <class Sim>
-  QuadraturePoints<Sim>& workspace() {
-    if (auto* q = std::any_cast<QuadraturePoints<Sim>>(&quad_)) return *q;
-    return quad_.emplace<QuadraturePoints<Sim>>();
-  }
-  template <class Sim>
-  const QuadraturePoints<Sim>& prepared() const {
-    const auto* q = std::any_cast<QuadraturePoints<Sim>>(&quad_);
-    if (q == nullptr)
-      throw std::logic_error("MLS mapping: map_mass must be the first mapping call of a step");
-    return *q;
-  }
-
   Settings settings_;
   MovingLeastSquares mls_;
   GaussRule rule_;
-  std::any quad_;  // QuadraturePoints<Sim>
+  QuadratureStore quad_;
   std::vector<char> active_;
   ShapeTable gauss_, nodes_;
   std::vector<Index> node_dof_;

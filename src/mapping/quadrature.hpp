@@ -2,7 +2,9 @@
 // Gauss-Legendre rules and per-step bookkeeping shared by the reconstruction mappings
 // (D 3.2.2: Gauss quadrature; 5.3.1: element-wise integration of the reconstructions).
 #include <Eigen/Eigenvalues>
+#include <any>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #include "core/simulation.hpp"
@@ -89,6 +91,35 @@ struct QuadraturePoints {
     stencil.resize(x.size());
     for (std::size_t g = 0; g < x.size(); ++g) sim.basis.evaluate_point(x[g], stencil[g]);
   }
+};
+
+// The quadrature points of a reconstruction mapping hold basis stencils, whose type depends on
+// the simulation (which itself names the mapping), so a mapping keeps them type-erased and
+// recovers them once per call (no allocation after the first step: the vectors keep their
+// capacity). map_mass, the first mapping call of every step, prepares them.
+class QuadratureStore {
+ public:
+  template <class Sim>
+  QuadraturePoints<Sim>& prepare() {
+    if (auto* q = std::any_cast<QuadraturePoints<Sim>>(&points_)) return *q;
+    return points_.emplace<QuadraturePoints<Sim>>();
+  }
+  // The points of the current step; throws when map_mass has not run (a scheme bug).
+  template <class Sim>
+  const QuadraturePoints<Sim>& prepared() const {
+    const auto* q = get<Sim>();
+    if (q == nullptr)
+      throw std::logic_error("a reconstruction mapping needs map_mass first in every step");
+    return *q;
+  }
+  // nullptr before the first map_mass for this Sim.
+  template <class Sim>
+  const QuadraturePoints<Sim>* get() const {
+    return std::any_cast<QuadraturePoints<Sim>>(&points_);
+  }
+
+ private:
+  std::any points_;
 };
 
 // m_i = sum_g phi_i rho_g w_g (lumped row sums); with consistent mass also

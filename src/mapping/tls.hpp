@@ -250,7 +250,7 @@ class TlsMapping {
                       rep.failed_condition,
                       rep.failed > 1 ? fmt::format(" and {} more element(s)", rep.failed - 1)
                                      : std::string()));
-    auto& q = quadrature<Sim>();
+    auto& q = quad_.prepare<Sim>();
     q.clear();
     const double dx = recon_.half_width();
     for (Index e = 0; e < recon_.num_elements(); ++e) {
@@ -272,7 +272,7 @@ class TlsMapping {
   void map_momentum(Sim& sim) {
     static_assert(Sim::kDim == 1, "the TLS mapping is one-dimensional (D ch. 5)");
     const auto& P = sim.particles;
-    const auto& q = prepared<Sim>();
+    const auto& q = quad_.prepared<Sim>();
     values_.resize(P.x.size());
     for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.density[i] * P.v[i][0];
     element_sums([&](std::size_t i) { return P.mass[i] * P.v[i][0]; });
@@ -288,7 +288,7 @@ class TlsMapping {
   void map_forces(Sim& sim) {
     static_assert(Sim::kDim == 1, "the TLS mapping is one-dimensional (D ch. 5)");
     const auto& P = sim.particles;
-    const auto& q = prepared<Sim>();
+    const auto& q = quad_.prepared<Sim>();
     values_.resize(P.x.size());
     for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.stress[i](0, 0);
     recon_.fit_plain(values_, coef_);
@@ -304,21 +304,6 @@ class TlsMapping {
   }
 
  private:
-  // The quadrature points hold the basis stencils, whose type depends on the simulation (which
-  // itself names this mapping), so they live in a std::any typed once per call (no allocation
-  // after the first step).
-  template <class Sim>
-  QuadraturePoints<Sim>& quadrature() {
-    if (auto* q = std::any_cast<QuadraturePoints<Sim>>(&quad_)) return *q;
-    return quad_.emplace<QuadraturePoints<Sim>>();
-  }
-  template <class Sim>
-  const QuadraturePoints<Sim>& prepared() const {
-    const auto* q = std::any_cast<QuadraturePoints<Sim>>(&quad_);
-    if (q == nullptr)
-      throw std::logic_error("TlsMapping: map_mass must be the first mapping call of a step");
-    return *q;
-  }
   // integrals_[e] = sum over the element's particles of value(p).
   template <class Value>
   void element_sums(Value&& value) {
@@ -342,7 +327,7 @@ class TlsMapping {
   TlsReconstruction recon_;
   std::vector<double> xi_, w_;              // Gauss rule on [-1, 1]
   std::vector<Eigen::Vector3d> psi_gauss_;  // Taylor basis at the Gauss points (s = xi)
-  std::any quad_;                           // QuadraturePoints<Sim>
+  QuadratureStore quad_;
   std::vector<double> values_, integrals_;  // per particle, per element
   TlsCoefficients coef_;
   std::vector<double> rho_;  // at the Gauss points
