@@ -52,10 +52,10 @@ struct ElementBins {
     for (const auto& x : P.x) ++start[static_cast<std::size_t>(g.cell_index(x) + 1)];
     for (Index e = 0; e < ne; ++e)
       start[static_cast<std::size_t>(e + 1)] += start[static_cast<std::size_t>(e)];
-    std::vector<Index> fill(start.begin(), start.end() - 1);
+    fill_.assign(start.begin(), start.end() - 1);
     for (Index p = 0; p < P.size(); ++p) {
       const Index e = g.cell_index(P.x[static_cast<std::size_t>(p)]);
-      order[static_cast<std::size_t>(fill[static_cast<std::size_t>(e)]++)] = p;
+      order[static_cast<std::size_t>(fill_[static_cast<std::size_t>(e)]++)] = p;
     }
   }
   Index count(Index e) const {
@@ -63,6 +63,9 @@ struct ElementBins {
   }
   const Index* begin(Index e) const { return order.data() + start[static_cast<std::size_t>(e)]; }
   const Index* end(Index e) const { return order.data() + start[static_cast<std::size_t>(e + 1)]; }
+
+ private:
+  std::vector<Index> fill_;  // insertion cursors, kept to avoid an allocation per step
 };
 
 // Quadrature points of one step with the basis evaluated once at each (D eq. 3.7-3.9, 5.16-5.17).
