@@ -58,6 +58,11 @@ struct Mms1DExact {
 // as expressions of x, body force as an expression of x and t, fixed or free ends.
 Problem<1> make_custom_1d(const Config& cfg);
 
+// A bar on [0, L] filling a grid of grid.cells cells with particles.per_cell particles per
+// cell, density rho, fixed at both ends, released with velocity v(X) (vibrating bar, mms_1d).
+void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,
+                    std::function<Vec<1>(const Vec<1>&)> velocity);
+
 // Material from the [material] keys for a problem in `dim` dimensions.
 Material material_from_config(const Config& cfg, int dim);
 

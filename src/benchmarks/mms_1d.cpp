@@ -64,17 +64,9 @@ Problem<1> make_mms_1d(const Config& cfg) {
                       law->p.mu(),
                       std::sqrt(cfg.get_real("material.youngs_modulus") / rho),
                       cfg.get_real("mms.amplitude")};
-  const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
-  pb.grid = Grid<1>(Vec<1>(0.0), Vec<1>(L), IVec<1>{cells});
-  pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L),
-                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho);
-  pb.body_min = Vec<1>(0.0);
-  pb.body_max = Vec<1>(L);
-  // u(X, 0) = 0, F = 1, zero stress; v(X, 0) = A c pi / L sin(2 pi X / L).
-  pb.initial_velocity = [ex](const Vec<1>& X) { return Vec<1>(ex(X, 0.0).v[0]); };
-  for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
-    pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
-  pb.fixed_sides = {{0, 0}, {0, 1}};  // u = 0 at X = 0 and X = L for all t
+  // u(X, 0) = 0, F = 1, zero stress; v(X, 0) = A c pi / L sin(2 pi X / L); u = 0 at X = 0 and
+  // X = L for all t (fixed ends).
+  fill_fixed_bar(pb, cfg, L, rho, [ex](const Vec<1>& X) { return Vec<1>(ex(X, 0.0).v[0]); });
   // b depends on the material position X (P.x0, fixed), so only time-dependence is flagged.
   pb.body_force.time_dependent = true;
   pb.body_force.fill = [ex](const Particles<1>& P, double t, std::vector<Vec<1>>& b) {

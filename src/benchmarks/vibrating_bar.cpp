@@ -19,6 +19,20 @@ Material material_from_config(const Config& cfg, int dim) {
   }
 }
 
+void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,
+                    std::function<Vec<1>(const Vec<1>&)> velocity) {
+  const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
+  pb.grid = Grid<1>(Vec<1>(0.0), Vec<1>(L), IVec<1>{cells});
+  pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L),
+                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+  pb.body_min = Vec<1>(0.0);
+  pb.body_max = Vec<1>(L);
+  pb.initial_velocity = std::move(velocity);
+  for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
+    pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
+  pb.fixed_sides = {{0, 0}, {0, 1}};
+}
+
 ExactState<1> VibratingBarExact::operator()(const Vec<1>& X, double t) const {
   using std::numbers::pi;
   const double omega = pi * wave_speed / length;
@@ -44,18 +58,9 @@ Problem<1> make_vibrating_bar(const Config& cfg, bool large) {
         "which holds for material.model = \"elastic_1d_small\" or \"linear_elastic\", not \"{}\"; "
         "use benchmark = \"vibrating_bar_large\" for large deformation",
         cfg.where("material.model"), model));
-  const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
-  pb.grid = Grid<1>(Vec<1>(0.0), Vec<1>(L), IVec<1>{cells});
-  pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L),
-                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho);
-  pb.body_min = Vec<1>(0.0);
-  pb.body_max = Vec<1>(L);
-  pb.initial_velocity = [v0, L](const Vec<1>& X) {
+  fill_fixed_bar(pb, cfg, L, rho, [v0, L](const Vec<1>& X) {
     return Vec<1>(v0 * std::sin(std::numbers::pi * X[0] / L));
-  };
-  for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
-    pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
-  pb.fixed_sides = {{0, 0}, {0, 1}};
+  });
   if (!large)
     pb.exact = VibratingBarExact{L, v0, rho, wave_speed(pb.material)};
   else
