@@ -343,12 +343,16 @@ void reference_errors(const Particles<1>& P, const Ulfem1D& ref, ErrorNorms& e) 
 // The mapping built with its settings from the configuration (reconstruction mappings).
 template <class Mapping>
 Mapping make_mapping(const Config& cfg) {
-  if constexpr (requires { Mapping::from_config(cfg); })
-    return Mapping::from_config(cfg);
-  else if constexpr (std::is_same_v<Mapping, TlsMapping>)
-    return TlsMapping(tls_settings_from_config(cfg));
-  else
-    return Mapping{};
+  try {
+    if constexpr (requires { Mapping::from_config(cfg); })
+      return Mapping::from_config(cfg);
+    else if constexpr (std::is_same_v<Mapping, TlsMapping>)
+      return TlsMapping(tls_settings_from_config(cfg));
+    else
+      return Mapping{};
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", cfg.where("method.mapping"), e.what()));
+  }
 }
 
 template <int Dim, class Basis, class Mapping, class Scheme>
