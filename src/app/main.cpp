@@ -60,10 +60,11 @@ int cmd_run(const std::string& config, const std::vector<std::string>& sets, std
   return r.exit_code;
 }
 
-int cmd_study(const std::string& config, const std::string& refine,
+int cmd_study(const std::string& config, const std::string& refine, const std::string& methods,
               const std::vector<std::string>& sets, std::string out, int jobs) {
   const auto cfg = mpm::Config::load(config, sets);
   auto opt = mpm::parse_refine(refine);
+  if (!methods.empty()) opt.methods = mpm::parse_methods(methods);
   opt.out_dir = out.empty() ? default_out("studies", config) : out;
   opt.jobs = jobs;
   const auto r = mpm::run_study(cfg, opt);
@@ -92,7 +93,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", fmt::format("mpm (mpmlab) {}", mpm::kVersion));
   app.require_subcommand(1);
 
-  std::string config, out, refine;
+  std::string config, out, refine, methods;
   std::vector<std::string> sets;
   bool quiet = false;
   int jobs = 0;
@@ -106,6 +107,9 @@ int main(int argc, char** argv) {
   auto* study = app.add_subcommand("study", "run a refinement series and print observed orders");
   study->add_option("config", config, "TOML configuration file")->required();
   study->add_option("--refine", refine, "key and values, e.g. grid.cells=5,10,20,40")->required();
+  study->add_option("--methods", methods,
+                    "method matrix: basis[degree]/mapping[/mass],... e.g. "
+                    "\"linear/direct, bspline2/tls/consistent\"");
   study->add_option("--set", sets, "override a key: section.key=value (repeatable)");
   study->add_option("--out", out, "output directory (default studies/<config name>)");
   study->add_option("--jobs,-j", jobs, "parallel runs (default: hardware threads)");
@@ -160,7 +164,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run) return cmd_run(config, sets, out, quiet);
-    if (*study) return cmd_study(config, refine, sets, out, jobs);
+    if (*study) return cmd_study(config, refine, methods, sets, out, jobs);
     if (*bench) return cmd_bench(bopt);
     if (*rec) {
       const auto r = mpm::reconstruct(ropt);

@@ -1,13 +1,16 @@
 #include "core/study.hpp"
 
 #include <fmt/format.h>
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <mutex>
 #include <thread>
 
+#include "core/registry.hpp"
 #include "io/config.hpp"
 #include "io/output.hpp"
 
@@ -59,6 +62,67 @@ StudyOptions parse_refine(const std::string& text) {
   return o;
 }
 
+std::vector<MethodSpec> parse_methods(const std::string& text) {
+  auto names = [](const auto& entries) {
+    std::string out;
+    for (const auto& e : entries) out += fmt::format("{}{}", out.empty() ? "" : ", ", e.name);
+    return out;
+  };
+  auto known = [](const auto& entries, const std::string& name) {
+    for (const auto& e : entries)
+      if (e.name == name) return true;
+    return false;
+  };
+  std::vector<MethodSpec> out;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const auto comma = text.find(',', pos);
+    std::string item =
+        text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    item.erase(0, item.find_first_not_of(" \t"));
+    item.erase(item.find_last_not_of(" \t") + 1);
+    if (item.empty()) throw InputError(fmt::format("--methods '{}' has an empty item", text));
+    std::vector<std::string> parts;
+    for (std::size_t p = 0;;) {
+      const auto slash = item.find('/', p);
+      parts.push_back(item.substr(p, slash == std::string::npos ? std::string::npos : slash - p));
+      if (slash == std::string::npos) break;
+      p = slash + 1;
+    }
+    if (parts.size() < 2 || parts.size() > 3)
+      throw InputError(fmt::format(
+          "--methods item '{}' must be basis[degree]/mapping[/mass], e.g. bspline2/tls/consistent",
+          item));
+    MethodSpec m;
+    m.label = item;
+    std::string basis = parts[0];
+    std::string degree;
+    while (!basis.empty() && std::isdigit(static_cast<unsigned char>(basis.back()))) {
+      degree.insert(degree.begin(), basis.back());
+      basis.pop_back();
+    }
+    if (!known(registry::kBases, basis))
+      throw InputError(fmt::format("--methods item '{}': basis '{}' is not one of: {}", item, basis,
+                                   names(registry::kBases)));
+    if (!known(registry::kMappings, parts[1]))
+      throw InputError(fmt::format("--methods item '{}': mapping '{}' is not one of: {}", item,
+                                   parts[1], names(registry::kMappings)));
+    m.keys.emplace_back("method.basis", basis);
+    if (!degree.empty()) m.keys.emplace_back("method.degree", degree);
+    m.keys.emplace_back("method.mapping", parts[1]);
+    if (parts.size() == 3) {
+      if (!known(registry::kMassTypes, parts[2]))
+        throw InputError(fmt::format("--methods item '{}': mass '{}' is not one of: {}", item,
+                                     parts[2], names(registry::kMassTypes)));
+      m.keys.emplace_back("method.mass", parts[2]);
+    }
+    out.push_back(std::move(m));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return out;
+}
+
 double observed_order(double e_coarse, double e_fine, double h_coarse, double h_fine) {
   if (!(e_coarse > 0.0) || !(e_fine > 0.0) || h_coarse == h_fine)
     return std::numeric_limits<double>::quiet_NaN();
@@ -66,16 +130,35 @@ double observed_order(double e_coarse, double e_fine, double h_coarse, double h_
 }
 
 StudyResult run_study(const Config& base, const StudyOptions& opt) {
+  // The configuration's own method when no matrix is given, labelled by its keys.
+  std::vector<MethodSpec> methods = opt.methods;
+  if (methods.empty()) {
+    std::string label = base.get_string("method.basis");
+    if (label == "bspline") label += std::to_string(base.get_int("method.degree"));
+    label += "/" + base.get_string("method.mapping") + "/" + base.get_string("method.mass");
+    methods.push_back({label, {}});
+  }
   // Validate every configuration before running any (bad input fails fast).
   std::vector<Config> configs;
-  for (const auto& v : opt.values) {
-    Config c = base;
-    c.set(opt.key, v, fmt::format("--refine {}={}", opt.key, v));
-    configs.push_back(std::move(c));
+  std::vector<std::string> dirs;
+  StudyResult res;
+  for (const auto& m : methods) {
+    res.labels.push_back(m.label);
+    for (const auto& v : opt.values) {
+      Config c = base;
+      for (const auto& [key, value] : m.keys)
+        c.set(key, value, fmt::format("--methods {}", m.label));
+      c.set(opt.key, v, fmt::format("--refine {}={}", opt.key, v));
+      configs.push_back(std::move(c));
+      std::string method_dir = m.label;
+      std::replace(method_dir.begin(), method_dir.end(), '/', '_');
+      dirs.push_back((std::filesystem::path(opt.out_dir) / (opt.methods.empty() ? "" : method_dir) /
+                      fmt::format("{}_{}", opt.key, v))
+                         .string());
+    }
   }
   if (!opt.out_dir.empty()) std::filesystem::create_directories(opt.out_dir);
 
-  StudyResult res;
   res.runs.resize(configs.size());
   std::vector<std::string> input_errors(configs.size());
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
@@ -86,10 +169,7 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
     for (std::size_t k = next++; k < configs.size(); k = next++) {
       RunOptions ro;
       ro.quiet = true;
-      if (!opt.out_dir.empty())
-        ro.out_dir =
-            (std::filesystem::path(opt.out_dir) / fmt::format("{}_{}", opt.key, opt.values[k]))
-                .string();
+      if (!opt.out_dir.empty()) ro.out_dir = dirs[k];
       try {
         res.runs[k] = run(configs[k], ro);
       } catch (const InputError& e) {
@@ -111,14 +191,15 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
 }
 
 std::string study_csv(const StudyOptions& opt, const StudyResult& r) {
-  std::string s = fmt::format("{},cells,h,particles,steps,status", opt.key);
+  std::string s = fmt::format("method,{},cells,h,particles,steps,status", opt.key);
   for (const auto& c : kColumns) s += fmt::format(",{}", c.name);
   s += ",max_rel_mass_error,max_rel_momentum_error,grid_crossings,wall_seconds,"
        "ns_per_particle_step\n";
   for (std::size_t k = 0; k < r.runs.size(); ++k) {
     const auto& run = r.runs[k];
-    s += fmt::format("{},{},{:.17g},{},{},{}", opt.values[k], run.cells, run.h, run.particles,
-                     run.steps, run.exit_code == 0 ? "ok" : "failed");
+    const std::size_t nv = opt.values.size();
+    s += fmt::format("{},{},{},{:.17g},{},{},{}", r.labels[k / nv], opt.values[k % nv], run.cells,
+                     run.h, run.particles, run.steps, run.exit_code == 0 ? "ok" : "failed");
     for (const auto& c : kColumns) {
       const auto& v = run.errors.*(c.member);
       s += v ? fmt::format(",{:.17g}", *v) : std::string(",");
@@ -131,26 +212,32 @@ std::string study_csv(const StudyOptions& opt, const StudyResult& r) {
 }
 
 std::string study_table(const StudyOptions& opt, const StudyResult& r) {
-  std::string s = fmt::format("{:>12} {:>11} {:>9}", opt.key, "h", "particles");
+  std::string head = fmt::format("{:>12} {:>11} {:>9}", opt.key, "h", "particles");
   for (const auto& c : kColumns)
-    if (c.label) s += fmt::format(" {:>13} {:>5}", c.label, "order");
-  s += "\n";
-  for (std::size_t k = 0; k < r.runs.size(); ++k) {
-    const auto& run = r.runs[k];
-    s += fmt::format("{:>12} {:>11.4e} {:>9}", opt.values[k], run.h, run.particles);
-    for (const auto& c : kColumns) {
-      if (!c.label) continue;
-      const auto& v = run.errors.*(c.member);
-      std::string order;
-      if (k > 0 && v && (r.runs[k - 1].errors.*(c.member))) {
-        const double o =
-            observed_order(*(r.runs[k - 1].errors.*(c.member)), *v, r.runs[k - 1].h, run.h);
-        if (std::isfinite(o)) order = fmt::format("{:.2f}", o);
+    if (c.label) head += fmt::format(" {:>13} {:>5}", c.label, "order");
+  std::string s;
+  const std::size_t nv = opt.values.size();
+  for (std::size_t m = 0; m < r.labels.size(); ++m) {
+    s += fmt::format("{}{}\n{}\n", m > 0 ? "\n" : "", r.labels[m], head);
+    for (std::size_t k = 0; k < nv; ++k) {
+      const auto& run = r.runs[m * nv + k];
+      s += fmt::format("{:>12} {:>11.4e} {:>9}", opt.values[k], run.h, run.particles);
+      for (const auto& c : kColumns) {
+        if (!c.label) continue;
+        const auto& v = run.errors.*(c.member);
+        std::string order;
+        if (k > 0) {
+          const auto& prev = r.runs[m * nv + k - 1];
+          if (v && prev.errors.*(c.member)) {
+            const double o = observed_order(*(prev.errors.*(c.member)), *v, prev.h, run.h);
+            if (std::isfinite(o)) order = fmt::format("{:.2f}", o);
+          }
+        }
+        s += fmt::format(" {:>13} {:>5}", fmt_opt(v), order);
       }
-      s += fmt::format(" {:>13} {:>5}", fmt_opt(v), order);
+      if (run.exit_code != 0) s += fmt::format("  FAILED: {}", run.failure);
+      s += "\n";
     }
-    if (run.exit_code != 0) s += fmt::format("  FAILED: {}", run.failure);
-    s += "\n";
   }
   return s;
 }

@@ -8,20 +8,32 @@
 
 namespace mpm {
 
+// One method of a method matrix: "basis[degree]/mapping[/mass]", e.g. "bspline2/tls/consistent".
+struct MethodSpec {
+  std::string label;                                      // as given
+  std::vector<std::pair<std::string, std::string>> keys;  // method.* settings it stands for
+};
+
 struct StudyOptions {
   std::string key;                  // the refined key, e.g. "grid.cells"
   std::vector<std::string> values;  // its values, coarse to fine
-  std::string out_dir;              // study.csv here, each run in out_dir/<key>_<value>
+  std::vector<MethodSpec> methods;  // empty: the configuration's own method
+  std::string out_dir;              // study.csv here, each run in out_dir/<method>/<key>_<value>
   int jobs = 0;                     // parallel runs; 0: one per hardware thread
   bool quiet = false;
 };
 
 struct StudyResult {
-  std::vector<RunResult> runs;  // in the order of `values`
+  std::vector<std::string> labels;  // one per method
+  std::vector<RunResult> runs;      // method-major: runs[m * values.size() + k]
 };
 
 // Parses "key=v1,v2,..." (the --refine argument). Throws InputError.
 StudyOptions parse_refine(const std::string& text);
+
+// Parses "linear/direct, bspline2/tls/consistent, ..." (the --methods argument) against the
+// registry of bases, mappings and mass types. Throws InputError naming the bad item.
+std::vector<MethodSpec> parse_methods(const std::string& text);
 
 StudyResult run_study(const Config& base, const StudyOptions& opt);
 

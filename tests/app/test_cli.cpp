@@ -146,9 +146,32 @@ TEST(Cli, StudyWritesCsvAndPrintsOrders) {
   std::getline(f, row1);
   std::getline(f, row2);
   EXPECT_FALSE(std::getline(f, extra));
-  EXPECT_EQ(header.rfind("grid.cells,cells,h,particles", 0), 0u) << header;
-  EXPECT_EQ(row1.rfind("5,5,", 0), 0u) << row1;
-  EXPECT_EQ(row2.rfind("10,10,", 0), 0u) << row2;
+  EXPECT_EQ(header.rfind("method,grid.cells,cells,h,particles", 0), 0u) << header;
+  EXPECT_EQ(row1.rfind("linear/direct/lumped,5,5,", 0), 0u) << row1;
+  EXPECT_EQ(row2.rfind("linear/direct/lumped,10,10,", 0), 0u) << row2;
+  std::filesystem::remove_all(out);
+}
+
+TEST(Cli, StudyRunsAMethodMatrix) {
+  const auto out = temp_dir("matrix");
+  auto r =
+      sh("study " + src("examples/vibrating_bar_small.toml") +
+         " --refine grid.cells=5,10 --methods \"linear/direct, bspline2/tls/consistent\" --out " +
+         out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("bspline2/tls/consistent"), std::string::npos) << r.out;
+  std::ifstream f(out / "study.csv");
+  std::string line;
+  std::vector<std::string> rows;
+  while (std::getline(f, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows[3].rfind("bspline2/tls/consistent,5,", 0), 0u) << rows[3];
+  EXPECT_TRUE(
+      std::filesystem::exists(out / "bspline2_tls_consistent" / "grid.cells_10" / "summary.json"));
+  auto bad = sh("study " + src("examples/vibrating_bar_small.toml") +
+                " --refine grid.cells=5 --methods spline/direct");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.out.find("basis 'spline' is not one of"), std::string::npos) << bad.out;
   std::filesystem::remove_all(out);
 }
 
