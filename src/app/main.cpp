@@ -3,12 +3,15 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <optional>
 
 #include "core/perf.hpp"
 #include "core/reconstruct.hpp"
 #include "core/registry.hpp"
 #include "core/run.hpp"
 #include "core/study.hpp"
+#include "io/checkpoint.hpp"
 #include "io/config.hpp"
 #include "mpm/version.hpp"
 
@@ -33,11 +36,25 @@ void print_list() {
 }
 
 int cmd_run(const std::string& config, const std::vector<std::string>& sets, std::string out,
-            bool quiet) {
-  const auto cfg = mpm::Config::load(config, sets);
+            bool quiet, const std::string& restart) {
+  mpm::RunOptions ro;
+  ro.quiet = quiet;
+  std::optional<mpm::Config> cfg;
+  if (!config.empty()) cfg = mpm::Config::load(config, sets);
+  if (restart.empty()) {
+    if (!cfg) throw mpm::InputError("mpm run needs a CONFIG file (or --restart FILE)");
+  } else {
+    // Continue from a checkpoint: its stored configuration, which CONFIG (if given) must match
+    // except for output.* and time.end; outputs go next to the checkpoint by default.
+    ro.restart = std::make_shared<const mpm::io::Checkpoint>(mpm::io::read_checkpoint(restart));
+    ro.restart_name = restart;
+    cfg = mpm::io::restart_config(*ro.restart, restart, cfg ? &*cfg : nullptr, sets);
+    if (out.empty()) out = std::filesystem::path(restart).parent_path().string();
+    if (out.empty()) out = ".";
+  }
   if (out.empty()) out = default_out("runs", config);
-  mpm::RunOptions ro{out, quiet};
-  const auto r = mpm::run(cfg, ro);
+  ro.out_dir = out;
+  const auto r = mpm::run(*cfg, ro);
   if (!quiet) {
     std::cout << fmt::format(
         "{}: {} particles, {} cells, {} steps in {:.3f} s ({:.1f} ns per "
@@ -99,7 +116,12 @@ int main(int argc, char** argv) {
   int jobs = 0;
 
   auto* run = app.add_subcommand("run", "run one configuration and write its outputs");
-  run->add_option("config", config, "TOML configuration file")->required();
+  std::string restart;
+  run->add_option("config", config, "TOML configuration file (optional with --restart)");
+  run->add_option("--restart", restart,
+                  "continue from a checkpoint.bin (output.checkpoint_every) to time.end; CONFIG, "
+                  "if given, may differ from the stored configuration only in output.* and "
+                  "time.end (default --out: the checkpoint's directory)");
   run->add_option("--set", sets, "override a key: section.key=value (repeatable)");
   run->add_option("--out", out, "output directory (default runs/<config name>)");
   run->add_flag("--quiet,-q", quiet, "no progress line or report");
@@ -163,7 +185,7 @@ int main(int argc, char** argv) {
 
   CLI11_PARSE(app, argc, argv);
   try {
-    if (*run) return cmd_run(config, sets, out, quiet);
+    if (*run) return cmd_run(config, sets, out, quiet, restart);
     if (*study) return cmd_study(config, refine, methods, sets, out, jobs);
     if (*bench) return cmd_bench(bopt);
     if (*rec) {

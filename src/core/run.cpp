@@ -11,8 +11,10 @@
 #include "benchmarks/problem.hpp"
 #include "core/registry.hpp"
 #include "core/variants.hpp"
+#include "io/checkpoint.hpp"
 #include "io/config.hpp"
 #include "io/output.hpp"
+#include "mapping/quadrature.hpp"
 #include "mpm/version.hpp"
 #include "solver/ulfem.hpp"
 
@@ -28,14 +30,18 @@ double seconds_since(Clock::time_point t0) {
 // Terminal progress for runs longer than a second: steps, simulated time, rate, time left.
 class Progress {
  public:
-  Progress(bool enabled, Index total, Index particles)
-      : enabled_(enabled), total_(total), particles_(particles), tty_(isatty(STDERR_FILENO)) {}
+  Progress(bool enabled, Index total, Index particles, Index start = 0)
+      : enabled_(enabled),
+        total_(total),
+        particles_(particles),
+        start_step_(start),
+        tty_(isatty(STDERR_FILENO)) {}
   void update(Index step, double t) {
     if (!enabled_) return;
     const double el = seconds_since(start_);
     if (el < 1.0 || el - last_ < (tty_ ? 0.25 : 10.0)) return;
     last_ = el;
-    const double rate = static_cast<double>(step) / el;
+    const double rate = static_cast<double>(step - start_step_) / el;
     const double left = rate > 0 ? static_cast<double>(total_ - step) / rate : 0.0;
     std::cerr << fmt::format("{}step {}/{}  t = {:.4g} s  {:.3g} particle-steps/s  {:.0f} s left{}",
                              tty_ ? "\r" : "", step, total_, t,
@@ -48,7 +54,7 @@ class Progress {
 
  private:
   bool enabled_;
-  Index total_, particles_;
+  Index total_, particles_, start_step_;
   bool tty_;
   Clock::time_point start_ = Clock::now();
   double last_ = 0.0;
@@ -177,6 +183,7 @@ class OutputSession {
       }
       extra = {{"u_exact", &ue}, {"v_exact", &ve}, {"stress_exact", &se}};
     }
+    frame_times_.push_back(sim.time);
     const std::string stem = fmt::format("particles_{:05d}", frames_);
     if (csv_) io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(P, extra));
     if (vtk_) {
@@ -192,6 +199,21 @@ class OutputSession {
     if (enabled()) io::write_file_atomic(dir_ / "summary.json", j.dump(2) + "\n");
   }
 
+  // Checkpoints: the frames written so far, and continuing after a restart (numbering goes on;
+  // particles.pvd lists the earlier frames again, history.csv starts anew).
+  int frames() const { return frames_; }
+  const std::vector<double>& frame_times() const { return frame_times_; }
+  void resume(const io::Checkpoint& c) {
+    frames_ = static_cast<int>(c.frames);
+    frame_times_ = c.frame_times;
+    if (vtk_)
+      for (std::size_t k = 0; k < frame_times_.size(); ++k)
+        pvd_.add(frame_times_[k], fmt::format("particles_{:05d}.vtu", k));
+  }
+  void checkpoint(const io::Checkpoint& c) {
+    if (enabled()) io::write_checkpoint(dir_ / io::kCheckpointFile, c);
+  }
+
  private:
   std::filesystem::path dir_;
   ExactSolution<Dim> exact_;
@@ -199,7 +221,59 @@ class OutputSession {
   std::string history_;
   io::PvdSeries pvd_;
   int frames_ = 0;
+  std::vector<double> frame_times_;
 };
+
+// Explicit stability (Euler-Cromer, lumped mass): dt <= 2 / omega_max, omega_max^2 bounded by
+// Gershgorin's theorem on M_L^-1 K of a uniform 1D bar (E = rho = h = 1), so
+// dt_crit = factor h / c. P1: factor 1 exactly (h / c). B-splines of degree p: computed from
+// exact Gauss integrals of their stiffness and lumped mass over a grid of 4p + 4 cells (the
+// small end functions of the open knot vector set the bound). GIMP, CPDI and DDMPM use the P1
+// bound (their gradients are averages of P1's).
+template <int P>
+double bspline_stability_factor() {
+  const Index n = 4 * P + 4;
+  const Grid<1> g(Vec<1>(0.0), Vec<1>(static_cast<double>(n)), IVec<1>{n});
+  const BSplineBasis<1, P> basis(g);
+  const auto nd = static_cast<std::size_t>(basis.num_dofs());
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(static_cast<Index>(nd), static_cast<Index>(nd));
+  Eigen::VectorXd m = Eigen::VectorXd::Zero(static_cast<Index>(nd));
+  const GaussRule rule = gauss_legendre(P + 1);
+  typename BSplineBasis<1, P>::StencilT st;
+  for (Index c = 0; c < n; ++c)
+    for (std::size_t k = 0; k < rule.xi.size(); ++k) {
+      basis.evaluate_point(Vec<1>(static_cast<double>(c) + 0.5 + 0.5 * rule.xi[k]), st);
+      const double w = 0.5 * rule.w[k];
+      for (int a = 0; a < st.kSize; ++a) {
+        m[st.dof[a]] += w * st.w[a];
+        for (int b = 0; b < st.kSize; ++b)
+          K(st.dof[a], st.dof[b]) += w * st.grad[a][0] * st.grad[b][0];
+      }
+    }
+  double omega2 = 0.0;
+  for (Index i = 0; i < K.rows(); ++i) omega2 = std::max(omega2, K.row(i).cwiseAbs().sum() / m[i]);
+  return 2.0 / std::sqrt(omega2);
+}
+
+template <class Basis>
+double stability_factor() {
+  if constexpr (requires { Basis::kDegree; })
+    return bspline_stability_factor<Basis::kDegree>();
+  else
+    return 1.0;
+}
+
+// Stops before the first step when dt exceeds the limit, unless time.allow_unstable.
+void check_stability(const Config& cfg, double dt, double h, const Material& material,
+                     double factor, int dim, std::string_view what) {
+  const double c = wave_speed(material);
+  const double limit = factor * h / (c * std::sqrt(static_cast<double>(dim)));
+  if (dt > limit && !cfg.get_bool("time.allow_unstable"))
+    throw InputError(fmt::format(
+        "{}: time.dt = {:.6g} s exceeds the explicit stability limit {:.6g} s = {:.4g} h / c "
+        "(h = {:.6g} m, c = {:.6g} m/s, {}); reduce time.dt or set time.allow_unstable = true",
+        cfg.where("time.dt"), dt, limit, factor, h, c, what));
+}
 
 template <class Basis>
 constexpr int boundary_cells() {
@@ -238,21 +312,30 @@ struct StateView {
 // The time loop shared by every solver: `advance(s)` takes step s to s + 1 (timed; may throw
 // RunError), `after()` runs untimed companions (the FEM reference), `view()` exposes the state.
 // Writes history rows and frames, shows progress, and on a RunError keeps the failing state as
-// the last frame and records the failure in `res`.
-template <int Dim, class Advance, class After, class View>
+// the last frame and records the failure in `res`. `start`: the step the state is at (non-zero
+// after a restart: no initial frame then). `save(step)` writes a checkpoint every
+// output.checkpoint_every steps.
+template <int Dim, class Advance, class After, class View, class Save>
 void drive(const TimeSetup& ts, const Config& cfg, const RunOptions& opt, OutputSession<Dim>& out,
-           Advance&& advance, After&& after, View&& view, RunResult& res) {
+           Index start, Advance&& advance, After&& after, View&& view, Save&& save,
+           RunResult& res) {
   const int frames = static_cast<int>(cfg.get_int("output.frames"));
   const Index history_every = cfg.get_int("output.history_every");
+  const Index checkpoint_every = cfg.get_int("output.checkpoint_every");
+  if (start > ts.steps)
+    throw InputError(
+        fmt::format("{}: the checkpoint is at step {}, beyond time.end = {} ({} steps of time.dt)",
+                    cfg.where("time.end"), start, cfg.get_real("time.end"), ts.steps));
   Index next_frame = 1;
   auto frame_step = [&](Index k) {
     return frames > 0 ? (k * ts.steps + frames - 1) / frames : ts.steps;
   };
+  while (next_frame <= frames && start >= frame_step(next_frame)) ++next_frame;
   out.history_row(view());
-  out.frame(view());
-  Progress progress(!opt.quiet, ts.steps, res.particles);
+  if (start == 0) out.frame(view());
+  Progress progress(!opt.quiet, ts.steps, res.particles, start);
   double step_seconds = 0.0;
-  Index step = 0;
+  Index step = start;
   try {
     while (step < ts.steps) {
       const auto t0 = Clock::now();
@@ -266,6 +349,7 @@ void drive(const TimeSetup& ts, const Config& cfg, const RunOptions& opt, Output
         while (next_frame <= frames && step >= frame_step(next_frame)) ++next_frame;
         out.frame(view());
       }
+      if (checkpoint_every > 0 && step % checkpoint_every == 0) save(step);
       progress.update(step, view().time);
     }
   } catch (const RunError& e) {
@@ -276,9 +360,10 @@ void drive(const TimeSetup& ts, const Config& cfg, const RunOptions& opt, Output
   }
   progress.finish();
   res.steps = step;
+  const Index taken = step - start;
   res.ns_per_particle_step =
-      step > 0
-          ? 1e9 * step_seconds / (static_cast<double>(step) * static_cast<double>(res.particles))
+      taken > 0
+          ? 1e9 * step_seconds / (static_cast<double>(taken) * static_cast<double>(res.particles))
           : 0.0;
 }
 
@@ -355,6 +440,63 @@ Mapping make_mapping(const Config& cfg) {
   }
 }
 
+// Checkpoints (io/checkpoint.hpp). The state of an MPM run with its FEM reference: everything a
+// step reads that an earlier step wrote (the grid quantities and stencils are rebuilt per step).
+template <int Dim, class Sim>
+io::Checkpoint capture(const Sim& sim, const std::optional<Ulfem1D>& reference,
+                       const OutputSession<Dim>& out, const std::string& config) {
+  io::Checkpoint c;
+  c.config = config;
+  c.solver = "mpm";
+  c.dim = Dim;
+  c.step = sim.step;
+  c.time = sim.time;
+  c.particles = io::pack_particles(sim.particles);
+  c.cells.assign(sim.cell.begin(), sim.cell.end());
+  c.diag = sim.diag;
+  if (reference) c.fem = io::pack_fem(reference->save());
+  c.mapping = std::string(Sim::MappingT::kName);
+  if constexpr (requires { io::encode_totals(sim.mapping.totals()); })
+    c.mapping_totals = io::encode_totals(sim.mapping.totals());
+  c.frames = out.frames();
+  c.frame_times = out.frame_times();
+  return c;
+}
+
+// Puts the checkpoint's state into a freshly set-up run; returns the step it is at.
+template <int Dim, class Sim>
+Index restore(const RunOptions& opt, Sim& sim, std::optional<Ulfem1D>& reference,
+              OutputSession<Dim>& out) {
+  const io::Checkpoint& c = *opt.restart;
+  const std::string what = fmt::format("checkpoint '{}'", opt.restart_name);
+  if (c.solver != "mpm" || c.dim != Dim || c.mapping != Sim::MappingT::kName)
+    throw InputError(
+        fmt::format("{} holds a {} run ({}D, mapping {}), not this {}D mpm run with "
+                    "mapping {}",
+                    what, c.solver, c.dim, c.mapping, Dim, Sim::MappingT::kName));
+  auto p = io::unpack_particles<Dim>(c.particles, what);
+  if (p.size() != sim.particles.size() || c.cells.size() != sim.cell.size() ||
+      reference.has_value() != c.fem.has_value())
+    throw InputError(fmt::format("{} does not fit the problem: {} particles ({} set up){}", what,
+                                 p.size(), sim.particles.size(),
+                                 reference.has_value() != c.fem.has_value()
+                                     ? ", FEM reference state missing or unexpected"
+                                     : ""));
+  sim.particles = std::move(p);
+  sim.cell.assign(c.cells.begin(), c.cells.end());
+  sim.diag = c.diag;
+  sim.step = c.step;
+  sim.time = c.time;
+  if (reference) reference->restore(io::unpack_fem(*c.fem, what));
+  if constexpr (requires { io::encode_totals(sim.mapping.totals()); }) {
+    auto t = sim.mapping.totals();
+    io::decode_totals(c.mapping_totals, t);
+    sim.mapping.set_totals(t);
+  }
+  out.resume(c);
+  return c.step;
+}
+
 template <int Dim, class Basis, class Mapping, class Scheme>
 RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) {
   const auto t_start = Clock::now();
@@ -365,6 +507,9 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
   std::optional<Ulfem1D> reference;
   if constexpr (Dim == 1)
     if (pb.fem_reference) reference.emplace(pb, cfg.get_int("reference.dofs") - 1);
+
+  check_stability(cfg, ts.dt, pb.grid.h.minCoeff(), pb.material, stability_factor<Basis>(), Dim,
+                  fmt::format("{} basis, lumped-mass bound", Basis::kName));
 
   using Sim = Simulation<Dim, Basis, Mapping>;
   Sim sim(pb.grid, Basis(pb.grid), make_mapping<Mapping>(cfg), std::move(pb.particles),
@@ -383,8 +528,10 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
   res.cells = sim.grid.num_cells();
   res.h = sim.grid.h[0];
   res.particles = sim.particles.size();
+  const Index start = opt.restart ? restore<Dim>(opt, sim, reference, out) : 0;
+  const std::string config_text = cfg.to_toml();
   drive<Dim>(
-      ts, cfg, opt, out,
+      ts, cfg, opt, out, start,
       [&](Index s) {
         Scheme::step(sim, ts.dt);
         sim.step = s + 1;
@@ -396,7 +543,7 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
       [&] {
         return StateView<Dim>{sim.particles, sim.time, sim.material};
       },
-      res);
+      [&](Index) { out.checkpoint(capture<Dim>(sim, reference, out, config_text)); }, res);
 
   if (res.exit_code == exit_code::kOk) {
     res.errors = error_norms<Dim>(sim.particles, sim.grid, pb.exact, sim.time, ts.dt,
@@ -454,6 +601,8 @@ RunResult run_ulfem(Problem<1>& pb, const Config& cfg, const RunOptions& opt) {
   OutputSession<1> out(opt, cfg, pb);
   const auto elements =
       std::max<Index>(1, std::llround((pb.body_max[0] - pb.body_min[0]) / pb.grid.h[0]));
+  check_stability(cfg, ts.dt, (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements),
+                  pb.material, 1.0, 1, "linear elements");
   Ulfem1D fem(pb, elements);
   RunResult res;
   res.benchmark = pb.benchmark;
@@ -461,10 +610,33 @@ RunResult run_ulfem(Problem<1>& pb, const Config& cfg, const RunOptions& opt) {
   res.cells = elements;
   res.h = (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements);
   res.particles = elements;
+  Index start = 0;
+  if (opt.restart) {
+    const io::Checkpoint& c = *opt.restart;
+    const std::string what = fmt::format("checkpoint '{}'", opt.restart_name);
+    if (c.solver != "ulfem" || !c.fem)
+      throw InputError(fmt::format("{} holds a {} run, not a ulfem run", what, c.solver));
+    fem.restore(io::unpack_fem(*c.fem, what));
+    out.resume(c);
+    start = c.step;
+  }
+  const std::string config_text = cfg.to_toml();
   drive<1>(
-      ts, cfg, opt, out, [&](Index) { fem.step(ts.dt); }, [] {},
+      ts, cfg, opt, out, start, [&](Index) { fem.step(ts.dt); }, [] {},
       [&] {
         return StateView<1>{fem.elements(), fem.time(), pb.material};
+      },
+      [&](Index step) {
+        io::Checkpoint c;
+        c.config = config_text;
+        c.solver = "ulfem";
+        c.dim = 1;
+        c.step = step;
+        c.time = fem.time();
+        c.fem = io::pack_fem(fem.save());
+        c.frames = out.frames();
+        c.frame_times = out.frame_times();
+        out.checkpoint(c);
       },
       res);
   if (res.exit_code == exit_code::kOk) {

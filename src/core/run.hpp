@@ -1,5 +1,6 @@
 #pragma once
 // Running one configuration: build the problem, choose the variants once, step, write outputs.
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -10,10 +11,18 @@
 namespace mpm {
 
 class Config;
+namespace io {
+struct Checkpoint;
+}
 
 struct RunOptions {
   std::string out_dir;  // empty: write nothing
   bool quiet = false;   // no progress line
+  // Continue from this checkpoint (io::read_checkpoint) instead of the initial state; the
+  // configuration passed to run() must be io::restart_config()'s. restart_name (the file)
+  // names it in error messages.
+  std::shared_ptr<const io::Checkpoint> restart;
+  std::string restart_name;
 };
 
 // Particle error norms at the final time (D eq. 4.92); empty when there is no exact solution.

@@ -96,6 +96,8 @@ std::vector<KeySpec> declare() {
 
       real("time.dt", "s", kRequired, greater_than(0), "time-step size"),
       real("time.end", "s", kRequired, greater_than(0), "end time of the simulation"),
+      boolean("time.allow_unstable", false,
+              "run even when time.dt exceeds the explicit stability limit"),
 
       choice("method.scheme", "musl", kSchemes, "update scheme"),
       choice("method.basis", "linear", kBases, "grid basis functions"),
@@ -158,6 +160,9 @@ std::vector<KeySpec> declare() {
       boolean("output.csv", true, "write particle frames as CSV"),
       boolean("output.vtk", true, "write particle and grid frames as VTK XML (.vtu + .pvd)"),
       integer("output.history_every", 1, at_least(1), "write a history.csv row every N steps"),
+      integer("output.checkpoint_every", 0, at_least(0),
+              "write the complete state to checkpoint.bin every N steps, replacing the previous "
+              "one, for `mpm run --restart` (0: never)"),
   };
 }
 

@@ -177,6 +177,8 @@ class MovingLeastSquaresMapping {
   // The last step (Gauss points and, IMLS, nodes) and the sums over the run.
   const MlsReport& last_report() const { return mls_.report(); }
   const MlsReport& totals() const { return totals_; }
+  // Checkpoint restart: the sums continue from a saved run (io/checkpoint.hpp).
+  void set_totals(const MlsReport& t) { totals_ = t; }
   template <class Sim>
   const QuadraturePoints<Sim>* quadrature() const {
     return quad_.get<Sim>();

@@ -232,6 +232,8 @@ class TlsMapping {
   const TlsReport& last_report() const { return recon_.report(); }
   // Counts summed over the steps so far (element-steps), largest condition number of the run.
   const TlsReport& totals() const { return totals_; }
+  // Checkpoint restart: the sums continue from a saved run (io/checkpoint.hpp).
+  void set_totals(const TlsReport& t) { totals_ = t; }
 
   // rho^ conservative with c_e = sum m_p and data rho_p; lumped masses and, with consistent
   // mass, M_ij = sum_g phi_i rho^ phi_j w_g (D eq. 5.14, 5.17).

@@ -213,6 +213,30 @@ double Ulfem1D::momentum() const {
   return p;
 }
 
+Ulfem1D::State Ulfem1D::save() const {
+  return {x_, v_, nodes_.body, el_, time_, time_anchor_, last_dt_, steps_, steps_since_anchor_};
+}
+
+void Ulfem1D::restore(const State& s) {
+  const auto nn = x_.size();
+  if (s.x.size() != nn || s.v.size() != nn || s.node_body.size() != nn ||
+      s.elements.size() != el_.size() || s.elements.x0.size() != el_.x0.size() ||
+      s.elements.stress.size() != el_.stress.size())
+    throw InputError(fmt::format(
+        "ULFEM state of {} nodes and {} elements does not fit this mesh of {} nodes and {} "
+        "elements",
+        s.x.size(), s.elements.size(), nn, el_.size()));
+  x_ = s.x;
+  v_ = s.v;
+  nodes_.body = s.node_body;
+  el_ = s.elements;
+  time_ = s.time;
+  time_anchor_ = s.time_anchor;
+  last_dt_ = s.last_dt;
+  steps_ = s.steps;
+  steps_since_anchor_ = s.steps_since_anchor;
+}
+
 double Ulfem1D::critical_dt() const {
   double lmin = el_.volume.front();
   for (double l : el_.volume) lmin = std::min(lmin, l);

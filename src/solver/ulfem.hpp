@@ -60,6 +60,20 @@ class Ulfem1D {
   // keep a margin).
   double critical_dt() const;
 
+  // The complete mutable state, for checkpoints (io/checkpoint.hpp): restore(save()) on a solver
+  // built from the same problem continues bit for bit. The nodal material positions and masses
+  // are not included: the constructor computes them from the problem.
+  struct State {
+    std::vector<double> x, v;       // nodal current positions [m], velocities [m/s]
+    std::vector<Vec<1>> node_body;  // nodal body force per unit mass [m/s^2]
+    Particles<1> elements;          // the per-element state (elements())
+    double time = 0.0, time_anchor = 0.0, last_dt = 0.0;
+    Index steps = 0, steps_since_anchor = 0;
+  };
+  State save() const;
+  // Throws InputError when the sizes do not match this solver's mesh.
+  void restore(const State& s);
+
  private:
   void refresh_body_force(double t);
   void check_elements() const;  // throws RunError

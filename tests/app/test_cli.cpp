@@ -87,6 +87,24 @@ TEST(Cli, WrongTypeBadChoiceAndRangeErrors) {
   EXPECT_NE(s.out.find("--set method.scheme=leapfrog"), std::string::npos) << s.out;
 }
 
+TEST(Cli, TimeStepAboveTheStabilityLimitIsRefusedUnlessAllowed) {
+  auto r = sh("run " + src("tests/data/dt_above_limit.toml") + " -q --out " +
+              temp_dir("unstable").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("dt_above_limit.toml:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("exceeds the explicit stability limit"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("time.allow_unstable"), std::string::npos) << r.out;
+  // Allowed on purpose: the run goes unstable and stops cleanly with a diagnosis.
+  const auto out = temp_dir("unstable_allowed");
+  auto a = sh("run " + src("tests/data/dt_above_limit.toml") +
+              " -q --set time.allow_unstable=true --set time.end=1 --out " + out.string());
+  EXPECT_NE(a.code, 0) << a.out;
+  EXPECT_NE(a.code, 2) << a.out;
+  EXPECT_NE(a.out.find("step "), std::string::npos) << a.out;
+  EXPECT_TRUE(std::filesystem::exists(out / "summary.json"));
+  std::filesystem::remove_all(out);
+}
+
 TEST(Cli, ParticleLeavingTheGridStopsWithStepIdsAndKeepsOutput) {
   const auto out = temp_dir("leave");
   auto r = sh("run " + src("tests/data/leaves_grid.toml") + " -q --out " + out.string());

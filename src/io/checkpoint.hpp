@@ -1,0 +1,109 @@
+#pragma once
+// Checkpoints: the complete state of a run in one binary file (output.checkpoint_every), from
+// which `mpm run --restart FILE` continues bit for bit (README "Checkpoints").
+//
+// File layout (all integers little-endian, reals IEEE-754 binary64 little-endian):
+//   offset  0  8 bytes  magic "MPMLABCK"
+//   offset  8  u32      format version (kCheckpointVersion)
+//   offset 12  u64      payload size in bytes
+//   offset 20  u64      FNV-1a 64-bit hash of the payload bytes
+//   offset 28           payload
+// Payload, in this order (str = u64 length + bytes; f64[] = u64 count + values; i64[] likewise):
+//   str config (Config::to_toml() of the run), str solver ("mpm" or "ulfem"), i64 dim,
+//   i64 step, f64 time,
+//   particles: i64 count, then f64[] x, x0, u, v, mass, volume, volume0, density, F, stress,
+//     body (vectors Dim values per particle, tensors Dim x Dim column-major),
+//   i64[] cell of each particle at the last basis evaluation,
+//   diagnostics: f64 max_rel_mass_error, f64 max_rel_momentum_error, i64 grid_crossings,
+//   u8 FEM state present; if 1: f64[] node x, f64[] node v, f64[] node body, the element
+//     particles (as above), f64 time, f64 time_anchor, f64 last_dt, i64 steps,
+//     i64 steps_since_anchor,
+//   str mapping name, str mapping totals (TLS/MLS report counters, empty for other mappings),
+//   i64 frames written, f64[] frame times.
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/simulation.hpp"
+#include "io/config.hpp"
+#include "mapping/mls.hpp"
+#include "mapping/tls.hpp"
+#include "particles/particles.hpp"
+#include "solver/ulfem.hpp"
+
+namespace mpm::io {
+
+inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
+inline constexpr std::uint32_t kCheckpointVersion = 1;
+inline constexpr std::size_t kCheckpointHeaderBytes = 28;
+inline constexpr const char* kCheckpointFile = "checkpoint.bin";
+
+// FNV-1a, 64-bit (offset basis 14695981039346656037, prime 1099511628211).
+std::uint64_t fnv1a64(std::string_view bytes);
+
+// Particle arrays of any dimension, flattened (Dim or Dim^2 doubles per particle).
+struct ParticleArrays {
+  std::int64_t dim = 0;
+  std::int64_t count = 0;
+  std::vector<double> x, x0, u, v, mass, volume, volume0, density, F, stress, body;
+};
+
+template <int Dim>
+ParticleArrays pack_particles(const Particles<Dim>& p);
+// Throws InputError (naming `what`) when the dimension or a size does not match.
+template <int Dim>
+Particles<Dim> unpack_particles(const ParticleArrays& a, const std::string& what);
+
+struct FemArrays {
+  std::vector<double> x, v, body;
+  ParticleArrays elements;
+  double time = 0.0, time_anchor = 0.0, last_dt = 0.0;
+  std::int64_t steps = 0, steps_since_anchor = 0;
+};
+FemArrays pack_fem(const Ulfem1D::State& s);
+Ulfem1D::State unpack_fem(const FemArrays& a, const std::string& what);
+
+struct Checkpoint {
+  std::string config;  // Config::to_toml() of the run that wrote it
+  std::string solver;  // "mpm" or "ulfem"
+  std::int64_t dim = 1;
+  std::int64_t step = 0;     // steps taken
+  double time = 0.0;         // [s]
+  ParticleArrays particles;  // MPM particles (empty for solver "ulfem")
+  std::vector<std::int64_t> cells;
+  Diagnostics diag;
+  std::optional<FemArrays> fem;  // the FEM reference alongside MPM, or the ULFEM solver
+  std::string mapping;           // method.mapping
+  std::string mapping_totals;    // encode_totals() of TLS/MLS, else empty
+  std::int64_t frames = 0;       // particle frames written so far
+  std::vector<double> frame_times;
+};
+
+std::string encode_checkpoint(const Checkpoint& c);
+// `name` (the file name) is used in error messages. Throws InputError when the bytes are not a
+// checkpoint, are truncated, corrupted (checksum) or of another format version.
+Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name);
+
+// write_file_atomic(path, encode_checkpoint(c)).
+void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c);
+// Reads and decodes; InputError naming the file when it cannot be read or decoded.
+Checkpoint read_checkpoint(const std::filesystem::path& path);
+
+// The configuration of a restarted run. The checkpoint's stored configuration is parsed (source
+// "<name> (stored configuration)"); `given` (CONFIG of `mpm run CONFIG --restart FILE`, --set
+// applied) or, when absent, the stored one with `overrides` applied must agree with it in every
+// key and constant except output.* and time.end, else InputError listing the differing keys
+// with both values. Returns the configuration to run with.
+Config restart_config(const Checkpoint& c, const std::string& name, const Config* given,
+                      const std::vector<std::string>& overrides = {});
+
+// The run-long counters of the TLS and (I)MLS mappings.
+std::string encode_totals(const TlsReport& r);
+std::string encode_totals(const MlsReport& r);
+void decode_totals(std::string_view bytes, TlsReport& r);
+void decode_totals(std::string_view bytes, MlsReport& r);
+
+}  // namespace mpm::io
