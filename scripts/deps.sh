@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs the Debian packages mpmlab needs, only those missing (idempotent, fast when nothing
-# is missing). Run as root (or with sudo available).
+# is missing). Run as root (or with sudo available). Extra packages can be given as arguments
+# (scripts/fuzz.sh asks for clang and the compiler-rt libraries that hold libFuzzer).
 set -euo pipefail
 PACKAGES=(g++ cmake make ninja-build pkg-config libeigen3-dev libtomlplusplus-dev libcli11-dev
-  libfmt-dev libmuparser-dev nlohmann-json3-dev libgtest-dev)
+  libfmt-dev libmuparser-dev nlohmann-json3-dev libgtest-dev "$@")
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
