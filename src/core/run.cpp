@@ -699,10 +699,20 @@ RunResult run(const Config& cfg, const RunOptions& opt) {
     return choose_alternative<Scheme>(cfg.get_string("method.scheme"), "method.scheme");
   });
   return std::visit(
-      [&](auto& pb, auto b, auto m, auto s) {
+      [&](auto& pb, auto b, auto m, auto s) -> RunResult {
         constexpr int Dim = std::decay_t<decltype(pb)>::kDim;
-        using B = typename decltype(b)::template type<Dim>;
-        return run_typed<Dim, B, decltype(m), decltype(s)>(pb, cfg, opt);
+        using K = decltype(b);
+        using M = decltype(m);
+        if constexpr (!supports_dimension<K>(Dim)) {
+          throw InputError(fmt::format("{}: method.basis = \"{}\" is not available in {}D",
+                                       cfg.where("method.basis"), K::kName, Dim));
+        } else if constexpr (!supports_dimension<M>(Dim)) {
+          throw InputError(fmt::format("{}: method.mapping = \"{}\" is not available in {}D",
+                                       cfg.where("method.mapping"), M::kName, Dim));
+        } else {
+          using B = typename K::template type<Dim>;
+          return run_typed<Dim, B, M, decltype(s)>(pb, cfg, opt);
+        }
       },
       problem, basis, mapping, scheme);
 }

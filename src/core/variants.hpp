@@ -40,6 +40,7 @@ struct BSplineKind {
 
 struct DdmpmKind {
   static constexpr std::string_view kName = "ddmpm";
+  static constexpr bool supports_dimension(int dim) { return dim == 1; }
   template <int Dim>
   using type = DdmpmBasis<Dim>;
 };
@@ -68,6 +69,16 @@ using BasisKind =
                  BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>>;
 using MappingKind =
     std::variant<DirectMapping, CubicSplineMapping, TlsMapping, MlsMapping, ImlsMapping>;
+
+// Whether a basis kind or mapping runs in `dim` dimensions: those that are not
+// dimension-generic declare supports_dimension(); the run set-up checks it before instantiating.
+template <class T>
+constexpr bool supports_dimension(int dim) {
+  if constexpr (requires { T::supports_dimension(dim); })
+    return T::supports_dimension(dim);
+  else
+    return true;
+}
 
 template <class Variant, std::size_t I = 0>
 Variant choose_alternative(std::string_view name, std::string_view key, std::string choices = {}) {

@@ -218,6 +218,8 @@ class TlsReconstruction {
 class TlsMapping {
  public:
   static constexpr std::string_view kName = "tls";
+  // The run set-up rejects other dimensions with a clear message before instantiating.
+  static constexpr bool supports_dimension(int dim) { return dim == 1; }
 
   TlsMapping() : TlsMapping(TlsSettings{}) {}
   explicit TlsMapping(const TlsSettings& s) : recon_(s) {
