@@ -1,5 +1,7 @@
 #pragma once
 // Constructors of the built-in benchmarks (one file each).
+#include <numbers>
+
 #include "benchmarks/problem.hpp"
 
 namespace mpm {
@@ -52,6 +54,22 @@ struct Mms1DExact {
   double piola_stress(double F) const;                    // P(F) = sigma(F) in 1D
   double body_force(double X, double t) const;            // b(X, t) [m/s^2]
   ExactState<1> operator()(const Vec<1>& X, double t) const;
+};
+
+// 2D axis-aligned vibration of a unit square, manufactured solution (001 eq. 38-42, D 3.4.1,
+// after Sadeghirad et al. 2011), plane-strain neo-Hookean:
+//   u = (A sin(2 pi X/L) sin(omega t), -A sin(2 pi Y/L) sin(omega t)), omega = c pi / L,
+// c = sqrt(E / rho0); rollers on all four sides; body force b = u_tt - Div P / rho0.
+Problem<2> make_plate_mms_2d(const Config& cfg);
+
+struct PlateMms2DExact {
+  double length, density, lambda, mu, wave_speed, amplitude;
+  double omega() const { return wave_speed * std::numbers::pi / length; }
+  Mat<2> deformation_gradient(const Vec<2>& X, double t) const;  // F = I + Grad u (diagonal)
+  Mat<2> cauchy_stress(const Mat<2>& F) const;                   // sigma(F) [Pa]
+  Mat<2> piola_stress(const Mat<2>& F) const;                    // P(F) [Pa]
+  Vec<2> body_force(const Vec<2>& X, double t) const;            // b(X, t) [m/s^2]
+  ExactState<2> operator()(const Vec<2>& X, double t) const;
 };
 
 // 1D problem from the configuration alone: grid and body extents, initial velocity and stress

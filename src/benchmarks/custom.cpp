@@ -64,8 +64,8 @@ Problem<1> make_custom_1d(const Config& cfg) {
     for (std::size_t i = 0; i < P.x.size(); ++i) out[i][0] = b(P.x[i][0], 0.0, 0.0, t);
   };
 
-  if (cfg.get_string("boundary.left") == "fixed") pb.fixed_sides.emplace_back(0, 0);
-  if (cfg.get_string("boundary.right") == "fixed") pb.fixed_sides.emplace_back(0, 1);
+  if (cfg.get_string("boundary.left") == "fixed") pb.fixed_sides.push_back({0, 0});
+  if (cfg.get_string("boundary.right") == "fixed") pb.fixed_sides.push_back({0, 1});
   return pb;
 }
 

@@ -49,6 +49,7 @@ AnyProblem make_problem(const Config& cfg) {
   if (name == "traction_bar") return make_traction_bar(cfg);
   if (name == "mms_1d") return make_mms_1d(cfg);
   if (name == "custom") return make_custom_1d(cfg);
+  if (name == "plate_mms_2d") return make_plate_mms_2d(cfg);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));
 }

@@ -28,6 +28,15 @@ struct ExactState {
 template <int Dim>
 using ExactSolution = std::function<ExactState<Dim>(const Vec<Dim>& X, double t)>;
 
+// A Dirichlet condition u_d = 0 on the grid side normal to `direction` (side 0 lower, 1 upper),
+// for the velocity components whose bit is set in `components` (bit d: component d; default
+// all). A roller (normal component only) is components = 1 << direction.
+struct FixedSide {
+  int direction = 0;
+  int side = 0;
+  unsigned components = ~0u;
+};
+
 template <int Dim>
 struct Problem {
   static constexpr int kDim = Dim;
@@ -35,7 +44,7 @@ struct Problem {
   Grid<Dim> grid;
   Particles<Dim> particles;
   Material material;
-  std::vector<std::pair<int, int>> fixed_sides;  // (direction, side 0 lower / 1 upper)
+  std::vector<FixedSide> fixed_sides;
   BodyForce<Dim> body_force;
   std::vector<EndTraction<Dim>> tractions;
   // The body before deformation and its initial fields as functions of the material position,
@@ -49,7 +58,7 @@ struct Problem {
   bool fem_reference = false;  // empty when the benchmark has no exact solution
 };
 
-using AnyProblem = std::variant<Problem<1>>;
+using AnyProblem = std::variant<Problem<1>, Problem<2>>;
 
 // Particles evenly spaced over the body [lo, hi] (per direction), `per_cell` per grid cell
 // width, each carrying an equal share of the volume; mass = rho0 V, F = I, zero stress.

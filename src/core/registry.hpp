@@ -23,6 +23,9 @@ inline constexpr Entry kBenchmarks[] = {
     {"mms_1d",
      "1D neo-Hookean manufactured solution, body force from the exact displacement (003)"},
     {"custom", "1D problem built from the config alone: extents, fields by expression, ends"},
+    {"plate_mms_2d",
+     "2D axis-aligned vibration of a unit square, neo-Hookean manufactured solution (001, D "
+     "3.4.1)"},
 };
 
 inline constexpr Entry kBases[] = {

@@ -71,17 +71,19 @@ struct Simulation {
 
   GridState<Dim> nodes;
   ConsistentMass consistent;
-  std::vector<StencilT> stencils;  // basis at x_p^s, refreshed by evaluate_basis()
-  std::vector<Index> cell;         // cell of each particle at the last evaluation
+  bool consistent_per_component = false;  // one factorisation per velocity component
+  std::vector<StencilT> stencils;         // basis at x_p^s, refreshed by evaluate_basis()
+  std::vector<Index> cell;                // cell of each particle at the last evaluation
 
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s
   Diagnostics diag;
 
-  // Prescribe zero velocity in every component on a grid side (d: direction, side 0/1).
-  void fix_side(int d, int side) {
-    for (Index i : basis.boundary_dofs(d, side))
-      nodes.fixed[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>((1u << Dim) - 1u);
+  // Prescribe zero velocity on a grid side (d: direction, side 0/1) in the components whose
+  // bit is set in `components` (all by default); conditions on several sides combine.
+  void fix_side(int d, int side, unsigned components = ~0u) {
+    const auto mask = static_cast<std::uint8_t>(components & ((1u << Dim) - 1u));
+    for (Index i : basis.boundary_dofs(d, side)) nodes.fixed[static_cast<std::size_t>(i)] |= mask;
   }
 };
 

@@ -120,7 +120,8 @@ std::vector<KeySpec> declare() {
       integer("method.mls_degree", 1, closed(1, 2),
               "polynomial degree of the MLS and IMLS reconstructions (1: [1, x], 2: [1, x, x^2])"),
       real("mms.amplitude", "m", 0.1, any(),
-           "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (003)"),
+           "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (mms_1d: 003; "
+           "plate_mms_2d: 001)"),
       integer("reference.dofs", 120, at_least(2),
               "nodes of the updated-Lagrangian FEM reference of vibrating_bar_large (D: 120)"),
 
@@ -132,6 +133,8 @@ std::vector<KeySpec> declare() {
 
       real("bar.length", "m", 1.0, greater_than(0), "length L of the vibrating bar"),
       real("bar.v0", "m/s", 0.1, any(), "amplitude v0 of the initial velocity v0 sin(pi x/L)"),
+      real("plate.length", "m", 1.0, greater_than(0),
+           "side L of the square plate of plate_mms_2d (001: 1 m)"),
       real("column.height", "m", 50.0, greater_than(0),
            "initial height H of the compacted column (D 5.4.2)"),
       real("column.body_force", "m/s^2", -200.0, any(),

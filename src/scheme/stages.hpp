@@ -3,6 +3,7 @@
 // these calls; no stage knows which scheme calls it. Per-particle loops are plain loops over the
 // struct-of-arrays with the basis and material resolved at compile time.
 #include <fmt/format.h>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -108,19 +109,29 @@ void map_mass(Sim& sim) {
   const double threshold = sim.mass_tolerance * largest;
   for (std::size_t i = 0; i < m.size(); ++i) sim.nodes.active[i] = m[i] > threshold ? 1 : 0;
   if (sim.mass_type == MassType::Consistent) {
+    constexpr int Dim = Sim::kDim;
+    constexpr std::uint8_t kAll = (1u << Dim) - 1u;
     const auto& act = sim.nodes.active;
     const auto& fixed = sim.nodes.fixed;
     // Fixed DOFs are eliminated: the prescribed value is zero, so M y = r with identity rows.
-    // Per-component fixing would need one factorisation per component; every boundary
-    // condition of this release fixes all components.
-    if (!sim.consistent.factorize([&](Index i) {
-          const auto k = static_cast<std::size_t>(i);
-          return act[k] && !fixed[k];
-        }))
-      throw RunError(exit_code::kNonFinite,
-                     fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
-                                 "(a cell with too few particles); use method.mass = \"lumped\"",
-                                 sim.step, sim.time));
+    // One factorisation serves every component unless some DOF is fixed in only some of them
+    // (rollers): then component d gets its own (slot d).
+    const bool per_component =
+        std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
+    sim.consistent_per_component = per_component;
+    for (int d = 0; d < (per_component ? Dim : 1); ++d) {
+      const auto bit = static_cast<std::uint8_t>(per_component ? 1u << d : kAll);
+      if (!sim.consistent.factorize(
+              [&](Index i) {
+                const auto k = static_cast<std::size_t>(i);
+                return act[k] && !(fixed[k] & bit);
+              },
+              d))
+        throw RunError(exit_code::kNonFinite,
+                       fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
+                                   "(a cell with too few particles); use method.mass = \"lumped\"",
+                                   sim.step, sim.time));
+    }
   }
 }
 
@@ -176,9 +187,10 @@ void solve_grid(const Sim& sim, const std::vector<V>& r, std::vector<V>& y) {
   } else {
     Eigen::VectorXd rhs(static_cast<Index>(n));
     for (int d = 0; d < Dim; ++d) {
+      const int slot = sim.consistent_per_component ? d : 0;
       for (std::size_t i = 0; i < n; ++i)
-        rhs[static_cast<Index>(i)] = (nd.active[i] && !nd.fixed[i]) ? r[i][d] : 0.0;
-      const Eigen::VectorXd sol = sim.consistent.solve(rhs);
+        rhs[static_cast<Index>(i)] = (nd.active[i] && !(nd.fixed[i] & (1u << d))) ? r[i][d] : 0.0;
+      const Eigen::VectorXd sol = sim.consistent.solve(rhs, slot);
       for (std::size_t i = 0; i < n; ++i) y[i][d] = sol[static_cast<Index>(i)];
     }
   }

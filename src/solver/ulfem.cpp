@@ -45,10 +45,10 @@ Ulfem1D::Ulfem1D(const Problem<1>& pb, Index elements)
   dX_ = (hi - lo) / static_cast<double>(elements);
 
   const double scale = std::max(pb.grid.upper()[0] - pb.grid.origin[0], hi - lo);
-  for (auto [d, side] : pb.fixed_sides) {
-    if (d != 0) continue;
-    if (side == 0 && coincide(pb.grid.origin[0], lo, scale)) fixed_lo_ = true;
-    if (side == 1 && coincide(pb.grid.upper()[0], hi, scale)) fixed_hi_ = true;
+  for (const auto& f : pb.fixed_sides) {
+    if (f.direction != 0 || !(f.components & 1u)) continue;
+    if (f.side == 0 && coincide(pb.grid.origin[0], lo, scale)) fixed_lo_ = true;
+    if (f.side == 1 && coincide(pb.grid.upper()[0], hi, scale)) fixed_hi_ = true;
   }
 
   X_.resize(nn);

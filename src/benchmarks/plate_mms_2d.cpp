@@ -1,0 +1,109 @@
+#include <fmt/format.h>
+#include <cmath>
+#include <numbers>
+
+#include "benchmarks/benchmarks.hpp"
+#include "io/config.hpp"
+
+namespace mpm {
+
+Mat<2> PlateMms2DExact::deformation_gradient(const Vec<2>& X, double t) const {
+  using std::numbers::pi;
+  const double k = 2.0 * pi / length, s = std::sin(omega() * t);
+  Mat<2> F = Mat<2>::Identity();
+  F(0, 0) += amplitude * k * std::cos(k * X[0]) * s;
+  F(1, 1) -= amplitude * k * std::cos(k * X[1]) * s;
+  return F;
+}
+
+Mat<2> PlateMms2DExact::cauchy_stress(const Mat<2>& F) const {
+  // 001 eq. 41 (D eq. 2.14), plane strain: F_zz = 1.
+  const double J = F.determinant();
+  return (lambda * std::log(J) / J) * Mat<2>::Identity() +
+         (mu / J) * (F * F.transpose() - Mat<2>::Identity());
+}
+
+Mat<2> PlateMms2DExact::piola_stress(const Mat<2>& F) const {
+  // 001 eq. 40: P = lambda ln(J) F^-1 + mu F^-1 (F F^T - I) = J sigma F^-T.
+  const double J = F.determinant();
+  return J * cauchy_stress(F) * F.inverse().transpose();
+}
+
+Vec<2> PlateMms2DExact::body_force(const Vec<2>& X, double t) const {
+  using std::numbers::pi;
+  // b = u_tt - (1/rho0) Div P. F is diagonal with F_xx = F_xx(X, t), F_yy = F_yy(Y, t), so
+  // P_xy = 0 and Div P = (dP_xx/dF_xx dF_xx/dX, dP_yy/dF_yy dF_yy/dY) with
+  //   P_xx = lambda ln(F_xx F_yy) / F_xx + mu (F_xx - 1/F_xx),
+  //   dP_xx/dF_xx = (lambda (1 - ln J) + mu) / F_xx^2 + mu,   dF_xx/dX = -k^2 u_x,
+  // and u_tt = -omega^2 u. Hence b_x = u_x [k^2/rho0 dP_xx/dF_xx - omega^2]
+  //   = pi^2 u_x / L^2 [4 mu/rho0 - c^2 - 4 (lambda (ln J - 1) - mu) / (rho0 F_xx^2)],
+  // which is 001 eq. 42 with its prefactor pi u / L^2 corrected to pi^2 u / L^2 (METHODS.md
+  // errata), and the same for y. A test checks it against finite differences of u and P.
+  const double k = 2.0 * pi / length, w = omega();
+  const ExactState<2> e = (*this)(X, t);
+  const Mat<2> F = deformation_gradient(X, t);
+  const double lnJ = std::log(F.determinant());
+  Vec<2> b;
+  for (int d = 0; d < 2; ++d) {
+    const double f = F(d, d);
+    const double dPdF = (lambda * (1.0 - lnJ) + mu) / (f * f) + mu;
+    b[d] = e.u[d] * (k * k * dPdF / density - w * w);
+  }
+  return b;
+}
+
+ExactState<2> PlateMms2DExact::operator()(const Vec<2>& X, double t) const {
+  using std::numbers::pi;
+  const double k = 2.0 * pi / length, w = omega();
+  ExactState<2> s;
+  // 001 eq. 38-39 (written for L = 1; du/dt carries c pi / L).
+  s.u = Vec<2>(amplitude * std::sin(k * X[0]) * std::sin(w * t),
+               -amplitude * std::sin(k * X[1]) * std::sin(w * t));
+  s.v = Vec<2>(amplitude * w * std::sin(k * X[0]) * std::cos(w * t),
+               -amplitude * w * std::sin(k * X[1]) * std::cos(w * t));
+  s.stress = cauchy_stress(deformation_gradient(X, t));
+  return s;
+}
+
+Problem<2> make_plate_mms_2d(const Config& cfg) {
+  Problem<2> pb;
+  pb.benchmark = "plate_mms_2d";
+  pb.material = material_from_config(cfg, 2);
+  const auto* law = std::get_if<NeoHookean>(&pb.material);
+  if (law == nullptr)
+    throw InputError(
+        fmt::format("{}: the manufactured body force of benchmark \"plate_mms_2d\" is derived "
+                    "for material.model = \"neo_hookean\" (001 eq. 40-42), not \"{}\"",
+                    cfg.where("material.model"), material_name(pb.material)));
+  const double L = cfg.get_real("plate.length");
+  const double rho = cfg.get_real("material.density");
+  // 001: c = sqrt(E / rho0) (its "sqrt(E)/gamma", METHODS.md errata), not the P-wave speed.
+  const PlateMms2DExact ex{L,
+                           rho,
+                           law->p.lambda(),
+                           law->p.mu(),
+                           std::sqrt(cfg.get_real("material.youngs_modulus") / rho),
+                           cfg.get_real("mms.amplitude")};
+  const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
+  pb.grid = Grid<2>(Vec<2>::Zero(), Vec<2>(L, L), IVec<2>{cells, cells});
+  pb.particles = seed_particles<2>(pb.grid, Vec<2>::Zero(), Vec<2>(L, L),
+                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+  pb.body_min = Vec<2>::Zero();
+  pb.body_max = Vec<2>(L, L);
+  pb.initial_velocity = [ex](const Vec<2>& X) { return ex(X, 0.0).v; };
+  for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
+    pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
+  // "Fixed at the entire boundary" fixes the normal component only (rollers): u_x = 0 on X = 0
+  // and X = L, u_y = 0 on Y = 0 and Y = L. The tangential components follow the manufactured
+  // solution (u_y(0, Y, t) != 0), so fixing both would contradict it.
+  pb.fixed_sides = {{0, 0, 1u}, {0, 1, 1u}, {1, 0, 2u}, {1, 1, 2u}};
+  // b depends on the material position X (P.x0, fixed), so only time dependence is flagged.
+  pb.body_force.time_dependent = true;
+  pb.body_force.fill = [ex](const Particles<2>& P, double t, std::vector<Vec<2>>& b) {
+    for (std::size_t i = 0; i < b.size(); ++i) b[i] = ex.body_force(P.x0[i], t);
+  };
+  pb.exact = ex;
+  return pb;
+}
+
+}  // namespace mpm
