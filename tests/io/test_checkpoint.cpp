@@ -181,6 +181,13 @@ TEST(Checkpoint, RestartIsBitwiseBsplineTlsConsistent) {
        20});
 }
 
+TEST(Checkpoint, RestartIsBitwise2DPlate) {
+  // 2D, rollers (per-component Dirichlet) and the per-component consistent-mass solves.
+  check_bitwise_restart({"plate_mms_2d", {"grid.cells=4"}, 20});
+  check_bitwise_restart(
+      {"plate_mms_2d", {"grid.cells=4", "method.mass=consistent", "method.scheme=usavg"}, 20});
+}
+
 TEST(Checkpoint, RestartIsBitwiseLargeBarWithFemReference) {
   check_bitwise_restart({"vibrating_bar_large", {}, 100});
 }
