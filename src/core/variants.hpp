@@ -64,8 +64,16 @@ struct CpdiKind {
   using type = CpdiBasis<Dim>;
 };
 
+// CPDI2: quadrilateral domains with tracked corners (2D only; basis/cpdi.hpp).
+struct Cpdi2Kind {
+  static constexpr std::string_view kName = "cpdi2";
+  static constexpr bool supports_dimension(int dim) { return dim == 2; }
+  template <int Dim>
+  using type = Cpdi2Basis<Dim>;
+};
+
 using BasisKind =
-    std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, DdmpmKind, BSplineKind<1>,
+    std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi2Kind, DdmpmKind, BSplineKind<1>,
                  BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>>;
 using MappingKind =
     std::variant<DirectMapping, CubicSplineMapping, TlsMapping, MlsMapping, ImlsMapping>;
