@@ -33,7 +33,7 @@ inline constexpr Entry kBases[] = {
     {"cpdi2", "CPDI2: quadrilateral domains, corners moved with the grid velocity (D 2.6.4; 2D)"},
     {"bspline",
      "B-splines of degree method.degree (1-5) from one open uniform knot vector (D 3.1)"},
-    {"ddmpm", "dual domain MPM: P1 values, smoothed gradients (D 2.6.4; 1D)"},
+    {"ddmpm", "dual domain MPM: P1 values, smoothed gradients (D 2.6.4; 1D and 2D)"},
 };
 
 inline constexpr Entry kMappings[] = {

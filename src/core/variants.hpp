@@ -40,7 +40,8 @@ struct BSplineKind {
 
 struct DdmpmKind {
   static constexpr std::string_view kName = "ddmpm";
-  static constexpr bool supports_dimension(int dim) { return dim == 1; }
+  // 1D as in D; 2D with the tensor-product weight alpha derived in basis/ddmpm.hpp.
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
   template <int Dim>
   using type = DdmpmBasis<Dim>;
 };
