@@ -2,11 +2,33 @@
 // Dual domain MPM (DDMPM, D 2.6.4): the P1 basis with smoothed gradients
 //   grad_bar phi_i(x) = alpha(x) grad phi_i(x) + (1 - alpha(x)) grad_tilde phi_i(x),
 //   grad_tilde phi_i(x) = sum_j phi_j(x) / V_j  int_Omega phi_j grad phi_i dOmega,
-//   V_j = int_Omega phi_j dOmega,   alpha(x) = 2 sum_i phi_i(x) phi_{i+1}(x)   (1D, D ch. 5).
+//   V_j = int_Omega phi_j dOmega.
 // The integrals run over the material domain and are evaluated with the particles as
 // quadrature points (sum_p V_p ...), as in the original DDMPM, so they are refreshed every
 // step by prepare(). Values are the P1 values; only gradients change (forces and velocity
-// gradients, D 2.6.4). One-dimensional, as the weight alpha is specified only in 1D.
+// gradients, D 2.6.4).
+//
+// The weight alpha. D requires only that alpha vanish on the cell boundaries (it is "not
+// uniquely specified") and gives it in 1D (D ch. 5):
+//   alpha(x) = 2 sum_i phi_i(x) phi_{i+1}(x) = 2 xi (1 - xi),   xi in [0, 1] in the cell.
+// D does not give a multi-dimensional alpha; this code uses the tensor product of the 1D weight
+// on the tensor grid (derived here, not from a source):
+//   alpha(x) = prod_d 2 xi_d (1 - xi_d).
+// It vanishes on every cell face (some xi_d is 0 or 1), is smooth inside the cell, reduces to
+// D's weight in 1D, and in 2D equals 2 (phi_00 phi_11 + phi_10 phi_01) over the cell's nodes,
+// the sum over diagonally opposite node pairs, as D's 1D sum runs over the cell's node pair.
+// Its maximum is 2^-Dim at the cell centre (1/2 in 1D, 1/4 in 2D).
+// The smoothed term needs nothing dimension-specific: on the tensor grid phi_j grad phi_i is
+// non-zero only for nodes i, j of a common cell, i.e. i - j in {-1, 0, 1}^Dim, so each node j
+// stores 3^Dim vectors G_j[i - j] = (1/V_j) int phi_j grad phi_i.
+//
+// Properties at any x (D 2.5): the values are P1's (partition of unity, linear reproduction).
+// sum_i grad_bar phi_i = 0 because sum_i grad phi_i = 0 at every particle. Where every node of
+// x's cell carries volume, sum_i x_i grad_bar phi_i^T = I, because the particle sums keep
+// sum_i x_i grad phi_i^T = I, so sum_i x_i G_j[i - j]^T = I for every j with V_j > 0.
+// Stencil: the nodes c_d - 1 .. c_d + 2 per direction around x's cell c (4^Dim slots); the outer
+// ones carry zero value and only the smoothed gradient.
+#include <algorithm>
 #include <array>
 #include <string_view>
 #include <vector>
@@ -17,15 +39,19 @@ namespace mpm {
 
 template <int Dim>
 class DdmpmBasis {
-  static_assert(Dim == 1, "DDMPM is specified in one dimension (D 2.6.4, ch. 5)");
+  static constexpr int kNeighbours = ipow(3, Dim);  // i - j in {-1, 0, 1}^Dim
+  static constexpr int kCellNodes = ipow(2, Dim);
 
  public:
   static constexpr std::string_view kName = "ddmpm";
   static constexpr int kPerDim = 4;  // nodes c-1 .. c+2 carry smoothed gradients
-  using StencilT = Stencil<Dim, 4>;
+  using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
 
-  explicit DdmpmBasis(const Grid<Dim>& g) : p1_(g), n_(g.cells[0] + 1) {
-    G_.assign(static_cast<std::size_t>(n_), {0.0, 0.0, 0.0});
+  explicit DdmpmBasis(const Grid<Dim>& g) : p1_(g), n_(p1_.dofs_per_dim()) {
+    Neighbours zero;
+    zero.fill(Vec<Dim>::Zero());
+    G_.assign(static_cast<std::size_t>(p1_.num_dofs()), zero);
+    V_.assign(G_.size(), 0.0);
   }
 
   const Grid<Dim>& grid() const { return p1_.grid(); }
@@ -34,32 +60,37 @@ class DdmpmBasis {
   Vec<Dim> dof_position(Index i) const { return p1_.dof_position(i); }
   std::vector<Index> boundary_dofs(int d, int side) const { return p1_.boundary_dofs(d, side); }
 
-  // G_j[k] = (1/V_j) sum_p V_p phi_j(x_p) dphi_{j-1+k}/dx(x_p), k = 0, 1, 2 [1/m].
-  // Particles outside the grid are skipped; the time step reports them.
+  // G_j[k] = (1/V_j) sum_p V_p phi_j(x_p) grad phi_i(x_p) [1/m], node i = j + o with
+  // k = sum_d (o_d + 1) 3^d. Particles outside the grid are skipped; the time step reports them.
   void prepare(const Particles<Dim>& P) {
-    std::vector<double> V(static_cast<std::size_t>(n_), 0.0);
-    for (auto& g : G_) g = {0.0, 0.0, 0.0};
+    std::fill(V_.begin(), V_.end(), 0.0);
+    for (auto& g : G_) g.fill(Vec<Dim>::Zero());
     typename LinearBasis<Dim>::StencilT s;
     for (Index p = 0; p < P.size(); ++p) {
       const auto i = static_cast<std::size_t>(p);
       if (!grid().inside(P.x[i])) continue;
       p1_.evaluate(P, p, s);
       const double Vp = P.volume[i];
-      for (int a = 0; a < 2; ++a) {
-        const Index j = s.dof[a];
-        V[static_cast<std::size_t>(j)] += Vp * s.w[a];
-        for (int b = 0; b < 2; ++b) {
-          const Index k = s.dof[b] - j + 1;  // 0, 1 or 2
-          G_[static_cast<std::size_t>(j)][static_cast<std::size_t>(k)] +=
-              Vp * s.w[a] * s.grad[b][0];
+      // P1 slot a is node first + bits of a (tensor_product), so node b - node a = bits b - a.
+      for (int a = 0; a < kCellNodes; ++a) {
+        const auto j = static_cast<std::size_t>(s.dof[static_cast<std::size_t>(a)]);
+        const double Vw = Vp * s.w[static_cast<std::size_t>(a)];
+        V_[j] += Vw;
+        for (int b = 0; b < kCellNodes; ++b) {
+          int k = 0, stride = 1;
+          for (int d = 0; d < Dim; ++d) {
+            k += (((b >> d) & 1) - ((a >> d) & 1) + 1) * stride;
+            stride *= 3;
+          }
+          G_[j][static_cast<std::size_t>(k)] += Vw * s.grad[static_cast<std::size_t>(b)];
         }
       }
     }
     for (std::size_t j = 0; j < G_.size(); ++j)
-      for (double& g : G_[j]) g = V[j] > 0.0 ? g / V[j] : 0.0;
+      for (auto& g : G_[j]) g = V_[j] > 0.0 ? Vec<Dim>(g / V_[j]) : Vec<Dim>::Zero();
   }
 
-  // Values of P1 at x_p; gradients smoothed. Slots 0 and 3 (nodes c-1, c+2) have zero weight.
+  // Values of P1 at x_p; gradients smoothed.
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
     evaluate_point(P.x[static_cast<std::size_t>(p)], s);
   }
@@ -69,28 +100,65 @@ class DdmpmBasis {
   void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     typename LinearBasis<Dim>::StencilT q;
     p1_.evaluate_point(x, q);
-    const Index c = q.dof[0];
-    const double alpha = 2.0 * q.w[0] * q.w[1];
-    for (int k = 0; k < 4; ++k) {
-      const Index node = c - 1 + k;
-      s.dof[k] = std::clamp<Index>(node, 0, n_ - 1);
-      s.w[k] = (k == 1 || k == 2) ? q.w[k - 1] : 0.0;
-      double smooth = 0.0;  // grad_tilde phi_node at x
-      for (int a = 0; a < 2; ++a) {
-        const Index j = c + a;
-        const Index off = node - j + 1;
-        if (off >= 0 && off <= 2 && node >= 0 && node < n_)
-          smooth += q.w[a] * G_[static_cast<std::size_t>(j)][static_cast<std::size_t>(off)];
+    // Cell and local coordinate as LinearBasis computes them, for the window and alpha.
+    const Grid<Dim>& g = grid();
+    IVec<Dim> c;
+    double alpha = 1.0;
+    for (int d = 0; d < Dim; ++d) {
+      const double s_d = (x[d] - g.origin[d]) / g.h[d];
+      c[static_cast<std::size_t>(d)] = g.cell_of(x[d], d);
+      const double xi = s_d - static_cast<double>(c[static_cast<std::size_t>(d)]);
+      alpha *= 2.0 * (1.0 - xi) * xi;  // 1D: 2 phi_c phi_{c+1} (D ch. 5)
+    }
+    for (int k = 0; k < StencilT::kSize; ++k) {
+      // Node of slot k: c_d - 1 + k_d; P1 slot (c_d + a_d) when every k_d is 1 or 2.
+      IVec<Dim> node;
+      Index dof = 0, stride = 1;
+      int rem = k, a = 0, astride = 1;
+      bool inside = true, in_cell = true;
+      for (int d = 0; d < Dim; ++d) {
+        const auto e = static_cast<std::size_t>(d);
+        const int kd = rem % kPerDim;
+        rem /= kPerDim;
+        node[e] = c[e] - 1 + kd;
+        inside = inside && node[e] >= 0 && node[e] < n_[e];
+        in_cell = in_cell && (kd == 1 || kd == 2);
+        a += (kd - 1) * astride;
+        astride *= 2;
+        dof += std::clamp<Index>(node[e], 0, n_[e] - 1) * stride;
+        stride *= n_[e];
       }
-      const double plain = (k == 1 || k == 2) ? q.grad[k - 1][0] : 0.0;
-      s.grad[k][0] = (node >= 0 && node < n_) ? alpha * plain + (1.0 - alpha) * smooth : 0.0;
+      const auto ku = static_cast<std::size_t>(k);
+      s.dof[ku] = dof;
+      s.w[ku] = in_cell ? q.w[static_cast<std::size_t>(a)] : 0.0;
+      Vec<Dim> smooth = Vec<Dim>::Zero();  // grad_tilde phi_node at x
+      for (int b = 0; b < kCellNodes; ++b) {
+        // Cell node j = c + bits of b; offset node - j must lie in {-1, 0, 1}^Dim.
+        int off = 0, ostride = 1;
+        bool near = true;
+        for (int d = 0; d < Dim; ++d) {
+          const auto e = static_cast<std::size_t>(d);
+          const Index o = node[e] - (c[e] + ((b >> d) & 1));
+          near = near && o >= -1 && o <= 1;
+          off += static_cast<int>(o + 1) * ostride;
+          ostride *= 3;
+        }
+        if (near && inside)
+          smooth += q.w[static_cast<std::size_t>(b)] *
+                    G_[static_cast<std::size_t>(q.dof[static_cast<std::size_t>(b)])]
+                      [static_cast<std::size_t>(off)];
+      }
+      const Vec<Dim> plain = in_cell ? q.grad[static_cast<std::size_t>(a)] : Vec<Dim>::Zero();
+      s.grad[ku] = inside ? Vec<Dim>(alpha * plain + (1.0 - alpha) * smooth) : Vec<Dim>::Zero();
     }
   }
 
  private:
+  using Neighbours = std::array<Vec<Dim>, kNeighbours>;
   LinearBasis<Dim> p1_;
-  Index n_;
-  std::vector<std::array<double, 3>> G_;
+  IVec<Dim> n_;
+  std::vector<Neighbours> G_;  // per node j: (1/V_j) int phi_j grad phi_{j+o}, o in {-1,0,1}^Dim
+  std::vector<double> V_;      // V_j [m^Dim], scratch of prepare()
 };
 
 }  // namespace mpm

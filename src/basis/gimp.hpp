@@ -9,8 +9,15 @@
 // cell); in Dim > 1 the box makes them tensor products of the 1D factors (D 2.6.4).
 //   uGIMP:  l_d = l0_d, the initial size at every time level (D 2.6.4, Sadeghirad et al. 2011).
 //   cpGIMP: l_d = F_dd l0_d, the size from the diagonal of F (D 2.6.4, Sadeghirad et al. 2011).
-// Initial size: l0 = V_p^0 in 1D (a 1D volume is a length); Particles carries no per-direction
-// size, so in Dim > 1 the initial domain is taken as a cube of side (V_p^0)^(1/Dim).
+// Initial size: l0 = V_p^0 in 1D (a 1D volume is a length). Particles carries no per-direction
+// size, so in Dim > 1 the initial domain is taken similar to the grid cell:
+//   l0_d = h_d (V_p^0 / |cell|)^(1/Dim),   |cell| = prod_d h_d.
+// For particles seeded on a regular lattice with k per cell and direction (seed_particles), the
+// domain is the lattice cell h_d / k in every direction, exactly what this gives (V_p^0 =
+// prod_d h_d / k^Dim), so the domains tile the body; on square cells it is the cube of side
+// (V_p^0)^(1/Dim). It is stateless (from V_p^0, which checkpoints keep), so a restart needs no
+// basis state. A body whose extent is not a whole number of lattice spacings per cell gets the
+// same-area domain of the cell's aspect ratio instead of the exact lattice spacing.
 // Stencil: 4 nodes per direction. A domain of length l spans at most ceil(l/h) + 1 nodes' supports
 // in the worst position, so 4 nodes hold any domain with l_d <= 2 h_d, wherever it lies; fits()
 // enforces that limit (position-independent, so a run never stops by the luck of a position).
@@ -129,14 +136,24 @@ class NodalDomainBasis {
     }
   }
 
-  // Initial particle side length along each direction [m]: V_p^0 in 1D, (V_p^0)^(1/Dim) else.
-  static double initial_length(const Particles<Dim>& P, Index p) {
+  // Initial particle side length along direction d [m]: V_p^0 in 1D, h_d (V_p^0/|cell|)^(1/Dim)
+  // in Dim > 1 (the domain is similar to the grid cell; see the file comment).
+  double initial_length(const Particles<Dim>& P, Index p, int d) const {
     const double v0 = P.volume0[static_cast<std::size_t>(p)];
     if constexpr (Dim == 1) {
       return v0;
     } else {
-      return std::pow(v0, 1.0 / Dim);
+      return grid_.h[d] * std::pow(v0 / grid_.cell_volume(), 1.0 / Dim);
     }
+  }
+
+  // Matrix of the initial half-edge vectors convected by F (D eq. 2.64-2.65): column d is
+  // r_d = F r_d^0 with r_d^0 = (l0_d / 2) e_d, i.e. J = F diag(l0 / 2) [m].
+  Mat<Dim> half_edges(const Particles<Dim>& P, Index p) const {
+    const Mat<Dim>& F = P.F[static_cast<std::size_t>(p)];
+    Mat<Dim> J;
+    for (int d = 0; d < Dim; ++d) J.col(d) = F.col(d) * (0.5 * initial_length(P, p, d));
+    return J;
   }
 
   Grid<Dim> grid_;
@@ -205,7 +222,7 @@ class GimpBasis : public NodalDomainBasis<Dim> {
 
   // Side length of the particle domain along d [m] (D eq. 2.63: l_p).
   double length(const Particles<Dim>& P, Index p, int d) const {
-    const double l0 = Base::initial_length(P, p);
+    const double l0 = this->initial_length(P, p, d);
     if constexpr (kSizeFromF) {
       return P.F[static_cast<std::size_t>(p)](d, d) * l0;
     } else {

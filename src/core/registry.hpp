@@ -33,9 +33,10 @@ inline constexpr Entry kBases[] = {
     {"ugimp", "uniform GIMP: P1 averaged over the initial particle domain (D 2.6.4, eq. 2.61)"},
     {"cpgimp", "contiguous-particle GIMP: particle domain sized by the diagonal of F (D 2.6.4)"},
     {"cpdi", "CPDI: domain convected by F, P1 interpolated at its corners (D 2.6.4, eq. 2.64)"},
+    {"cpdi2", "CPDI2: quadrilateral domains, corners moved with the grid velocity (D 2.6.4; 2D)"},
     {"bspline",
      "B-splines of degree method.degree (1-5) from one open uniform knot vector (D 3.1)"},
-    {"ddmpm", "dual domain MPM: P1 values, smoothed gradients (D 2.6.4; 1D)"},
+    {"ddmpm", "dual domain MPM: P1 values, smoothed gradients (D 2.6.4; 1D and 2D)"},
 };
 
 inline constexpr Entry kMappings[] = {

@@ -40,7 +40,8 @@ struct BSplineKind {
 
 struct DdmpmKind {
   static constexpr std::string_view kName = "ddmpm";
-  static constexpr bool supports_dimension(int dim) { return dim == 1; }
+  // 1D as in D; 2D with the tensor-product weight alpha derived in basis/ddmpm.hpp.
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
   template <int Dim>
   using type = DdmpmBasis<Dim>;
 };
@@ -64,8 +65,16 @@ struct CpdiKind {
   using type = CpdiBasis<Dim>;
 };
 
+// CPDI2: quadrilateral domains with tracked corners (2D only; basis/cpdi.hpp).
+struct Cpdi2Kind {
+  static constexpr std::string_view kName = "cpdi2";
+  static constexpr bool supports_dimension(int dim) { return dim == 2; }
+  template <int Dim>
+  using type = Cpdi2Basis<Dim>;
+};
+
 using BasisKind =
-    std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, DdmpmKind, BSplineKind<1>,
+    std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi2Kind, DdmpmKind, BSplineKind<1>,
                  BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>>;
 using MappingKind =
     std::variant<DirectMapping, CubicSplineMapping, TlsMapping, MlsMapping, ImlsMapping>;

@@ -249,6 +249,8 @@ void update_particle_position(Sim& sim, double dt) {
     P.x[i] += dx;
     P.u[i] += dx;
   }
+  // Bases that track particle-domain corners (CPDI2) move them with the same grid velocity.
+  if constexpr (requires { sim.basis.advect(sim, dt); }) sim.basis.advect(sim, dt);
 }
 
 // Velocity gradient from the current grid velocity, then F, V, rho and the stress

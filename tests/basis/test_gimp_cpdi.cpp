@@ -409,7 +409,7 @@ TEST(GimpCpdiBasis, TwoDimensionalReproduction) {
   const CpdiBasis<2> cp(g);
   Particles<2> P;
   P.resize(1);
-  P.volume0[0] = 0.04;  // side 0.2 m
+  P.volume0[0] = 0.04;  // 0.04 m^2, a domain similar to the cell (about 0.195 x 0.205 m)
   Mat<2> F;
   F << 1.2, 0.3, -0.1, 0.9;
   P.F[0] = F;
