@@ -485,6 +485,10 @@ io::Checkpoint capture(const Sim& sim, const std::optional<Ulfem1D>& reference,
     c.mapping_totals = io::encode_totals(sim.mapping.totals());
   c.frames = out.frames();
   c.frame_times = out.frame_times();
+  if constexpr (requires { sim.basis.corners(); })
+    for (const auto& corners : sim.basis.corners())
+      for (const auto& x : corners)
+        for (int d = 0; d < Dim; ++d) c.basis_state.push_back(x[d]);
   return c;
 }
 
@@ -517,6 +521,21 @@ Index restore(const RunOptions& opt, Sim& sim, std::optional<Ulfem1D>& reference
     auto t = sim.mapping.totals();
     io::decode_totals(c.mapping_totals, t);
     sim.mapping.set_totals(t);
+  }
+  if constexpr (requires { sim.basis.corners(); }) {
+    // CPDI2: the tracked corners, 2^Dim per particle.
+    using Corners = typename std::decay_t<decltype(sim.basis.corners())>::value_type;
+    constexpr std::size_t kPer = std::tuple_size_v<Corners> * Dim;
+    if (c.basis_state.size() != kPer * sim.particles.x.size())
+      throw InputError(fmt::format("{} holds {} values of basis state; the {} basis needs {}", what,
+                                   c.basis_state.size(), Sim::BasisT::kName,
+                                   kPer * sim.particles.x.size()));
+    std::vector<Corners> corners(sim.particles.x.size());
+    std::size_t k = 0;
+    for (auto& cs : corners)
+      for (auto& x : cs)
+        for (int d = 0; d < Dim; ++d) x[d] = c.basis_state[k++];
+    sim.basis.set_corners(std::move(corners));
   }
   out.resume(c);
   return c.step;

@@ -259,6 +259,7 @@ std::string encode_checkpoint(const Checkpoint& c) {
   p.str(c.mapping_totals);
   p.i64(c.frames);
   p.reals(c.frame_times);
+  p.reals(c.basis_state);
 
   Writer out;
   out.bytes().append(kCheckpointMagic);
@@ -328,6 +329,7 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
   c.mapping_totals = r.str();
   c.frames = r.i64();
   c.frame_times = r.reals();
+  c.basis_state = r.reals();
   if (!r.done())
     throw InputError(fmt::format("checkpoint '{}': unexpected bytes after the payload", name));
   return c;

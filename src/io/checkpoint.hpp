@@ -19,7 +19,9 @@
 //     particles (as above), f64 time, f64 time_anchor, f64 last_dt, i64 steps,
 //     i64 steps_since_anchor,
 //   str mapping name, str mapping totals (TLS/MLS report counters, empty for other mappings),
-//   i64 frames written, f64[] frame times.
+//   i64 frames written, f64[] frame times,
+//   f64[] basis state (version 2: the tracked corners of CPDI2, 2^Dim x Dim values per particle;
+//     empty for the other bases).
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -37,7 +39,7 @@
 namespace mpm::io {
 
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
-inline constexpr std::uint32_t kCheckpointVersion = 1;
+inline constexpr std::uint32_t kCheckpointVersion = 2;
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 
@@ -80,6 +82,7 @@ struct Checkpoint {
   std::string mapping_totals;    // encode_totals() of TLS/MLS, else empty
   std::int64_t frames = 0;       // particle frames written so far
   std::vector<double> frame_times;
+  std::vector<double> basis_state;  // state a basis carries between steps (CPDI2 corners)
 };
 
 std::string encode_checkpoint(const Checkpoint& c);
