@@ -149,16 +149,22 @@ int main(int argc, char** argv) {
 
   mpm::ReconstructOptions ropt;
   auto* rec = app.add_subcommand(
-      "reconstruct", "reconstruct f(x) from points with a mapping's reconstruction (D 5.2.3)");
-  rec->add_option("--function", ropt.function, "f(x), muparser syntax")->capture_default_str();
+      "reconstruct",
+      "reconstruct f(x) or f(x, y) from points with a mapping's reconstruction (D 5.2.3, 6.2.1)");
+  rec->add_option("--dim", ropt.dim,
+                  "1: f(x) on [lower, upper]; 2: f(x, y) on [lower, upper]^2 (tls only)")
+      ->capture_default_str();
+  rec->add_option("--function", ropt.function, "f(x) or f(x, y), muparser syntax")
+      ->capture_default_str();
   rec->add_option("--lower", ropt.lower, "lower end of the domain")->capture_default_str();
   rec->add_option("--upper", ropt.upper, "upper end of the domain")->capture_default_str();
-  rec->add_option("--cells", ropt.cells, "elements")->capture_default_str();
+  rec->add_option("--cells", ropt.cells, "elements (per direction)")->capture_default_str();
   rec->add_option("--mapping", ropt.mapping, "tls, cubic_spline, mls or imls")
       ->capture_default_str();
   rec->add_option("--mls-degree", ropt.mls_degree, "MLS/IMLS polynomial degree (1 or 2)")
       ->capture_default_str();
-  rec->add_option("--terms", ropt.terms, "TLS Taylor terms (1-3)")->capture_default_str();
+  rec->add_option("--terms", ropt.terms, "TLS Taylor terms (1D: 1-3; 2D: 1, 3 or 6)")
+      ->capture_default_str();
   rec->add_option("--completion", ropt.completion,
                   "TLS completion: none, reduce, virtual, "
                   "neighbour")
@@ -167,15 +173,18 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   rec->add_flag("!--plain", ropt.conservative,
                 "TLS: plain least squares instead of keeping the element integrals");
-  rec->add_option("--points", ropt.points, "uniform:N, random:N (per element) or list:X1,X2,...")
+  rec->add_option("--points", ropt.points,
+                  "uniform:N, random:N (per element) or list:X1,X2,...; 2D also uniform:NXxNY, "
+                  "inner:NXxNY (k/(n+1), D 6.2.1: inner:2x3), list:X1;Y1,X2;Y2,...")
       ->capture_default_str();
   rec->add_option("--seed", ropt.seed, "seed of random:N")->capture_default_str();
   rec->add_flag("--share-faces", ropt.share_faces,
                 "a point on an interior face belongs to both elements");
-  rec->add_option("--error-points", ropt.error_points, "Gauss points per element for the RMS")
+  rec->add_option("--error-points", ropt.error_points,
+                  "Gauss points per element (2D: per direction) for the RMS")
       ->capture_default_str();
   rec->add_option("--integration-points", ropt.integration_points,
-                  "Gauss points per element for the integral")
+                  "Gauss points per element (2D: per direction) for the integral")
       ->capture_default_str();
 
   auto* keys = app.add_subcommand("keys",
@@ -190,16 +199,23 @@ int main(int argc, char** argv) {
     if (*bench) return cmd_bench(bopt);
     if (*rec) {
       const auto r = mpm::reconstruct(ropt);
-      std::cout << fmt::format("f(x) = {} on [{}, {}], {} elements, {} points, {}\n", ropt.function,
-                               ropt.lower, ropt.upper, ropt.cells, r.x.size(), ropt.mapping);
+      if (ropt.dim == 2)
+        std::cout << fmt::format("f(x, y) = {} on [{}, {}]^2, {} x {} elements, {} points, {}\n",
+                                 ropt.function, ropt.lower, ropt.upper, ropt.cells, ropt.cells,
+                                 r.xy.size(), ropt.mapping);
+      else
+        std::cout << fmt::format("f(x) = {} on [{}, {}], {} elements, {} points, {}\n",
+                                 ropt.function, ropt.lower, ropt.upper, ropt.cells, r.x.size(),
+                                 ropt.mapping);
       std::cout << r.details;
-      std::cout << fmt::format("RMS error ({} Gauss points per element)   {:.6e}\n",
-                               ropt.error_points, r.rms_error);
+      std::cout << fmt::format("RMS error ({} Gauss points per element{})   {:.6e}\n",
+                               ropt.error_points, ropt.dim == 2 ? " and direction" : "",
+                               r.rms_error);
       std::cout << fmt::format(
           "integral: exact {:.15g}, reconstructed {:.15g} ({} Gauss points "
-          "per element)\nrelative integral error               {:.6e}\n",
+          "per element{})\nrelative integral error               {:.6e}\n",
           r.integral_exact, r.integral_reconstructed, ropt.integration_points,
-          r.relative_integral_error);
+          ropt.dim == 2 ? " and direction" : "", r.relative_integral_error);
       return 0;
     }
     if (*keys) {

@@ -1,6 +1,7 @@
 #include "core/reconstruct.hpp"
 
 #include <fmt/format.h>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -22,18 +23,22 @@ double constant_expression(const std::string& text, const char* what) {
   return e(0.0);
 }
 
+// N of "kind:N" (leading digits); 0 when not a number.
+int parse_count(const std::string& text) {
+  try {
+    return std::stoi(text);
+  } catch (...) {
+    return 0;
+  }
+}
+
 std::vector<double> make_points(const ReconstructOptions& opt, const Grid<1>& g) {
   const auto colon = opt.points.find(':');
   const std::string kind = opt.points.substr(0, colon);
   const std::string arg = colon == std::string::npos ? "" : opt.points.substr(colon + 1);
   std::vector<double> x;
   if (kind == "uniform" || kind == "random") {
-    int n = 0;
-    try {
-      n = std::stoi(arg);
-    } catch (...) {
-      n = 0;
-    }
+    const int n = parse_count(arg);
     if (n < 1)
       throw InputError(fmt::format("--points {}: expected {}:N with N >= 1 points per element",
                                    opt.points, kind));
@@ -64,6 +69,168 @@ std::vector<double> make_points(const ReconstructOptions& opt, const Grid<1>& g)
       opt.points));
 }
 
+// "N" or "NXxNY": points per element in x and y.
+std::array<int, 2> parse_counts_2d(const std::string& text) {
+  const auto x = text.find('x');
+  if (x == std::string::npos) {
+    const int n = parse_count(text);
+    return {n, n};
+  }
+  return {parse_count(text.substr(0, x)), parse_count(text.substr(x + 1))};
+}
+
+// The data points of the 2D playground, element by element (x fastest, as Grid::cell_index).
+std::vector<Vec<2>> make_points_2d(const ReconstructOptions& opt, const Grid<2>& g) {
+  const auto colon = opt.points.find(':');
+  const std::string kind = opt.points.substr(0, colon);
+  const std::string arg = colon == std::string::npos ? "" : opt.points.substr(colon + 1);
+  std::vector<Vec<2>> x;
+  if (kind == "uniform" || kind == "inner" || kind == "random") {
+    const auto n =
+        kind == "random" ? std::array<int, 2>{parse_count(arg), 1} : parse_counts_2d(arg);
+    if (n[0] < 1 || n[1] < 1)
+      throw InputError(fmt::format("--points {}: expected {}:N{} with N >= 1 points per element",
+                                   opt.points, kind,
+                                   kind == "random" ? "" : " or NXxNY (N x N or NX x NY)"));
+    // Position k of n in [0, 1]: uniform (k + 1/2) / n; inner k / (n + 1), k = 1..n, which gives
+    // D 6.2.1's x_min + 1/3, x_max - 1/3 (n = 2) and y_min + 1/4, mid, y_max - 1/4 (n = 3) in
+    // unit elements.
+    auto at = [&](int k, int m) {
+      return kind == "uniform" ? (k + 0.5) / m : (k + 1.0) / (m + 1.0);
+    };
+    std::mt19937 rng(opt.seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (Index j = 0; j < g.cells[1]; ++j)
+      for (Index i = 0; i < g.cells[0]; ++i) {
+        const Vec<2> corner(g.origin[0] + static_cast<double>(i) * g.h[0],
+                            g.origin[1] + static_cast<double>(j) * g.h[1]);
+        if (kind == "random") {
+          for (int k = 0; k < n[0]; ++k) {
+            const double sx = u(rng), sy = u(rng);
+            x.emplace_back(corner[0] + sx * g.h[0], corner[1] + sy * g.h[1]);
+          }
+          continue;
+        }
+        for (int ky = 0; ky < n[1]; ++ky)
+          for (int kx = 0; kx < n[0]; ++kx)
+            x.emplace_back(corner[0] + at(kx, n[0]) * g.h[0], corner[1] + at(ky, n[1]) * g.h[1]);
+      }
+    return x;
+  }
+  if (kind == "list") {
+    std::size_t pos = 0;
+    while (pos < arg.size()) {
+      const auto comma = arg.find(',', pos);
+      const std::string item =
+          arg.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+      const auto semi = item.find(';');
+      if (semi == std::string::npos)
+        throw InputError(fmt::format("--points list: \"{}\" is not X;Y", item));
+      x.emplace_back(constant_expression(item.substr(0, semi), "--points list item"),
+                     constant_expression(item.substr(semi + 1), "--points list item"));
+      if (comma == std::string::npos) break;
+      pos = comma + 1;
+    }
+    if (x.empty()) throw InputError("--points list: give at least one point");
+    return x;
+  }
+  throw InputError(fmt::format(
+      "--points {}: choose uniform:N, uniform:NXxNY, inner:NXxNY, random:N or list:X1;Y1,... "
+      "(points per element)",
+      opt.points));
+}
+
+// Calls fn(x, w) at the n x n Gauss points of element e (weights include the Jacobian).
+template <class Fn>
+void for_each_gauss_point(const Grid<2>& g, Index e, const GaussRule& rule, Fn&& fn) {
+  const Index i = e % g.cells[0], j = e / g.cells[0];
+  const Vec<2> hw = 0.5 * g.h;
+  const Vec<2> c(g.origin[0] + (static_cast<double>(i) + 0.5) * g.h[0],
+                 g.origin[1] + (static_cast<double>(j) + 0.5) * g.h[1]);
+  for (std::size_t ky = 0; ky < rule.xi.size(); ++ky)
+    for (std::size_t kx = 0; kx < rule.xi.size(); ++kx)
+      fn(Vec<2>(c[0] + hw[0] * rule.xi[kx], c[1] + hw[1] * rule.xi[ky]),
+         hw[0] * rule.w[kx] * hw[1] * rule.w[ky]);
+}
+
+// D 6.2.1: f(x, y) on the square [a, b]^2 with cells x cells rectangular elements, TLS only.
+// The RMS error is taken over error_points x error_points Gauss points per element (D 6.2.1: 2 x
+// 2, "four Gauss points per element"), the integral with integration_points x integration_points.
+ReconstructResult reconstruct_2d(const ReconstructOptions& opt, double a, double b) {
+  if (opt.mapping != "tls")
+    throw InputError(fmt::format(
+        "--mapping {} is one-dimensional; --dim 2 reconstructs with tls (D 6.2)", opt.mapping));
+  const Expression f(opt.function, {});
+  const Grid<2> g(Vec<2>(a, a), Vec<2>(b, b), IVec<2>{opt.cells, opt.cells});
+  const Index ne = g.num_cells();
+
+  ReconstructResult res;
+  res.xy = make_points_2d(opt, g);
+  std::vector<double> fx;
+  for (const Vec<2>& p : res.xy) {
+    if (!g.inside(p))
+      throw InputError(fmt::format("--points: ({}, {}) lies outside [{}, {}]^2", p[0], p[1], a, b));
+    fx.push_back(f(p[0], p[1]));
+  }
+
+  // Exact element integrals (20 x 20 Gauss: far below any reconstruction error here).
+  const GaussRule exact_rule = gauss_legendre(20);
+  std::vector<double> element_integral(static_cast<std::size_t>(ne), 0.0);
+  for (Index e = 0; e < ne; ++e)
+    for_each_gauss_point(g, e, exact_rule, [&](const Vec<2>& x, double w) {
+      element_integral[static_cast<std::size_t>(e)] += w * f(x[0], x[1]);
+    });
+  for (double c : element_integral) res.integral_exact += c;
+
+  TlsSettings s;
+  s.terms = opt.terms;
+  s.completion = parse_tls_completion(opt.completion);
+  s.max_condition = opt.max_condition;
+  // Conservative fits only fit psi_2..psi_nb: judge the data on those (D 6.2.1's points make
+  // the full normal matrix singular, see TlsSettings::conservative_only).
+  s.conservative_only = opt.conservative;
+  validate(s, 2);
+  TlsReconstruction2D tls(s);
+  tls.set_points(g, res.xy, opt.share_faces);
+  TlsCoefficients2D coeffs;
+  if (tls.report().failed > 0)
+    throw InputError(fmt::format(
+        "TLS cannot fit element {} ({} points, condition number {:.3g}) without completion; "
+        "use --completion reduce, virtual or neighbour",
+        tls.describe(tls.report().failed_element), tls.report().failed_points,
+        tls.report().failed_condition));
+  if (opt.conservative)
+    tls.fit_conservative(fx, element_integral, coeffs);
+  else
+    tls.fit_plain(fx, coeffs);
+  res.details += fmt::format("{:>8} {:>5} {:>5} {:>7} {:>8} {:>8} {:>6} {:>12}\n", "element", "i",
+                             "j", "points", "virtual", "borrowed", "terms", "cond(D)");
+  for (Index e = 0; e < ne; ++e) {
+    const auto& info = tls.element(e);
+    const IVec<2> c = tls.cell(e);
+    res.details +=
+        fmt::format("{:>8} {:>5} {:>5} {:>7} {:>8} {:>8} {:>6} {:>12.4g}\n", e, c[0], c[1],
+                    info.points, info.virtual_points, info.borrowed, info.terms, info.condition);
+  }
+
+  const GaussRule err_rule = gauss_legendre(opt.error_points);
+  const GaussRule int_rule = gauss_legendre(opt.integration_points);
+  double sq = 0.0;
+  for (Index e = 0; e < ne; ++e) {
+    for_each_gauss_point(g, e, err_rule, [&](const Vec<2>& x, double) {
+      const double d = tls.evaluate(coeffs, e, x) - f(x[0], x[1]);
+      sq += d * d;
+    });
+    for_each_gauss_point(g, e, int_rule, [&](const Vec<2>& x, double w) {
+      res.integral_reconstructed += w * tls.evaluate(coeffs, e, x);
+    });
+  }
+  res.rms_error = std::sqrt(sq / static_cast<double>(ne * opt.error_points * opt.error_points));
+  res.relative_integral_error =
+      std::abs(res.integral_reconstructed - res.integral_exact) / std::abs(res.integral_exact);
+  return res;
+}
+
 }  // namespace
 
 ReconstructResult reconstruct(const ReconstructOptions& opt) {
@@ -73,6 +240,8 @@ ReconstructResult reconstruct(const ReconstructOptions& opt) {
   if (opt.cells < 1) throw InputError("--cells must be at least 1");
   if (opt.error_points < 1 || opt.integration_points < 1)
     throw InputError("--error-points and --integration-points must be at least 1");
+  if (opt.dim == 2) return reconstruct_2d(opt, a, b);
+  if (opt.dim != 1) throw InputError(fmt::format("--dim {}: choose 1 or 2", opt.dim));
   const Expression f(opt.function, {});
   const Grid<1> g(Vec<1>(a), Vec<1>(b), IVec<1>{opt.cells});
 

@@ -1,8 +1,9 @@
 #pragma once
-// `mpm reconstruct`: the reconstruction playground (D 5.2.3, Table 5.1). A function given as an
-// expression of x is sampled at points of a 1D grid and reconstructed with a mapping's
-// reconstruction; the RMS error over many Gauss points per element and the relative error of the
-// integral (by the mapping's own quadrature) are reported.
+// `mpm reconstruct`: the reconstruction playground (D 5.2.3, Table 5.1; D 6.2.1 in 2D). A function
+// given as an expression of x (and y) is sampled at points of a 1D grid (or a square 2D grid of
+// rectangles) and reconstructed with a mapping's reconstruction; the RMS error over Gauss points
+// per element and the relative error of the integral (by the mapping's own quadrature) are
+// reported.
 #include <string>
 #include <vector>
 
@@ -11,27 +12,35 @@
 namespace mpm {
 
 struct ReconstructOptions {
-  std::string function = "sin(x) + 2";      // f(x), muparser syntax
+  // 1: f(x) on [lower, upper]; 2: f(x, y) on [lower, upper]^2 with cells x cells elements
+  // (TLS only, D 6.2.1).
+  int dim = 1;
+  std::string function = "sin(x) + 2";      // f(x) or f(x, y), muparser syntax
   std::string lower = "0", upper = "4*pi";  // domain ends (expressions of constants)
-  Index cells = 4;
-  std::string mapping = "tls";  // tls | cubic_spline | mls | imls
-  int terms = 3;                // TLS Taylor terms
+  Index cells = 4;                          // per direction
+  std::string mapping = "tls";              // tls | cubic_spline | mls | imls
+  int terms = 3;                            // TLS Taylor terms (1D 1-3; 2D 1, 3 or 6; 0: quadratic)
   std::string completion = "virtual";
   double max_condition = 1e8;
   int mls_degree = 1;        // MLS/IMLS polynomial degree (1 or 2); weight support from the cell
   bool conservative = true;  // TLS: keep the exact element integrals (D eq. 5.9)
   // uniform:N (N evenly spaced per element), random:N (N per element, --seed), or
   // list:X1,X2,... (expressions); a point on an interior face belongs to both elements when
-  // share_faces is set (as the point at pi in D 5.2.3).
+  // share_faces is set (as the point at pi in D 5.2.3). 2D: uniform:N or uniform:NXxNY ((k + 1/2)
+  // / n per direction), inner:NXxNY (k / (n + 1), k = 1..n; D 6.2.1 is inner:2x3), random:N,
+  // list:X1;Y1,X2;Y2,...
   std::string points = "uniform:3";
   unsigned seed = 1;
   bool share_faces = false;
-  int error_points = 100;      // Gauss points per element for the RMS error (D: 100)
-  int integration_points = 2;  // Gauss points per element for the integral (D: 2)
+  // Gauss points per element (2D: per direction) for the RMS error (D 5.2.3: 100; D 6.2.1: 2)
+  // and for the integral (D: 2).
+  int error_points = 100;
+  int integration_points = 2;
 };
 
 struct ReconstructResult {
-  std::vector<double> x;  // the data points
+  std::vector<double> x;   // the data points (1D)
+  std::vector<Vec<2>> xy;  // the data points (2D)
   double rms_error = 0.0;
   double integral_exact = 0.0;  // 20-point Gauss per element of f
   double integral_reconstructed = 0.0;

@@ -450,14 +450,15 @@ inline void reference_errors(const Particles<1>& P, const Ulfem1D& ref, ErrorNor
   if (den > 0.0) e.stress_rel_l2 = std::sqrt(num / den);
 }
 
-// The mapping built with its settings from the configuration (reconstruction mappings).
-template <class Mapping>
+// The mapping built with its settings from the configuration (reconstruction mappings),
+// validated for the problem's dimension.
+template <int Dim, class Mapping>
 Mapping make_mapping(const Config& cfg) {
   try {
     if constexpr (requires { Mapping::from_config(cfg); })
       return Mapping::from_config(cfg);
     else if constexpr (std::is_same_v<Mapping, TlsMapping>)
-      return TlsMapping(tls_settings_from_config(cfg));
+      return TlsMapping(tls_settings_from_config(cfg, Dim), Dim);
     else
       return Mapping{};
   } catch (const InputError& e) {
@@ -556,7 +557,7 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
                   fmt::format("{} basis, lumped-mass bound", Basis::kName));
 
   using Sim = Simulation<Dim, Basis, Mapping>;
-  Sim sim(pb.grid, Basis(pb.grid), make_mapping<Mapping>(cfg), std::move(pb.particles),
+  Sim sim(pb.grid, Basis(pb.grid), make_mapping<Dim, Mapping>(cfg), std::move(pb.particles),
           pb.material);
   sim.mass_type =
       cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;

@@ -108,8 +108,9 @@ std::vector<KeySpec> declare() {
            "degrees of freedom with mass below this fraction of the largest nodal mass are "
            "inactive"),
       choice("method.solver", "mpm", kSolvers, "time-stepping method"),
-      integer("method.tls_terms", 3, closed(1, 3),
-              "Taylor basis functions per element of the TLS mapping (1: constant, 3: quadratic)"),
+      integer("method.tls_terms", 0, closed(0, 6),
+              "Taylor basis functions per element of the TLS mapping (1D: 1-3; 2D: 1, 3 or 6; 0: "
+              "the quadratic basis, 3 in 1D and 6 in 2D)"),
       choice("method.tls_completion", "virtual", kTlsCompletions,
              "what TLS does in an element with too few or badly placed particles (D 5.2.3)"),
       real("method.tls_max_condition", "", 1e8, greater_than(1),

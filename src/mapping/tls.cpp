@@ -1,5 +1,5 @@
-// Taylor least-squares reconstruction in 1D (D 5.2-5.3, 000 sec. 2, 004 4.4.1): element systems,
-// completion of deficient elements (D 5.2.3) and the per-field fits.
+// Taylor least-squares reconstruction in 1D and 2D (D 5.2-5.3, 6.1-6.2, 000 sec. 2, 004 4.4.1):
+// element systems, completion of deficient elements (D 5.2.3, 6.3.2) and the per-field fits.
 #include "mapping/tls.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "io/config.hpp"
 
@@ -19,28 +20,56 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // no new direction to D.
 constexpr double kCoincident = 1e-10;
 
-// cond_2(D_t) = lambda_max / lambda_min of the leading t x t block of the symmetric positive
-// semi-definite normal matrix D (D 5.2.3); infinite when singular.
-double condition_number(const Eigen::Matrix3d& D, int t) {
+// cond_2 = lambda_max / lambda_min of the block of rows and columns first..t-1 of the symmetric
+// positive semi-definite normal matrix D (D 5.2.3): the leading t x t block for plain fits
+// (first = 0), the terms 2..t for conservative ones (first = 1); infinite when singular, 1 when
+// nothing is fitted.
+template <int K>
+double condition_number(const Eigen::Matrix<double, K, K>& D, int first, int t) {
   double lo = 0.0, hi = 0.0;
-  if (t == 1) {
-    lo = hi = D(0, 0);
-  } else if (t == 2) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(D.topLeftCorner<2, 2>(),
-                                                            Eigen::EigenvaluesOnly);
-    lo = es.eigenvalues()[0];
-    hi = es.eigenvalues()[1];
-  } else {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(D, Eigen::EigenvaluesOnly);
-    lo = es.eigenvalues()[0];
-    hi = es.eigenvalues()[2];
+  auto eigen = [&]<int N>(std::integral_constant<int, N>) {
+    if constexpr (N <= K) {
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(
+          D.template block<N, N>(first, first), Eigen::EigenvaluesOnly);
+      lo = es.eigenvalues()[0];
+      hi = es.eigenvalues()[N - 1];
+    }
+  };
+  switch (t - first) {
+    case 0:
+      return 1.0;
+    case 1:
+      lo = hi = D(first, first);
+      break;
+    case 2:
+      eigen(std::integral_constant<int, 2>{});
+      break;
+    case 3:
+      eigen(std::integral_constant<int, 3>{});
+      break;
+    case 4:
+      eigen(std::integral_constant<int, 4>{});
+      break;
+    case 5:
+      eigen(std::integral_constant<int, 5>{});
+      break;
+    default:
+      eigen(std::integral_constant<int, 6>{});
+      break;
   }
   if (!(lo > 0.0) || !std::isfinite(hi)) return kInf;
   return hi / lo;
 }
 
-void add_outer(Eigen::Matrix3d& D, const Eigen::Vector3d& psi) {
+template <int K>
+void add_outer(Eigen::Matrix<double, K, K>& D, const Eigen::Matrix<double, K, 1>& psi) {
   D.noalias() += psi * psi.transpose();
+}
+
+// Polynomial degree of n_b Taylor terms: 1D n_b - 1; 2D 0, 1, 2 for 1, 3, 6 terms.
+int taylor_degree(int terms, int dim) {
+  if (dim == 1) return terms - 1;
+  return terms == 1 ? 0 : terms == 3 ? 1 : 2;
 }
 
 }  // namespace
@@ -69,32 +98,43 @@ std::string_view tls_completion_name(TlsCompletion c) {
   return "none";
 }
 
-void validate(const TlsSettings& s) {
-  if (s.terms < 1 || s.terms > 3)
-    throw InputError(fmt::format("method.tls_terms = {} must be 1, 2 or 3", s.terms));
+void validate(const TlsSettings& s, int dim) {
+  if (dim != 1 && dim != 2)
+    throw InputError(fmt::format("the TLS reconstruction is available in 1D and 2D, not {}D", dim));
+  if (dim == 1 && (s.terms < 0 || s.terms > 3))
+    throw InputError(fmt::format(
+        "method.tls_terms = {} must be 1, 2 or 3 in 1D (0: quadratic, 3 terms)", s.terms));
+  if (dim == 2 && s.terms != 0 && s.terms != 1 && s.terms != 3 && s.terms != 6)
+    throw InputError(fmt::format(
+        "method.tls_terms = {} must be 1 (constant), 3 (linear) or 6 (quadratic) in 2D (0: 6)",
+        s.terms));
   if (!(s.max_condition > 1.0))
     throw InputError(
         fmt::format("method.tls_max_condition = {} must be greater than 1", s.max_condition));
   if (s.gauss_points < 0 || s.gauss_points > 10)
     throw InputError(fmt::format("method.gauss_points = {} must lie in [0, 10]", s.gauss_points));
-  if (s.max_borrowed < 1)
-    throw InputError(fmt::format("TLS max_borrowed = {} must be at least 1", s.max_borrowed));
-  // n Gauss points integrate degree 2n - 1 exactly; psi_3 is quadratic (D 5.3.2).
-  if (2 * s.gauss_points_used() < s.terms)
+  if (s.max_borrowed < 0)
+    throw InputError(
+        fmt::format("TLS max_borrowed = {} must be positive (0: the default)", s.max_borrowed));
+  // n Gauss points per direction integrate degree 2n - 1 exactly; psi_2.. must integrate to zero
+  // (D 5.3.2: n_b <= 2 x Gauss points in 1D; in 2D the quadratic terms need 2 per direction).
+  const int terms = s.terms_used(dim);
+  if (2 * s.gauss_points_used() - 1 < taylor_degree(terms, dim))
     throw InputError(fmt::format(
         "method.gauss_points = {} does not integrate the Taylor basis of method.tls_terms = {} "
-        "exactly, so mass and momentum would not be conserved (D 5.3.2 needs tls_terms <= 2 x "
-        "gauss_points); use 2 or more Gauss points, or 0 for the default",
-        s.gauss_points, s.terms));
+        "exactly, so mass and momentum would not be conserved (D 5.3.2: n Gauss points per "
+        "direction integrate degree 2n - 1, the {}D basis has degree {}); use 2 or more Gauss "
+        "points, or 0 for the default",
+        s.gauss_points, terms, dim, taylor_degree(terms, dim)));
 }
 
-TlsSettings tls_settings_from_config(const Config& cfg) {
+TlsSettings tls_settings_from_config(const Config& cfg, int dim) {
   TlsSettings s;
   s.terms = static_cast<int>(cfg.get_int("method.tls_terms"));
   s.completion = parse_tls_completion(cfg.get_string("method.tls_completion"));
   s.max_condition = cfg.get_real("method.tls_max_condition");
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
-  validate(s);
+  validate(s, dim);
   return s;
 }
 
@@ -118,131 +158,234 @@ void accumulate(TlsReport& total, const TlsReport& step) {
   total.failed += step.failed;
 }
 
-TlsReconstruction::TlsReconstruction(const TlsSettings& s) : settings_(s) {
-  validate(s);
+template <int Dim>
+BasicTlsReconstruction<Dim>::BasicTlsReconstruction(const TlsSettings& s)
+    : settings_(s), nb_(s.terms_used(Dim)) {
+  validate(s, Dim);
+  // 2D virtual points (D 6.3.2 leaves their placement open): on each face, at the Gauss-Legendre
+  // nodes of as many points as the face trace of a neighbour's reconstruction has coefficients
+  // (2 for the linear basis, 3 for the quadratic one), so that the trace is passed on whole. The
+  // nodes lie inside the face, so the faces share no virtual point at a corner.
+  if constexpr (Dim == 2) face_xi_ = gauss_legendre(nb_ == 6 ? 3 : 2).xi;
 }
 
-const TlsReport& TlsReconstruction::set_points(const Grid<1>& g, std::span<const double> x,
-                                               bool share_face_points) {
+template <int Dim>
+std::string BasicTlsReconstruction<Dim>::describe(Index e) const {
+  if constexpr (Dim == 1) {
+    return fmt::format("{}", e);
+  } else {
+    const IVec<Dim> c = cell(e);
+    return fmt::format("{} at cell ({}, {})", e, c[0], c[1]);
+  }
+}
+
+template <int Dim>
+const TlsReport& BasicTlsReconstruction<Dim>::set_points(const Grid<Dim>& g,
+                                                         std::span<const Point> x,
+                                                         bool share_face_points) {
   grid_ = g;
-  x_.assign(x.begin(), x.end());
-  const Index ne = g.num_cells();
-  const auto ne_s = static_cast<std::size_t>(ne);
+  x_.resize(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) x_[i] = as_vec(x[i]);
   report_ = TlsReport{};
-  // Counting sort into the cells, as ElementBins, with the optional second owner of a point on
-  // an interior face (its lower neighbour).
-  auto lower_owner = [&](double xp, Index c) -> Index {
-    if (!share_face_points || c <= 0) return -1;
-    const double s = (xp - g.origin[0]) / g.h[0];
-    return s == static_cast<double>(c) ? c - 1 : -1;
-  };
-  bins_.start.assign(ne_s + 1, 0);
-  for (double xp : x_) {
-    const Index c = g.cell_of(xp, 0);
-    if (c < 0 || c >= ne) {
-      ++report_.outside;
-      continue;
-    }
-    ++bins_.start[static_cast<std::size_t>(c + 1)];
-    const Index l = lower_owner(xp, c);
-    if (l >= 0) ++bins_.start[static_cast<std::size_t>(l + 1)];
-  }
-  for (std::size_t e = 0; e < ne_s; ++e) bins_.start[e + 1] += bins_.start[e];
-  bins_.order.resize(static_cast<std::size_t>(bins_.start[ne_s]));
-  std::vector<Index> fill(bins_.start.begin(), bins_.start.end() - 1);
-  for (std::size_t p = 0; p < x_.size(); ++p) {
-    const Index c = g.cell_of(x_[p], 0);
-    if (c < 0 || c >= ne) continue;
-    bins_.order[static_cast<std::size_t>(fill[static_cast<std::size_t>(c)]++)] =
-        static_cast<Index>(p);
-    const Index l = lower_owner(x_[p], c);
-    if (l >= 0)
-      bins_.order[static_cast<std::size_t>(fill[static_cast<std::size_t>(l)]++)] =
-          static_cast<Index>(p);
-  }
+  bin_points(share_face_points);
   build_systems();
   return report_;
 }
 
-const TlsReport& TlsReconstruction::set_points(const Grid<1>& g, const Particles<1>& P) {
+template <int Dim>
+const TlsReport& BasicTlsReconstruction<Dim>::set_points(const Grid<Dim>& g,
+                                                         const Particles<Dim>& P) {
   grid_ = g;
-  x_.resize(P.x.size());
-  for (std::size_t i = 0; i < x_.size(); ++i) x_[i] = P.x[i][0];
+  x_.assign(P.x.begin(), P.x.end());
   report_ = TlsReport{};
   bins_.build(g, P);
   build_systems();
   return report_;
 }
 
-bool TlsReconstruction::coincides(const System& sys, double s) const {
-  for (Index k = sys.begin; k < sys.end; ++k)
-    if (std::abs(data_[static_cast<std::size_t>(k)].psi[1] - s) <= kCoincident) return true;
+// Counting sort into the cells, as ElementBins, with the optional further owners of a point on
+// interior faces (the lower neighbours across those faces; in 2D also the one across the corner).
+template <int Dim>
+void BasicTlsReconstruction<Dim>::bin_points(bool share_face_points) {
+  const auto ne_s = static_cast<std::size_t>(grid_.num_cells());
+  // Calls owner(e) for every element that holds x; false when x lies outside the grid.
+  auto for_each_owner = [&](const Vec<Dim>& x, auto&& owner) {
+    IVec<Dim> c{}, l{};
+    for (int d = 0; d < Dim; ++d) {
+      c[d] = grid_.cell_of(x[d], d);
+      if (c[d] < 0 || c[d] >= grid_.cells[d]) return false;
+      l[d] = -1;
+      if (share_face_points && c[d] > 0 &&
+          (x[d] - grid_.origin[d]) / grid_.h[d] == static_cast<double>(c[d]))
+        l[d] = c[d] - 1;
+    }
+    for (int mask = 0; mask < (1 << Dim); ++mask) {
+      Index e = 0, stride = 1;
+      bool exists = true;
+      for (int d = 0; d < Dim; ++d) {
+        const bool lower = (mask >> d) & 1;
+        exists = exists && (!lower || l[d] >= 0);
+        e += (lower ? l[d] : c[d]) * stride;
+        stride *= grid_.cells[d];
+      }
+      if (exists) owner(e);
+    }
+    return true;
+  };
+  bins_.start.assign(ne_s + 1, 0);
+  for (const auto& x : x_)
+    if (!for_each_owner(x, [&](Index e) { ++bins_.start[static_cast<std::size_t>(e + 1)]; }))
+      ++report_.outside;
+  for (std::size_t e = 0; e < ne_s; ++e) bins_.start[e + 1] += bins_.start[e];
+  bins_.order.resize(static_cast<std::size_t>(bins_.start[ne_s]));
+  fill_.assign(bins_.start.begin(), bins_.start.end() - 1);
+  for (std::size_t p = 0; p < x_.size(); ++p)
+    for_each_owner(x_[p], [&](Index e) {
+      bins_.order[static_cast<std::size_t>(fill_[static_cast<std::size_t>(e)]++)] =
+          static_cast<Index>(p);
+    });
+}
+
+template <int Dim>
+bool BasicTlsReconstruction<Dim>::coincides(const System& sys, const Vec<Dim>& s) const {
+  for (Index k = sys.begin; k < sys.end; ++k) {
+    const Taylor& psi = data_[static_cast<std::size_t>(k)].psi;  // psi_2..psi_{1+Dim} = s
+    bool same = true;
+    for (int d = 0; d < Dim; ++d) same = same && std::abs(psi[1 + d] - s[d]) <= kCoincident;
+    if (same) return true;
+  }
   return false;
 }
 
-void TlsReconstruction::add_datum(System& sys, Eigen::Matrix3d& D, const Datum& d) {
+template <int Dim>
+void BasicTlsReconstruction<Dim>::add_datum(System& sys, Matrix& D, const Datum& d) {
   data_.push_back(d);
   sys.end = static_cast<Index>(data_.size());
   add_outer(D, d.psi);
 }
 
-// D 5.2.3: a virtual point on each face whose neighbour fits all n_b terms from its own points,
-// valued by that neighbour's reconstruction at the face (at fit time). A face already holding a
-// point of the element adds nothing and is skipped.
-void TlsReconstruction::add_virtual_points(Index e, System& sys, Eigen::Matrix3d& D,
-                                           int& distinct) {
-  const Index ne = grid_.num_cells();
-  for (int side : {-1, +1}) {
-    const Index n = e + side;
-    if (n < 0 || n >= ne || !own_[static_cast<std::size_t>(n)].ok) continue;
-    const double s = static_cast<double>(side);
-    if (coincides(sys, s)) continue;
-    add_datum(sys, D, Datum::virtual_point(s, n, -s));
-    sys.has_virtual = true;
-    ++distinct;
-    ++info_[static_cast<std::size_t>(e)].virtual_points;
+template <int Dim>
+double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t) const {
+  return condition_number(D, settings_.conservative_only ? 1 : 0, t);
+}
+
+// Enough distinct positions for the unknowns (t, or t - 1 when a_1 is always given) and
+// cond(D) within the limit.
+template <int Dim>
+bool BasicTlsReconstruction<Dim>::well_posed(const Matrix& D, int distinct, int t,
+                                             double& cond) const {
+  cond = condition(D, t);
+  return distinct >= t - (settings_.conservative_only ? 1 : 0) && cond <= settings_.max_condition;
+}
+
+// D 5.2.3: virtual points on each face whose neighbour fits all n_b terms from its own points,
+// valued by that neighbour's reconstruction there (at fit time). 1D: one point, the face itself;
+// 2D: the face nodes face_xi_ (see the constructor). A virtual point coinciding with a point of
+// the element adds nothing and is skipped.
+template <int Dim>
+void BasicTlsReconstruction<Dim>::add_virtual_points(Index e, System& sys, Matrix& D,
+                                                     int& distinct) {
+  const IVec<Dim> c = cell(e);
+  const std::size_t per_face = Dim == 1 ? 1 : face_xi_.size();
+  Index stride = 1;
+  for (int d = 0; d < Dim; stride *= grid_.cells[d], ++d) {
+    for (int side : {-1, +1}) {
+      if (c[d] + side < 0 || c[d] + side >= grid_.cells[d]) continue;
+      const Index n = e + side * stride;
+      if (!own_[static_cast<std::size_t>(n)].ok) continue;
+      for (std::size_t k = 0; k < per_face; ++k) {
+        Vec<Dim> s;
+        s[d] = static_cast<double>(side);
+        if constexpr (Dim == 2) s[1 - d] = face_xi_[k];
+        Vec<Dim> s_source = s;  // the same point in the neighbour's coordinates
+        s_source[d] = -s[d];
+        if (coincides(sys, s)) continue;
+        add_datum(sys, D, Datum::virtual_point(s, n, s_source));
+        sys.has_virtual = true;
+        ++distinct;
+        ++info_[static_cast<std::size_t>(e)].virtual_points;
+      }
+    }
   }
 }
 
-// D 5.2.3: the nearest points of the two adjacent elements (distance to this element, ties by
-// index), one at a time until n_b terms are well posed or max_borrowed points were taken.
-// Points coinciding with the element's data are passed over. No allocation: each search scans
-// the neighbours for the next candidate after the last one taken in (distance, index) order.
-void TlsReconstruction::borrow_points(Index e, System& sys, Eigen::Matrix3d& D, int& distinct) {
-  const Index ne = grid_.num_cells();
-  const int nb = settings_.terms;
-  const double xc = centre(e), dx = half_width();
-  const double lo = xc - dx, hi = xc + dx;
-  double last_d = -1.0;
-  Index last_p = -1;
+// D 5.2.3, 6.3.2: the nearest points of the adjacent elements (Euclidean distance to this
+// element, ties by index), one at a time until n_b terms are well posed or max_borrowed points
+// were taken. In 2D the elements across the faces are searched first, those across the corners
+// only when the face neighbours have nothing left. Points coinciding with the element's data are
+// passed over. No allocation: each search scans the neighbours for the next candidate after the
+// last one taken in (distance, index) order.
+template <int Dim>
+void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D, int& distinct) {
+  const int nb = nb_;
+  const int max_taken = settings_.max_borrowed_used(Dim);
+  const Vec<Dim> xc = centre_vec(e), dx = half_width_vec();
+  Vec<Dim> lo, hi;
+  for (int d = 0; d < Dim; ++d) {
+    lo[d] = xc[d] - dx[d];
+    hi[d] = xc[d] + dx[d];
+  }
+  const IVec<Dim> c = cell(e);
   int taken = 0;
-  while (taken < settings_.max_borrowed &&
-         !(distinct >= nb && condition_number(D, nb) <= settings_.max_condition)) {
-    double best_d = kInf;
-    Index best_p = -1;
-    for (int side : {-1, +1}) {
-      const Index n = e + side;
-      if (n < 0 || n >= ne) continue;
-      for (const Index* it = bins_.begin(n); it != bins_.end(n); ++it) {
-        const double xp = x_[static_cast<std::size_t>(*it)];
-        const double d = std::max(0.0, side < 0 ? lo - xp : xp - hi);
-        const bool after = d > last_d || (d == last_d && *it > last_p);
-        const bool better = d < best_d || (d == best_d && *it < best_p);
-        if (after && better) {
-          best_d = d;
-          best_p = *it;
+  double cond = 0.0;
+  for (int corners = 0; corners < Dim; ++corners) {
+    // The neighbours of this round: across the faces (1D: the two sides), then the corners.
+    std::array<Index, 4> nbrs{};
+    int count = 0;
+    for (int dy = Dim == 2 ? -1 : 0; dy <= (Dim == 2 ? 1 : 0); ++dy)
+      for (int dx0 = -1; dx0 <= 1; ++dx0) {
+        const int offsets = (dx0 != 0) + (dy != 0);
+        if (offsets != 1 + corners) continue;
+        IVec<Dim> nc = c;
+        nc[0] += dx0;
+        if constexpr (Dim == 2) nc[1] += dy;
+        bool inside = true;
+        Index n = 0, stride = 1;
+        for (int d = 0; d < Dim; ++d) {
+          inside = inside && nc[d] >= 0 && nc[d] < grid_.cells[d];
+          n += nc[d] * stride;
+          stride *= grid_.cells[d];
+        }
+        if (inside) nbrs[static_cast<std::size_t>(count++)] = n;
+      }
+    double last_d = -1.0;
+    Index last_p = -1;
+    while (taken < max_taken && !well_posed(D, distinct, nb, cond)) {
+      double best_d = kInf;
+      Index best_p = -1;
+      for (int k = 0; k < count; ++k) {
+        const Index n = nbrs[static_cast<std::size_t>(k)];
+        for (const Index* it = bins_.begin(n); it != bins_.end(n); ++it) {
+          const Vec<Dim>& xp = x_[static_cast<std::size_t>(*it)];
+          double d = 0.0;
+          if constexpr (Dim == 1) {
+            d = std::max(0.0, std::max(lo[0] - xp[0], xp[0] - hi[0]));
+          } else {
+            double sq = 0.0;
+            for (int j = 0; j < Dim; ++j) {
+              const double gap = std::max(0.0, std::max(lo[j] - xp[j], xp[j] - hi[j]));
+              sq += gap * gap;
+            }
+            d = std::sqrt(sq);
+          }
+          const bool after = d > last_d || (d == last_d && *it > last_p);
+          const bool better = d < best_d || (d == best_d && *it < best_p);
+          if (after && better) {
+            best_d = d;
+            best_p = *it;
+          }
         }
       }
+      if (best_p < 0) break;  // these neighbours have nothing left
+      last_d = best_d;
+      last_p = best_p;
+      const Vec<Dim> s = local(e, x_[static_cast<std::size_t>(best_p)]);
+      if (coincides(sys, s)) continue;
+      add_datum(sys, D, Datum::real(s, best_p));
+      ++distinct;
+      ++taken;
+      ++info_[static_cast<std::size_t>(e)].borrowed;
     }
-    if (best_p < 0) break;  // the neighbours have nothing left
-    last_d = best_d;
-    last_p = best_p;
-    const double s = (x_[static_cast<std::size_t>(best_p)] - xc) / dx;
-    if (coincides(sys, s)) continue;
-    add_datum(sys, D, Datum::real(s, best_p));
-    ++distinct;
-    ++taken;
-    ++info_[static_cast<std::size_t>(e)].borrowed;
   }
 }
 
@@ -250,7 +393,8 @@ void TlsReconstruction::borrow_points(Index e, System& sys, Eigen::Matrix3d& D, 
 // enough": orthogonal to working precision for cond(B) well below 1/eps, which max_condition
 // guarantees), once for terms 1..t (plain) and once for terms 2..t (conservative, psi_1 left
 // out as in D 5.3.1). Q is stored in the data, so no allocation.
-void TlsReconstruction::factorise(System& sys) {
+template <int Dim>
+void BasicTlsReconstruction<Dim>::factorise(System& sys) {
   const int t = sys.terms;
   auto orthonormalise = [&](auto column, auto& R, int first, int n) {
     R.setZero();
@@ -284,22 +428,25 @@ void TlsReconstruction::factorise(System& sys) {
         column(data_[static_cast<std::size_t>(k)])[j] *= inv;
     }
   };
-  orthonormalise([](Datum& d) -> Eigen::Vector3d& { return d.q; }, sys.R, 0, t);
-  orthonormalise([](Datum& d) -> Eigen::Vector2d& { return d.qc; }, sys.Rc, 1, t - 1);
+  if (!settings_.conservative_only)
+    orthonormalise([](Datum& d) -> Taylor& { return d.q; }, sys.R, 0, t);
+  orthonormalise([](Datum& d) -> Taylor1& { return d.qc; }, sys.Rc, 1, t - 1);
 }
 
-void TlsReconstruction::build_systems() {
+template <int Dim>
+void BasicTlsReconstruction<Dim>::build_systems() {
   const Index ne = grid_.num_cells();
   const auto ne_s = static_cast<std::size_t>(ne);
-  const int nb = settings_.terms;
-  const double dx = half_width(), max_cond = settings_.max_condition;
+  const int nb = nb_;
+  const Vec<Dim> dx = half_width_vec();
   report_.elements = ne;
   own_.resize(ne_s);
   systems_.resize(ne_s);
   info_.assign(ne_s, TlsElementInfo{});
   data_.clear();
+  const std::size_t virtual_max = 2 * Dim * (Dim == 1 ? 1 : face_xi_.size());
   data_.reserve(bins_.order.size() +
-                ne_s * static_cast<std::size_t>(2 + std::max(0, settings_.max_borrowed)));
+                ne_s * (virtual_max + static_cast<std::size_t>(settings_.max_borrowed_used(Dim))));
 
   // Pass 1: each element from its own points (also decides which neighbours can lend virtual
   // points).
@@ -307,22 +454,28 @@ void TlsReconstruction::build_systems() {
     Own& o = own_[static_cast<std::size_t>(e)];
     o.D.setZero();
     o.distinct = 0;
-    std::array<double, 3> seen{};
-    const double xc = centre(e);
+    std::array<Vec<Dim>, K> seen{};
+    const Vec<Dim> xc = centre_vec(e);
     for (const Index* it = bins_.begin(e); it != bins_.end(e); ++it) {
-      const double s = (x_[static_cast<std::size_t>(*it)] - xc) / dx;
-      add_outer(o.D, taylor_basis(s));
+      const Vec<Dim>& x = x_[static_cast<std::size_t>(*it)];
+      Vec<Dim> s;
+      for (int d = 0; d < Dim; ++d) s[d] = (x[d] - xc[d]) / dx[d];
+      add_outer(o.D, taylor_basis_at<Dim>(s));
       if (o.distinct < nb) {
         bool fresh = true;
-        for (int k = 0; k < o.distinct; ++k)
-          fresh = fresh && std::abs(seen[static_cast<std::size_t>(k)] - s) > kCoincident;
+        for (int k = 0; k < o.distinct; ++k) {
+          bool same = true;
+          for (int d = 0; d < Dim; ++d)
+            same = same && std::abs(seen[static_cast<std::size_t>(k)][d] - s[d]) <= kCoincident;
+          fresh = fresh && !same;
+        }
         if (fresh) seen[static_cast<std::size_t>(o.distinct++)] = s;
       }
     }
     const Index count = bins_.count(e);
     info_[static_cast<std::size_t>(e)].points = count;
-    o.condition = count > 0 ? condition_number(o.D, nb) : 0.0;
-    o.ok = count > 0 && o.distinct >= nb && o.condition <= max_cond;
+    o.ok = count > 0 && well_posed(o.D, o.distinct, nb, o.condition);
+    if (count == 0) o.condition = 0.0;
   }
 
   // Pass 2: data, completion, number of terms and factorisations.
@@ -335,12 +488,15 @@ void TlsReconstruction::build_systems() {
     sys.has_virtual = false;
     if (info.points == 0) continue;  // inactive: no reconstruction
     ++report_.active;
-    const double xc = centre(e);
+    const Vec<Dim> xc = centre_vec(e);
     for (const Index* it = bins_.begin(e); it != bins_.end(e); ++it) {
-      data_.push_back(Datum::real((x_[static_cast<std::size_t>(*it)] - xc) / dx, *it));
+      const Vec<Dim>& x = x_[static_cast<std::size_t>(*it)];
+      Vec<Dim> s;
+      for (int d = 0; d < Dim; ++d) s[d] = (x[d] - xc[d]) / dx[d];
+      data_.push_back(Datum::real(s, *it));
     }
     sys.end = static_cast<Index>(data_.size());
-    Eigen::Matrix3d D = o.D;
+    Matrix D = o.D;
     int distinct = o.distinct;
     if (!o.ok) {
       switch (settings_.completion) {
@@ -363,11 +519,12 @@ void TlsReconstruction::build_systems() {
           break;
       }
     }
-    // Reduce (also the fallback of the completions): drop terms until well posed. One term is
-    // always well posed in an active element (D = number of data > 0).
+    // Reduce (also the fallback of the completions): drop terms until well posed, 1D 3 -> 2 -> 1,
+    // 2D 6 -> 3 -> 1 (complete polynomial spaces). One term is always well posed in an active
+    // element (D = number of data > 0).
     int t = nb;
-    double cond = condition_number(D, t);
-    while (t > 1 && (distinct < t || cond > max_cond)) cond = condition_number(D, --t);
+    double cond = 0.0;
+    while (!well_posed(D, distinct, t, cond) && t > 1) t = Dim == 1 ? t - 1 : (t == 6 ? 3 : 1);
     sys.terms = t;
     factorise(sys);
     info.terms = t;
@@ -383,13 +540,14 @@ void TlsReconstruction::build_systems() {
 
 // Elements with virtual points need their neighbours' coefficients, and their neighbours never
 // have virtual points (they fit all terms from their own points), so two passes suffice.
-void TlsReconstruction::fit(std::span<const double> f, const double* integrals,
-                            TlsCoefficients& a) const {
+template <int Dim>
+void BasicTlsReconstruction<Dim>::fit(std::span<const double> f, const double* integrals,
+                                      Coefficients& a) const {
   if (f.size() < x_.size())
     throw std::invalid_argument("TlsReconstruction: one value per point of set_points");
   const Index ne = grid_.num_cells();
   a.resize(static_cast<std::size_t>(ne));
-  const double h = grid_.h[0];
+  const double volume = grid_.cell_volume();  // |Omega_e| (D eq. 6.7)
   for (int pass = 0; pass < 2; ++pass) {
     for (Index e = 0; e < ne; ++e) {
       const auto ei = static_cast<std::size_t>(e);
@@ -408,16 +566,16 @@ void TlsReconstruction::fit(std::span<const double> f, const double* integrals,
       const int t = sys.terms;
       auto value = [&](const Datum& d) {
         if (d.point >= 0) return f[static_cast<std::size_t>(d.point)];
-        return a[static_cast<std::size_t>(d.source)].dot(taylor_basis(d.s_source));
+        return a[static_cast<std::size_t>(d.source)].dot(taylor_basis_at<Dim>(d.s_source));
       };
-      Eigen::Vector3d coef = Eigen::Vector3d::Zero();
+      Taylor coef = Taylor::Zero();
       if (integrals != nullptr) {
         // D eq. 5.9: a_1 fixed by the element integral; the rest fit f - a_1 without psi_1:
         // a_2..t = R_c^{-1} Q_c^T (U - a_1).
-        const double a1 = integrals[ei] / h;
+        const double a1 = integrals[ei] / volume;
         coef[0] = a1;
         if (t > 1) {
-          Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+          Taylor1 rhs = Taylor1::Zero();
           for (Index k = sys.begin; k < sys.end; ++k) {
             const Datum& d = data_[static_cast<std::size_t>(k)];
             rhs += d.qc * (value(d) - a1);  // q_c is zero beyond t - 1 columns
@@ -430,7 +588,7 @@ void TlsReconstruction::fit(std::span<const double> f, const double* integrals,
         }
       } else {
         // D eq. 5.1: a = D^{-1} B U = R^{-1} Q^T U.
-        Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+        Taylor rhs = Taylor::Zero();
         for (Index k = sys.begin; k < sys.end; ++k) {
           const Datum& d = data_[static_cast<std::size_t>(k)];
           rhs += d.q * value(d);  // q is zero beyond t columns
@@ -446,22 +604,30 @@ void TlsReconstruction::fit(std::span<const double> f, const double* integrals,
   }
 }
 
-void TlsReconstruction::fit_conservative(std::span<const double> f,
-                                         std::span<const double> integrals,
-                                         TlsCoefficients& a) const {
+template <int Dim>
+void BasicTlsReconstruction<Dim>::fit_conservative(std::span<const double> f,
+                                                   std::span<const double> integrals,
+                                                   Coefficients& a) const {
   if (integrals.size() < static_cast<std::size_t>(grid_.num_cells()))
     throw std::invalid_argument("TlsReconstruction::fit_conservative: one integral per element");
   fit(f, integrals.data(), a);
 }
 
-void TlsReconstruction::fit_plain(std::span<const double> f, TlsCoefficients& a) const {
+template <int Dim>
+void BasicTlsReconstruction<Dim>::fit_plain(std::span<const double> f, Coefficients& a) const {
+  if (settings_.conservative_only)
+    throw std::logic_error("TlsReconstruction::fit_plain: the settings are conservative_only");
   fit(f, nullptr, a);
 }
 
-double TlsReconstruction::evaluate(const TlsCoefficients& a, double x) const {
-  const Index e = grid_.cell_of(x, 0);
-  if (e < 0 || e >= grid_.num_cells()) return 0.0;
-  return evaluate(a, e, x);
+template <int Dim>
+double BasicTlsReconstruction<Dim>::evaluate(const Coefficients& a, const Point& x) const {
+  const Vec<Dim> v = as_vec(x);
+  if (!grid_.inside(v)) return 0.0;
+  return evaluate(a, grid_.cell_index(v), x);
 }
+
+template class BasicTlsReconstruction<1>;
+template class BasicTlsReconstruction<2>;
 
 }  // namespace mpm

@@ -1,26 +1,31 @@
 #pragma once
-// Taylor least-squares (TLS) reconstruction in one dimension and the TLS particle-to-grid mapping
-// (D 5.2-5.3, 000 sec. 2-4, 004 4.4).
+// Taylor least-squares (TLS) reconstruction in one and two dimensions and the TLS
+// particle-to-grid mapping (D 5.2-5.3 and ch. 6, 000 sec. 2-4, 004 4.4).
 //
-// TlsReconstruction fits, per cell of a Grid<1> (an element), a short Taylor expansion to
-// scattered data (D eq. 5.1-5.5). Fields are either plain least squares (all coefficients free,
-// D eq. 5.1) or conservative: a_1 = c_e / |Omega_e| is fixed by the element integral c_e and the
-// other coefficients fit f - a_1 (D eq. 5.8-5.9, 5.3.1). The least-squares matrices depend only on
-// the point positions, so they are built and factorised once per point set and reused for every
-// field. The reconstruction is element-local and discontinuous across element faces.
+// BasicTlsReconstruction<Dim> fits, per cell of a uniform Grid<Dim> (an element: an interval in
+// 1D, a rectangle in 2D), a short Taylor expansion to scattered data (D eq. 5.1-5.5, 6.1-6.13).
+// Fields are either plain least squares (all coefficients free, D eq. 5.1) or conservative:
+// a_1 = c_e / |Omega_e| is fixed by the element integral c_e and the other coefficients fit
+// f - a_1 (D eq. 5.8-5.9, 5.3.1). The least-squares matrices depend only on the point
+// positions, so they are built and factorised once per point set and reused for every field.
+// The reconstruction is element-local and discontinuous across element faces.
 //
-// TlsMapping uses it as the particle-to-grid mapping of MPM (D 5.3.1, 004 4.4.3): density,
+// TlsMapping uses it as the particle-to-grid mapping of MPM (D 5.3.1, 6.3, 004 4.4.3): density,
 // momentum density and body-force density are reconstructed conservatively, stress by plain least
-// squares, and all are integrated with n Gauss points per active element (D eq. 5.12-5.17), which
-// conserves mass and momentum to round-off (D eq. 5.19-5.21).
+// squares (each component separately, D 6.3), and all are integrated with n Gauss points per
+// direction in every active element (D eq. 5.12-5.17, 6.19-6.20), which conserves mass and
+// momentum to round-off (D eq. 5.19-5.21, Table 6.1).
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
 #include <any>
 #include <limits>
+#include <optional>
 #include <span>
 #include <stdexcept>
+#include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "core/simulation.hpp"
@@ -30,41 +35,63 @@ namespace mpm {
 
 class Config;
 
-// What an element does when its data cannot support the requested Taylor basis (D 5.2.3;
+// What an element does when its data cannot support the requested Taylor basis (D 5.2.3, 6.3.2;
 // registry::kTlsCompletions holds the user-facing names).
 enum class TlsCompletion {
   None,       // report failure (the MPM mapping stops the run, exit code 6)
-  Reduce,     // fewer Taylor terms (3 -> 2 -> 1) until the fit is well posed
-  Virtual,    // virtual points at the faces, valued by the neighbours' reconstructions
-  Neighbour,  // borrow the nearest points of the adjacent elements
+  Reduce,     // fewer Taylor terms (1D: 3 -> 2 -> 1; 2D: 6 -> 3 -> 1) until well posed
+  Virtual,    // virtual points on the faces, valued by the neighbours' reconstructions
+  Neighbour,  // borrow the nearest points of the adjacent elements (2D: faces, then corners)
 };
 
 // "none", "reduce", "virtual", "neighbour" (registry::kTlsCompletions). Throws InputError.
 TlsCompletion parse_tls_completion(std::string_view name);
 std::string_view tls_completion_name(TlsCompletion c);
 
+// Taylor terms of the complete quadratic basis: 3 in 1D (D 5.2.2), 6 in 2D (D eq. 6.1-6.6).
+template <int Dim>
+inline constexpr int kTaylorTerms = Dim == 1 ? 3 : 6;
+template <int Dim>
+using TaylorVector = Eigen::Matrix<double, kTaylorTerms<Dim>, 1>;
+
 struct TlsSettings {
-  int terms = 3;  // n_b: Taylor basis functions per element, 1..3 (D 5.3.1 uses 3)
+  // n_b: Taylor basis functions per element. 1D: 1..3; 2D: 1 (constant), 3 (linear) or 6
+  // (quadratic), the complete polynomial spaces. 0: the quadratic basis of the dimension (3 in 1D
+  // as in D 5.3.1, 6 in 2D as in D 6.2).
+  int terms = 0;
   TlsCompletion completion = TlsCompletion::Virtual;
   // Largest cond(D) accepted before an element counts as deficient (D 5.2.3). D is the normal
-  // matrix sum psi psi^T of the Taylor basis, which is already scaled by the element half-width,
+  // matrix sum psi psi^T of the Taylor basis, which is already scaled by the element half-widths,
   // so the number does not depend on the element size.
   double max_condition = 1e8;
-  // Gauss points per active element for the mapping; 0: 2, exact for quadratic TLS (D 5.3.1).
+  // Gauss points per direction of every active element for the mapping; 0: 2, exact for
+  // quadratic TLS (D 5.3.1; 2 x 2 in 2D).
   int gauss_points = 0;
-  // Neighbour completion: most points borrowed by one element.
-  int max_borrowed = 3;
+  // Neighbour completion: most points borrowed by one element; 0: the terms of the quadratic
+  // basis (3 in 1D, 6 in 2D).
+  int max_borrowed = 0;
+  // The point sets serve conservative fits only (a_1 given, D eq. 5.9): well-posedness is then
+  // judged on the fitted terms 2..n_b alone, and fit_plain is unavailable. D 6.2.1 needs this:
+  // its six points per element lie on two lines x_1 = const, where psi_4 is constant, so the
+  // full normal matrix is singular while the conservative fit of psi_2..psi_6 is well posed.
+  bool conservative_only = false;
 
   int gauss_points_used() const { return gauss_points > 0 ? gauss_points : 2; }
+  int terms_used(int dim) const { return terms > 0 ? terms : (dim == 1 ? 3 : 6); }
+  int max_borrowed_used(int dim) const {
+    return max_borrowed > 0 ? max_borrowed : (dim == 1 ? 3 : 6);
+  }
 };
 
-// Throws InputError for settings outside the documented ranges, including Gauss rules that do
-// not integrate the Taylor basis exactly (D 5.3.2 needs n_b <= 2 x Gauss points per element,
-// otherwise mass and momentum are not conserved).
-void validate(const TlsSettings& s);
+// Throws InputError for settings outside the documented ranges of dimension `dim` (1 or 2),
+// including Gauss rules that do not integrate the Taylor basis exactly (D 5.3.2: n Gauss points
+// per direction integrate degree 2n - 1, the basis must be integrated exactly, otherwise mass and
+// momentum are not conserved; in 2D, 6 terms need 2 points per direction).
+void validate(const TlsSettings& s, int dim = 1);
 
-// The method.tls_* and method.gauss_points keys of a run configuration (io/keys.cpp).
-TlsSettings tls_settings_from_config(const Config& cfg);
+// The method.tls_* and method.gauss_points keys of a run configuration (io/keys.cpp), validated
+// for `dim`.
+TlsSettings tls_settings_from_config(const Config& cfg, int dim = 1);
 
 // What one point set (one MPM step) needed. An element can count in several of reduced,
 // with_virtual and with_neighbours (e.g. completed with one virtual point and still reduced).
@@ -107,71 +134,146 @@ inline Eigen::Vector3d taylor_basis(double s) {
   return {1.0, s, 0.5 * (s * s - 1.0 / 3.0)};
 }
 
-// Taylor coefficients a_1..a_3 of every element (zero beyond the element's terms; zero in
-// inactive elements; NaN in failed ones).
-using TlsCoefficients = std::vector<Eigen::Vector3d>;
+// The 2D basis on a rectangle (D eq. 6.1-6.13, overline restored as in 1D): s = (x_1 - x_1c) /
+// dx_1, t = (x_2 - x_2c) / dx_2 in [-1, 1]; psi_4 = (s^2 - 1/3) / 2, psi_5 = (t^2 - 1/3) / 2 and
+// psi_6 = s t - mean(s t) = s t (the mean vanishes by symmetry, D eq. 6.12-6.13). psi_2..psi_6
+// integrate to zero over the element.
+inline TaylorVector<2> taylor_basis(double s, double t) {
+  TaylorVector<2> psi;
+  psi << 1.0, s, t, 0.5 * (s * s - 1.0 / 3.0), 0.5 * (t * t - 1.0 / 3.0), s * t;
+  return psi;
+}
 
-class TlsReconstruction {
+// The basis of dimension Dim at the element coordinates s.
+template <int Dim>
+TaylorVector<Dim> taylor_basis_at(const Vec<Dim>& s) {
+  static_assert(Dim == 1 || Dim == 2, "TLS is implemented in 1D and 2D (rectangles)");
+  if constexpr (Dim == 1)
+    return taylor_basis(s[0]);
+  else
+    return taylor_basis(s[0], s[1]);
+}
+
+// Taylor coefficients a_1..a_K of every element (zero beyond the element's terms; zero in
+// inactive elements; NaN in failed ones).
+template <int Dim>
+using BasicTlsCoefficients = std::vector<TaylorVector<Dim>>;
+using TlsCoefficients = BasicTlsCoefficients<1>;
+using TlsCoefficients2D = BasicTlsCoefficients<2>;
+
+template <int Dim>
+class BasicTlsReconstruction {
  public:
-  explicit TlsReconstruction(const TlsSettings& s = {});
+  static constexpr int kDim = Dim;
+  static constexpr int K = kTaylorTerms<Dim>;  // storage size of the coefficient vectors
+  // A position: a number in 1D, a vector in 2D.
+  using Point = std::conditional_t<Dim == 1, double, Vec<Dim>>;
+  using Taylor = TaylorVector<Dim>;
+  using Coefficients = BasicTlsCoefficients<Dim>;
+
+  explicit BasicTlsReconstruction(const TlsSettings& s = {});
 
   // Scattered points x (any order; outside the grid: ignored and counted). A point on an interior
   // element face belongs to the upper element (Grid::cell_of); with share_face_points it belongs
-  // to both adjacent elements, as the point at pi in D 5.2.3.
-  const TlsReport& set_points(const Grid<1>& g, std::span<const double> x,
+  // to all elements sharing that face (or corner), as the point at pi in D 5.2.3.
+  const TlsReport& set_points(const Grid<Dim>& g, std::span<const Point> x,
                               bool share_face_points = false);
   // The particles of an MPM step (all inside the grid), binned with ElementBins.
-  const TlsReport& set_points(const Grid<1>& g, const Particles<1>& P);
+  const TlsReport& set_points(const Grid<Dim>& g, const Particles<Dim>& P);
 
   // f: one value per point of set_points. integrals: c_e per element; a_1 = c_e / |Omega_e|
   // (D eq. 5.9) whatever the data, which (own and completion points alike) fit a_2.. only, so
   // int_e f^ = c_e to round-off.
   void fit_conservative(std::span<const double> f, std::span<const double> integrals,
-                        TlsCoefficients& a) const;
-  // All coefficients from least squares (D eq. 5.1).
-  void fit_plain(std::span<const double> f, TlsCoefficients& a) const;
+                        Coefficients& a) const;
+  // All coefficients from least squares (D eq. 5.1). Not with settings().conservative_only.
+  void fit_plain(std::span<const double> f, Coefficients& a) const;
 
   // The reconstruction at x: element-local; an interior face belongs to the upper element, like
   // Grid::cell_of. Zero outside the grid.
-  double evaluate(const TlsCoefficients& a, double x) const;
+  double evaluate(const Coefficients& a, const Point& x) const;
   // The reconstruction of element e at x (x need not lie in e: its Taylor polynomial extended).
-  double evaluate(const TlsCoefficients& a, Index e, double x) const {
-    return a[static_cast<std::size_t>(e)].dot(taylor_basis((x - centre(e)) / half_width()));
+  double evaluate(const Coefficients& a, Index e, const Point& x) const {
+    return a[static_cast<std::size_t>(e)].dot(basis(e, x));
   }
-  // int_e f^ = a_1 |Omega_e| (D eq. 5.8).
-  double integral(const TlsCoefficients& a, Index e) const {
-    return a[static_cast<std::size_t>(e)][0] * grid_.h[0];
+  // The Taylor basis of element e at x.
+  Taylor basis(Index e, const Point& x) const { return taylor_basis_at<Dim>(local(e, as_vec(x))); }
+  // int_e f^ = a_1 |Omega_e| (D eq. 5.8, 6.7).
+  double integral(const Coefficients& a, Index e) const {
+    return a[static_cast<std::size_t>(e)][0] * grid_.cell_volume();
   }
 
   const TlsSettings& settings() const { return settings_; }
+  int terms() const { return nb_; }  // n_b requested (settings().terms resolved)
   const TlsReport& report() const { return report_; }
   const TlsElementInfo& element(Index e) const { return info_[static_cast<std::size_t>(e)]; }
   bool active(Index e) const { return info_[static_cast<std::size_t>(e)].points > 0; }
-  const Grid<1>& grid() const { return grid_; }
+  const Grid<Dim>& grid() const { return grid_; }
   Index num_elements() const { return grid_.num_cells(); }
   // Own points of each element (for element sums such as c_e = sum m_p).
-  const ElementBins<1>& bins() const { return bins_; }
-  double centre(Index e) const {
-    return grid_.origin[0] + (static_cast<double>(e) + 0.5) * grid_.h[0];
+  const ElementBins<Dim>& bins() const { return bins_; }
+  // Cell indices of element e (x fastest, as Grid::cell_index).
+  IVec<Dim> cell(Index e) const {
+    IVec<Dim> c{};
+    for (int d = 0; d < Dim; ++d) {
+      c[d] = e % grid_.cells[d];
+      e /= grid_.cells[d];
+    }
+    return c;
   }
-  double half_width() const { return 0.5 * grid_.h[0]; }
+  // "e" in 1D, "e at cell (i, j)" in 2D: for messages.
+  std::string describe(Index e) const;
+  Point centre(Index e) const { return from_vec(centre_vec(e)); }
+  Point half_width() const { return from_vec(half_width_vec()); }
+  Vec<Dim> centre_vec(Index e) const {
+    const IVec<Dim> c = cell(e);
+    Vec<Dim> x;
+    for (int d = 0; d < Dim; ++d)
+      x[d] = grid_.origin[d] + (static_cast<double>(c[d]) + 0.5) * grid_.h[d];
+    return x;
+  }
+  Vec<Dim> half_width_vec() const { return 0.5 * grid_.h; }
+  // Element coordinates of x in element e: (x - x_c) / dx per direction.
+  Vec<Dim> local(Index e, const Vec<Dim>& x) const {
+    const Vec<Dim> c = centre_vec(e), hw = half_width_vec();
+    Vec<Dim> s;
+    for (int d = 0; d < Dim; ++d) s[d] = (x[d] - c[d]) / hw[d];
+    return s;
+  }
 
  private:
+  using Taylor1 = Eigen::Matrix<double, K - 1, 1>;  // terms 2..K
+  using Matrix = Eigen::Matrix<double, K, K>;
+  using Matrix1 = Eigen::Matrix<double, K - 1, K - 1>;
+
+  static Vec<Dim> as_vec(const Point& x) {
+    if constexpr (Dim == 1)
+      return Vec<1>(x);
+    else
+      return x;
+  }
+  static Point from_vec(const Vec<Dim>& x) {
+    if constexpr (Dim == 1)
+      return x[0];
+    else
+      return x;
+  }
+
   // One least-squares datum of an element: a point (own or borrowed) or a virtual face point.
   struct Datum {
-    Eigen::Vector3d psi;  // Taylor basis of the fitted element at the datum
-    Eigen::Vector3d q;    // row of Q in B^T = Q R, terms 1..t (plain fits)
-    Eigen::Vector2d qc;   // row of Q_c in B_c^T = Q_c R_c, terms 2..t (conservative fits)
-    Index point;          // index of the value in f; -1 for a virtual point
-    Index source;         // virtual: the neighbour whose reconstruction gives the value
-    double s_source;      // virtual: the face in the neighbour's coordinate (-1 or +1)
+    Taylor psi;         // Taylor basis of the fitted element at the datum (psi_2.. = position)
+    Taylor q;           // row of Q in B^T = Q R, terms 1..t (plain fits)
+    Taylor1 qc;         // row of Q_c in B_c^T = Q_c R_c, terms 2..t (conservative fits)
+    Index point;        // index of the value in f; -1 for a virtual point
+    Index source;       // virtual: the neighbour whose reconstruction gives the value
+    Vec<Dim> s_source;  // virtual: the point in the neighbour's coordinates
 
-    static Datum real(double s, Index point) {
-      return {taylor_basis(s), Eigen::Vector3d::Zero(), Eigen::Vector2d::Zero(), point, -1, 0.0};
+    static Datum real(const Vec<Dim>& s, Index point) {
+      return {taylor_basis_at<Dim>(s), Taylor::Zero(), Taylor1::Zero(), point, -1,
+              Vec<Dim>::Zero()};
     }
-    static Datum virtual_point(double s, Index source, double s_source) {
-      return {taylor_basis(s), Eigen::Vector3d::Zero(), Eigen::Vector2d::Zero(), -1, source,
-              s_source};
+    static Datum virtual_point(const Vec<Dim>& s, Index source, const Vec<Dim>& s_source) {
+      return {taylor_basis_at<Dim>(s), Taylor::Zero(), Taylor1::Zero(), -1, source, s_source};
     }
   };
   // The least-squares problems are solved by a thin QR factorisation of the data matrix
@@ -181,57 +283,118 @@ class TlsReconstruction {
     Index begin = 0, end = 0;  // data_[begin, end)
     int terms = 0;
     bool has_virtual = false;  // fitted after its neighbours
-    Eigen::Matrix3d R;         // upper triangular, terms 1..t
-    Eigen::Matrix2d Rc;        // upper triangular, terms 2..t
+    Matrix R;                  // upper triangular, terms 1..t
+    Matrix1 Rc;                // upper triangular, terms 2..t
   };
   // Element data from its own points alone (first pass).
   struct Own {
-    Eigen::Matrix3d D;
+    Matrix D;
     int distinct = 0;  // distinct positions, counted up to n_b
     double condition = 0.0;
     bool ok = false;  // n_b terms are well posed without completion
   };
 
+  void bin_points(bool share_face_points);
   void build_systems();
-  bool coincides(const System& sys, double s) const;
-  void add_datum(System& sys, Eigen::Matrix3d& D, const Datum& d);
-  void add_virtual_points(Index e, System& sys, Eigen::Matrix3d& D, int& distinct);
-  void borrow_points(Index e, System& sys, Eigen::Matrix3d& D, int& distinct);
+  bool coincides(const System& sys, const Vec<Dim>& s) const;
+  void add_datum(System& sys, Matrix& D, const Datum& d);
+  void add_virtual_points(Index e, System& sys, Matrix& D, int& distinct);
+  void borrow_points(Index e, System& sys, Matrix& D, int& distinct);
+  bool well_posed(const Matrix& D, int distinct, int t, double& cond) const;
+  double condition(const Matrix& D, int t) const;
   void factorise(System& sys);
-  void fit(std::span<const double> f, const double* integrals, TlsCoefficients& a) const;
+  void fit(std::span<const double> f, const double* integrals, Coefficients& a) const;
 
   TlsSettings settings_;
-  Grid<1> grid_;
-  std::vector<double> x_;  // positions of the current point set [m]
-  ElementBins<1> bins_;
+  int nb_ = 0;                   // terms requested
+  std::vector<double> face_xi_;  // positions of the virtual points along a face (2D)
+  Grid<Dim> grid_;
+  std::vector<Vec<Dim>> x_;  // positions of the current point set [m]
+  ElementBins<Dim> bins_;
   std::vector<Own> own_;
   std::vector<System> systems_;
   std::vector<TlsElementInfo> info_;
   std::vector<Datum> data_;
+  std::vector<Index> fill_;  // binning cursors (standalone point sets)
   TlsReport report_;
 };
 
-// The TLS particle-to-grid mapping (D 5.3.1, 004 4.4.3), one-dimensional. map_mass, the first
-// mapping call of every step, bins the particles, factorises the element systems and places the
-// Gauss points; map_momentum and map_forces of the same step reuse them (positions do not change
-// within a step, only the particle values).
+extern template class BasicTlsReconstruction<1>;
+extern template class BasicTlsReconstruction<2>;
+using TlsReconstruction = BasicTlsReconstruction<1>;
+using TlsReconstruction2D = BasicTlsReconstruction<2>;
+
+// What the TLS mapping keeps per dimension: the reconstruction, the Gauss rule of an element in
+// its coordinates (n^Dim points, x fastest) with the Taylor basis there, and the fields at the
+// Gauss points of a step.
+template <int Dim>
+struct TlsMappingState {
+  BasicTlsReconstruction<Dim> recon;
+  std::vector<Vec<Dim>> xi;            // Gauss points in [-1, 1]^Dim
+  std::vector<Vec<Dim>> w;             // their 1D weights per direction (product: the weight)
+  std::vector<TaylorVector<Dim>> psi;  // Taylor basis at xi
+  BasicTlsCoefficients<Dim> coef;
+  std::vector<double> rho;  // at the Gauss points of the step
+  std::vector<Vec<Dim>> rhov, rhob;
+  std::vector<Mat<Dim>> sigma;
+
+  explicit TlsMappingState(const TlsSettings& s) : recon(s) {
+    const GaussRule rule = gauss_legendre(s.gauss_points_used());
+    const int n = static_cast<int>(rule.xi.size());
+    int count = 1;
+    for (int d = 0; d < Dim; ++d) count *= n;
+    for (int k = 0; k < count; ++k) {
+      Vec<Dim> x, wk;
+      for (int d = 0, r = k; d < Dim; ++d, r /= n) {
+        x[d] = rule.xi[static_cast<std::size_t>(r % n)];
+        wk[d] = rule.w[static_cast<std::size_t>(r % n)];
+      }
+      xi.push_back(x);
+      w.push_back(wk);
+      psi.push_back(taylor_basis_at<Dim>(x));
+    }
+  }
+};
+
+// The TLS particle-to-grid mapping (D 5.3.1, 6.3, 004 4.4.3) in 1D and 2D (rectangles). map_mass,
+// the first mapping call of every step, bins the particles, factorises the element systems and
+// places the Gauss points; map_momentum and map_forces of the same step reuse them (positions do
+// not change within a step, only the particle values). The mapping is not a template on the
+// dimension (it is one alternative of the run's mapping variant); it keeps one state per
+// dimension, created for `dim` at construction and for another dimension at its first map_mass.
 class TlsMapping {
  public:
   static constexpr std::string_view kName = "tls";
   // The run set-up rejects other dimensions with a clear message before instantiating.
-  static constexpr bool supports_dimension(int dim) { return dim == 1; }
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
 
   TlsMapping() : TlsMapping(TlsSettings{}) {}
-  explicit TlsMapping(const TlsSettings& s) : recon_(s) {
-    const GaussRule rule = gauss_legendre(s.gauss_points_used());
-    xi_ = rule.xi;
-    w_ = rule.w;
-    for (double xi : xi_) psi_gauss_.push_back(taylor_basis(xi));
+  // Validates s for dimension dim (throws InputError).
+  explicit TlsMapping(const TlsSettings& s, int dim = 1) : settings_(s), dim_(dim) {
+    validate(s, dim);
+    if (dim == 2)
+      state2_.emplace(s);
+    else
+      state1_.emplace(s);
   }
 
-  const TlsSettings& settings() const { return recon_.settings(); }
-  const TlsReconstruction& reconstruction() const { return recon_; }
-  const TlsReport& last_report() const { return recon_.report(); }
+  const TlsSettings& settings() const { return settings_; }
+  // The reconstruction of the last step (before the first step: of the constructor's dimension).
+  template <int Dim = 1>
+  const BasicTlsReconstruction<Dim>& reconstruction() const {
+    const auto& st = [this]() -> const auto& {
+      if constexpr (Dim == 1)
+        return state1_;
+      else
+        return state2_;
+    }
+    ();
+    if (!st) throw std::logic_error(fmt::format("TlsMapping: no {}D reconstruction yet", Dim));
+    return st->recon;
+  }
+  const TlsReport& last_report() const {
+    return dim_ == 2 ? reconstruction<2>().report() : reconstruction<1>().report();
+  }
   // Counts summed over the steps so far (element-steps), largest condition number of the run.
   const TlsReport& totals() const { return totals_; }
   // Checkpoint restart: the sums continue from a saved run (io/checkpoint.hpp).
@@ -241,102 +404,141 @@ class TlsMapping {
   // mass, M_ij = sum_g phi_i rho^ phi_j w_g (D eq. 5.14, 5.17).
   template <class Sim>
   void map_mass(Sim& sim) {
-    static_assert(Sim::kDim == 1, "the TLS mapping is one-dimensional (D ch. 5)");
+    constexpr int Dim = Sim::kDim;
+    auto& st = state<Dim>();
     const auto& P = sim.particles;
-    const TlsReport& rep = recon_.set_points(sim.grid, P);
+    const TlsReport& rep = st.recon.set_points(sim.grid, P);
     accumulate(totals_, rep);
     if (rep.failed > 0)
       throw RunError(
           exit_code::kReconstruction,
           fmt::format("step {}, t = {:.9g} s: TLS cannot fit element {} ({} particles, condition "
                       "number {:.3g}){}; set method.tls_completion = reduce, virtual or neighbour",
-                      sim.step, sim.time, rep.failed_element, rep.failed_points,
+                      sim.step, sim.time, st.recon.describe(rep.failed_element), rep.failed_points,
                       rep.failed_condition,
                       rep.failed > 1 ? fmt::format(" and {} more element(s)", rep.failed - 1)
                                      : std::string()));
     auto& q = quad_.prepare<Sim>();
     q.clear();
-    const double dx = recon_.half_width();
-    for (Index e = 0; e < recon_.num_elements(); ++e) {
-      if (!recon_.active(e)) continue;  // no particles: no reconstruction, no mass
-      const double xc = recon_.centre(e);
-      for (std::size_t k = 0; k < xi_.size(); ++k) q.add(Vec<1>(xc + dx * xi_[k]), dx * w_[k], e);
+    // D 6.3: the same Gauss rule in every element of the uniform grid, weights scaled by the
+    // half-widths (the Jacobian of the map from [-1, 1]^Dim).
+    const Vec<Dim> hw = st.recon.half_width_vec();
+    for (Index e = 0; e < st.recon.num_elements(); ++e) {
+      if (!st.recon.active(e)) continue;  // no particles: no reconstruction, no mass
+      const Vec<Dim> c = st.recon.centre_vec(e);
+      for (std::size_t k = 0; k < st.xi.size(); ++k) {
+        Vec<Dim> x;
+        double wg = 1.0;
+        for (int d = 0; d < Dim; ++d) {
+          x[d] = c[d] + hw[d] * st.xi[k][d];
+          wg *= hw[d] * st.w[k][d];
+        }
+        q.add(x, wg, e);
+      }
     }
     q.evaluate(sim);
 
-    element_sums([&](std::size_t i) { return P.mass[i]; });
-    recon_.fit_conservative(P.density, integrals_, coef_);
-    rho_.resize(q.size());
-    at_gauss(q, [&](std::size_t g, double v) { rho_[g] = v; });
-    assemble_mass(sim, q, rho_);
+    element_sums(st.recon, [&](std::size_t i) { return P.mass[i]; });
+    st.recon.fit_conservative(P.density, integrals_, st.coef);
+    st.rho.resize(q.size());
+    at_gauss(st, q, [&](std::size_t g, double v) { st.rho[g] = v; });
+    assemble_mass(sim, q, st.rho);
   }
 
-  // (rho v)^ conservative with c_e = sum m_p v_p and data rho_p v_p (D eq. 5.14, 5.16).
+  // (rho v)^ conservative per component with c_e = sum m_p v_p and data rho_p v_p (D eq. 5.14,
+  // 5.16; both directions in 2D, D 6.3).
   template <class Sim>
   void map_momentum(Sim& sim) {
-    static_assert(Sim::kDim == 1, "the TLS mapping is one-dimensional (D ch. 5)");
+    constexpr int Dim = Sim::kDim;
+    auto& st = state<Dim>();
     const auto& P = sim.particles;
     const auto& q = quad_.prepared<Sim>();
+    st.rhov.resize(q.size());
     values_.resize(P.x.size());
-    for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.density[i] * P.v[i][0];
-    element_sums([&](std::size_t i) { return P.mass[i] * P.v[i][0]; });
-    recon_.fit_conservative(values_, integrals_, coef_);
-    rhov_.resize(q.size());
-    at_gauss(q, [&](std::size_t g, double v) { rhov_[g][0] = v; });
-    assemble_momentum(sim, q, rhov_);
+    for (int d = 0; d < Dim; ++d) {
+      for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.density[i] * P.v[i][d];
+      element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.v[i][d]; });
+      st.recon.fit_conservative(values_, integrals_, st.coef);
+      at_gauss(st, q, [&](std::size_t g, double v) { st.rhov[g][d] = v; });
+    }
+    assemble_momentum(sim, q, st.rhov);
   }
 
-  // sigma^ by plain least squares (D eq. 5.12-5.13); the body-force density (rho b)^ conservative
-  // with c_e = sum m_p b_p and data rho_p b_p; f_i = sum_g (phi_i (rho b)^ - sigma^ dphi_i) w_g.
+  // sigma^ by plain least squares per component (D eq. 5.12-5.13, 6.19-6.20); the body-force
+  // density (rho b)^ conservative per component with c_e = sum m_p b_p and data rho_p b_p;
+  // f_i = sum_g (phi_i (rho b)^ - sigma^ grad phi_i) w_g.
   template <class Sim>
   void map_forces(Sim& sim) {
-    static_assert(Sim::kDim == 1, "the TLS mapping is one-dimensional (D ch. 5)");
+    constexpr int Dim = Sim::kDim;
+    auto& st = state<Dim>();
     const auto& P = sim.particles;
     const auto& q = quad_.prepared<Sim>();
     values_.resize(P.x.size());
-    for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.stress[i](0, 0);
-    recon_.fit_plain(values_, coef_);
-    sigma_.resize(q.size());
-    at_gauss(q, [&](std::size_t g, double v) { sigma_[g](0, 0) = v; });
+    st.sigma.resize(q.size());
+    for (int r = 0; r < Dim; ++r)
+      for (int c = 0; c < Dim; ++c) {
+        for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.stress[i](r, c);
+        st.recon.fit_plain(values_, st.coef);
+        at_gauss(st, q, [&](std::size_t g, double v) { st.sigma[g](r, c) = v; });
+      }
 
-    for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.density[i] * P.body[i][0];
-    element_sums([&](std::size_t i) { return P.mass[i] * P.body[i][0]; });
-    recon_.fit_conservative(values_, integrals_, coef_);
-    rhob_.resize(q.size());
-    at_gauss(q, [&](std::size_t g, double v) { rhob_[g][0] = v; });
-    assemble_forces(sim, q, rhob_, sigma_);
+    st.rhob.resize(q.size());
+    for (int d = 0; d < Dim; ++d) {
+      for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.density[i] * P.body[i][d];
+      element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.body[i][d]; });
+      st.recon.fit_conservative(values_, integrals_, st.coef);
+      at_gauss(st, q, [&](std::size_t g, double v) { st.rhob[g][d] = v; });
+    }
+    assemble_forces(sim, q, st.rhob, st.sigma);
   }
 
  private:
+  // The state of dimension Dim, created (and the settings validated for Dim) on first use.
+  template <int Dim>
+  TlsMappingState<Dim>& state() {
+    static_assert(Dim == 1 || Dim == 2, "the TLS mapping is implemented in 1D and 2D");
+    dim_ = Dim;
+    if constexpr (Dim == 1) {
+      if (!state1_) {
+        validate(settings_, 1);
+        state1_.emplace(settings_);
+      }
+      return *state1_;
+    } else {
+      if (!state2_) {
+        validate(settings_, 2);
+        state2_.emplace(settings_);
+      }
+      return *state2_;
+    }
+  }
   // integrals_[e] = sum over the element's particles of value(p).
-  template <class Value>
-  void element_sums(Value&& value) {
-    const auto& bins = recon_.bins();
-    integrals_.assign(static_cast<std::size_t>(recon_.num_elements()), 0.0);
-    for (Index e = 0; e < recon_.num_elements(); ++e) {
+  template <class Recon, class Value>
+  void element_sums(const Recon& recon, Value&& value) {
+    const auto& bins = recon.bins();
+    integrals_.assign(static_cast<std::size_t>(recon.num_elements()), 0.0);
+    for (Index e = 0; e < recon.num_elements(); ++e) {
       double c = 0.0;
       for (const Index* p = bins.begin(e); p != bins.end(e); ++p)
         c += value(static_cast<std::size_t>(*p));
       integrals_[static_cast<std::size_t>(e)] = c;
     }
   }
-  // The reconstruction coef_ at every Gauss point: element e, local point k = g mod n.
-  template <class Sim, class Store>
-  void at_gauss(const QuadraturePoints<Sim>& q, Store&& store) const {
-    const std::size_t n = psi_gauss_.size();
+  // The reconstruction st.coef at every Gauss point: element e, local point k = g mod n^Dim.
+  template <int Dim, class Sim, class Store>
+  static void at_gauss(const TlsMappingState<Dim>& st, const QuadraturePoints<Sim>& q,
+                       Store&& store) {
+    const std::size_t n = st.psi.size();
     for (std::size_t g = 0; g < q.size(); ++g)
-      store(g, coef_[static_cast<std::size_t>(q.element[g])].dot(psi_gauss_[g % n]));
+      store(g, st.coef[static_cast<std::size_t>(q.element[g])].dot(st.psi[g % n]));
   }
 
-  TlsReconstruction recon_;
-  std::vector<double> xi_, w_;              // Gauss rule on [-1, 1]
-  std::vector<Eigen::Vector3d> psi_gauss_;  // Taylor basis at the Gauss points (s = xi)
+  TlsSettings settings_;
+  int dim_ = 1;  // dimension of the last step
+  std::optional<TlsMappingState<1>> state1_;
+  std::optional<TlsMappingState<2>> state2_;
   QuadratureStore quad_;
   std::vector<double> values_, integrals_;  // per particle, per element
-  TlsCoefficients coef_;
-  std::vector<double> rho_;  // at the Gauss points
-  std::vector<Vec<1>> rhov_, rhob_;
-  std::vector<Mat<1>> sigma_;
   TlsReport totals_;
 };
 
