@@ -299,6 +299,30 @@ inline void check_stability(const Config& cfg, double dt, double h, const Materi
         cfg.where("time.dt"), dt, limit, factor, h, c, what));
 }
 
+// Before the first step: with method.tls_completion = "none" every element holding particles
+// must support the Taylor basis on its own (D 5.2.3, 6.3.1); otherwise the run would stop at
+// step 0, so the input is refused with what to change.
+template <int Dim, class Mapping>
+void check_reconstruction_input(const Config& cfg, const Grid<Dim>& grid, const Particles<Dim>& P,
+                                const Mapping& mapping) {
+  if constexpr (std::is_same_v<Mapping, TlsMapping>) {
+    const TlsSettings& s = mapping.settings();
+    if (s.completion != TlsCompletion::None) return;
+    BasicTlsReconstruction<Dim> recon(s);
+    const TlsReport& rep = recon.set_points(grid, P);
+    if (rep.failed > 0)
+      throw InputError(fmt::format(
+          "{}: method.tls_completion = \"none\", but the initial particles cannot support {} "
+          "Taylor terms in {} element(s): element {} has {} particle(s) (condition number "
+          "{:.3g}, limit method.tls_max_condition = {:.3g}); seed more particles "
+          "(particles.per_cell), use fewer terms (method.tls_terms) or set "
+          "method.tls_completion = \"reduce\", \"virtual\" or \"neighbour\"",
+          cfg.where("method.tls_completion"), s.terms_used(Dim), rep.failed,
+          recon.describe(rep.failed_element), rep.failed_points, rep.failed_condition,
+          s.max_condition));
+  }
+}
+
 template <class Basis>
 constexpr int boundary_cells() {
   if constexpr (requires { Basis::kDegree; })
@@ -546,7 +570,6 @@ template <int Dim, class Basis, class Mapping, class Scheme>
 RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) {
   const auto t_start = Clock::now();
   const TimeSetup ts = time_setup(cfg);
-  OutputSession<Dim> out(opt, cfg, pb);
 
   // The FEM reference of benchmarks without an exact solution, stepped alongside (untimed).
   std::optional<Ulfem1D> reference;
@@ -559,6 +582,7 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
   using Sim = Simulation<Dim, Basis, Mapping>;
   Sim sim(pb.grid, Basis(pb.grid), make_mapping<Dim, Mapping>(cfg), std::move(pb.particles),
           pb.material);
+  if (!opt.restart) check_reconstruction_input<Dim>(cfg, sim.grid, sim.particles, sim.mapping);
   sim.mass_type =
       cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
   sim.mass_tolerance = cfg.get_real("method.mass_tolerance");
@@ -567,6 +591,8 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
   sim.tractions = pb.tractions;
   if (sim.body_force.fill) sim.body_force.fill(sim.particles, 0.0, sim.particles.body);
 
+  // Outputs start once the input has passed every check above.
+  OutputSession<Dim> out(opt, cfg, pb);
   RunResult res;
   res.benchmark = pb.benchmark;
   res.dim = Dim;

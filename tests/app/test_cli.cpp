@@ -87,6 +87,28 @@ TEST(Cli, WrongTypeBadChoiceAndRangeErrors) {
   EXPECT_NE(s.out.find("--set method.scheme=leapfrog"), std::string::npos) << s.out;
 }
 
+TEST(Cli, BodyOutsideTheGridAndUnsupportedReconstructionAreRefusedBeforeTheFirstStep) {
+  const auto out = temp_dir("outside");
+  auto b = sh("run " + src("tests/data/body_outside_grid.toml") + " -q --out " + out.string());
+  EXPECT_EQ(b.code, 2) << b.out;
+  EXPECT_NE(b.out.find("body_outside_grid.toml:"), std::string::npos) << b.out;
+  EXPECT_NE(b.out.find("must lie inside the grid"), std::string::npos) << b.out;
+  EXPECT_FALSE(std::filesystem::exists(out / "summary.json"));  // nothing ran
+  auto t =
+      sh("run " + src("tests/data/tls_sparse_no_completion.toml") + " -q --out " + out.string());
+  EXPECT_EQ(t.code, 2) << t.out;
+  EXPECT_NE(t.out.find("tls_sparse_no_completion.toml:"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find("method.tls_completion"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find("1 particle(s)"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find("\"reduce\", \"virtual\" or \"neighbour\""), std::string::npos) << t.out;
+  EXPECT_FALSE(std::filesystem::exists(out / "summary.json"));
+  // With a completion strategy the same input runs.
+  auto ok = sh("run " + src("tests/data/tls_sparse_no_completion.toml") +
+               " -q --set method.tls_completion=reduce --out " + out.string());
+  EXPECT_EQ(ok.code, 0) << ok.out;
+  std::filesystem::remove_all(out);
+}
+
 TEST(Cli, TimeStepAboveTheStabilityLimitIsRefusedUnlessAllowed) {
   auto r = sh("run " + src("tests/data/dt_above_limit.toml") + " -q --out " +
               temp_dir("unstable").string());
