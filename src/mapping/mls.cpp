@@ -1,4 +1,4 @@
-// MLS (001 eq. 6-17) and IMLS (003 eq. 1-17) reconstruction in one dimension.
+// MLS (001 eq. 6-17) and IMLS (003 eq. 1-17) reconstruction in one and two dimensions.
 #include "mapping/mls.hpp"
 
 #include <algorithm>
@@ -28,69 +28,65 @@ void accumulate(MlsReport& total, const MlsReport& step) {
   if (step.max_condition > total.max_condition) {
     total.max_condition = step.max_condition;
     total.worst_x = step.worst_x;
+    total.worst_y = step.worst_y;
   }
 }
 
-MovingLeastSquares::MovingLeastSquares(bool improved, int degree, double max_condition)
+template <int Dim>
+MovingLeastSquares<Dim>::MovingLeastSquares(bool improved, int degree, double max_condition)
     : improved_(improved), degree_(degree), max_condition_(max_condition) {
   if (degree != 1 && degree != 2)
     throw InputError(fmt::format("method.mls_degree = {}: choose 1 or 2", degree));
+  terms_ = mls_terms(Dim, degree);
 }
 
-void MovingLeastSquares::set_points(const Grid<1>& g, std::span<const double> x) {
+template <int Dim>
+void MovingLeastSquares<Dim>::set_points(const Grid<Dim>& g, std::span<const Vec<Dim>> x) {
   x_.assign(x.begin(), x.end());
   bin(g);
 }
 
-void MovingLeastSquares::set_points(const Grid<1>& g, const Particles<1>& P) {
-  x_.resize(P.x.size());
-  for (std::size_t p = 0; p < x_.size(); ++p) x_[p] = P.x[p][0];
+template <int Dim>
+void MovingLeastSquares<Dim>::set_points(const Grid<1>& g,
+                                         std::span<const double> x) requires(Dim == 1) {
+  x_.resize(x.size());
+  for (std::size_t p = 0; p < x.size(); ++p) x_[p][0] = x[p];
   bin(g);
 }
 
-void MovingLeastSquares::bin(const Grid<1>& g) {
+template <int Dim>
+void MovingLeastSquares<Dim>::bin(const Grid<Dim>& g) {
   grid_ = g;
-  const Index nc = g.num_cells();
-  start_.assign(static_cast<std::size_t>(nc + 1), 0);
-  outside_ = 0;
-  for (double xp : x_) {
-    if (!g.inside(Vec<1>(xp))) {
-      ++outside_;
-      continue;
-    }
-    ++start_[static_cast<std::size_t>(g.cell_of(xp, 0) + 1)];
-  }
-  for (Index c = 0; c < nc; ++c)
-    start_[static_cast<std::size_t>(c + 1)] += start_[static_cast<std::size_t>(c)];
-  order_.resize(start_.back());
-  fill_.assign(start_.begin(), start_.end() - 1);
-  for (std::size_t p = 0; p < x_.size(); ++p) {
-    if (!g.inside(Vec<1>(x_[p]))) continue;
-    order_[fill_[static_cast<std::size_t>(g.cell_of(x_[p], 0))]++] = static_cast<Index>(p);
-  }
+  outside_ = bins_.build(g, std::span<const Vec<Dim>>(x_));
   report_ = {};
 }
 
 namespace {
 
-// MLS with M terms: phi_p = w_p q(s_p)^T A^{-1} e_1 (p(x) = e_1 at s = 0). Returns cond(A);
-// infinite when A is singular (phi untouched).
-template <int M>
-double mls_shape(const std::vector<double>& s, const std::vector<double>& w, double singular,
-                 std::vector<double>& phi) {
+// The monomials of total degree <= degree in s, ordered by degree: [1, s_0 .. s_{D-1}] and then
+// s_i s_j for i <= j ([1, x, y, x^2, xy, y^2] in 2D, 003 eq. 15; [1, x, x^2] in 1D).
+template <int Dim>
+inline void monomials(const Vec<Dim>& s, int degree, double* q) {
+  q[0] = 1.0;
+  for (int d = 0; d < Dim; ++d) q[1 + d] = s[d];
+  if (degree < 2) return;
+  int k = Dim + 1;
+  for (int i = 0; i < Dim; ++i)
+    for (int j = i; j < Dim; ++j) q[k++] = s[i] * s[j];
+}
+
+// MLS with M terms: phi_p = w_p q(s_p)^T A^{-1} e_1 (p(x) = e_1 at s = 0; 001 eq. 14). Returns
+// cond(A); infinite when A is singular (phi untouched).
+template <int M, int Dim>
+double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, int degree,
+                 double singular, std::vector<double>& phi) {
   using Mat = Eigen::Matrix<double, M, M>;
   using Vec = Eigen::Matrix<double, M, 1>;
   Mat A = Mat::Zero();
-  auto basis = [](double sp) {
-    Vec q;
-    q[0] = 1.0;
-    q[1] = sp;
-    if constexpr (M == 3) q[2] = sp * sp;
-    return q;
-  };
+  Vec q = Vec::Zero();
   for (std::size_t k = 0; k < s.size(); ++k) {
-    const Vec q = basis(s[k]);
-    A.noalias() += w[k] * q * q.transpose();
+    monomials<Dim>(s[k], degree, q.data());
+    A.noalias() += w[k] * q * q.transpose();  // 001 eq. 10
   }
   Eigen::SelfAdjointEigenSolver<Mat> es;
   es.compute(A);                     // iterative: computeDirect loses ~1e-12 on 3x3 here
@@ -100,37 +96,65 @@ double mls_shape(const std::vector<double>& s, const std::vector<double>& w, dou
   // c = A^{-1} e_1 = V diag(1 / lambda) V^T e_1.
   Vec c = Vec::Zero();
   for (int j = 0; j < M; ++j) c += (V(0, j) / lam[j]) * V.col(j);
-  for (std::size_t k = 0; k < s.size(); ++k) phi[k] = w[k] * basis(s[k]).dot(c);
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    monomials<Dim>(s[k], degree, q.data());
+    phi[k] = w[k] * q.dot(c);
+  }
   return lam[M - 1] / lam[0];
 }
 
 }  // namespace
 
-void MovingLeastSquares::gather(double x, MlsWeight weight) {
-  const double h = grid_.h[0];
-  const double R = mls_support(weight, h);
-  const Index nc = grid_.num_cells();
-  const auto cell = [&](double y) {
-    const double c = std::floor((y - grid_.origin[0]) / h);
-    return static_cast<Index>(std::clamp(c, 0.0, static_cast<double>(nc - 1)));
-  };
+template <int Dim>
+void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight) {
   near_.clear();
   s_.clear();
   w_.clear();
-  for (Index c = cell(x - R); c <= cell(x + R); ++c)
-    for (std::size_t k = start_[static_cast<std::size_t>(c)];
-         k < start_[static_cast<std::size_t>(c + 1)]; ++k) {
-      const Index p = order_[k];
-      const double d = x_[static_cast<std::size_t>(p)] - x;
-      const double wp = mls_weight(weight, d, h);
+  // Cells overlapping the support box [x - R, x + R] per direction (clamped to the grid).
+  IVec<Dim> lo, hi;
+  for (int d = 0; d < Dim; ++d) {
+    const double R = mls_support(weight, grid_.h[d]);
+    const double top = static_cast<double>(grid_.cells[d] - 1);
+    const auto cell = [&](double y) {
+      return static_cast<Index>(
+          std::clamp(std::floor((y - grid_.origin[d]) / grid_.h[d]), 0.0, top));
+    };
+    lo[d] = cell(x[d] - R);
+    hi[d] = cell(x[d] + R);
+  }
+  // Rows of cells along x are contiguous in the bins (x fastest): one range per row.
+  IVec<Dim> c = lo;
+  while (true) {
+    Index first = lo[0], stride = 1;
+    for (int d = 1; d < Dim; ++d) {
+      stride *= grid_.cells[d - 1];
+      first += c[d] * stride;
+    }
+    const Index last = first + (hi[0] - lo[0]);
+    const auto b = static_cast<std::size_t>(bins_.start[static_cast<std::size_t>(first)]);
+    const auto e = static_cast<std::size_t>(bins_.start[static_cast<std::size_t>(last + 1)]);
+    for (std::size_t k = b; k < e; ++k) {
+      const Index p = bins_.order[k];
+      const Vec<Dim> dx = x_[static_cast<std::size_t>(p)] - x;
+      double wp = 1.0;  // 001 eq. 16: tensor product of the 1D weights
+      for (int d = 0; d < Dim; ++d) wp *= mls_weight(weight, dx[d], grid_.h[d]);
       if (!(wp > 0.0)) continue;
       near_.push_back(p);
-      s_.push_back(d / h);
+      s_.push_back(dx.cwiseQuotient(grid_.h));
       w_.push_back(wp);
     }
+    int d = 1;
+    for (; d < Dim; ++d) {
+      if (++c[d] <= hi[d]) break;
+      c[d] = lo[d];
+    }
+    if (d >= Dim) break;
+  }
 }
 
-void MovingLeastSquares::add_row(double x, MlsWeight weight, ShapeTable& t, bool widen) {
+template <int Dim>
+void MovingLeastSquares<Dim>::add_row(const Vec<Dim>& x, MlsWeight weight, ShapeTable& t,
+                                      bool widen) {
   gather(x, weight);
   if (near_.empty() && widen && weight == MlsWeight::Linear) {
     gather(x, MlsWeight::QuadraticSpline);
@@ -146,77 +170,90 @@ void MovingLeastSquares::add_row(double x, MlsWeight weight, ShapeTable& t, bool
   }
   t.point.insert(t.point.end(), near_.begin(), near_.end());
   t.phi.resize(row + n);
-  p_.resize(n);  // phi scratch for MLS, reused below
-  const int m = degree_ + 1;
 
-  if (!improved_) {
-    const double cond =
-        m == 2 ? mls_shape<2>(s_, w_, kSingular, p_) : mls_shape<3>(s_, w_, kSingular, p_);
-    if (cond > report_.max_condition) {
-      report_.max_condition = cond;
-      report_.worst_x = x;
-    }
-    if (!std::isfinite(cond)) {
-      ++report_.singular;
-      t.point.resize(row);
-      t.phi.resize(row);
-      t.start.push_back(row);
-      return;
-    }
-    if (cond > max_condition_) ++report_.ill_conditioned;
-    std::copy(p_.begin(), p_.begin() + static_cast<std::ptrdiff_t>(n),
-              t.phi.begin() + static_cast<std::ptrdiff_t>(row));
+  if (improved_) {
+    imls_row(row, t);
     t.start.push_back(row + n);
     return;
   }
-
-  // IMLS: Gram-Schmidt (modified, two passes) of q_i = s^i under <f, g> = sum w f g
-  // (003 eq. 16); p_[3 k + i] = p_i(s_k), px[i] = p_i(0), nrm[i] = <p_i, p_i>.
-  p_.resize(3 * n);
-  double px[3] = {0.0, 0.0, 0.0}, nrm[3] = {0.0, 0.0, 0.0};
-  bool keep[3] = {false, false, false};
-  int kept = 0;
-  for (int i = 0; i < m; ++i) {
-    for (std::size_t k = 0; k < n; ++k)
-      p_[3 * k + static_cast<std::size_t>(i)] = std::pow(s_[k], i);
-    px[i] = i == 0 ? 1.0 : 0.0;
-    for (int pass = 0; pass < 2; ++pass)
-      for (int j = 0; j < i; ++j) {
-        if (!keep[j]) continue;
-        double dot = 0.0;
-        for (std::size_t k = 0; k < n; ++k)
-          dot += w_[k] * p_[3 * k + static_cast<std::size_t>(i)] *
-                 p_[3 * k + static_cast<std::size_t>(j)];
-        const double c = dot / nrm[j];
-        for (std::size_t k = 0; k < n; ++k)
-          p_[3 * k + static_cast<std::size_t>(i)] -= c * p_[3 * k + static_cast<std::size_t>(j)];
-        px[i] -= c * px[j];
-      }
-    double nn = 0.0;
-    for (std::size_t k = 0; k < n; ++k) {
-      const double v = p_[3 * k + static_cast<std::size_t>(i)];
-      nn += w_[k] * v * v;
-    }
-    nrm[i] = nn;
-    keep[i] = i == 0 ? nn > 0.0 : nn > kDropTolerance * nrm[0];
-    if (keep[i]) ++kept;
+  p_.resize(n);  // phi scratch
+  constexpr int M1 = mls_terms(Dim, 1), M2 = mls_terms(Dim, 2);
+  const double cond = degree_ == 1 ? mls_shape<M1, Dim>(s_, w_, degree_, kSingular, p_)
+                                   : mls_shape<M2, Dim>(s_, w_, degree_, kSingular, p_);
+  if (cond > report_.max_condition) {
+    report_.max_condition = cond;
+    report_.worst_x = x[0];
+    report_.worst_y = Dim > 1 ? x[Dim - 1] : 0.0;
   }
-  if (kept < m) ++report_.reduced;
-  // phi_p = w_p sum_i p_i(x) p_i(x_p) / <p_i, p_i> (003 eq. 14).
-  for (std::size_t k = 0; k < n; ++k) {
-    double a = 0.0;
-    for (int i = 0; i < m; ++i)
-      if (keep[i]) a += px[i] * p_[3 * k + static_cast<std::size_t>(i)] / nrm[i];
-    t.phi[row + k] = w_[k] * a;
+  if (!std::isfinite(cond)) {
+    ++report_.singular;
+    t.point.resize(row);
+    t.phi.resize(row);
+    t.start.push_back(row);
+    return;
   }
+  if (cond > max_condition_) ++report_.ill_conditioned;
+  std::copy(p_.begin(), p_.begin() + static_cast<std::ptrdiff_t>(n),
+            t.phi.begin() + static_cast<std::ptrdiff_t>(row));
   t.start.push_back(row + n);
 }
 
-double MovingLeastSquares::evaluate(double x, MlsWeight weight, std::span<const double> f) {
+// IMLS: Gram-Schmidt (modified, two passes) of the monomials q_i under <f, g> = sum w f g
+// (003 eq. 16); p_[S k + i] = p_i(s_k), px[i] = p_i(0), nrm[i] = <p_i, p_i>. Terms whose norm
+// vanishes relative to <p_1, p_1> (eq. 17) or that the data resolve too poorly at x
+// (kMaxAmplification) are dropped, then phi_p = w_p sum_i p_i(x) p_i(x_p) / <p_i, p_i>
+// (eq. 11, 14).
+template <int Dim>
+void MovingLeastSquares<Dim>::imls_row(std::size_t row, ShapeTable& t) {
+  constexpr std::size_t S = kMaxTerms;  // stride of p_
+  const std::size_t n = near_.size();
+  const int m = terms_;
+  p_.resize(S * n);
+  for (std::size_t k = 0; k < n; ++k) monomials<Dim>(s_[k], degree_, &p_[S * k]);
+  double px[S] = {}, nrm[S] = {};
+  bool keep[S] = {};
+  int kept = 0;
+  for (int i = 0; i < m; ++i) {
+    const auto ii = static_cast<std::size_t>(i);
+    px[ii] = i == 0 ? 1.0 : 0.0;
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t j = 0; j < ii; ++j) {
+        if (!keep[j]) continue;
+        double dot = 0.0;
+        for (std::size_t k = 0; k < n; ++k) dot += w_[k] * p_[S * k + ii] * p_[S * k + j];
+        const double c = dot / nrm[j];
+        for (std::size_t k = 0; k < n; ++k) p_[S * k + ii] -= c * p_[S * k + j];
+        px[ii] -= c * px[j];
+      }
+    double nn = 0.0;
+    for (std::size_t k = 0; k < n; ++k) nn += w_[k] * p_[S * k + ii] * p_[S * k + ii];
+    nrm[ii] = nn;
+    // Dropped when it vanishes (eq. 17) or when it would amplify the data at x too much:
+    // |p_i(x)| > kMaxAmplification rms(p_i), rms(p_i)^2 = <p_i, p_i> / <p_1, p_1>.
+    keep[ii] = i == 0 ? nn > 0.0
+                      : nn > kDropTolerance * nrm[0] &&
+                            px[ii] * px[ii] * nrm[0] <= kMaxAmplification * kMaxAmplification * nn;
+    if (keep[ii]) ++kept;
+  }
+  if (kept < m) ++report_.reduced;
+  for (std::size_t k = 0; k < n; ++k) {
+    double a = 0.0;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i)
+      if (keep[i]) a += px[i] * p_[S * k + i] / nrm[i];
+    t.phi[row + k] = w_[k] * a;
+  }
+}
+
+template <int Dim>
+double MovingLeastSquares<Dim>::evaluate(const Vec<Dim>& x, MlsWeight weight,
+                                         std::span<const double> f) {
   scratch_.clear();
   add_row(x, weight, scratch_);
   return scratch_.apply(0, [&](std::size_t p) { return f[p]; });
 }
+
+template class MovingLeastSquares<1>;
+template class MovingLeastSquares<2>;
 
 MlsSettings mls_settings_from_config(const Config& cfg, bool improved) {
   MlsSettings s;

@@ -1,21 +1,26 @@
 #pragma once
 // Moving least squares (MLS, 001 eq. 6-17) and improved moving least squares (IMLS, 003
-// eq. 1-17) reconstruction in one dimension, and the particle-to-grid mappings built on them
-// (001 eq. 18-37, 003 eq. 23-40).
+// eq. 1-17) reconstruction in one and two dimensions, and the particle-to-grid mappings built on
+// them (001 eq. 18-37, 003 eq. 23-40).
 //
-// MovingLeastSquares fits, at each evaluation point x, a polynomial of degree 1 or 2 to the
+// MovingLeastSquares<Dim> fits, at each evaluation point x, a polynomial of degree 1 or 2 to the
 // scattered data within the support of a weight w(x - x_p) and evaluates it at x (eq. 13).
 //   MLS: a = A^{-1} B U with the moment matrix A(x) = sum_p w p(x_p) p(x_p)^T (001 eq. 10-14).
 //   IMLS: the monomials are orthogonalised by Gram-Schmidt under the weighted discrete inner
 //     product <f, g> = sum_p w(x - x_p) f(x_p) g(x_p) (003 eq. 7, 16), a_i = <p_i, u> / <p_i, p_i>
 //     (eq. 11). Terms with <p_i, p_i> <= kDropTolerance <p_1, p_1> are dropped (eq. 17): the
 //     fit never inverts a matrix, one particle gives its value, two particles a straight line.
-// The monomials are those of s = (x_p - x) / l (l the cell size): the same polynomial space as
-// 1, x, x^2 (so the same reconstruction, and the same dropped spans in IMLS) but scaled to O(1)
-// and centred at the evaluation point, where p(x) = (1, 0, 0).
+//     Terms the data resolve too poorly at x (kMaxAmplification) are dropped as well.
+// The monomials, ordered by total degree ([1, x, y, x^2, xy, y^2], 003 eq. 15; [1, x, x^2] in
+// 1D), are those of s = (x_p - x) / l per direction (l_d the cell size): the same polynomial
+// space as in x (so the same reconstruction, and the same dropped spans in IMLS) but scaled to
+// O(1) and centred at the evaluation point, where p(x) = (1, 0, ..., 0).
+// In 2D the weight is the tensor product w(x - x_p) = w(r_x) w(r_y) (001 eq. 16).
 //
 // The reconstruction is linear in the data: at each evaluation point the shape functions
 // phi_p(x) (eq. 14) are computed once and stored (ShapeTable), then every field is a dot product.
+// Particles are binned by cell (ElementBins); an evaluation visits only the cells within the
+// support of the weight (7 per direction for the quadratic spline, 3 for the linear weight).
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
@@ -24,6 +29,8 @@
 #include <span>
 #include <stdexcept>
 #include <string_view>
+#include <tuple>
+#include <type_traits>
 #include <vector>
 
 #include "core/simulation.hpp"
@@ -34,17 +41,24 @@ namespace mpm {
 class Config;
 
 enum class MlsWeight {
-  // 003 eq. 27 / 001 eq. 17: w(r), r = |x - x_p| / (2 l), nonzero for |x - x_p| < 3 l.
+  // 003 eq. 27 / 001 eq. 17: w(r), r = |x - x_p| / (2 l), nonzero for |x - x_p| < 3 l (per
+  // direction; 001 eq. 16 multiplies the directions).
   QuadraticSpline,
-  // The P1 hat centred at x: w = 1 - |x - x_p| / l for |x - x_p| < l (003 eq. 31 velocity).
+  // The P1 hat centred at x: w = 1 - |x - x_p| / l for |x - x_p| < l (003 eq. 31 velocity),
+  // tensor product in 2D.
   Linear,
 };
 
-// w(x - x_p) for a cell size l.
+// w(x - x_p) for a cell size l (one direction).
 double mls_weight(MlsWeight kind, double distance, double cell);
-// Support radius: 3 l (quadratic spline) or l (linear).
+// Support radius per direction: 3 l (quadratic spline) or l (linear).
 inline double mls_support(MlsWeight kind, double cell) {
   return kind == MlsWeight::QuadraticSpline ? 3.0 * cell : cell;
+}
+// Number of monomials of total degree <= degree (1 or 2) in dim variables: 2, 3 in 1D;
+// 3, 6 in 2D (001 eq. 15, 003 eq. 15).
+constexpr int mls_terms(int dim, int degree) {
+  return degree == 1 ? dim + 1 : (dim + 1) * (dim + 2) / 2;
 }
 
 struct MlsReport {
@@ -52,10 +66,11 @@ struct MlsReport {
   Index empty = 0;             // no particle in the support: value 0
   Index ill_conditioned = 0;   // MLS: cond(A) > max_condition (still solved)
   Index singular = 0;          // MLS: A singular (fewer distinct points than terms): value 0
-  Index reduced = 0;           // IMLS: fewer terms than degree + 1 (eq. 17)
+  Index reduced = 0;           // IMLS: fewer terms than the full basis (eq. 17, kMaxAmplification)
   Index widened = 0;           // linear weight without data: quadratic-spline weight used instead
   double max_condition = 0.0;  // MLS: largest cond(A) (infinite when singular)
-  double worst_x = 0.0;        // MLS: where it occurred [m]
+  double worst_x = 0.0;        // MLS: where it occurred, first coordinate [m]
+  double worst_y = 0.0;        // MLS: second coordinate (2D; 0 in 1D) [m]
 };
 
 void accumulate(MlsReport& total, const MlsReport& step);
@@ -72,68 +87,105 @@ struct ShapeTable {
     phi.clear();
   }
   std::size_t rows() const { return start.size() - 1; }
-  // sum_p phi_p(x_r) f(p).
-  template <class F>
-  double apply(std::size_t r, F&& f) const {
-    double s = 0.0;
+  // sum_p phi_p(x_r) f(p); T is double or a fixed-size Eigen vector or matrix (all components
+  // of a field in one pass over the row).
+  template <class T = double, class F>
+  T apply(std::size_t r, F&& f) const {
+    T s;
+    if constexpr (std::is_arithmetic_v<T>)
+      s = 0.0;
+    else
+      s.setZero();
     for (std::size_t k = start[r]; k < start[r + 1]; ++k)
       s += phi[k] * f(static_cast<std::size_t>(point[k]));
     return s;
   }
 };
 
+template <int Dim = 1>
 class MovingLeastSquares {
+  static_assert(Dim == 1 || Dim == 2, "MLS is implemented in 1D and 2D");
+
  public:
   // Relative tolerance on <p_i, p_i> / <p_1, p_1> below which IMLS drops p_i (003 eq. 17). The
-  // ratio is the weighted mean square of p_i in units of l^(2(i-1)): 1e-10 drops a linear term
-  // when the particles in the support spread less than ~1e-5 l, far above round-off (~1e-32) and
-  // far below any particle spacing of a run.
+  // ratio is the weighted mean square of p_i in units of l^(2 deg p_i): 1e-10 drops a linear
+  // term when the particles in the support spread less than ~1e-5 l in that direction, far
+  // above round-off (~1e-32) and far below any particle spacing of a run.
   static constexpr double kDropTolerance = 1e-10;
+  // IMLS also drops p_i when |p_i(x)| > kMaxAmplification rms(p_i), rms(p_i)^2 = <p_i, p_i> /
+  // <p_1, p_1>. By Cauchy-Schwarz that term's share of the amplification sum_p |phi_p(x)| is at
+  // most |p_i(x)| / rms(p_i), so the kept terms give sum_p |phi_p| <= 1 + (m - 1) 1e3. Eq. 17
+  // only drops terms that vanish exactly; nearly dependent data keep a tiny but non-zero
+  // <p_i, p_i> and the fit then extrapolates with a huge coefficient. In 2D this happens at free
+  // edges: the linear-weight support of a B-spline DOF outside the body holds one column of
+  // particles, which the deformation bends slightly (~1e-6 l), and the nodal velocity (003
+  // eq. 31) jumped to 1e4 v0 within one step (free block, MUSL). Measured ratios: at most ~25 on
+  // random data with every term resolved (the reproduction tests, 3 or 9 particles per cell,
+  // degree 2, linear weight), 2e6 to 9e6 where such runs blew up; 1e3 separates them with a wide
+  // margin on both sides. The 1D mms_1d errors (docs/verification.md) are unchanged.
+  static constexpr double kMaxAmplification = 1e3;
   // MLS: A is treated as singular when lambda_min <= kSingular lambda_max.
   static constexpr double kSingular = 1e-14;
+  // Largest number of polynomial terms (degree 2).
+  static constexpr int kMaxTerms = mls_terms(Dim, 2);
 
   // improved: IMLS, else MLS; degree 1 or 2 (throws InputError otherwise). max_condition:
   // MLS points with a larger cond(A) are counted as ill-conditioned.
   explicit MovingLeastSquares(bool improved = false, int degree = 1, double max_condition = 1e8);
 
   // Positions of the data (standalone use); points outside the grid are ignored and counted.
-  void set_points(const Grid<1>& g, std::span<const double> x);
+  void set_points(const Grid<Dim>& g, std::span<const Vec<Dim>> x);
+  void set_points(const Grid<1>& g, std::span<const double> x) requires(Dim == 1);
   // The particles of an MPM step.
-  void set_points(const Grid<1>& g, const Particles<1>& P);
+  void set_points(const Grid<Dim>& g, const Particles<Dim>& P) { set_points(g, std::span(P.x)); }
 
   // Appends the shape functions at x to t (an empty row where no particle is in the support).
   // widen: a Linear weight without data in its support falls back to the quadratic spline
   // (counted in widened): B-spline DOFs sit at Greville points, which may lie more than one
   // cell from the body although the DOF carries mass.
-  void add_row(double x, MlsWeight weight, ShapeTable& t, bool widen = false);
+  void add_row(const Vec<Dim>& x, MlsWeight weight, ShapeTable& t, bool widen = false);
+  void add_row(double x, MlsWeight weight, ShapeTable& t, bool widen = false) requires(Dim == 1) {
+    add_row(Vec<1>(x), weight, t, widen);
+  }
   // The reconstruction of the data f (one value per point of set_points) at x.
-  double evaluate(double x, MlsWeight weight, std::span<const double> f);
+  double evaluate(const Vec<Dim>& x, MlsWeight weight, std::span<const double> f);
+  double evaluate(double x, MlsWeight weight, std::span<const double> f) requires(Dim == 1) {
+    return evaluate(Vec<1>(x), weight, f);
+  }
 
   bool improved() const { return improved_; }
   int degree() const { return degree_; }
+  int terms() const { return terms_; }
   Index outside() const { return outside_; }
+  // The data binned by grid cell (valid after set_points).
+  const ElementBins<Dim>& bins() const { return bins_; }
   const MlsReport& report() const { return report_; }
   void reset_report() { report_ = {}; }
 
  private:
-  void bin(const Grid<1>& g);
-  void gather(double x, MlsWeight weight);  // near_, s_, w_
+  void bin(const Grid<Dim>& g);                      // x_ into bins_
+  void gather(const Vec<Dim>& x, MlsWeight weight);  // near_, s_, w_
+  void imls_row(std::size_t row, ShapeTable& t);
 
   bool improved_;
   int degree_;
+  int terms_;
   double max_condition_;
-  Grid<1> grid_{Vec<1>(0.0), Vec<1>(1.0), IVec<1>{1}};
-  std::vector<double> x_;
-  std::vector<std::size_t> start_;  // bins: points of cell c are order_[start_[c] .. start_[c+1])
-  std::vector<Index> order_;
-  std::vector<std::size_t> fill_;
+  Grid<Dim> grid_;
+  std::vector<Vec<Dim>> x_;
+  ElementBins<Dim> bins_;
   Index outside_ = 0;
   // Scratch of one evaluation point (no allocation once the capacity is reached).
   std::vector<Index> near_;
-  std::vector<double> s_, w_, p_;  // p_[3 k + i]: orthogonal p_i at point k (IMLS)
+  std::vector<Vec<Dim>> s_;  // (x_p - x) / l per direction
+  std::vector<double> w_;
+  std::vector<double> p_;  // p_[kMaxTerms k + i]: monomial / orthogonal p_i at point k
   ShapeTable scratch_;
   MlsReport report_;
 };
+
+extern template class MovingLeastSquares<1>;
+extern template class MovingLeastSquares<2>;
 
 struct MlsSettings {
   int degree = 1;        // method.mls_degree: 1 (001 eq. 15) or 2
@@ -142,10 +194,11 @@ struct MlsSettings {
   int gauss_points_used() const { return gauss_points > 0 ? gauss_points : 2; }
 };
 
-// The MLS (Improved = false, 001 eq. 18-33) and IMLS (Improved = true, 003 eq. 23-36) mappings,
-// one-dimensional. map_mass, the first mapping call of a step, bins the particles, places
-// n Gauss points in every element holding a particle and stores the shape functions there
-// (quadratic-spline weight); map_forces and map_momentum reuse them.
+// The MLS (Improved = false, 001 eq. 18-33) and IMLS (Improved = true, 003 eq. 23-36) mappings
+// in 1D and 2D. map_mass, the first mapping call of a step, bins the particles, places n Gauss
+// points per direction in every element holding a particle (n^Dim per element, 001: 2 x 2) and
+// stores the shape functions there (quadratic-spline weight); map_forces and map_momentum reuse
+// them. Every vector and tensor component is reconstructed with the same shape functions.
 //   mass: rho^ (data rho_p); lumped, or consistent for MLS.
 //   forces: sigma^ (data sigma_p) and b^ (data b_p), body-force density rho^ b^ at the Gauss
 //     points (001 eq. 20, 24 / 003 eq. 25, 29 reconstruct b; the density factor they leave out
@@ -160,12 +213,12 @@ class MovingLeastSquaresMapping {
  public:
   static constexpr std::string_view kName = Improved ? "imls" : "mls";
   using Settings = MlsSettings;
-  static constexpr bool supports_dimension(int dim) { return dim == 1; }
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
 
   MovingLeastSquaresMapping() : MovingLeastSquaresMapping(Settings{}) {}
   // Throws InputError for a degree other than 1, 2 or negative Gauss points.
   explicit MovingLeastSquaresMapping(const Settings& s)
-      : settings_(s), mls_(Improved, s.degree, s.max_condition) {
+      : settings_(s), work_(Work<1>(s), Work<2>(s)) {
     if (s.gauss_points < 0) throw InputError("method.gauss_points must be >= 0");
     rule_ = gauss_legendre(s.gauss_points_used());
   }
@@ -173,9 +226,14 @@ class MovingLeastSquaresMapping {
   static MovingLeastSquaresMapping from_config(const Config& cfg);
 
   const Settings& settings() const { return settings_; }
-  const MovingLeastSquares& reconstruction() const { return mls_; }
+  template <int Dim = 1>
+  const MovingLeastSquares<Dim>& reconstruction() const {
+    return std::get<Dim - 1>(work_).mls;
+  }
   // The last step (Gauss points and, IMLS, nodes) and the sums over the run.
-  const MlsReport& last_report() const { return mls_.report(); }
+  const MlsReport& last_report() const {
+    return dim_ == 2 ? reconstruction<2>().report() : reconstruction<1>().report();
+  }
   const MlsReport& totals() const { return totals_; }
   // Checkpoint restart: the sums continue from a saved run (io/checkpoint.hpp).
   void set_totals(const MlsReport& t) { totals_ = t; }
@@ -186,25 +244,41 @@ class MovingLeastSquaresMapping {
 
   template <class Sim>
   void map_mass(Sim& sim) {
-    static_assert(Sim::kDim == 1, "the MLS/IMLS mappings are one-dimensional");
+    constexpr int Dim = Sim::kDim;
+    static_assert(Dim == 1 || Dim == 2, "the MLS/IMLS mappings are one- and two-dimensional");
     if (Improved && sim.mass_type == MassType::Consistent)
       throw InputError("method.mapping = imls needs method.mass = lumped (003 eq. 32)");
+    dim_ = Dim;
+    auto& mls = std::get<Dim - 1>(work_).mls;
     const auto& P = sim.particles;
     const auto& grid = sim.grid;
-    mls_.set_points(grid, P);
+    mls.set_points(grid, P);
     auto& q = quad_.prepare<Sim>();
     q.clear();
     gauss_.clear();
-    const double h = grid.h[0], half = 0.5 * h;
-    active_.assign(static_cast<std::size_t>(grid.num_cells()), 0);
-    for (const auto& x : P.x) active_[static_cast<std::size_t>(grid.cell_index(x))] = 1;
+    // Tensor-product Gauss rule on each element holding a particle: point k has index
+    // k_d = (k / n^d) % n in direction d (x fastest), weight prod_d (h_d / 2) w_{k_d}.
+    const int n = static_cast<int>(rule_.xi.size());
+    const int per_element = ipow(n, Dim);
+    const Vec<Dim> half = 0.5 * grid.h;
     for (Index e = 0; e < grid.num_cells(); ++e) {
-      if (!active_[static_cast<std::size_t>(e)]) continue;
-      const double xc = grid.origin[0] + (static_cast<double>(e) + 0.5) * h;
-      for (std::size_t k = 0; k < rule_.xi.size(); ++k) {
-        const double xg = xc + half * rule_.xi[k];
-        q.add(Vec<1>(xg), half * rule_.w[k], e);
-        mls_.add_row(xg, MlsWeight::QuadraticSpline, gauss_);
+      if (mls.bins().count(e) == 0) continue;
+      Vec<Dim> centre;
+      Index rem = e;
+      for (int d = 0; d < Dim; ++d) {
+        centre[d] = grid.origin[d] + (static_cast<double>(rem % grid.cells[d]) + 0.5) * grid.h[d];
+        rem /= grid.cells[d];
+      }
+      for (int k = 0; k < per_element; ++k) {
+        Vec<Dim> xg;
+        double wg = 1.0;
+        for (int d = 0, r = k; d < Dim; ++d, r /= n) {
+          const auto j = static_cast<std::size_t>(r % n);
+          xg[d] = centre[d] + half[d] * rule_.xi[j];
+          wg *= half[d] * rule_.w[j];
+        }
+        q.add(xg, wg, e);
+        mls.add_row(xg, MlsWeight::QuadraticSpline, gauss_);
       }
     }
     q.evaluate(sim);
@@ -220,65 +294,81 @@ class MovingLeastSquaresMapping {
       for (Index i = 0; i < sim.basis.num_dofs(); ++i) {
         if (!(m[static_cast<std::size_t>(i)] > 0.0)) continue;
         node_dof_.push_back(i);
-        mls_.add_row(sim.basis.dof_position(i)[0], MlsWeight::Linear, nodes_, true);
+        mls.add_row(sim.basis.dof_position(i), MlsWeight::Linear, nodes_, true);
       }
     }
-    const MlsReport& rep = mls_.report();
+    const MlsReport& rep = mls.report();
     accumulate(totals_, rep);
     if (rep.singular > 0)
-      throw RunError(exit_code::kReconstruction,
-                     fmt::format("step {}, t = {:.9g} s: the MLS moment matrix is singular at {} "
-                                 "point(s) (first near x = {:.6g}): too few distinct particles "
-                                 "for method.mls_degree = {}; use method.mapping = imls",
-                                 sim.step, sim.time, rep.singular, rep.worst_x, settings_.degree));
+      throw RunError(
+          exit_code::kReconstruction,
+          fmt::format("step {}, t = {:.9g} s: the MLS moment matrix is singular at {} "
+                      "point(s) (first near x = {:.6g}{}): too few distinct particles "
+                      "for method.mls_degree = {}; use method.mapping = imls",
+                      sim.step, sim.time, rep.singular, rep.worst_x,
+                      Dim == 2 ? fmt::format(", y = {:.6g}", rep.worst_y) : "", settings_.degree));
   }
 
   template <class Sim>
   void map_momentum(Sim& sim) {
-    static_assert(Sim::kDim == 1, "the MLS/IMLS mappings are one-dimensional");
+    constexpr int Dim = Sim::kDim;
+    using V = Vec<Dim>;
     const auto& P = sim.particles;
     const auto& q = quad_.prepared<Sim>();
     if constexpr (Improved) {
       auto& out = sim.nodes.momentum;
-      std::fill(out.begin(), out.end(), Vec<1>::Zero());
+      std::fill(out.begin(), out.end(), V::Zero());
       for (std::size_t r = 0; r < node_dof_.size(); ++r) {
         const auto i = static_cast<std::size_t>(node_dof_[r]);
-        const double v = nodes_.apply(r, [&](std::size_t p) { return P.v[p][0]; });
-        out[i][0] = sim.nodes.mass[i] * v;
+        out[i] = sim.nodes.mass[i] *
+                 nodes_.apply<V>(r, [&](std::size_t p) -> const V& { return P.v[p]; });
       }
     } else {
-      vec_.resize(q.size());
+      auto& vec = std::get<Dim - 1>(work_).vec;
+      vec.resize(q.size());
       for (std::size_t g = 0; g < q.size(); ++g)
-        vec_[g][0] = gauss_.apply(g, [&](std::size_t p) { return P.density[p] * P.v[p][0]; });
-      assemble_momentum(sim, q, vec_);
+        vec[g] = gauss_.apply<V>(g, [&](std::size_t p) -> V { return P.density[p] * P.v[p]; });
+      assemble_momentum(sim, q, vec);
     }
   }
 
   template <class Sim>
   void map_forces(Sim& sim) {
-    static_assert(Sim::kDim == 1, "the MLS/IMLS mappings are one-dimensional");
+    constexpr int Dim = Sim::kDim;
+    using V = Vec<Dim>;
+    using M = Mat<Dim>;
     const auto& P = sim.particles;
     const auto& q = quad_.prepared<Sim>();
-    sig_.resize(q.size());
-    vec_.resize(q.size());
+    auto& sig = std::get<Dim - 1>(work_).sig;
+    auto& vec = std::get<Dim - 1>(work_).vec;
+    sig.resize(q.size());
+    vec.resize(q.size());
     for (std::size_t g = 0; g < q.size(); ++g) {
-      sig_[g](0, 0) = gauss_.apply(g, [&](std::size_t p) { return P.stress[p](0, 0); });
-      vec_[g][0] = rho_[g] * gauss_.apply(g, [&](std::size_t p) { return P.body[p][0]; });
+      sig[g] = gauss_.apply<M>(g, [&](std::size_t p) -> const M& { return P.stress[p]; });
+      vec[g] = rho_[g] * gauss_.apply<V>(g, [&](std::size_t p) -> const V& { return P.body[p]; });
     }
-    assemble_forces(sim, q, vec_, sig_);
+    assemble_forces(sim, q, vec, sig);
   }
 
  private:
+  // The reconstruction and the Gauss-point fields of one dimension (the mapping is chosen before
+  // the dimension is known, so it holds both; the unused one stays empty).
+  template <int Dim>
+  struct Work {
+    explicit Work(const Settings& s) : mls(Improved, s.degree, s.max_condition) {}
+    MovingLeastSquares<Dim> mls;
+    std::vector<Vec<Dim>> vec;
+    std::vector<Mat<Dim>> sig;
+  };
+
   Settings settings_;
-  MovingLeastSquares mls_;
+  std::tuple<Work<1>, Work<2>> work_;
+  int dim_ = 1;  // dimension of the last map_mass
   GaussRule rule_;
   QuadratureStore quad_;
-  std::vector<char> active_;
   ShapeTable gauss_, nodes_;
   std::vector<Index> node_dof_;
   std::vector<double> rho_;
-  std::vector<Vec<1>> vec_;
-  std::vector<Mat<1>> sig_;
   MlsReport totals_;
 };
 

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <any>
 #include <cmath>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
@@ -45,18 +46,29 @@ struct ElementBins {
   std::vector<Index> start;  // particles of cell e: order[start[e] .. start[e + 1])
   std::vector<Index> order;
 
-  void build(const Grid<Dim>& g, const Particles<Dim>& P) {
+  void build(const Grid<Dim>& g, const Particles<Dim>& P) { build(g, std::span(P.x)); }
+  // Any point set; points outside the grid are left out of every cell. Returns their number.
+  Index build(const Grid<Dim>& g, std::span<const Vec<Dim>> x) {
     const Index ne = g.num_cells();
     start.assign(static_cast<std::size_t>(ne + 1), 0);
-    order.resize(static_cast<std::size_t>(P.size()));
-    for (const auto& x : P.x) ++start[static_cast<std::size_t>(g.cell_index(x) + 1)];
+    Index outside = 0;
+    for (const auto& xp : x) {
+      if (!g.inside(xp)) {
+        ++outside;
+        continue;
+      }
+      ++start[static_cast<std::size_t>(g.cell_index(xp) + 1)];
+    }
     for (Index e = 0; e < ne; ++e)
       start[static_cast<std::size_t>(e + 1)] += start[static_cast<std::size_t>(e)];
+    order.resize(static_cast<std::size_t>(start.back()));
     fill_.assign(start.begin(), start.end() - 1);
-    for (Index p = 0; p < P.size(); ++p) {
-      const Index e = g.cell_index(P.x[static_cast<std::size_t>(p)]);
-      order[static_cast<std::size_t>(fill_[static_cast<std::size_t>(e)]++)] = p;
+    for (std::size_t p = 0; p < x.size(); ++p) {
+      if (!g.inside(x[p])) continue;
+      const Index e = g.cell_index(x[p]);
+      order[static_cast<std::size_t>(fill_[static_cast<std::size_t>(e)]++)] = static_cast<Index>(p);
     }
+    return outside;
   }
   Index count(Index e) const {
     return start[static_cast<std::size_t>(e + 1)] - start[static_cast<std::size_t>(e)];
