@@ -655,6 +655,7 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
                           {"widened", t.widened},
                           {"max_condition", t.max_condition},
                           {"worst_x", t.worst_x}};
+    if constexpr (Dim == 2) res.summary["mls"]["worst_y"] = t.worst_y;
   }
   if (reference)
     res.summary["reference"] = {{"solver", "ulfem"},

@@ -435,6 +435,7 @@ std::string encode_totals(const MlsReport& t) {
   for (Index v : {t.points, t.empty, t.ill_conditioned, t.singular, t.reduced, t.widened}) w.i64(v);
   w.f64(t.max_condition);
   w.f64(t.worst_x);
+  w.f64(t.worst_y);
   return std::move(w.bytes());
 }
 
@@ -444,6 +445,7 @@ void decode_totals(std::string_view bytes, MlsReport& t) {
     *v = r.i64();
   t.max_condition = r.f64();
   t.worst_x = r.f64();
+  t.worst_y = r.f64();
 }
 
 }  // namespace mpm::io

@@ -107,32 +107,30 @@ TEST(ReconstructionMpm, TlsImprovesMpmOnTheColumn) {
   EXPECT_LT(tls.diag.max_rel_momentum_error, 1e-12);
 }
 
-TEST(ReconstructionMpm, SparseElementsNeverBreakARunOrConservation) {
-  // A body of 1, 2 and 3 particles per cell in different parts, moving through the grid with
-  // free ends: elements with 0, 1, 2 particles arise; every completion keeps conservation, and
-  // "none" stops with exit code 6.
-  for (const char* completion : {"reduce", "virtual", "neighbour", "none"})
-    for (const char* basis : {"linear", "bspline"}) {
-      SCOPED_TRACE(fmt::format("{} {}", completion, basis));
-      const auto cfg = Config::parse(fmt::format(R"toml(
+// A body moving through the grid with free ends; `per_cell` particles per cell.
+Config sparse_body(const char* basis, const char* completion, int per_cell, double body_max) {
+  return Config::parse(fmt::format(R"toml(
 benchmark = "custom"
 grid = {{ cells = 16, min = 0.0, max = 1.0 }}
-body = {{ min = 0.25, max = 0.6 }}
-particles.per_cell = 1
+body = {{ min = 0.25, max = {} }}
+particles.per_cell = {}
 time = {{ dt = 1e-4, end = 0.04 }}
 method = {{ basis = "{}", mapping = "tls", tls_completion = "{}" }}
 material = {{ model = "elastic_1d_large", density = 1000.0, youngs_modulus = 1e5 }}
 initial.velocity = "2.0 + 0.5*sin(9*x)"
 boundary = {{ left = "free", right = "free" }}
 )toml",
-                                                 basis, completion),
-                                     "<sparse>");
-      const auto r = run(cfg, RunOptions{});
-      if (std::string(completion) == "none") {
-        EXPECT_EQ(r.exit_code, exit_code::kReconstruction);
-        EXPECT_NE(r.failure.find("TLS cannot fit element"), std::string::npos) << r.failure;
-        continue;
-      }
+                                   body_max, per_cell, basis, completion),
+                       "<sparse>");
+}
+
+TEST(ReconstructionMpm, SparseElementsNeverBreakARunOrConservation) {
+  // One particle per cell, the body moving through the grid with free ends: elements with 0, 1,
+  // 2 particles arise; every completion keeps conservation.
+  for (const char* completion : {"reduce", "virtual", "neighbour"})
+    for (const char* basis : {"linear", "bspline"}) {
+      SCOPED_TRACE(fmt::format("{} {}", completion, basis));
+      const auto r = run(sparse_body(basis, completion, 1, 0.6), RunOptions{});
       ASSERT_EQ(r.exit_code, 0) << r.failure;
       const auto& tls = r.summary["tls"];
       EXPECT_GT(tls["reduced"].get<Index>() + tls["with_virtual"].get<Index>() +
@@ -141,6 +139,21 @@ boundary = {{ left = "free", right = "free" }}
       EXPECT_LT(r.diag.max_rel_mass_error, 1e-13);
       EXPECT_LT(r.diag.max_rel_momentum_error, 1e-13);
     }
+}
+
+TEST(ReconstructionMpm, NoCompletionIsRefusedUpFrontOrStopsWithExitCode6) {
+  for (const char* basis : {"linear", "bspline"}) {
+    SCOPED_TRACE(basis);
+    // Elements that cannot support 3 terms at the start: refused before the first step.
+    EXPECT_THROW(run(sparse_body(basis, "none", 1, 0.6), RunOptions{}), InputError);
+    // Three particles in every element of [0.25, 0.625] = 6 cells at the start; once the body
+    // moves, its end elements hold 1 or 2: the run stops with exit code 6 and names the element.
+    const auto r = run(sparse_body(basis, "none", 3, 0.625), RunOptions{});
+    EXPECT_EQ(r.exit_code, exit_code::kReconstruction);
+    EXPECT_NE(r.failure.find("TLS cannot fit element"), std::string::npos) << r.failure;
+    EXPECT_NE(r.failure.find("step "), std::string::npos) << r.failure;
+    EXPECT_GT(r.steps, 0);
+  }
 }
 
 }  // namespace
