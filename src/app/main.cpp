@@ -1,6 +1,7 @@
 // mpm: the mpmlab command line. Subcommands: run, study, bench, keys, list.
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -77,8 +78,15 @@ int cmd_run(const std::string& config, const std::vector<std::string>& sets, std
   return r.exit_code;
 }
 
+// Single-quoted for /bin/sh.
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 int cmd_study(const std::string& config, const std::string& refine, const std::string& methods,
-              const std::vector<std::string>& sets, std::string out, int jobs) {
+              const std::vector<std::string>& sets, std::string out, int jobs, bool plot) {
   const auto cfg = mpm::Config::load(config, sets);
   auto opt = mpm::parse_refine(refine);
   if (!methods.empty()) opt.methods = mpm::parse_methods(methods);
@@ -87,6 +95,21 @@ int cmd_study(const std::string& config, const std::string& refine, const std::s
   const auto r = mpm::run_study(cfg, opt);
   std::cout << mpm::study_table(opt, r);
   std::cout << fmt::format("study.csv and each run's outputs in {}/\n", opt.out_dir);
+  if (plot) {
+    // Convergence plots (PNG and SVG) by the repository's matplotlib script.
+    const std::string script = std::string(MPM_SCRIPTS_DIR) + "/plot_study.py";
+    // Debian's interpreter, which sees Debian's python3-matplotlib (a python3 earlier on PATH,
+    // e.g. pyenv's, would not).
+    const std::string python =
+        std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+    const std::string cmd =
+        python + " " + shell_quote(script) + " " + shell_quote(opt.out_dir + "/study.csv");
+    std::cout << std::flush;
+    if (std::system(cmd.c_str()) != 0) {
+      std::cerr << fmt::format("mpm: the study finished, but plotting failed ({})\n", cmd);
+      return mpm::exit_code::kInternal;
+    }
+  }
   for (const auto& run : r.runs)
     if (run.exit_code != 0) return run.exit_code;
   return 0;
@@ -135,6 +158,10 @@ int main(int argc, char** argv) {
   study->add_option("--set", sets, "override a key: section.key=value (repeatable)");
   study->add_option("--out", out, "output directory (default studies/<config name>)");
   study->add_option("--jobs,-j", jobs, "parallel runs (default: hardware threads)");
+  bool plot = false;
+  study->add_flag("--plot", plot,
+                  "write convergence plots (PNG, SVG) of every error against h, one line per "
+                  "method with its fitted order (scripts/plot_study.py; needs python3-matplotlib)");
 
   mpm::BenchOptions bopt;
   auto* bench = app.add_subcommand("bench", "time the explicit step (ns per particle-step)");
@@ -195,7 +222,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run) return cmd_run(config, sets, out, quiet, restart);
-    if (*study) return cmd_study(config, refine, methods, sets, out, jobs);
+    if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot);
     if (*bench) return cmd_bench(bopt);
     if (*rec) {
       const auto r = mpm::reconstruct(ropt);

@@ -215,4 +215,24 @@ TEST(Cli, StudyRunsAMethodMatrix) {
   std::filesystem::remove_all(out);
 }
 
+TEST(Cli, StudyPlotsConvergence) {
+  // --plot writes one log-log figure per error (PNG and SVG) with the fitted orders.
+  const auto out = temp_dir("plot");
+  auto r =
+      sh("study " + src("examples/vibrating_bar_small.toml") +
+         " --refine grid.cells=5,10 --methods \"linear/direct, bspline2/direct\" --plot --out " +
+         out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  for (const char* e : {"displacement_rms", "velocity_rms", "stress_rms"})
+    for (const char* ext : {"png", "svg"}) {
+      const auto file = out / fmt::format("convergence_{}.{}", e, ext);
+      EXPECT_TRUE(std::filesystem::exists(file)) << file;
+      if (std::filesystem::exists(file)) EXPECT_GT(std::filesystem::file_size(file), 1000u);
+    }
+  std::ifstream svg(out / "convergence_displacement_rms.svg");
+  const std::string text((std::istreambuf_iterator<char>(svg)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("linear/direct (order"), std::string::npos);
+  std::filesystem::remove_all(out);
+}
+
 }  // namespace
