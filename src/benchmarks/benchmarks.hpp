@@ -84,4 +84,9 @@ void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,
 // Material from the [material] keys for a problem in `dim` dimensions.
 Material material_from_config(const Config& cfg, int dim);
 
+// The neo-Hookean law of a manufactured-solution benchmark, whose body force is derived for that
+// law (`source` names the derivation); InputError naming material.model otherwise.
+const NeoHookean& require_neo_hookean(const Config& cfg, const Material& m,
+                                      std::string_view benchmark, std::string_view source);
+
 }  // namespace mpm

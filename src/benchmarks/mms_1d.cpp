@@ -49,12 +49,7 @@ Problem<1> make_mms_1d(const Config& cfg) {
   Problem<1> pb;
   pb.benchmark = "mms_1d";
   pb.material = material_from_config(cfg, 1);
-  const auto* law = std::get_if<NeoHookean>(&pb.material);
-  if (law == nullptr)
-    throw InputError(
-        fmt::format("{}: the manufactured body force of benchmark \"mms_1d\" is derived for "
-                    "material.model = \"neo_hookean\" (003 eq. 42), not \"{}\"",
-                    cfg.where("material.model"), material_name(pb.material)));
+  const auto* law = &require_neo_hookean(cfg, pb.material, pb.benchmark, "003 eq. 42");
   const double L = cfg.get_real("bar.length");
   const double rho = cfg.get_real("material.density");
   // 003: c = sqrt(E / rho0), not the 1D neo-Hookean modulus sqrt((lambda + 2 mu) / rho0).

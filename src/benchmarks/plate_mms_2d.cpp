@@ -69,12 +69,7 @@ Problem<2> make_plate_mms_2d(const Config& cfg) {
   Problem<2> pb;
   pb.benchmark = "plate_mms_2d";
   pb.material = material_from_config(cfg, 2);
-  const auto* law = std::get_if<NeoHookean>(&pb.material);
-  if (law == nullptr)
-    throw InputError(
-        fmt::format("{}: the manufactured body force of benchmark \"plate_mms_2d\" is derived "
-                    "for material.model = \"neo_hookean\" (001 eq. 40-42), not \"{}\"",
-                    cfg.where("material.model"), material_name(pb.material)));
+  const auto* law = &require_neo_hookean(cfg, pb.material, pb.benchmark, "001 eq. 40-42");
   const double L = cfg.get_real("plate.length");
   const double rho = cfg.get_real("material.density");
   // 001: c = sqrt(E / rho0) (its "sqrt(E)/gamma", METHODS.md errata), not the P-wave speed.

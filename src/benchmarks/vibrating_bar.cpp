@@ -19,6 +19,15 @@ Material material_from_config(const Config& cfg, int dim) {
   }
 }
 
+const NeoHookean& require_neo_hookean(const Config& cfg, const Material& m,
+                                      std::string_view benchmark, std::string_view source) {
+  if (const auto* law = std::get_if<NeoHookean>(&m)) return *law;
+  throw InputError(fmt::format(
+      "{}: the manufactured body force of benchmark \"{}\" is derived for material.model = "
+      "\"neo_hookean\" ({}), not \"{}\"",
+      cfg.where("material.model"), benchmark, source, material_name(m)));
+}
+
 void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,
                     std::function<Vec<1>(const Vec<1>&)> velocity) {
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
