@@ -121,7 +121,8 @@ std::vector<KeySpec> declare() {
       integer("method.mls_degree", 1, closed(1, 2),
               "polynomial degree of the MLS and IMLS reconstructions (1: [1, x], 2: [1, x, x^2])"),
       real("mms.amplitude", "m", 0.1, any(),
-           "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (mms_1d: 003; "
+           "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (mms_1d: "
+           "003; "
            "plate_mms_2d: 001)"),
       integer("reference.dofs", 120, at_least(2),
               "nodes of the updated-Lagrangian FEM reference of vibrating_bar_large (D: 120)"),
