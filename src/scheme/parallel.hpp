@@ -19,8 +19,8 @@
 namespace mpm {
 
 struct ParticleChunks {
-  // At least this many particles per chunk: small problems are one chunk, summed exactly as
-  // a serial loop would.
+  // ceil(n / kMinSize) chunks, at most kMax: problems of up to kMinSize particles are one
+  // chunk, summed exactly as a serial loop would.
   static constexpr Index kMinSize = 512;
   static constexpr int kMax = 64;  // the most threads that can share a scatter
 
