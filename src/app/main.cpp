@@ -116,12 +116,15 @@ int cmd_study(const std::string& config, const std::string& refine, const std::s
 }
 
 int cmd_bench(const mpm::BenchOptions& opt) {
-  const auto r = mpm::bench_1d(opt);
+  const auto r = opt.dim == 2 ? mpm::bench_2d(opt) : mpm::bench_1d(opt);
+  const std::string basis =
+      opt.basis == "bspline" ? fmt::format("bspline degree {}", opt.degree) : opt.basis;
   std::cout << fmt::format(
-      "1D {} step, {} basis, {} mapping, lumped mass: {} particles, {} cells, {} steps, "
-      "best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes per particle "
-      "(particle state, cached P1 stencil, grid share)\n",
-      opt.scheme, opt.basis, opt.mapping, r.particles, r.cells, r.steps, opt.repeats,
+      "{}D {} step, {} basis, {} mapping, lumped mass: {} particles, {} cells{}, {} steps, "
+      "{} thread(s), best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes "
+      "per particle (particle state, cached stencil, grid share)\n",
+      opt.dim, opt.scheme, basis, opt.mapping, r.particles, r.cells,
+      opt.dim == 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
       r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
   return 0;
 }
@@ -165,7 +168,15 @@ int main(int argc, char** argv) {
 
   mpm::BenchOptions bopt;
   auto* bench = app.add_subcommand("bench", "time the explicit step (ns per particle-step)");
-  bench->add_option("--particles", bopt.particles, "number of particles")->capture_default_str();
+  bench->add_option("--dim", bopt.dim, "1: vibrating bar; 2: plate_mms_2d (neo-Hookean)")
+      ->check(CLI::IsMember({1, 2}))
+      ->capture_default_str();
+  bench->add_option("--particles", bopt.particles, "number of particles (about, in 2D)")
+      ->capture_default_str();
+  bench->add_option("--per-cell", bopt.per_cell,
+                    "particles per cell per direction (default 4 in 1D, 3 in 2D)");
+  bench->add_option("--threads", bopt.threads, "OpenMP threads (default: OMP_NUM_THREADS)")
+      ->check(CLI::PositiveNumber);
   bench->add_option("--steps", bopt.steps, "steps per repeat")->capture_default_str();
   bench->add_option("--repeats", bopt.repeats, "repeats (best and median reported)")
       ->capture_default_str();

@@ -4,6 +4,7 @@
 
 #include "benchmarks/benchmarks.hpp"
 #include "io/config.hpp"
+#include "scheme/parallel.hpp"
 
 namespace mpm {
 
@@ -94,8 +95,12 @@ Problem<2> make_plate_mms_2d(const Config& cfg) {
   pb.fixed_sides = {{0, 0, 1u}, {0, 1, 1u}, {1, 0, 2u}, {1, 1, 2u}};
   // b depends on the material position X (P.x0, fixed), so only time dependence is flagged.
   pb.body_force.time_dependent = true;
+  // Refilled every step (sines, cosines and a logarithm per particle): in parallel.
   pb.body_force.fill = [ex](const Particles<2>& P, double t, std::vector<Vec<2>>& b) {
-    for (std::size_t i = 0; i < b.size(); ++i) b[i] = ex.body_force(P.x0[i], t);
+    parallel_for(static_cast<Index>(b.size()), [&](Index p) {
+      const auto i = static_cast<std::size_t>(p);
+      b[i] = ex.body_force(P.x0[i], t);
+    });
   };
   pb.exact = ex;
   return pb;

@@ -1,10 +1,12 @@
 #include "core/perf.hpp"
 
 #include <fmt/format.h>
+#include <omp.h>
+
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
-#include "basis/linear.hpp"
 #include "core/run.hpp"
 #include "grid/grid_state.hpp"
 #include "io/config.hpp"
@@ -12,23 +14,41 @@
 
 namespace mpm {
 
-BenchResult bench_1d(const BenchOptions& opt) {
-  BenchResult r;
-  r.cells = std::max<Index>(1, opt.particles / opt.per_cell);
-  r.particles = r.cells * opt.per_cell;
-  r.steps = opt.steps;
-  // A stable step: dt = 0.1 h / c with c = sqrt(7e6 / 2000) m/s.
-  const double h = 1.0 / static_cast<double>(r.cells);
-  const double dt = 0.1 * h / std::sqrt(7e6 / 2000.0);
-  const std::string toml = fmt::format(
-      "benchmark = \"vibrating_bar\"\n"
-      "[grid]\ncells = {}\n[particles]\nper_cell = {}\n"
-      "[time]\ndt = {:.17g}\nend = {:.17g}\n"
-      "[method]\nscheme = \"{}\"\nbasis = \"{}\"\ndegree = {}\nmapping = \"{}\"\n"
-      "[material]\ndensity = 2000.0\nyoungs_modulus = 7e6\n[bar]\nv0 = 0.28\n",
-      r.cells, opt.per_cell, dt, dt * static_cast<double>(opt.steps), opt.scheme, opt.basis,
-      opt.degree, opt.mapping);
-  const Config cfg = Config::parse(toml, "<bench>");
+namespace {
+
+// Functions per direction in a particle's stencil and grid DOFs per direction beyond the cell
+// count, by basis name (basis/*.hpp: StencilT and num_dofs()).
+int stencil_per_dim(const BenchOptions& opt) {
+  if (opt.basis == "linear") return 2;
+  if (opt.basis == "bspline") return opt.degree + 1;
+  return 4;  // GIMP, CPDI, DDMPM: nodes c-1 .. c+2
+}
+Index extra_dofs(const BenchOptions& opt) {
+  return opt.basis == "bspline" ? opt.degree : 1;
+}
+
+// Particle state + cached stencil + cell index + the grid's share: the GridState arrays and the
+// scatter slices of scheme/parallel.hpp (about one grid of mass and one of vectors).
+template <int Dim>
+double bytes_per_particle(const BenchOptions& opt, Index cells, Index particles) {
+  const auto n = static_cast<std::size_t>(std::pow(stencil_per_dim(opt), Dim));
+  const std::size_t stencil = n * (sizeof(Index) + sizeof(double) + sizeof(Vec<Dim>));
+  const double dofs = std::pow(static_cast<double>(cells + extra_dofs(opt)), Dim);
+  const double per_dof =
+      static_cast<double>(sizeof(double) + 4 * sizeof(Vec<Dim>) + 2 * sizeof(std::uint8_t) +
+                          sizeof(double) + sizeof(Vec<Dim>));
+  return static_cast<double>(Particles<Dim>::bytes_per_particle() + stencil + sizeof(Index)) +
+         dofs * per_dof / static_cast<double>(particles);
+}
+
+std::string method_toml(const BenchOptions& opt) {
+  return fmt::format("[method]\nscheme = \"{}\"\nbasis = \"{}\"\ndegree = {}\nmapping = \"{}\"\n",
+                     opt.scheme, opt.basis, opt.degree, opt.mapping);
+}
+
+void time_runs(const Config& cfg, const BenchOptions& opt, BenchResult& r) {
+  if (opt.threads > 0) omp_set_num_threads(opt.threads);
+  r.threads = omp_get_max_threads();
   std::vector<double> ns;
   for (int k = 0; k < opt.repeats; ++k) {
     RunOptions ro;
@@ -38,11 +58,51 @@ BenchResult bench_1d(const BenchOptions& opt) {
   std::sort(ns.begin(), ns.end());
   r.best_ns_per_particle_step = ns.front();
   r.median_ns_per_particle_step = ns[ns.size() / 2];
-  const double dofs = static_cast<double>(r.cells + 1);
-  const double grid_bytes = dofs * (sizeof(double) + 4 * sizeof(Vec<1>) + 2 * sizeof(std::uint8_t));
-  r.bytes_per_particle = static_cast<double>(Particles<1>::bytes_per_particle() +
-                                             sizeof(LinearBasis<1>::StencilT) + sizeof(Index)) +
-                         grid_bytes / static_cast<double>(r.particles);
+}
+
+}  // namespace
+
+BenchResult bench_1d(const BenchOptions& opt) {
+  BenchResult r;
+  const int per_cell = opt.per_cell > 0 ? opt.per_cell : 4;
+  r.cells = std::max<Index>(1, opt.particles / per_cell);
+  r.particles = r.cells * per_cell;
+  r.steps = opt.steps;
+  // A stable step: dt = 0.1 h / c with c = sqrt(7e6 / 2000) m/s.
+  const double h = 1.0 / static_cast<double>(r.cells);
+  const double dt = 0.1 * h / std::sqrt(7e6 / 2000.0);
+  const std::string toml = fmt::format(
+      "benchmark = \"vibrating_bar\"\n"
+      "[grid]\ncells = {}\n[particles]\nper_cell = {}\n"
+      "[time]\ndt = {:.17g}\nend = {:.17g}\n{}"
+      "[material]\ndensity = 2000.0\nyoungs_modulus = 7e6\n[bar]\nv0 = 0.28\n",
+      r.cells, per_cell, dt, dt * static_cast<double>(opt.steps), method_toml(opt));
+  time_runs(Config::parse(toml, "<bench>"), opt, r);
+  r.bytes_per_particle = bytes_per_particle<1>(opt, r.cells, r.particles);
+  return r;
+}
+
+BenchResult bench_2d(const BenchOptions& opt) {
+  BenchResult r;
+  const int per_cell = opt.per_cell > 0 ? opt.per_cell : 3;  // per direction
+  r.cells = std::max<Index>(1, std::llround(std::sqrt(static_cast<double>(opt.particles)) /
+                                            static_cast<double>(per_cell)));
+  r.particles = r.cells * r.cells * per_cell * per_cell;
+  r.steps = opt.steps;
+  // A stable step: dt = 0.1 h / c with the P-wave speed c = sqrt((lambda + 2 mu) / rho).
+  const double E = 1e7, nu = 0.3, rho = 1000.0;
+  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = E / (2.0 * (1.0 + nu));
+  const double h = 1.0 / static_cast<double>(r.cells);
+  const double dt = 0.1 * h / std::sqrt((lambda + 2.0 * mu) / rho);
+  const std::string toml = fmt::format(
+      "benchmark = \"plate_mms_2d\"\n"
+      "[grid]\ncells = {}\n[particles]\nper_cell = {}\n"
+      "[time]\ndt = {:.17g}\nend = {:.17g}\n{}"
+      "[material]\nmodel = \"neo_hookean\"\ndensity = {}\nyoungs_modulus = {}\n"
+      "poisson_ratio = {}\n[mms]\namplitude = 1e-3\n",
+      r.cells, per_cell, dt, dt * static_cast<double>(opt.steps), method_toml(opt), rho, E, nu);
+  time_runs(Config::parse(toml, "<bench>"), opt, r);
+  r.bytes_per_particle = bytes_per_particle<2>(opt, r.cells, r.particles);
   return r;
 }
 

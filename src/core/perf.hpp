@@ -7,8 +7,10 @@
 namespace mpm {
 
 struct BenchOptions {
+  int dim = 1;
   Index particles = 1000000;
-  int per_cell = 4;
+  int per_cell = 0;  // per direction; 0: 4 in 1D, 3 in 2D
+  int threads = 0;   // OpenMP threads; 0: the OpenMP default (OMP_NUM_THREADS or all cores)
   Index steps = 20;
   int repeats = 3;
   std::string scheme = "musl";
@@ -21,13 +23,19 @@ struct BenchResult {
   Index particles = 0;
   Index cells = 0;
   Index steps = 0;
+  int threads = 0;  // OpenMP threads used
   double best_ns_per_particle_step = 0.0;
   double median_ns_per_particle_step = 0.0;
-  double bytes_per_particle = 0.0;  // particle state + cached stencils + grid share (linear)
+  double bytes_per_particle = 0.0;  // particle state + cached stencil + grid share
 };
 
 // 1D vibrating bar (D Table 3.1 set 2 material) with the given scheme, basis and mapping,
 // lumped mass.
 BenchResult bench_1d(const BenchOptions& opt);
+
+// 2D manufactured-solution plate (plate_mms_2d: neo-Hookean, E = 1e7 Pa, nu = 0.3, rho = 1000
+// kg/m^3, amplitude 1e-3 m), about `particles` particles, per_cell per direction, dt = 0.1 h / c
+// with the P-wave speed c, lumped mass.
+BenchResult bench_2d(const BenchOptions& opt);
 
 }  // namespace mpm

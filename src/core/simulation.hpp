@@ -9,6 +9,7 @@
 #include "grid/grid_state.hpp"
 #include "material/materials.hpp"
 #include "particles/particles.hpp"
+#include "scheme/parallel.hpp"
 #include "solver/mass_matrix.hpp"
 
 namespace mpm {
@@ -74,6 +75,7 @@ struct Simulation {
   bool consistent_per_component = false;  // one factorisation per velocity component
   std::vector<StencilT> stencils;         // basis at x_p^s, refreshed by evaluate_basis()
   std::vector<Index> cell;                // cell of each particle at the last evaluation
+  ScatterBuffers<Dim> scatter;            // per-chunk grid buffers of the parallel scatters
 
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s

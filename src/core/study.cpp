@@ -10,6 +10,8 @@
 #include <mutex>
 #include <thread>
 
+#include <omp.h>
+
 #include "core/registry.hpp"
 #include "io/config.hpp"
 #include "io/output.hpp"
@@ -166,6 +168,10 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
                                            static_cast<unsigned>(configs.size()));
   std::atomic<std::size_t> next{0};
   auto worker = [&] {
+    // Runs in parallel share the cores with the OpenMP loops inside each run: split them
+    // (results do not depend on the thread count). Per thread; the main thread's is restored.
+    const int omp_threads = omp_get_max_threads();
+    if (jobs > 1) omp_set_num_threads(std::max(1, omp_threads / static_cast<int>(jobs)));
     for (std::size_t k = next++; k < configs.size(); k = next++) {
       RunOptions ro;
       ro.quiet = true;
@@ -176,6 +182,7 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
         input_errors[k] = e.what();
       }
     }
+    omp_set_num_threads(omp_threads);
   };
   std::vector<std::thread> pool;
   for (unsigned t = 1; t < jobs; ++t) pool.emplace_back(worker);

@@ -1,14 +1,20 @@
 #pragma once
 // The shared stages of every update scheme (D Algorithms 1-2, D 2.6.3). A scheme is an order of
 // these calls; no stage knows which scheme calls it. Per-particle loops are plain loops over the
-// struct-of-arrays with the basis and material resolved at compile time.
+// struct-of-arrays with the basis and material resolved at compile time, run in parallel with
+// OpenMP (scheme/parallel.hpp); every sum across particles has the same rounding for any
+// thread count.
 #include <fmt/format.h>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "core/simulation.hpp"
+#include "scheme/parallel.hpp"
 
 namespace mpm::stages {
 
@@ -40,23 +46,46 @@ void evaluate_basis(Sim& sim) {
   constexpr bool kHasDomain = requires {
     basis.fits(P, Index{0});
   };
-  bool outside = false, unfit = false;
-  for (Index p = 0; p < P.size(); ++p) {
-    const auto i = static_cast<std::size_t>(p);
-    if (!sim.grid.inside(P.x[i])) {
-      outside = true;
-      continue;
-    }
-    if constexpr (kHasDomain) {
-      if (!basis.fits(P, p)) {
-        unfit = true;
+  // Per chunk: flags, crossings and the DOF range of the new stencils (recorded here, while
+  // the stencils are in cache, for the scatters of DirectMapping).
+  constexpr std::size_t K = ParticleChunks::kMax;
+  std::array<std::uint8_t, K> chunk_outside{}, chunk_unfit{};
+  std::array<Index, K> chunk_crossings{};
+  auto& ranges = sim.scatter.ranges;
+  for_each_chunk(P.size(), [&](int chunk, Index b, Index e) {
+    const auto ck = static_cast<std::size_t>(chunk);
+    Index lo = std::numeric_limits<Index>::max(), hi = -1;
+    for (Index p = b; p < e; ++p) {
+      const auto i = static_cast<std::size_t>(p);
+      if (!sim.grid.inside(P.x[i])) {
+        chunk_outside[ck] = 1;
         continue;
       }
+      if constexpr (kHasDomain) {
+        if (!basis.fits(P, p)) {
+          chunk_unfit[ck] = 1;
+          continue;
+        }
+      }
+      const Index c = sim.grid.cell_index(P.x[i]);
+      if (sim.cell[i] >= 0 && c != sim.cell[i]) ++chunk_crossings[ck];
+      sim.cell[i] = c;
+      auto& s = sim.stencils[i];
+      basis.evaluate(P, p, s);
+      for (int a = 0; a < s.kSize; ++a) {
+        lo = std::min(lo, s.dof[a]);
+        hi = std::max(hi, s.dof[a]);
+      }
     }
-    const Index c = sim.grid.cell_index(P.x[i]);
-    if (sim.cell[i] >= 0 && c != sim.cell[i]) ++sim.diag.grid_crossings;
-    sim.cell[i] = c;
-    basis.evaluate(P, p, sim.stencils[i]);
+    ranges.lo[ck] = lo;
+    ranges.hi[ck] = hi;
+  });
+  ranges.particles = P.size();
+  bool outside = false, unfit = false;
+  for (std::size_t c = 0; c < K; ++c) {
+    outside = outside || chunk_outside[c];
+    unfit = unfit || chunk_unfit[c];
+    sim.diag.grid_crossings += chunk_crossings[c];
   }
   if constexpr (kHasDomain) {
     if (unfit && !outside) {
@@ -96,18 +125,20 @@ template <class Sim>
 void map_mass(Sim& sim) {
   sim.mapping.map_mass(sim);
   const auto& m = sim.nodes.mass;
-  double total = 0.0, largest = 0.0;
-  for (double mi : m) {
-    total += mi;
-    largest = std::max(largest, mi);
-  }
-  double particle_mass = 0.0;
-  for (double mp : sim.particles.mass) particle_mass += mp;
+  const auto& mp = sim.particles.mass;
+  const double total = deterministic_sum(static_cast<Index>(m.size()), 0.0,
+                                         [&](Index i) { return m[static_cast<std::size_t>(i)]; });
+  const double largest = m.empty() ? 0.0 : *std::max_element(m.begin(), m.end());
+  const double particle_mass = deterministic_sum(
+      static_cast<Index>(mp.size()), 0.0, [&](Index p) { return mp[static_cast<std::size_t>(p)]; });
   if (particle_mass > 0.0)
     sim.diag.max_rel_mass_error =
         std::max(sim.diag.max_rel_mass_error, std::abs(total - particle_mass) / particle_mass);
   const double threshold = sim.mass_tolerance * largest;
-  for (std::size_t i = 0; i < m.size(); ++i) sim.nodes.active[i] = m[i] > threshold ? 1 : 0;
+  parallel_for(static_cast<Index>(m.size()), [&](Index k) {
+    const auto i = static_cast<std::size_t>(k);
+    sim.nodes.active[i] = m[i] > threshold ? 1 : 0;
+  });
   if (sim.mass_type == MassType::Consistent) {
     constexpr int Dim = Sim::kDim;
     constexpr std::uint8_t kAll = (1u << Dim) - 1u;
@@ -139,15 +170,22 @@ template <class Sim>
 void map_momentum(Sim& sim) {
   sim.mapping.map_momentum(sim);
   constexpr int Dim = Sim::kDim;
-  Vec<Dim> grid_p = Vec<Dim>::Zero(), part_p = Vec<Dim>::Zero();
-  double scale = 0.0;
-  for (const auto& q : sim.nodes.momentum) grid_p += q;
+  const auto& q = sim.nodes.momentum;
+  const Vec<Dim> grid_p =
+      deterministic_sum(static_cast<Index>(q.size()), Vec<Dim>::Zero().eval(),
+                        [&](Index i) { return q[static_cast<std::size_t>(i)]; });
+  // One pass over the particles: (sum m_p v_p, sum m_p |v_p|) as one vector.
+  using Sums = Eigen::Matrix<double, Dim + 1, 1>;
   const auto& P = sim.particles;
-  for (Index p = 0; p < P.size(); ++p) {
+  const Sums sums = deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
     const auto i = static_cast<std::size_t>(p);
-    part_p += P.mass[i] * P.v[i];
-    scale += P.mass[i] * P.v[i].norm();
-  }
+    Sums r;
+    r.template head<Dim>() = P.mass[i] * P.v[i];
+    r[Dim] = P.mass[i] * P.v[i].norm();
+    return r;
+  });
+  const Vec<Dim> part_p = sums.template head<Dim>();
+  const double scale = sums[Dim];
   if (scale > 0.0)
     sim.diag.max_rel_momentum_error =
         std::max(sim.diag.max_rel_momentum_error, (grid_p - part_p).norm() / scale);
@@ -183,7 +221,10 @@ void solve_grid(const Sim& sim, const std::vector<V>& r, std::vector<V>& y) {
   const auto& nd = sim.nodes;
   const auto n = r.size();
   if (sim.mass_type == MassType::Lumped) {
-    for (std::size_t i = 0; i < n; ++i) y[i] = nd.active[i] ? V(r[i] / nd.mass[i]) : V::Zero();
+    parallel_for(static_cast<Index>(n), [&](Index k) {
+      const auto i = static_cast<std::size_t>(k);
+      y[i] = nd.active[i] ? V(r[i] / nd.mass[i]) : V::Zero();
+    });
   } else {
     Eigen::VectorXd rhs(static_cast<Index>(n));
     for (int d = 0; d < Dim; ++d) {
@@ -217,7 +258,10 @@ void solve_velocity(Sim& sim) {
 template <class Sim>
 void advance_grid_velocity(Sim& sim, double dt) {
   auto& nd = sim.nodes;
-  for (std::size_t i = 0; i < nd.velocity.size(); ++i) nd.velocity[i] += dt * nd.accel[i];
+  parallel_for(nd.size(), [&](Index k) {
+    const auto i = static_cast<std::size_t>(k);
+    nd.velocity[i] += dt * nd.accel[i];
+  });
 }
 
 // v_p^{s+1} = v_p^s + dt sum_i phi_i(x_p^s) a_i^s (D eq. 2.39 / 2.47).
@@ -225,13 +269,13 @@ template <class Sim>
 void update_particle_velocity(Sim& sim, double dt) {
   auto& P = sim.particles;
   const auto& a = sim.nodes.accel;
-  for (Index p = 0; p < P.size(); ++p) {
+  parallel_for(P.size(), [&](Index p) {
     const auto i = static_cast<std::size_t>(p);
     const auto& s = sim.stencils[i];
     Vec<Sim::kDim> acc = Vec<Sim::kDim>::Zero();
     for (int k = 0; k < s.kSize; ++k) acc += s.w[k] * a[static_cast<std::size_t>(s.dof[k])];
     P.v[i] += dt * acc;
-  }
+  });
 }
 
 // x_p^{s+1} = x_p^s + dt sum_i phi_i(x_p^s) v_i^{s+1}, and the same increment for u_p
@@ -240,7 +284,7 @@ template <class Sim>
 void update_particle_position(Sim& sim, double dt) {
   auto& P = sim.particles;
   const auto& v = sim.nodes.velocity;
-  for (Index p = 0; p < P.size(); ++p) {
+  parallel_for(P.size(), [&](Index p) {
     const auto i = static_cast<std::size_t>(p);
     const auto& s = sim.stencils[i];
     Vec<Sim::kDim> dx = Vec<Sim::kDim>::Zero();
@@ -248,7 +292,7 @@ void update_particle_position(Sim& sim, double dt) {
     dx *= dt;
     P.x[i] += dx;
     P.u[i] += dx;
-  }
+  });
   // Bases that track particle-domain corners (CPDI2) move them with the same grid velocity.
   if constexpr (requires { sim.basis.advect(sim, dt); }) sim.basis.advect(sim, dt);
 }
@@ -260,10 +304,10 @@ void update_stress(Sim& sim, double dt) {
   constexpr int Dim = Sim::kDim;
   auto& P = sim.particles;
   const auto& v = sim.nodes.velocity;
-  bool bad = false;
-  std::visit(
+  // The variant is resolved once, outside the parallel loop; `bad`: any particle failed.
+  const bool bad = std::visit(
       [&](const auto& law) {
-        for (Index p = 0; p < P.size(); ++p) {
+        return parallel_any(P.size(), [&](Index p) {
           const auto i = static_cast<std::size_t>(p);
           const auto& s = sim.stencils[i];
           Mat<Dim> L = Mat<Dim>::Zero();  // L_ab = dv_a/dx_b
@@ -275,8 +319,8 @@ void update_stress(Sim& sim, double dt) {
           P.volume[i] = J * P.volume0[i];
           P.density[i] = P.mass[i] / P.volume[i];
           law.update(P.stress[i], P.F[i], dtL);
-          bad |= !(J > 0.0) || !std::isfinite(P.stress[i].sum());
-        }
+          return !(J > 0.0) || !std::isfinite(P.stress[i].sum());
+        });
       },
       sim.material);
   if (bad) {

@@ -1,0 +1,173 @@
+#pragma once
+// OpenMP helpers of the explicit core. Results must not depend on the thread count, so every
+// sum that crosses particles runs over a FIXED partition of the particles into chunks (the
+// partition depends only on the particle count), each chunk summed in particle order and the
+// chunk results combined in chunk order. One thread and many threads then give the same bits.
+//
+// The particle-to-grid scatters (GridAccumulator) give each chunk its own slice of grid
+// buffer covering only the DOFs its particles touch (particles are seeded cell by cell, so a
+// chunk touches a narrow band of the grid), then add the slices into the grid in chunk order.
+// No locks or atomics; the extra work is zeroing and adding the slices, about one grid's worth
+// plus the stencil overlap between chunks per scatter.
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace mpm {
+
+struct ParticleChunks {
+  // ceil(n / kMinSize) chunks, at most kMax: problems of up to kMinSize particles are one
+  // chunk, summed exactly as a serial loop would.
+  static constexpr Index kMinSize = 512;
+  static constexpr int kMax = 64;  // the most threads that can share a scatter
+
+  static int count(Index n) {
+    return static_cast<int>(std::clamp<Index>((n + kMinSize - 1) / kMinSize, 1, kMax));
+  }
+  static Index begin(Index n, int c, int chunks) { return n * c / chunks; }
+};
+
+// Below this many iterations a loop stays on one thread (the fork costs more than it saves).
+inline constexpr Index kParallelMin = 2048;
+
+// f(i) for i in [0, n), iterations independent of one another.
+template <class F>
+void parallel_for(Index n, F&& f) {
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
+  for (Index i = 0; i < n; ++i) f(i);
+}
+
+// f(i) for i in [0, n); true when any call returned true (failure flags).
+template <class F>
+bool parallel_any(Index n, F&& f) {
+  bool any = false;
+#pragma omp parallel for schedule(static) reduction(|| : any) if (n >= kParallelMin)
+  for (Index i = 0; i < n; ++i) any = f(i) || any;
+  return any;
+}
+
+// f(c, begin, end) for every chunk c of ParticleChunks over n particles, chunks in parallel.
+template <class F>
+void for_each_chunk(Index n, F&& f) {
+  const int k = ParticleChunks::count(n);
+#pragma omp parallel for schedule(static) if (k > 1)
+  for (int c = 0; c < k; ++c)
+    f(c, ParticleChunks::begin(n, c, k), ParticleChunks::begin(n, c + 1, k));
+}
+
+// sum_i f(i) over [0, n) with the same rounding for any thread count: partial sums per chunk
+// in index order, combined in chunk order. T: double or an Eigen fixed-size vector.
+template <class T, class F>
+T deterministic_sum(Index n, const T& zero, F&& f) {
+  std::array<T, ParticleChunks::kMax> part;
+  const int k = ParticleChunks::count(n);
+  for_each_chunk(n, [&](int c, Index b, Index e) {
+    T acc = zero;
+    for (Index i = b; i < e; ++i) acc += f(i);
+    part[static_cast<std::size_t>(c)] = acc;
+  });
+  T total = zero;
+  for (int c = 0; c < k; ++c) total += part[static_cast<std::size_t>(c)];
+  return total;
+}
+
+// The grid DOFs [lo, hi] touched by the stencils of each particle chunk. evaluate_basis, the
+// only writer of the stencils, records them while the stencils are in cache.
+struct ChunkDofRanges {
+  Index particles = -1;  // the particle count they were recorded for; -1: none yet
+  std::array<Index, ParticleChunks::kMax> lo{}, hi{};
+
+  // Scans the stencils (fallback when evaluate_basis did not record them).
+  template <class Stencil>
+  void scan(const std::vector<Stencil>& stencils) {
+    const auto n = static_cast<Index>(stencils.size());
+    for_each_chunk(n, [&](int c, Index b, Index e) { record(c, stencils, b, e); });
+    particles = n;
+  }
+  template <class Stencil>
+  void record(int c, const std::vector<Stencil>& stencils, Index b, Index e) {
+    Index l = std::numeric_limits<Index>::max(), h = -1;
+    for (Index p = b; p < e; ++p) {
+      const auto& s = stencils[static_cast<std::size_t>(p)];
+      for (int a = 0; a < s.kSize; ++a) {
+        l = std::min(l, s.dof[a]);
+        h = std::max(h, s.dof[a]);
+      }
+    }
+    lo[static_cast<std::size_t>(c)] = l;
+    hi[static_cast<std::size_t>(c)] = h;
+  }
+};
+
+// Per-chunk grid buffers of one value type (double or Vec<Dim>) for the particle-to-grid sums.
+template <class T>
+class GridAccumulator {
+ public:
+  // One chunk's view: add into the DOFs of its range.
+  struct Slice {
+    T* data;
+    Index lo;
+    T& operator[](Index dof) const { return data[dof - lo]; }
+  };
+
+  // out_i = sum_p contributions, where scatter(p, slice) adds particle p's contributions into
+  // slice[dof]. Every chunk sums its particles in order into its own slice; the slices are
+  // then added into `out` in chunk order. DOFs outside every range are set to zero.
+  template <class F>
+  void scatter(std::vector<T>& out, const T& zero, const ChunkDofRanges& r, F&& scatter) {
+    const Index n = r.particles;
+    const int k = ParticleChunks::count(n);
+    std::size_t size = 0;
+    for (int c = 0; c < k; ++c) {
+      const auto cc = static_cast<std::size_t>(c);
+      offset_[cc] = size;
+      size += static_cast<std::size_t>(std::max<Index>(0, r.hi[cc] - r.lo[cc] + 1));
+    }
+    if (buf_.size() < size) buf_.resize(size);  // grows only: no allocation once steady
+    const auto nodes = static_cast<Index>(out.size());
+    constexpr Index kBlock = 4096;  // DOFs per reduction task
+    const Index blocks = (nodes + kBlock - 1) / kBlock;
+#pragma omp parallel if (n >= kParallelMin)
+    {
+#pragma omp for schedule(static)
+      for (int c = 0; c < k; ++c) {
+        const auto cc = static_cast<std::size_t>(c);
+        if (r.hi[cc] < r.lo[cc]) continue;
+        T* data = buf_.data() + offset_[cc];
+        std::fill(data, data + (r.hi[cc] - r.lo[cc] + 1), zero);
+        const Slice slice{data, r.lo[cc]};
+        const Index e = ParticleChunks::begin(n, c + 1, k);
+        for (Index p = ParticleChunks::begin(n, c, k); p < e; ++p) scatter(p, slice);
+      }
+      // The implicit barrier above: every slice is complete before any is added.
+#pragma omp for schedule(static)
+      for (Index blk = 0; blk < blocks; ++blk) {
+        const Index b = blk * kBlock, e = std::min(nodes, b + kBlock);
+        std::fill(out.begin() + b, out.begin() + e, zero);
+        for (int c = 0; c < k; ++c) {
+          const auto cc = static_cast<std::size_t>(c);
+          const Index lo = std::max(b, r.lo[cc]), hi = std::min(e, r.hi[cc] + 1);
+          const T* data = buf_.data() + offset_[cc];
+          for (Index i = lo; i < hi; ++i) out[static_cast<std::size_t>(i)] += data[i - r.lo[cc]];
+        }
+      }
+    }
+  }
+
+ private:
+  std::vector<T> buf_;  // the slices of all chunks, back to back
+  std::array<std::size_t, ParticleChunks::kMax> offset_{};
+};
+
+// The scatter state a simulation keeps between steps: chunk ranges and buffers.
+template <int Dim>
+struct ScatterBuffers {
+  ChunkDofRanges ranges;
+  GridAccumulator<double> scalar;
+  GridAccumulator<Vec<Dim>> vector;
+};
+
+}  // namespace mpm

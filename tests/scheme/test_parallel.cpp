@@ -1,0 +1,189 @@
+// The OpenMP explicit core (scheme/parallel.hpp) gives the same bits for any thread count: the
+// particle sums run over a fixed partition into chunks that does not depend on the threads.
+// Every problem here has more than one chunk (> ParticleChunks::kMinSize particles) and more
+// than kParallelMin particles, so two threads really split the work.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cstring>
+#include <memory>
+#include <numbers>
+#include <random>
+
+#include "benchmarks/problem.hpp"
+#include "core/run.hpp"
+#include "core/variants.hpp"
+#include "io/config.hpp"
+#include "scheme/parallel.hpp"
+
+namespace mpm {
+namespace {
+
+// Restores the thread count of the process when a test ends.
+class Threads {
+ public:
+  explicit Threads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
+  ~Threads() { omp_set_num_threads(saved_); }
+  Threads(const Threads&) = delete;
+  Threads& operator=(const Threads&) = delete;
+
+ private:
+  int saved_;
+};
+
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+RunResult run_with_threads(int threads, const std::string& example,
+                           const std::vector<std::string>& sets) {
+  const Threads t(threads);
+  const Config cfg = Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + example, sets);
+  RunOptions ro;
+  ro.quiet = true;
+  return run(cfg, ro);
+}
+
+void expect_same_run(const std::string& example, const std::vector<std::string>& sets) {
+  const RunResult r1 = run_with_threads(1, example, sets);
+  const RunResult r2 = run_with_threads(2, example, sets);
+  ASSERT_EQ(r1.exit_code, 0) << r1.failure;
+  ASSERT_EQ(r2.exit_code, 0) << r2.failure;
+  ASSERT_GT(r1.particles, 2 * ParticleChunks::kMinSize);
+  // nlohmann::json compares numbers with ==: the error norms must agree to the last bit.
+  EXPECT_EQ(r1.summary["errors"], r2.summary["errors"]);
+  EXPECT_FALSE(r1.summary["errors"].empty());
+  EXPECT_EQ(r1.diag.max_rel_mass_error, r2.diag.max_rel_mass_error);
+  EXPECT_EQ(r1.diag.max_rel_momentum_error, r2.diag.max_rel_momentum_error);
+  EXPECT_EQ(r1.diag.grid_crossings, r2.diag.grid_crossings);
+}
+
+const std::vector<std::string> kBar = {"grid.cells=200", "particles.per_cell=12"};
+const std::vector<std::string> kPlate = {"grid.cells=24", "particles.per_cell=3", "time.end=1e-4"};
+
+std::vector<std::string> with(std::vector<std::string> base, std::vector<std::string> more) {
+  base.insert(base.end(), more.begin(), more.end());
+  return base;
+}
+
+TEST(Parallel, Bar1DLinearSameForOneAndTwoThreads) {
+  expect_same_run("vibrating_bar_small.toml", with(kBar, {"method.basis=\"linear\""}));
+}
+TEST(Parallel, Bar1DQuadraticBSplineSameForOneAndTwoThreads) {
+  expect_same_run("vibrating_bar_small.toml",
+                  with(kBar, {"method.basis=\"bspline\"", "method.degree=2"}));
+}
+TEST(Parallel, Bar1DConsistentMassSameForOneAndTwoThreads) {
+  expect_same_run("vibrating_bar_small.toml", with(kBar, {"method.mass=\"consistent\""}));
+}
+TEST(Parallel, Plate2DLinearSameForOneAndTwoThreads) {
+  expect_same_run("plate_mms_2d.toml",
+                  with(kPlate, {"method.basis=\"linear\"", "mms.amplitude=0.01"}));
+}
+TEST(Parallel, Plate2DQuadraticBSplineEverySchemeSameForOneAndTwoThreads) {
+  for (const char* scheme : {"usl", "usf", "musl", "usavg"}) {
+    SCOPED_TRACE(scheme);
+    expect_same_run("plate_mms_2d.toml",
+                    with(kPlate, {fmt::format("method.scheme=\"{}\"", scheme)}));
+  }
+}
+
+// The full particle state and grid after a few steps, compared byte for byte.
+using PlateSim = Simulation<2, BSplineBasis<2, 2>, DirectMapping>;
+
+// Simulation is not movable (the factorisations of the consistent mass are not): on the heap.
+template <class Scheme>
+std::unique_ptr<PlateSim> run_plate(int threads) {
+  const Threads t(threads);
+  Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{20, 20});
+  auto P = seed_particles<2>(g, Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), 3, 1000.0);
+  for (std::size_t i = 0; i < P.v.size(); ++i) {
+    using std::numbers::pi;
+    P.v[i] = Vec<2>(0.5 * std::sin(2 * pi * P.x[i][0]), -0.3 * std::sin(2 * pi * P.x[i][1]));
+  }
+  ElasticParameters ep{1000.0, 1e7, 0.3};
+  auto sim =
+      std::make_unique<PlateSim>(g, BSplineBasis<2, 2>(g), DirectMapping{}, P, NeoHookean{ep});
+  sim->fix_side(0, 0);
+  sim->fix_side(0, 1);
+  for (int s = 0; s < 20; ++s) Scheme::step(*sim, 1e-4);
+  return sim;
+}
+
+template <class Scheme>
+void expect_same_state() {
+  const auto pa = run_plate<Scheme>(1);
+  const auto pb = run_plate<Scheme>(2);
+  const PlateSim& a = *pa;
+  const PlateSim& b = *pb;
+  ASSERT_GT(a.particles.size(), 4 * ParticleChunks::kMinSize);
+  EXPECT_TRUE(same_bits(a.particles.x, b.particles.x));
+  EXPECT_TRUE(same_bits(a.particles.u, b.particles.u));
+  EXPECT_TRUE(same_bits(a.particles.v, b.particles.v));
+  EXPECT_TRUE(same_bits(a.particles.F, b.particles.F));
+  EXPECT_TRUE(same_bits(a.particles.stress, b.particles.stress));
+  EXPECT_TRUE(same_bits(a.particles.volume, b.particles.volume));
+  EXPECT_TRUE(same_bits(a.nodes.mass, b.nodes.mass));
+  EXPECT_TRUE(same_bits(a.nodes.momentum, b.nodes.momentum));
+  EXPECT_TRUE(same_bits(a.nodes.force, b.nodes.force));
+  EXPECT_EQ(a.diag.max_rel_momentum_error, b.diag.max_rel_momentum_error);
+}
+
+TEST(Parallel, BitwiseStateMusl) {
+  expect_same_state<Musl>();
+}
+TEST(Parallel, BitwiseStateUsl) {
+  expect_same_state<Usl>();
+}
+TEST(Parallel, BitwiseStateUsf) {
+  expect_same_state<Usf>();
+}
+TEST(Parallel, BitwiseStateUsavg) {
+  expect_same_state<Usavg>();
+}
+
+// A stencil of three DOFs (ChunkDofRanges reads kSize and dof).
+struct ThreeDofs {
+  static constexpr int kSize = 3;
+  std::array<Index, 3> dof;
+};
+
+// The chunked scatter against a plain serial sum, with particles in random order so that the
+// chunks' DOF ranges overlap everywhere; equal to round-off, and the same bits for 1..3 threads.
+TEST(Parallel, GridAccumulatorMatchesSerialSum) {
+  constexpr Index n = 5000, nodes = 700;
+  std::mt19937 gen(7);
+  std::uniform_int_distribution<Index> node(0, nodes - 3);
+  std::uniform_real_distribution<double> val(-1.0, 1.0);
+  std::vector<ThreeDofs> st(static_cast<std::size_t>(n));
+  std::vector<double> w(static_cast<std::size_t>(n));
+  for (std::size_t p = 0; p < st.size(); ++p) {
+    const Index j = node(gen);
+    st[p].dof = {j, j + 1, j + 2};
+    w[p] = val(gen);
+  }
+  std::vector<double> serial(nodes, 0.0);
+  for (std::size_t p = 0; p < st.size(); ++p)
+    for (Index d : st[p].dof) serial[static_cast<std::size_t>(d)] += w[p];
+  ChunkDofRanges r;
+  r.scan(st);
+  std::vector<double> first;
+  for (int threads = 1; threads <= 3; ++threads) {
+    const Threads t(threads);
+    GridAccumulator<double> acc;
+    std::vector<double> out(nodes, 99.0);  // stale values must be overwritten
+    acc.scatter(out, 0.0, r, [&](Index p, const auto& slice) {
+      for (Index d : st[static_cast<std::size_t>(p)].dof)
+        slice[d] += w[static_cast<std::size_t>(p)];
+    });
+    for (std::size_t i = 0; i < out.size(); ++i) EXPECT_NEAR(out[i], serial[i], 1e-12);
+    if (threads == 1)
+      first = out;
+    else
+      EXPECT_TRUE(same_bits(first, out));
+  }
+}
+
+}  // namespace
+}  // namespace mpm
