@@ -235,4 +235,18 @@ TEST(Cli, StudyPlotsConvergence) {
   std::filesystem::remove_all(out);
 }
 
+TEST(Cli, BenchRunsAShortCaseIn1DAnd2D) {
+  // The regression guard of the benchmark suite: the bench command builds and runs one short
+  // case per dimension and reports its figures (the timings themselves are not checked).
+  auto one = sh("bench --particles 2000 --steps 2 --repeats 1 --threads 1");
+  ASSERT_EQ(one.code, 0) << one.out;
+  EXPECT_NE(one.out.find("ns per particle-step"), std::string::npos) << one.out;
+  auto two =
+      sh("bench --dim 2 --particles 2000 --steps 2 --repeats 1 --threads 2 --basis bspline "
+         "--degree 2");
+  ASSERT_EQ(two.code, 0) << two.out;
+  EXPECT_NE(two.out.find("2D musl step"), std::string::npos) << two.out;
+  EXPECT_NE(two.out.find("bytes per particle"), std::string::npos) << two.out;
+}
+
 }  // namespace
