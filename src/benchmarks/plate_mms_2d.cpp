@@ -41,14 +41,17 @@ Vec<2> PlateMms2DExact::body_force(const Vec<2>& X, double t) const {
   // which is 001 eq. 42 with its prefactor pi u / L^2 corrected to pi^2 u / L^2 (METHODS.md
   // errata), and the same for y. A test checks it against finite differences of u and P.
   const double k = 2.0 * pi / length, w = omega();
-  const ExactState<2> e = (*this)(X, t);
+  // u alone (001 eq. 38, the same expressions as operator()): the full exact state would also
+  // evaluate the stress, which this per-particle, per-step force does not need.
+  const Vec<2> u(amplitude * std::sin(k * X[0]) * std::sin(w * t),
+                 -amplitude * std::sin(k * X[1]) * std::sin(w * t));
   const Mat<2> F = deformation_gradient(X, t);
   const double lnJ = std::log(F.determinant());
   Vec<2> b;
   for (int d = 0; d < 2; ++d) {
     const double f = F(d, d);
     const double dPdF = (lambda * (1.0 - lnJ) + mu) / (f * f) + mu;
-    b[d] = e.u[d] * (k * k * dPdF / density - w * w);
+    b[d] = u[d] * (k * k * dPdF / density - w * w);
   }
   return b;
 }
