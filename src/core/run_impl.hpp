@@ -647,7 +647,9 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
   if constexpr (std::is_same_v<Mapping, MlsMapping> || std::is_same_v<Mapping, ImlsMapping>) {
     // Where MLS moment matrices were ill-conditioned or IMLS dropped terms (001, 003).
     const auto& t = sim.mapping.totals();
-    res.summary["mls"] = {{"evaluations", t.points},
+    res.summary["mls"] = {{"degree", sim.mapping.settings().degree},
+                          {"dilation", sim.mapping.settings().dilation},
+                          {"evaluations", t.points},
                           {"empty_support", t.empty},
                           {"ill_conditioned", t.ill_conditioned},
                           {"singular", t.singular},

@@ -120,6 +120,9 @@ std::vector<KeySpec> declare() {
               "for TLS, 2 per half element for the cubic spline)"),
       integer("method.mls_degree", 1, closed(1, 2),
               "polynomial degree of the MLS and IMLS reconstructions (1: [1, x], 2: [1, x, x^2])"),
+      real("method.mls_dilation", "", 2.0, greater_than(0),
+           "dilation a of the MLS/IMLS quadratic-spline weight, r = |x - x_p| / (a h) per "
+           "direction, support 1.5 a h each side (001 eq. 16 and 003 eq. 27: a = 2)"),
       real("mms.amplitude", "m", 0.1, any(),
            "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (mms_1d: "
            "003; "

@@ -9,10 +9,10 @@
 
 namespace mpm {
 
-double mls_weight(MlsWeight kind, double distance, double cell) {
+double mls_weight(MlsWeight kind, double distance, double cell, double dilation) {
   const double d = std::abs(distance);
   if (kind == MlsWeight::Linear) return d < cell ? 1.0 - d / cell : 0.0;
-  const double r = d / (2.0 * cell);  // 003 eq. 27, 001 eq. 17
+  const double r = d / (dilation * cell);  // 003 eq. 27, 001 eq. 16-17 (dilation 2)
   if (r <= 0.5) return 0.75 - r * r;
   if (r < 1.5) return 0.5 * (1.5 - r) * (1.5 - r);
   return 0.0;
@@ -33,10 +33,13 @@ void accumulate(MlsReport& total, const MlsReport& step) {
 }
 
 template <int Dim>
-MovingLeastSquares<Dim>::MovingLeastSquares(bool improved, int degree, double max_condition)
-    : improved_(improved), degree_(degree), max_condition_(max_condition) {
+MovingLeastSquares<Dim>::MovingLeastSquares(bool improved, int degree, double max_condition,
+                                            double dilation)
+    : improved_(improved), degree_(degree), max_condition_(max_condition), dilation_(dilation) {
   if (degree != 1 && degree != 2)
     throw InputError(fmt::format("method.mls_degree = {}: choose 1 or 2", degree));
+  if (!(dilation > 0.0))
+    throw InputError(fmt::format("method.mls_dilation = {}: must be > 0", dilation));
   terms_ = mls_terms(Dim, degree);
 }
 
@@ -113,7 +116,7 @@ void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight) {
   // Cells overlapping the support box [x - R, x + R] per direction (clamped to the grid).
   IVec<Dim> lo, hi;
   for (int d = 0; d < Dim; ++d) {
-    const double R = mls_support(weight, grid_.h[d]);
+    const double R = mls_support(weight, grid_.h[d], dilation_);
     const double top = static_cast<double>(grid_.cells[d] - 1);
     const auto cell = [&](double y) {
       return static_cast<Index>(
@@ -137,7 +140,7 @@ void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight) {
       const Index p = bins_.order[k];
       const Vec<Dim> dx = x_[static_cast<std::size_t>(p)] - x;
       double wp = 1.0;  // 001 eq. 16: tensor product of the 1D weights
-      for (int d = 0; d < Dim; ++d) wp *= mls_weight(weight, dx[d], grid_.h[d]);
+      for (int d = 0; d < Dim; ++d) wp *= mls_weight(weight, dx[d], grid_.h[d], dilation_);
       if (!(wp > 0.0)) continue;
       near_.push_back(p);
       s_.push_back(dx.cwiseQuotient(grid_.h));
@@ -259,6 +262,7 @@ MlsSettings mls_settings_from_config(const Config& cfg, bool improved) {
   MlsSettings s;
   s.degree = static_cast<int>(cfg.get_int("method.mls_degree"));
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
+  s.dilation = cfg.get_real("method.mls_dilation");
   if (improved && cfg.get_string("method.mass") != "lumped")
     throw InputError("method.mapping = imls needs method.mass = lumped (003 eq. 32)");
   return s;

@@ -41,19 +41,22 @@ namespace mpm {
 class Config;
 
 enum class MlsWeight {
-  // 003 eq. 27 / 001 eq. 17: w(r), r = |x - x_p| / (2 l), nonzero for |x - x_p| < 3 l (per
-  // direction; 001 eq. 16 multiplies the directions).
+  // 003 eq. 27 / 001 eq. 17: w(r), r = |x - x_p| / (a l), nonzero for |x - x_p| < 1.5 a l (per
+  // direction; 001 eq. 16 multiplies the directions). The dilation a is 2 in 001 eq. 16 and 003
+  // (a support 6 cells wide); method.mls_dilation changes it.
   QuadraticSpline,
   // The P1 hat centred at x: w = 1 - |x - x_p| / l for |x - x_p| < l (003 eq. 31 velocity),
   // tensor product in 2D.
   Linear,
 };
 
+// The published dilation of the quadratic-spline weight (001 eq. 16, 003 eq. 27: r = dx / (2 l)).
+inline constexpr double kMlsDilation = 2.0;
 // w(x - x_p) for a cell size l (one direction).
-double mls_weight(MlsWeight kind, double distance, double cell);
-// Support radius per direction: 3 l (quadratic spline) or l (linear).
-inline double mls_support(MlsWeight kind, double cell) {
-  return kind == MlsWeight::QuadraticSpline ? 3.0 * cell : cell;
+double mls_weight(MlsWeight kind, double distance, double cell, double dilation = kMlsDilation);
+// Support radius per direction: 1.5 a l (quadratic spline; 3 l for a = 2) or l (linear).
+inline double mls_support(MlsWeight kind, double cell, double dilation = kMlsDilation) {
+  return kind == MlsWeight::QuadraticSpline ? 1.5 * dilation * cell : cell;
 }
 // Number of monomials of total degree <= degree (1 or 2) in dim variables: 2, 3 in 1D;
 // 3, 6 in 2D (001 eq. 15, 003 eq. 15).
@@ -130,8 +133,10 @@ class MovingLeastSquares {
   static constexpr int kMaxTerms = mls_terms(Dim, 2);
 
   // improved: IMLS, else MLS; degree 1 or 2 (throws InputError otherwise). max_condition:
-  // MLS points with a larger cond(A) are counted as ill-conditioned.
-  explicit MovingLeastSquares(bool improved = false, int degree = 1, double max_condition = 1e8);
+  // MLS points with a larger cond(A) are counted as ill-conditioned. dilation: a of the
+  // quadratic-spline weight (MlsWeight), > 0.
+  explicit MovingLeastSquares(bool improved = false, int degree = 1, double max_condition = 1e8,
+                              double dilation = kMlsDilation);
 
   // Positions of the data (standalone use); points outside the grid are ignored and counted.
   void set_points(const Grid<Dim>& g, std::span<const Vec<Dim>> x);
@@ -155,6 +160,7 @@ class MovingLeastSquares {
 
   bool improved() const { return improved_; }
   int degree() const { return degree_; }
+  double dilation() const { return dilation_; }
   int terms() const { return terms_; }
   Index outside() const { return outside_; }
   // The data binned by grid cell (valid after set_points).
@@ -171,6 +177,7 @@ class MovingLeastSquares {
   int degree_;
   int terms_;
   double max_condition_;
+  double dilation_;
   Grid<Dim> grid_;
   std::vector<Vec<Dim>> x_;
   ElementBins<Dim> bins_;
@@ -191,6 +198,7 @@ struct MlsSettings {
   int degree = 1;        // method.mls_degree: 1 (001 eq. 15) or 2
   int gauss_points = 0;  // per active element; 0: 2
   double max_condition = 1e8;
+  double dilation = kMlsDilation;  // method.mls_dilation
   int gauss_points_used() const { return gauss_points > 0 ? gauss_points : 2; }
 };
 
@@ -355,7 +363,7 @@ class MovingLeastSquaresMapping {
   // the dimension is known, so it holds both; the unused one stays empty).
   template <int Dim>
   struct Work {
-    explicit Work(const Settings& s) : mls(Improved, s.degree, s.max_condition) {}
+    explicit Work(const Settings& s) : mls(Improved, s.degree, s.max_condition, s.dilation) {}
     MovingLeastSquares<Dim> mls;
     std::vector<Vec<Dim>> vec;
     std::vector<Mat<Dim>> sig;

@@ -39,6 +39,30 @@ TEST(Mls, WeightFunctions) {
   EXPECT_GT(mls_weight(MlsWeight::QuadraticSpline, -1.49, 0.5), 0.0);
   EXPECT_DOUBLE_EQ(mls_weight(MlsWeight::Linear, 0.25, 1.0), 0.75);
   EXPECT_EQ(mls_weight(MlsWeight::Linear, 1.0, 1.0), 0.0);
+  // Dilation a: r = |dx| / (a l); the published a = 2 is the default (001 eq. 16).
+  EXPECT_DOUBLE_EQ(mls_weight(MlsWeight::QuadraticSpline, 0.25, 0.5, 1.0), 0.5);  // r = 1/2
+  EXPECT_EQ(mls_weight(MlsWeight::QuadraticSpline, 0.75, 0.5, 1.0), 0.0);         // r = 3/2
+  EXPECT_DOUBLE_EQ(mls_support(MlsWeight::QuadraticSpline, 0.5, 1.0), 0.75);
+  EXPECT_DOUBLE_EQ(mls_support(MlsWeight::QuadraticSpline, 0.5), 1.5);
+  EXPECT_THROW(MovingLeastSquares<1>(false, 1, 1e8, 0.0), InputError);
+}
+
+TEST(Mls, ReproducesPolynomialsWithAnyDilation) {
+  // 9 particles per cell so that the narrowest support (a = 1, 1.5 cells each side) still
+  // holds more distinct points than the quadratic basis has terms.
+  const auto x = scattered(3, 9);
+  for (bool improved : {false, true})
+    for (int degree : {1, 2})
+      for (double a : {1.0, 1.5, 3.0}) {
+        std::vector<double> f;
+        for (double xp : x) f.push_back(poly(degree, xp));
+        MovingLeastSquares m(improved, degree, 1e8, a);
+        m.set_points(kGrid, x);
+        for (double xe = 0.0; xe <= 2.0; xe += 0.0371)
+          EXPECT_NEAR(m.evaluate(xe, MlsWeight::QuadraticSpline, f), poly(degree, xe), 1e-11)
+              << improved << " " << degree << " a = " << a << " x = " << xe;
+        EXPECT_EQ(m.report().singular, 0);
+      }
 }
 
 TEST(Mls, ReproducesPolynomialsUpToDegree) {
