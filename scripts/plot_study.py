@@ -75,7 +75,7 @@ def save(fig, out, stem):
     paths = []
     for ext in ("png", "svg"):
         path = os.path.join(out, f"{stem}.{ext}")
-        fig.savefig(path, dpi=120)
+        fig.savefig(path, dpi=120, metadata={"Date": None} if path.endswith(".svg") else None)
         paths.append(path)
     return paths
 
@@ -155,6 +155,7 @@ def main(argv):
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
         plt.rcParams["svg.fonttype"] = "none"  # text stays text in the SVG (searchable, editable)
+        plt.rcParams["svg.hashsalt"] = "mpmlab"  # reproducible SVG ids (regenerated files diff)
     except ImportError:
         sys.exit("plot_study.py: matplotlib is missing; install it with "
                  "`bash scripts/deps.sh python3-matplotlib` (Debian package python3-matplotlib)")
@@ -190,7 +191,7 @@ def main(argv):
         fig.tight_layout()
         for ext in ("png", "svg"):
             path = os.path.join(out, f"convergence_{err}.{ext}")
-            fig.savefig(path, dpi=120)
+            fig.savefig(path, dpi=120, metadata={"Date": None} if path.endswith(".svg") else None)
             written.append(path)
         plt.close(fig)
     written += profile_and_history(plt, args.csv, methods, out, title)
