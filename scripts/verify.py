@@ -2,7 +2,7 @@
 """Verification report: regenerates docs/verification.md and docs/figures/ from fresh runs of
 build/mpm, with the published figures beside the measured ones and a computed verdict.
 
-    /usr/bin/python3 scripts/verify.py            full report into docs/ (about 5-10 min on 2 cores)
+    /usr/bin/python3 scripts/verify.py            full report into docs/ (1-3 min on 2 cores)
     /usr/bin/python3 scripts/verify.py --quick    coarse convergence guard (CI): prints each
                                                   observed order against its threshold, writes
                                                   nothing into docs/, exits 1 if one is below
@@ -13,7 +13,8 @@ study.csv, particle CSVs or `mpm reconstruct` output. The published figures are 
 PUBLISHED (value and source); the verdict column follows the rules of VERDICT_RULES.
 Prose explaining a difference is printed only when the verdict it explains is "differs".
 
-Needs Debian's python3 with numpy-free stdlib; plots need matplotlib (python3-matplotlib).
+Needs only the Python standard library; the plots need matplotlib (Debian: python3-matplotlib,
+which /usr/bin/python3 sees). --quick needs no matplotlib.
 """
 import argparse
 import csv
