@@ -29,6 +29,7 @@ SLOW+='|EmptyCellsAndFreeEnds|BSplineDegreeOneEqualsLinear)|TlsReconstruction2D\
 SLOW+='|BasesInTheStep\.BsmpmCutsTheColumnCompactionStressError|Ulfem\.LargeDeformationBarSelfConverges'
 SLOW+='|ReconstructionMpm\.(TlsImprovesMpmOnTheColumn|ReconstructionsReduceTheLargeDeformationError'
 SLOW+='|EveryBasisSchemeAndMassWithTlsAndCubicSpline)'
+SLOW+='|VerifyQuick\.'  # refinement studies through build/mpm (scripts/verify.py --quick)
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
 else

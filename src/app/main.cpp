@@ -1,5 +1,6 @@
-// mpm: the mpmlab command line. Subcommands: run, study, bench, keys, list.
+// mpm: the mpmlab command line. Subcommands: run, study, bench, reconstruct, verify, keys, list.
 #include <fmt/format.h>
+#include <sys/wait.h>
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <filesystem>
@@ -115,6 +116,25 @@ int cmd_study(const std::string& config, const std::string& refine, const std::s
   return 0;
 }
 
+// The verification report (scripts/verify.py), run with this executable.
+int cmd_verify(bool quick, bool long_runs, const std::string& out, int jobs, const char* argv0) {
+  std::error_code ec;
+  auto self = std::filesystem::canonical("/proc/self/exe", ec);
+  if (ec) self = std::filesystem::absolute(argv0);
+  const std::string python =
+      std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  std::string cmd = python + " " + shell_quote(std::string(MPM_SCRIPTS_DIR) + "/verify.py") +
+                    " --mpm " + shell_quote(self.string());
+  if (quick) cmd += " --quick";
+  if (long_runs) cmd += " --long";
+  if (!out.empty()) cmd += " --out " + shell_quote(out);
+  if (jobs > 0) cmd += fmt::format(" --jobs {}", jobs);
+  std::cout << std::flush;
+  const int status = std::system(cmd.c_str());
+  if (status == -1 || !WIFEXITED(status)) return mpm::exit_code::kInternal;
+  return WEXITSTATUS(status);
+}
+
 int cmd_bench(const mpm::BenchOptions& opt) {
   const auto r = opt.dim == 2 ? mpm::bench_2d(opt) : mpm::bench_1d(opt);
   const std::string basis =
@@ -225,6 +245,17 @@ int main(int argc, char** argv) {
                   "Gauss points per element (2D: per direction) for the integral")
       ->capture_default_str();
 
+  auto* verify = app.add_subcommand(
+      "verify",
+      "regenerate docs/verification.md and docs/figures/ from fresh runs (scripts/verify.py)");
+  bool verify_quick = false, verify_long = false;
+  verify->add_flag("--quick", verify_quick,
+                   "coarse convergence guard: print observed orders against thresholds, fail "
+                   "if one is below; writes nothing into docs/");
+  verify->add_flag("--long", verify_long, "also run the 001 plate study at T = 0.2 s (hours)");
+  verify->add_option("--out", out, "report directory (default: docs/ of the source tree)");
+  verify->add_option("--jobs,-j", jobs, "parallel runs (default 2)");
+
   auto* keys = app.add_subcommand("keys",
                                   "print every configuration key with type, unit, "
                                   "default, range and description");
@@ -235,6 +266,7 @@ int main(int argc, char** argv) {
     if (*run) return cmd_run(config, sets, out, quiet, restart);
     if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot);
     if (*bench) return cmd_bench(bopt);
+    if (*verify) return cmd_verify(verify_quick, verify_long, out, jobs, argv[0]);
     if (*rec) {
       const auto r = mpm::reconstruct(ropt);
       if (ropt.dim == 2)

@@ -1,0 +1,1402 @@
+#!/usr/bin/python3
+"""Verification report: regenerates docs/verification.md and docs/figures/ from fresh runs of
+build/mpm, with the published figures beside the measured ones and a computed verdict.
+
+    /usr/bin/python3 scripts/verify.py            full report into docs/ (1-3 min on 2 cores)
+    /usr/bin/python3 scripts/verify.py --quick    coarse convergence guard (CI): prints each
+                                                  observed order against its threshold, writes
+                                                  nothing into docs/, exits 1 if one is below
+    build/mpm verify [--quick] [--out DIR]        the same, through the command line
+
+Every number in the report that comes from a run is computed here from summary.json,
+study.csv, particle CSVs or `mpm reconstruct` output. The published figures are data in
+PUBLISHED (value and source); the verdict column follows the rules of VERDICT_RULES.
+Prose explaining a difference is printed only when the verdict it explains is "differs".
+
+Needs only the Python standard library; the plots need matplotlib (Debian: python3-matplotlib,
+which /usr/bin/python3 sees). --quick needs no matplotlib.
+"""
+import argparse
+import csv
+import glob
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCRIPTS = os.path.join(ROOT, "scripts")
+EX = os.path.join(ROOT, "examples")
+
+# --------------------------------------------------------------------------------------------
+# Published figures: key -> (source, value). Values are the documents' own numbers.
+# --------------------------------------------------------------------------------------------
+PUBLISHED = {
+    "bar_order_u": ("D 5.4.1, Fig. 5.9a", 2.0),
+    "bar_order_v": ("D 5.4.1, Fig. 5.9a", 2.0),
+    "bar_order_sigma": ("D 5.4.1, Fig. 5.9a", 1.0),
+    "bar_direct_mass": ("D 5.4", 1e-15),
+    "bar_tls_mass": ("D Table 5.3", 7.5e-15),
+    "bar_tls_momentum": ("D Table 5.3", 2.1e-16),
+    "bar_cs_mass_MPM": ("D Table 5.3", 2.3825e-12),
+    "bar_cs_mass_DDMPM": ("D Table 5.3", 3.9211e-13),
+    "bar_cs_mass_BSMPM": ("D Table 5.3", 7.3896e-15),
+    "bar_cs_momentum_MPM": ("D Table 5.3", 3.7e-6),
+    "bar_cs_momentum_DDMPM": ("D Table 5.3", 3.7e-6),
+    "bar_cs_momentum_BSMPM": ("D Table 5.3", 1.8e-6),
+    "bar_tls_u_factor": ("D Fig. 5.9a", 1.7),
+    "bar_bstls_order_u": ("D Fig. 5.9c", 3.0),
+    "bar_bstls_order_v": ("D Fig. 5.9c", 3.0),
+    "bar_bstls_order_sigma": ("D Fig. 5.9c", 3.0),
+    "large_tls_mass": ("D Table 5.5", 2.9e-14),
+    "large_tls_momentum": ("D Table 5.5", 5.8e-15),
+    "large_cs_mass_MPM": ("D Table 5.5", 8.21e-5),
+    "large_cs_mass_DDMPM": ("D Table 5.5", 3.59e-5),
+    "large_cs_mass_BSMPM": ("D Table 5.5", 7.39e-7),
+    "large_factor_BSMPM_TLS": ("D 5.4.1", 9.9),
+    "large_factor_DDMPM_TLS": ("D 5.4.1", 7.8),
+    "large_factor_BSMPM_CS": ("D 5.4.1", 13.5),
+    "large_factor_DDMPM_CS": ("D 5.4.1", 8.9),
+    "column_bsmpm_factor": ("D 5.4.2, Table 5.6", 10.0),
+    "column_mpm_crossings": ("D 5.4.2", 180),
+    "column_ddmpm_error": ("D Table 5.6", 4.4555e-2),
+    "column_tls_mass": ("D Table 5.7", 1.05e-12),
+    "column_tls_momentum": ("D Table 5.7", 5.6e-13),
+    "column_cs_mass_MPM": ("D Table 5.7", 3.08e-6),
+    "column_cs_mass_DDMPM": ("D Table 5.7", 4.76e-7),
+    "column_cs_mass_BSMPM": ("D Table 5.7", 1.51e-9),
+    "column_cs_momentum_MPM": ("D Table 5.7", 3.5e-6),
+    "tls2d_rms": ("D 6.2.1", 6.17e-3),
+    "tls2d_integral": ("D 6.2.1", 6.66e-16),
+    "tls2d_order_1": ("D Fig. 6.6", 1.0),
+    "tls2d_order_3": ("D Fig. 6.6", 2.0),
+    "tls2d_order_6": ("D Fig. 6.6", 3.0),
+    "mms_imls_order": ("003 Fig. 6", 2.0),
+    "mms_cpdi_order": ("003 Fig. 5", 2.0),
+    "plate_tls_mass": ("D Table 6.1", 7.3e-13),
+}
+
+FACTOR_TOL = 1.25   # a value is reproduced within this factor of the published one
+CLOSE_FACTOR = 2.0  # ... and close (same size, not the same number) within this factor
+ORDER_TOL = 0.3     # an order is reproduced within this distance of the published one
+CLOSE_ORDER = 0.6   # ... and close within this distance
+ROUNDOFF = 1e-11    # relative conservation errors below this are round-off (accumulated
+                    # over the thousands of steps of a run)
+VERDICT_RULES = (
+    f"A value is *reproduced* when it lies within a factor {FACTOR_TOL} of the published one, "
+    f"an observed order when it lies within {ORDER_TOL} of the published order, a relative "
+    f"conservation error when both it and the published one are below {ROUNDOFF:.0e} "
+    "(round-off) or within the factor; a qualitative claim by the test given in its row. "
+    f"A value within a factor {CLOSE_FACTOR:g} or an order within {CLOSE_ORDER} is *close*, "
+    "anything else *differs*; both give the measured and the published number.")
+
+
+def e(x, d=2):
+    """Compact scientific notation (None -> '-')."""
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "-"
+    return f"{x:.{d}e}"
+
+
+def num(x):
+    """A measured or published number in a verdict: 3 significant digits."""
+    if x is None or not math.isfinite(x):
+        return "-"
+    return f"{x:.3g}" if 1e-2 <= abs(x) < 1e4 else f"{x:.2e}"
+
+
+def pub(key):
+    return PUBLISHED[key][1]
+
+
+def src(key):
+    return PUBLISHED[key][0]
+
+
+def verdict_value(measured, key, roundoff=False):
+    p = pub(key)
+    if measured is None:
+        return f"differs: no measurement (run failed) vs published {num(p)}"
+    if measured > 0 and 1 / FACTOR_TOL <= measured / p <= FACTOR_TOL:
+        return "reproduced"
+    if roundoff and measured < ROUNDOFF and p < ROUNDOFF:
+        return "reproduced (both round-off)"
+    word = "close" if measured > 0 and 1 / CLOSE_FACTOR <= measured / p <= CLOSE_FACTOR else \
+        "differs"
+    return f"{word}: measured {num(measured)} vs published {num(p)}"
+
+
+def verdict_order(measured, key):
+    p = pub(key)
+    if measured is None or not math.isfinite(measured):
+        return f"differs: no order measured vs published {p:.1f}"
+    if abs(measured - p) <= ORDER_TOL:
+        return "reproduced"
+    word = "close" if abs(measured - p) <= CLOSE_ORDER else "differs"
+    return f"{word}: measured {measured:.2f} vs published {p:.1f}"
+
+
+def verdict_claim(ok, measured_text):
+    return "reproduced" if ok else f"differs: measured {measured_text}"
+
+
+def reproduced(v):
+    return v.startswith("reproduced")
+
+
+def ls_order(hs, es):
+    """Least-squares slope of log e against log h over the series (None if undefined)."""
+    pts = [(math.log(h), math.log(x)) for h, x in zip(hs, es)
+           if h and x is not None and h > 0 and x > 0]
+    if len(pts) < 2 or len(pts) < len(hs):
+        return None
+    mx = sum(p[0] for p in pts) / len(pts)
+    my = sum(p[1] for p in pts) / len(pts)
+    sxx = sum((p[0] - mx) ** 2 for p in pts)
+    return sum((p[0] - mx) * (p[1] - my) for p in pts) / sxx if sxx > 0 else None
+
+
+def pair_orders(hs, es):
+    out = [None]
+    for k in range(1, len(hs)):
+        a, b = es[k - 1], es[k]
+        out.append(math.log(a / b) / math.log(hs[k - 1] / hs[k])
+                   if a and b and a > 0 and b > 0 else None)
+    return out
+
+
+def o(x):
+    return "" if x is None else f"{x:.2f}"
+
+
+# --------------------------------------------------------------------------------------------
+# Running build/mpm
+# --------------------------------------------------------------------------------------------
+class Runner:
+    """Runs build/mpm (one OpenMP thread per run, `jobs` runs at a time) in a work directory."""
+
+    def __init__(self, mpm, jobs, work):
+        self.mpm, self.jobs, self.work = mpm, jobs, work
+        self.env = dict(os.environ, OMP_NUM_THREADS="1")
+        self.count = 0
+
+    def _dir(self, name):
+        self.count += 1
+        return os.path.join(self.work, f"{self.count:04d}_{re.sub(r'[^A-Za-z0-9_.-]', '_', name)}")
+
+    def run(self, example, sets=(), frames=1, name=None, out=None):
+        """One `mpm run`; returns summary.json as a dict with '_dir' added."""
+        out = out or self._dir(name or example)
+        cmd = [self.mpm, "run", os.path.join(EX, example + ".toml"), "-q", "--out", out,
+               "--set", "output.vtk=false", "--set", f"output.frames={frames}",
+               "--set", f"output.csv={'true' if frames else 'false'}"]
+        for s in sets:
+            cmd += ["--set", s]
+        subprocess.run(cmd, capture_output=True, env=self.env)
+        path = os.path.join(out, "summary.json")
+        if not os.path.exists(path):
+            return {"status": "failed", "errors": {}, "conservation": {}, "_dir": out}
+        with open(path) as f:
+            r = json.load(f)
+        r["_dir"] = out
+        return r
+
+    def many(self, specs):
+        """Runs [(example, sets), ...] in parallel; results in order."""
+        with ThreadPoolExecutor(max_workers=self.jobs) as ex:
+            return list(ex.map(lambda s: self.run(*s), specs))
+
+    def study(self, example, refine, methods=None, sets=(), name=None):
+        """`mpm study`; returns (out_dir, {method: [rows sorted by h descending]})."""
+        out = self._dir(name or ("study_" + example))
+        cmd = [self.mpm, "study", os.path.join(EX, example + ".toml"), "--refine", refine,
+               "--out", out, "-j", str(self.jobs),
+               "--set", "output.vtk=false", "--set", "output.frames=1"]
+        if methods:
+            cmd += ["--methods", methods]
+        for s in sets:
+            cmd += ["--set", s]
+        subprocess.run(cmd, capture_output=True, env=self.env)
+        rows = {}
+        with open(os.path.join(out, "study.csv"), newline="") as f:
+            for row in csv.DictReader(f):
+                for k, v in list(row.items()):
+                    if k not in ("method", "status") and v not in ("", None):
+                        try:
+                            row[k] = float(v)
+                        except ValueError:
+                            pass
+                    elif v == "":
+                        row[k] = None
+                rows.setdefault(row["method"], []).append(row)
+        for m in rows:
+            rows[m].sort(key=lambda r: -r["h"])
+        return out, rows
+
+    def reconstruct(self, args):
+        """`mpm reconstruct`; returns (rms, relative integral error)."""
+        p = subprocess.run([self.mpm, "reconstruct"] + args, capture_output=True, text=True,
+                           env=self.env)
+        rms = re.search(r"RMS error .*?([0-9.eE+-]+)\s*$", p.stdout, re.M)
+        integ = re.search(r"relative integral error\s+([0-9.eE+-]+)", p.stdout)
+        return (float(rms.group(1)) if rms else None, float(integ.group(1)) if integ else None)
+
+
+def col(rows, key):
+    return [r.get(key) for r in rows]
+
+
+def last_frame(run_dir):
+    files = sorted(glob.glob(os.path.join(run_dir, "particles_*.csv")))
+    if not files:
+        return None
+    with open(files[-1], newline="") as f:
+        return [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+
+
+def total_variation(parts, key):
+    ps = sorted(parts, key=lambda r: r["x0_1"])
+    return sum(abs(ps[k][key] - ps[k - 1][key]) for k in range(1, len(ps)))
+
+
+def plot_study(out, figdir, errors, title, energy=True):
+    """Convergence, stress-profile and conservation plots of a study (scripts/plot_study.py).
+    energy=False drops the energy-over-time plot (a body force doing work: not conserved)."""
+    cmd = ["/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable,
+           os.path.join(SCRIPTS, "plot_study.py"), os.path.join(out, "study.csv"),
+           "--errors", errors, "--out", figdir, "--title", title]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        print(p.stderr, file=sys.stderr)
+    paths = p.stdout.split()
+    if not energy:
+        for x in [x for x in paths if os.path.basename(x).startswith("conservation.")]:
+            os.remove(x)
+            paths.remove(x)
+    return [os.path.relpath(x, ROOT) for x in paths]
+
+
+# --------------------------------------------------------------------------------------------
+# Quick variant (CI guard)
+# --------------------------------------------------------------------------------------------
+QUICK_CHECKS = [
+    # (label, example, refine, methods, sets, error column, threshold on the LS order)
+    ("vibrating bar, P1 direct lumped, u (published 2)", "vibrating_bar_small",
+     "grid.cells=5,10,20", "linear/direct/lumped", [], "displacement_rms", 1.8),
+    ("vibrating bar, BSMPM-TLS consistent, u (published 3)", "vibrating_bar_small",
+     "grid.cells=5,10,20", "bspline2/tls/consistent", [], "displacement_rms", 2.5),
+    ("mms_1d, MPM+IMLS, u (published 2)", "mms_1d", "grid.cells=16,32,64", "linear/imls", [],
+     "displacement_rms", 1.8),
+    ("plate_mms_2d, A = 1e-4, P1 lumped, u (expected 2)", "plate_mms_2d", "grid.cells=8,16",
+     "linear/direct/lumped", ["mms.amplitude=1e-4", "time.end=1e-3"], "displacement_rms", 1.8),
+]
+
+
+def quick(runner, scale):
+    t0 = time.time()
+    failed = 0
+    print(f"verify --quick: observed orders (least squares over the sizes) against thresholds"
+          f"{'' if scale == 1 else f' x {scale}'}")
+    for label, example, refine, methods, sets, err, thr in QUICK_CHECKS:
+        _, rows = runner.study(example, refine, methods, sets)
+        rs = list(rows.values())[0]
+        order = ls_order(col(rs, "h"), col(rs, err))
+        bad = any(r["status"] != "ok" for r in rs)
+        ok = order is not None and not bad and order >= thr * scale
+        failed += not ok
+        print(f"  {'ok  ' if ok else 'FAIL'} {label}: {refine}, order "
+              f"{'-' if order is None else f'{order:.2f}'} >= {thr * scale:.2f}")
+    print(f"verify --quick: {len(QUICK_CHECKS) - failed}/{len(QUICK_CHECKS)} passed in "
+          f"{time.time() - t0:.1f} s")
+    if failed:
+        print(f"GUARD FAILED: {failed} observed order(s) below threshold")
+        return 1
+    return 0
+
+
+# --------------------------------------------------------------------------------------------
+# Report sections. Each returns Markdown; `ctx` collects the figures directory and measured
+# values that later sections (the "Against the published figures" table) reuse.
+# --------------------------------------------------------------------------------------------
+def fig_md(ctx, paths, caption, ext=".png"):
+    """Markdown image links relative to the report (PNG shown, SVG alongside), each captioned
+    with `caption` and what the file shows (from its name)."""
+    what = {"convergence_": "convergence of ", "stress_profile": "stress at the final time "
+            "(finest run of each method)", "conservation": "total energy over time (finest run "
+            "of each method)"}
+    out = []
+    for p in (p for p in paths if p.endswith(ext)):
+        stem = os.path.splitext(os.path.basename(p))[0]
+        label = next((v + stem[len(k):] if k.endswith("_") else v for k, v in what.items()
+                      if stem.startswith(k)), "")
+        rel = os.path.relpath(os.path.join(ROOT, p), ctx["out"])
+        out.append(f"![{caption}{': ' + label if label else ''}]({rel})")
+    return "\n".join(out) + "\n" if out else ""
+
+
+def sec_small_bar(R, ctx):
+    out, rows = R.study("vibrating_bar_small", "grid.cells=5,10,20,40", name="small_bar")
+    rs = list(rows.values())[0]
+    hs = col(rs, "h")
+    keys = ["displacement_rms", "velocity_rms_midstep", "velocity_rms", "stress_rms"]
+    orders = {k: pair_orders(hs, col(rs, k)) for k in keys}
+    t = ["| cells | displacement_rms | order | velocity_rms_midstep | order | velocity_rms (t = T) "
+         "| stress_rms [Pa] | order |", "|---|---|---|---|---|---|---|---|"]
+    for i, r in enumerate(rs):
+        t.append(f"| {int(r['cells'])} | {e(r['displacement_rms'], 3)} | "
+                 f"{o(orders['displacement_rms'][i])} | {e(r['velocity_rms_midstep'], 3)} | "
+                 f"{o(orders['velocity_rms_midstep'][i])} | {e(r['velocity_rms'], 3)} | "
+                 f"{r['stress_rms']:.4g} | {o(orders['stress_rms'][i])} |")
+    lsu = ls_order(hs, col(rs, "displacement_rms"))
+    lsv = ls_order(hs, col(rs, "velocity_rms_midstep"))
+    lss = ls_order(hs, col(rs, "stress_rms"))
+    vu, vv, vs = (verdict_order(lsu, "bar_order_u"), verdict_order(lsv, "bar_order_v"),
+                  verdict_order(lss, "bar_order_sigma"))
+    ctx["small_bar"] = rs
+    # dt = 1e-8 s: the mid-step velocity without its O(dt^2) start-up floor.
+    _, fine = R.study("vibrating_bar_small", "grid.cells=5,10,20,40", sets=["time.dt=1e-8"],
+                      name="small_bar_dt")
+    fr = list(fine.values())[0]
+    fo = pair_orders(col(fr, "h"), col(fr, "velocity_rms_midstep"))[1:]
+    same_u = all(abs(a["displacement_rms"] / b["displacement_rms"] - 1) < 1e-2 and
+                 abs(a["stress_rms"] / b["stress_rms"] - 1) < 1e-2 for a, b in zip(rs, fr))
+    # The other schemes at 40 cells.
+    sch = R.many([("vibrating_bar_small", ["grid.cells=40", f"method.scheme={s}"], 0)
+                  for s in ("usl", "usf", "usavg")])
+    usl = sch[0]["errors"]
+    musl = rs[-1]
+    digits = min(-math.log10(max(abs(usl[k] / musl[k] - 1), 1e-16))
+                 for k in ("displacement_rms", "velocity_rms", "stress_rms"))
+    mass, mom = musl["max_rel_mass_error"], musl["max_rel_momentum_error"]
+    figs = plot_study(out, os.path.join(ctx["figdir"], "vibrating_bar_small"),
+                      "displacement_rms,velocity_rms_midstep,stress_rms",
+                      "vibrating bar, small deformation, P1 (MUSL, lumped)")
+    ctx["readme_fig"] = [p for p in figs if p.endswith("convergence_displacement_rms.png")]
+    stall = rs[-1]["velocity_rms"]
+    mid_note = (", below 2 because of a second," if orders["velocity_rms_midstep"][-1] < 1.8
+                else "; finer grids would meet a second,")
+    md = f"""## Vibrating bar, small deformation, Table 3.1 set 2 (D 5.4.1, Fig. 5.9a; 004 Fig. 4.4)
+
+`build/mpm study examples/vibrating_bar_small.toml --refine grid.cells=5,10,20,40`
+(MUSL, P1, direct mapping, lumped mass, 12 PPC, dt = 1e-7 s, T = 1.9e-6 s).
+
+{chr(10).join(t)}
+
+Published: order 2 in displacement and velocity, 1 in stress. Least-squares orders over 5-40
+cells: u {o(lsu)} ({vu}), v mid-step {o(lsv)} ({vv}), stress {o(lss)} ({vs}).
+
+- The velocity against v(T) stalls at about {e(stall, 1)}: the particle velocity of Euler-Cromer
+  with the stress updated last is the half-step velocity (D 2.3.2), so comparing it with v(T)
+  leaves a first-order temporal error of v0 ω dt/2 · RMS(sin) ≈ 7e-10.
+- The mid-step velocity's last order is {o(orders['velocity_rms_midstep'][-1])}{mid_note}
+  O(dt²) floor: the scheme starts from v_p = v(0) where the leapfrog wants v(dt/2), a phase
+  error v0 (ω dt)²/8 ≈ 1.2e-11 · RMS(sin). With dt = 1e-8 s (`--set time.dt=1e-8`) the mid-step
+  orders are {", ".join(o(x) for x in fo)} and the 40-cell error is
+  {e(fr[-1]['velocity_rms_midstep'])}, while displacement and stress are
+  {"unchanged to 1 % (spatial errors)" if same_u else "changed (see the runs)"}.
+- USL gives the same numbers as MUSL to {int(digits)} digits on this problem. USF's velocity
+  approximates v(T + dt/2) and USAVG's v(T) (derived from their stage orders and checked by
+  `velocity_rms_scheme_time`, tested in `tests/scheme/test_vibrating_bar_mpm.cpp`); at 40
+  cells `velocity_rms_scheme_time` is {e(musl['velocity_rms_scheme_time'])} (MUSL),
+  {e(sch[0]['errors'].get('velocity_rms_scheme_time'))} (USL),
+  {e(sch[1]['errors'].get('velocity_rms_scheme_time'))} (USF),
+  {e(sch[2]['errors'].get('velocity_rms_scheme_time'))} (USAVG).
+- Conservation of the direct mapping at 40 cells: mass {e(mass, 1)}, momentum {e(mom, 1)}
+  (published bound for MPM: {e(pub('bar_direct_mass'), 0)} on this benchmark, {src('bar_direct_mass')}):
+  {verdict_value(mass, 'bar_direct_mass', roundoff=True)}.
+
+{fig_md(ctx, figs, "small-deformation bar")}"""
+    return md
+
+
+STATIC_BASES = """## Grid bases (D 2.6.4, 3.1)
+
+Bases: `linear` (P1), `bspline` with `method.degree` 1-5 (one open uniform knot vector, Cox-de
+Boor by span, D 3.1), `ddmpm` (P1 values, smoothed gradients, D 2.6.4), `ugimp`, `cpgimp`,
+`cpdi`, and in 2D `cpdi2`. Unit tests check partition of unity, non-negativity, zero derivative
+sum and linear reproduction (Greville abscissae for B-splines) at random points, knots and both
+ends; B-spline degree 1 equals P1 to round-off; B-spline derivatives against finite differences
+and their C^(p-1) continuity across knots; GIMP weights against numerical integrals of the hat
+function; DDMPM central-difference gradients in the interior and continuity across nodes.
+
+In 2D (`tests/basis/test_bases2d.cpp`): every basis satisfies partition of unity, zero gradient
+sum, linear reproduction sum w_i x_i = x_p and sum x_i grad w_i^T = I, with finite-difference
+gradient checks where the basis is a function of position, near edges and corners, CPDI with a
+sheared F and cpGIMP with a stretched F; each runs a rigid translation under MUSL that stays
+rigid. 2D choices: the initial particle half-size per direction is h_d (V_p^0 / cell volume)^(1/2)
+/ 2 (exactly h/k for k x k seeding); CPDI corners outside the grid are clamped onto it and the
+domain becomes the quadrilateral of the clamped corners (a body filling the grid would otherwise
+stop at step 0 on round-off); CPDI2 (Sadeghirad et al. 2013) tracks the four corners, moved with
+the P1 interpolation of the grid velocity after the particles (a stage hook), and checkpoints
+them; DDMPM in 2D uses alpha = prod_d 2 xi_d (1 - xi_d), our tensor-product extension of D's 1D
+weight (D specifies DDMPM in 1D only).
+
+Choices worth knowing:
+- DDMPM: the integrals over Omega (node volumes V_j and int phi_j grad phi_i) run over the
+  material domain with the particles as quadrature points, refreshed every step.
+- GIMP and CPDI (1D): a particle domain reaching past a grid end is clipped to the grid and
+  normalised by the clipped length, so the partition of unity holds. At a fixed end the end
+  particle's averaged stretch moves its CPDI corner past the grid end, so without clipping CPDI
+  could not run the fixed-end bars. A domain longer than 2h stops the run (exit code 5).
+"""
+
+
+def plot_profiles(ctx, name, runs, title, ylabel="stress [Pa]", xkey="x_1", key="stress_11"):
+    """Final-time particle stress of several runs against the exact column of the first."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        plt.rcParams["svg.fonttype"] = "none"
+        plt.rcParams["svg.hashsalt"] = "mpmlab"  # reproducible SVG ids
+    except ImportError:
+        return []
+    fig, ax = plt.subplots(figsize=(7.0, 4.5))
+    exact_done = False
+    for label, r in runs:
+        parts = last_frame(r["_dir"])
+        if not parts:
+            continue
+        parts.sort(key=lambda p: p[xkey])
+        xs = [p[xkey] for p in parts]
+        ax.plot(xs, [p[key] for p in parts], lw=1.0, label=label)
+        if not exact_done and "stress_exact" in parts[0]:
+            ax.plot(xs, [p["stress_exact"] for p in parts], "k--", lw=1.2, label="exact",
+                    zorder=10)
+            exact_done = True
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths = []
+    os.makedirs(ctx["figdir"], exist_ok=True)
+    for ext in ("png", "svg"):
+        p = os.path.join(ctx["figdir"], f"{name}.{ext}")
+        fig.savefig(p, dpi=120, metadata={"Date": None} if p.endswith(".svg") else None)
+        paths.append(os.path.relpath(p, ROOT))
+    plt.close(fig)
+    return paths
+
+
+def plot_history(ctx, name, runs, title):
+    """Relative change of total energy over time (history.csv) of several runs."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        plt.rcParams["svg.fonttype"] = "none"
+        plt.rcParams["svg.hashsalt"] = "mpmlab"  # reproducible SVG ids
+    except ImportError:
+        return []
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    for label, r in runs:
+        path = os.path.join(r["_dir"], "history.csv")
+        if not os.path.exists(path):
+            continue
+        with open(path, newline="") as f:
+            h = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        t = [x["time"] for x in h]
+        e0 = h[0]["total_energy"]
+        ax.plot(t, [abs(x["total_energy"] - e0) / e0 for x in h], lw=1.0, label=label)
+    ax.set_ylabel("|E(t) - E(0)| / E(0)")
+    ax.set_xlabel("t [s]")
+    ax.set_yscale("log")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    fig.tight_layout()
+    paths = []
+    for ext in ("png", "svg"):
+        p = os.path.join(ctx["figdir"], f"{name}.{ext}")
+        fig.savefig(p, dpi=120, metadata={"Date": None} if p.endswith(".svg") else None)
+        paths.append(os.path.relpath(p, ROOT))
+    plt.close(fig)
+    return paths
+
+
+def sec_crossing(R, ctx):
+    bases = [("linear (MPM)", ["method.basis=linear"]),
+             ("bspline p=2 (BSMPM)", ["method.basis=bspline", "method.degree=2"]),
+             ("ugimp", ["method.basis=ugimp"]), ("cpgimp", ["method.basis=cpgimp"]),
+             ("cpdi", ["method.basis=cpdi"]), ("ddmpm", ["method.basis=ddmpm"])]
+    res = R.many([("vibrating_bar_crossing", s, 1) for _, s in bases])
+    t = ["| basis | stress_rms [Pa] | stress_rel_l2 | velocity_rms_midstep [m/s] | TV / TV_exact "
+         "| grid crossings | status |", "|---|---|---|---|---|---|---|"]
+    tv = {}
+    tv_exact = None
+    for (label, _), r in zip(bases, res):
+        parts = last_frame(r["_dir"])
+        if parts:
+            tv_exact = total_variation(parts, "stress_exact")
+            tv[label] = total_variation(parts, "stress_11") / tv_exact
+        er = r["errors"]
+        t.append(f"| {label} | {er.get('stress_rms', 0):.4g} | {e(er.get('stress_rel_l2'))} | "
+                 f"{e(er.get('velocity_rms_midstep'))} | {tv.get(label, float('nan')):.2f} | "
+                 f"{r.get('grid_crossings', '-')} | {r['status']} |")
+    mpm, bs = res[0]["errors"], res[1]["errors"]
+    ratio = mpm["stress_rms"] / bs["stress_rms"]
+    ok = tv["linear (MPM)"] > 2 and abs(tv["bspline p=2 (BSMPM)"] - 1) < 0.1
+    v = verdict_claim(ok, f"TV ratios {tv['linear (MPM)']:.1f} (MPM), "
+                      f"{tv['bspline p=2 (BSMPM)']:.2f} (BSMPM)")
+    figs = plot_profiles(ctx, "crossing_stress_profile",
+                         [("MPM (P1)", res[0]), ("BSMPM (p=2)", res[1])],
+                         "vibrating bar with grid crossing, stress at T = 1e-3 s")
+    return f"""### Grid crossing, Table 3.1 set 1 (D 3.4.2, Fig. 3.7)
+
+`build/mpm run examples/vibrating_bar_crossing.toml --set method.basis=...` (510 cells, 12 PPC,
+MUSL, lumped), final time 1e-3 s; total variation (TV) of the final particle stress profile
+against that of the exact profile ({tv_exact:.3g} Pa):
+
+{chr(10).join(t)}
+
+Published: MPM oscillates, BSMPM follows the exact solution. Rule: MPM's TV ratio above 2 and
+BSMPM's within 10 % of 1. Verdict: {v}. BSMPM's stress error is {ratio:.0f}x below MPM's
+(tests in `tests/scheme/test_bases_benchmarks.cpp`).
+
+{fig_md(ctx, figs, "stress of the grid-crossing bar at the final time")}"""
+
+
+def sec_column_bases(R, ctx):
+    bases = [("linear (MPM)", ["method.basis=linear"]), ("ddmpm", ["method.basis=ddmpm"]),
+             ("ugimp", ["method.basis=ugimp"]), ("cpgimp", ["method.basis=cpgimp"]),
+             ("cpdi", ["method.basis=cpdi"]),
+             ("bspline p=2 (BSMPM)", ["method.basis=bspline", "method.degree=2"]),
+             ("bspline p=3", ["method.basis=bspline", "method.degree=3"])]
+    res = R.many([("column_compaction", s, 1) for _, s in bases])
+    t = ["| basis | stress_rel_l2 | grid crossings | status |", "|---|---|---|---|"]
+    for (label, _), r in zip(bases, res):
+        t.append(f"| {label} | {e(r['errors'].get('stress_rel_l2'))} | "
+                 f"{r.get('grid_crossings', '-')} | {r['status']} |")
+    mpm, dd, bs = (res[0]["errors"]["stress_rel_l2"], res[1]["errors"]["stress_rel_l2"],
+                   res[5]["errors"]["stress_rel_l2"])
+    cross = res[0]["grid_crossings"]
+    v1 = verdict_value(mpm / bs, "column_bsmpm_factor")
+    v2 = verdict_value(cross, "column_mpm_crossings")
+    v3 = verdict_value(dd, "column_ddmpm_error")
+    figs = plot_profiles(ctx, "column_stress_profile",
+                         [("MPM (P1)", res[0]), ("DDMPM", res[1]), ("BSMPM (p=2)", res[5])],
+                         "column compaction, stress at T = 0.5 s")
+    why = ""
+    if not reproduced(v3):
+        why = ("\nThe DDMPM difference is not explained yet: the dissertation does not say how "
+               "its integrals over Omega are evaluated (we use particle quadrature over the "
+               "material domain) and gives no MPM figure to compare the ratio with.")
+    ctx["column_bases"] = res
+    return f"""### Column compaction (D 5.4.2, Table 5.6)
+
+`build/mpm run examples/column_compaction.toml --set method.basis=...` (50 cells over the column,
+one empty cell above it, 20 PPC, dt = 1e-4 s, T = 0.5 s, `elastic_1d_large`), relative L2 stress
+error against the quasi-static solution at T:
+
+{chr(10).join(t)}
+
+| claim | published | measured | verdict |
+|---|---|---|---|
+| BSMPM cuts the MPM error ({src('column_bsmpm_factor')}) | {pub('column_bsmpm_factor'):.0f}x | {mpm / bs:.1f}x | {v1} |
+| MPM grid crossings ({src('column_mpm_crossings')}) | {pub('column_mpm_crossings')} | {cross} | {v2} |
+| DDMPM error ({src('column_ddmpm_error')}) | {pub('column_ddmpm_error')} | {e(dd, 3)} | {v3} |
+{why}
+
+At T = 0.5 s every mode of the column is at a zero of its ramp response
+(omega_n T = (2n-1) 5 pi), so the dynamic part of the exact solution vanishes and the measured
+error is the discretisation error.
+
+{fig_md(ctx, figs, "column compaction stress at the final time")}"""
+
+
+def sec_traction(R, ctx):
+    bases = [("linear (MPM)", ["method.basis=linear"]),
+             ("bspline p=2 (BSMPM)", ["method.basis=bspline", "method.degree=2"]),
+             ("cpdi", ["method.basis=cpdi"]), ("ugimp", ["method.basis=ugimp"])]
+    res = R.many([("traction_bar", s, 1) for _, s in bases])
+    t = ["| basis | stress_rel_l2 | displacement_rms [m] | grid crossings | status |",
+         "|---|---|---|---|---|"]
+    for (label, _), r in zip(bases, res):
+        t.append(f"| {label} | {e(r['errors'].get('stress_rel_l2'), 3)} | "
+                 f"{e(r['errors'].get('displacement_rms'))} | {r.get('grid_crossings', '-')} | "
+                 f"{r['status']} |")
+    p1, bs = res[0], res[1]
+    unstable = bs["status"] != "ok" or not bs["errors"].get("stress_rel_l2") or \
+        bs["errors"]["stress_rel_l2"] > 10 * p1["errors"]["stress_rel_l2"]
+    v = verdict_claim(unstable, f"BSMPM {bs['status']}, stress_rel_l2 "
+                      f"{e(bs['errors'].get('stress_rel_l2'))} against P1's "
+                      f"{e(p1['errors'].get('stress_rel_l2'))}")
+    figs = plot_profiles(ctx, "traction_stress_profile",
+                         [("MPM (P1)", res[0]), ("BSMPM (p=2)", res[1])],
+                         "bar with a dynamic traction, stress at T = 0.4 s")
+    why = "" if unstable else (
+        "\nOur BSMPM run on this grid completes, with a stress error no larger than P1's. D "
+        "does not describe its BSMPM run in enough detail to tell what made it unstable; the "
+        "unified approach D proposes as the remedy is not implemented, so it is not compared.\n")
+    return f"""### Bar with a dynamic traction (D 4.6.2, Steffen et al.)
+
+`build/mpm run examples/traction_bar.toml --set method.basis=...`: neo-Hookean bar of 1 m fixed
+at x = 0 in a 1.25 m grid of 80 cells (81 nodes), traction -sin(pi t) Pa at the free end, 4 PPC,
+dt = 1e-4 s, T = 0.4 s, MUSL, lumped mass; relative L2 stress error against D eq. 4.93:
+
+{chr(10).join(t)}
+
+| claim | published | measured | verdict |
+|---|---|---|---|
+| BSMPM unstable with 81 nodes (D 4.6.2); rule: the run fails or its stress error exceeds 10x P1's | unstable | {bs['status']}, {e(bs['errors'].get('stress_rel_l2'))} | {v} |
+{why}
+{fig_md(ctx, figs, "traction bar stress at the final time")}"""
+
+
+def sec_boundary(R, ctx):
+    out, rows = R.study("vibrating_bar_small", "grid.cells=5,10,20,40",
+                        sets=["method.basis=bspline", "method.degree=2"], name="boundary")
+    rs = list(rows.values())[0]
+    hs = col(rs, "h")
+    t = ["| cells | displacement_rms | interior | velocity_rms_scheme_time | interior | "
+         "stress_rms [Pa] | interior [Pa] |", "|---|---|---|---|---|---|---|"]
+    for r in rs:
+        t.append(f"| {int(r['cells'])} | {e(r['displacement_rms'])} | "
+                 f"{e(r['displacement_rms_interior'])} | {e(r['velocity_rms_scheme_time'])} | "
+                 f"{e(r['velocity_rms_scheme_time_interior'])} | {r['stress_rms']:.4g} | "
+                 f"{r['stress_rms_interior']:.3g} |")
+    s_all = ls_order(hs, col(rs, "stress_rms"))
+    s_int = pair_orders(hs, col(rs, "stress_rms_interior"))[-1]
+    mpm40 = ctx["small_bar"][-1]["stress_rms"]
+    below = mpm40 / rs[-1]["stress_rms_interior"]
+    v_int = col(rs, "velocity_rms_scheme_time_interior")
+    v_all = col(rs, "velocity_rms_scheme_time")
+    grows = v_all[-1] > v_all[0]
+    figs = plot_study(out, os.path.join(ctx["figdir"], "boundary_bsmpm_lumped"),
+                      "stress_rms,stress_rms_interior",
+                      "vibrating bar, BSMPM (p=2) lumped: all vs interior particles")
+    return f"""### Boundary error of BSMPM with lumped mass, Table 3.1 set 2 (D Fig. 5.10)
+
+`build/mpm study examples/vibrating_bar_small.toml --refine grid.cells=5,10,20,40 --set
+method.basis=bspline` (quadratic), all particles and interior particles (outside the first and
+last p = 2 cells, where the asymmetric end functions phi_0, phi_1 of the open knot vector live):
+
+{chr(10).join(t)}
+
+The all-particle stress error converges with least-squares order {o(s_all)} and the velocity
+error {"grows" if grows else "does not grow"} under refinement: the lumped projection q_i / m_i
+reproduces linear fields only where phi_i is symmetric about its Greville abscissa, so within p
+cells of each end the velocity gradient has an O(1) error, the stress an error independent of h
+there, and the forces of those cells an error growing like 1/h. The interior stress converges
+with order {o(s_int)} between 20 and 40 cells and is {below:.0f}x below MPM's at 40 cells. The interior velocity error
+ranges over {e(min(v_int))} to {e(max(v_int))}: the end stress errors reach the next p cells
+through the supports of phi_p .. phi_(2p-1) in the force assembly. Published: BSMPM lowers the
+error and raises the velocity order, with boundary problems in stress and displacement; we
+reproduce the boundary problem but not the better all-particle velocity (D Fig. 5.9c). The
+dissertation's remedy, TLS with a consistent mass matrix, is in the next section.
+
+{fig_md(ctx, figs, "BSMPM lumped: all-particle against interior stress error")}"""
+
+
+CH5_METHODS = {"MPM": ["method.basis=linear"], "DDMPM": ["method.basis=ddmpm"],
+               "BSMPM": ["method.basis=bspline", "method.degree=2"]}
+CH5_MAPPINGS = {"direct": "direct", "CS": "cubic_spline", "TLS": "tls"}
+
+
+def sec_reconstruction_intro(R, ctx):
+    rms, integ = R.reconstruct(["--dim", "2", "--function", "sin(x)*cos(y)", "--upper", "5",
+                                "--cells", "5", "--points", "inner:2x3", "--terms", "6",
+                                "--error-points", "2"])
+    fig66 = {}
+    for terms in (1, 3, 6):
+        for gp in ((5, 2) if terms == 6 else (5,)):
+            errs = [R.reconstruct(["--dim", "2", "--function", "sin(x/10)*cos(y/10)",
+                                   "--lower", "0", "--upper", "10", "--cells", str(n),
+                                   "--points", "uniform:3", "--terms", str(terms),
+                                   "--error-points", str(gp)])[0] for n in (4, 8, 16, 32)]
+            fig66[(terms, gp)] = ls_order([1 / 4, 1 / 8, 1 / 16, 1 / 32], errs)
+    v_rms = verdict_value(rms, "tls2d_rms")
+    v_int = verdict_value(integ, "tls2d_integral", roundoff=True)
+    v66 = [verdict_order(fig66[(n, 5)], f"tls2d_order_{n}") for n in (1, 3, 6)]
+    ctx["tls2d"] = (rms, integ, v_rms, v_int, fig66, v66)
+    return f"""## Reconstruction mappings and the FEM reference (D ch. 3.2, 5; 000; 004 4.4)
+
+Mappings: `direct`, `cubic_spline` (natural cubic spline through the particle values of
+density, momentum density, stress and body-force density, 2 Gauss points in each half of every
+active element, D eq. 3.6-3.10) and `tls` (per element, Taylor basis of `method.tls_terms`
+terms, density, momentum and body force with the first coefficient fixed to the element's
+particle sums, stress by plain least squares, 2 Gauss points per element, D eq. 5.11-5.18), with
+lumped or consistent mass. Sparse elements (`method.tls_completion`): `none` stops (exit code 6),
+`reduce`, `virtual` (virtual points at the faces from the neighbours' reconstructions, outside
+the conserved coefficient) and `neighbour` (nearest particles of the adjacent elements); a
+condition number above `method.tls_max_condition` also counts as deficient. The reference
+solver `ulfem` is a 1D updated-Lagrangian FEM with linear elements, lumped mass and
+Euler-Cromer; `vibrating_bar_large` steps it alongside every run (`reference.dofs` = 120 nodes,
+as D) and reports the particle stress error against it at the particles' material positions.
+
+Unit tests: Taylor-basis integrals (D eq. 5.7); TLS reproduces polynomials of degree n_b - 1
+and keeps element integrals to round-off with 0, 1, 2 and coincident particles in every
+completion mode; the natural spline interpolates, is C^2, reproduces lines and converges with
+order 4 in the interior; the ULFEM solver converges with order 2 and conserves energy over
+periods (`tests/mapping`, `tests/solver`). The D Fig. 5.5 case (two points in [pi, 2 pi]) is
+flagged by an infinite condition number, and the virtual point beats the reduced basis there
+(`tests/mapping/test_tls.cpp`).
+
+TLS on rectangles (D 6.1-6.3): `TlsReconstruction2D` fits 1, 3 or 6 Taylor terms (D eq.
+6.1-6.13 with the volume average restored on psi_4..psi_6; `method.tls_terms = 0`, the default,
+means the quadratic basis of the dimension: 3 in 1D, 6 in 2D) and the `tls` mapping runs in 2D
+with n x n Gauss points per active element (default 2 x 2), every stress component fitted
+separately (D eq. 6.19-6.20). Completions in 2D: `reduce` goes 6 -> 3 -> 1; `virtual` places, on
+each face whose neighbour fits the full basis from its own particles, as many points as the face
+trace of that neighbour's reconstruction has coefficients (2 for the linear, 3 for the quadratic
+basis) at the Gauss-Legendre nodes of the face (D 6.3.2 leaves the placement open); `neighbour`
+borrows the nearest particles of the face neighbours first and of the corner neighbours only
+when those have nothing left (at most `max_borrowed`, default 6 in 2D).
+
+| D 6.2 reconstruction (`mpm reconstruct --dim 2`) | published | measured | verdict |
+|---|---|---|---|
+| sin(x) cos(y), 6 points per element, RMS at 2 x 2 Gauss points ({src('tls2d_rms')}) | {pub('tls2d_rms')} | {rms:.6e} | {v_rms} |
+| the same, relative integral error | {pub('tls2d_integral')} | {e(integ, 1)} | {v_int} |
+| Fig. 6.6, sin(x/10) cos(y/10), 3 x 3 points, 4-32 cells, order with 1 term | {pub('tls2d_order_1'):.0f} | {o(fig66[(1, 5)])} | {v66[0]} |
+| order with 3 terms | {pub('tls2d_order_3'):.0f} | {o(fig66[(3, 5)])} | {v66[1]} |
+| order with 6 terms | {pub('tls2d_order_6'):.0f} | {o(fig66[(6, 5)])} | {v66[2]} |
+
+Command for the first rows: `mpm reconstruct --dim 2 --function "sin(x)*cos(y)" --upper 5
+--cells 5 --points inner:2x3 --terms 6 --error-points 2`; Fig. 6.6: `--function
+"sin(x/10)*cos(y/10)" --lower 0 --upper 10 --points uniform:3 --error-points 5 --cells 4 ... 32`.
+The orders are measured over 5 x 5 Gauss points per element (D does not say where it takes the
+error); at 2 x 2 Gauss points the quadratic basis gives order {o(fig66[(6, 2)])} for this f
+(its cubic error terms cancel there, f_xxx = f_xyy). The six points of D 6.2.1 lie on two lines
+x_1 = const, where psi_4 is constant: the full normal matrix is singular and only the
+conservative fit (psi_2..psi_6 with a_1 given) is well posed, so the 2D playground judges
+conservative fits on those terms (`TlsSettings::conservative_only`; 1D keeps its full-basis
+check). The 2D mapping conserves mass and momentum to round-off in every MUSL step with P1,
+B-splines, GIMP and CPDI and every completion (D Table 6.1, tested). A rigid translation stays
+rigid with `reduce` (P1, 6 terms); with `virtual`, cut edge elements amplify round-off by an
+exponentially growing mode, and with `neighbour` or quadratic B-splines the tilted density of a
+cut element can make a nodal mass negative (the node goes inactive): the robustness problems
+D 6.3.1-6.3.2 anticipates.
+
+Choices worth knowing:
+- TLS solves its least-squares problems by QR of the data matrix (same solution as D eq. 5.1,
+  better conditioned); cond(D) of the normal matrix is still what is compared with the limit.
+- The cubic-spline integrals run over the material domain: each active element clipped to the
+  extent of the particle domains, which at a fixed grid end extends to the wall. Where the body
+  fills its elements this is D 3.2.3; at the column's free top, integrating the extrapolated
+  spline over the empty part of the top element gave a mass error of 5e-3 (an earlier version,
+  not rerun here); clipping at the fixed ends as well moved the bar's mass errors away from
+  D Table 5.3. We take this to be what D did; the measured CS mass errors are in the tables
+  below.
+- The body force is integrated like the momentum (a conservative reconstruction of rho b).
+- One mass matrix per step serves both grid solves (acceleration and velocity).
+"""
+
+
+def sec_chapter5(R, ctx):
+    md = []
+    # Small-deformation bar: 3 bases x 3 mappings x 2 masses x 4 sizes.
+    cells = [5, 10, 20, 40]
+    combos = [(m, mp, mass) for m in CH5_METHODS for mp in CH5_MAPPINGS
+              for mass in ("lumped", "consistent")]
+    jobs = [(c, n) for c in combos for n in cells]
+    res = R.many([("vibrating_bar_small", CH5_METHODS[c[0]] + [
+        f"method.mapping={CH5_MAPPINGS[c[1]]}", f"method.mass={c[2]}", f"grid.cells={n}"], 0)
+        for c, n in jobs])
+    small = {}
+    for (c, n), r in zip(jobs, res):
+        small.setdefault(c, []).append(r)
+    md.append("### Vibrating bar, small deformation, set 2 (D 5.4.1, Fig. 5.9-5.11)\n")
+    md.append("Errors at 40 cells and least-squares orders over 5-40 cells (12 PPC, MUSL).\n")
+    md.append("| method | mapping | mass | displacement_rms | order | velocity_rms_midstep | "
+              "order | stress_rms [Pa] | order | stress_rms_interior | order | status |")
+    md.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    lso = {}
+    for c in combos:
+        rs = small[c]
+        hs = [r.get("h") for r in rs]
+        cellsout = []
+        for key in ("displacement_rms", "velocity_rms_midstep", "stress_rms",
+                    "stress_rms_interior"):
+            vals = [r["errors"].get(key) for r in rs]
+            lso[(c, key)] = ls_order(hs, vals)
+            cellsout += [e(vals[-1], 3), o(lso[(c, key)]) or "-"]
+        status = ",".join(sorted(set(r["status"] for r in rs)))
+        md.append(f"| {c[0]} | {c[1]} | {c[2]} | " + " | ".join(cellsout) + f" | {status} |")
+    md.append("\nConservation at 40 cells, lumped mass (D Table 5.3).\n")
+    md.append("| method | mapping | mass error | momentum error |\n|---|---|---|---|")
+    cons = {}
+    for m in CH5_METHODS:
+        for mp in ("CS", "TLS"):
+            c = small[(m, mp, "lumped")][-1]["conservation"]
+            cons[(m, mp)] = (c.get("max_rel_mass_error"), c.get("max_rel_momentum_error"))
+            md.append(f"| {m} | {mp} | {e(cons[(m, mp)][0], 3)} | {e(cons[(m, mp)][1], 3)} |")
+    md.append("")
+
+    # Large-deformation bar.
+    combos_l = [(m, mp, mass) for mass in ("lumped", "consistent") for m in CH5_METHODS
+                for mp in CH5_MAPPINGS]
+    res_l = R.many([("vibrating_bar_large", CH5_METHODS[c[0]] + [
+        f"method.mapping={CH5_MAPPINGS[c[1]]}", f"method.mass={c[2]}"], 1) for c in combos_l])
+    large = dict(zip(combos_l, res_l))
+    base = large[("MPM", "direct", "lumped")]["errors"]["stress_rel_l2"]
+    md.append("### Vibrating bar, large deformation (D 5.4.1, Fig. 5.12-5.13, Table 5.5)\n")
+    md.append("20 cells, 8 PPC, dt = 1e-4 s, T = 0.1 s, MUSL; relative L2 stress error against "
+              "the ULFEM reference (120 nodes) at the particles' material positions.\n")
+    md.append("| method | mapping | mass | stress_rel_l2 | MPM (lumped) error / this | "
+              "mass error | momentum error | crossings | status |")
+    md.append("|---|---|---|---|---|---|---|---|---|")
+    for c in combos_l:
+        r = large[c]
+        x = r["errors"].get("stress_rel_l2")
+        md.append(f"| {c[0]} | {c[1]} | {c[2]} | {e(x, 3)} | "
+                  f"{'-' if not x else f'{base / x:.1f}'} | "
+                  f"{e(r['conservation'].get('max_rel_mass_error'), 3)} | "
+                  f"{e(r['conservation'].get('max_rel_momentum_error'), 3)} | "
+                  f"{r.get('grid_crossings', '-')} | {r['status']} |")
+    md.append("")
+    figs_l = plot_history(ctx, "large_bar_energy",
+                          [(f"{c[0]}-{c[1]} {c[2]}", large[c]) for c in
+                           [("MPM", "direct", "lumped"), ("MPM", "TLS", "lumped"),
+                            ("MPM", "CS", "lumped"), ("BSMPM", "TLS", "consistent")]],
+                          "large-deformation bar: total energy over time")
+    md.append("Total energy over time (history.csv; the bar is free of external work, so the "
+              "exact energy is constant). The particle mass in history.csv is constant by "
+              "construction; the mapping's per-step mass and momentum errors are the "
+              "maxima tabulated above. The particle CSV does not carry the ULFEM reference "
+              "stress, so there is no profile plot against the reference here.\n")
+    md.append(fig_md(ctx, figs_l, "energy of the large-deformation bar over time"))
+
+    # Column compaction with the mappings.
+    combos_c = [(m, mp) for m in CH5_METHODS for mp in CH5_MAPPINGS]
+    res_c = R.many([("column_compaction", CH5_METHODS[c[0]] + [
+        f"method.mapping={CH5_MAPPINGS[c[1]]}"], 0) for c in combos_c])
+    column = dict(zip(combos_c, res_c))
+    md.append("### Column compaction (D 5.4.2, Fig. 5.14, Table 5.7)\n")
+    md.append("50 cells, 20 PPC, dt = 1e-4 s, T = 0.5 s, MUSL, lumped mass.\n")
+    md.append("| method | mapping | stress_rel_l2 | mass error | momentum error | crossings | "
+              "status |\n|---|---|---|---|---|---|---|")
+    for c in combos_c:
+        r = column[c]
+        md.append(f"| {c[0]} | {c[1]} | {e(r['errors'].get('stress_rel_l2'), 3)} | "
+                  f"{e(r['conservation'].get('max_rel_mass_error'), 3)} | "
+                  f"{e(r['conservation'].get('max_rel_momentum_error'), 3)} | "
+                  f"{r.get('grid_crossings', '-')} | {r['status']} |")
+    md.append("")
+    ctx.update(ch5_small=small, ch5_lso=lso, ch5_cons=cons, ch5_large=large,
+               ch5_column=column)
+    return "\n".join(md) + "\n"
+
+
+def sec_against_published(R, ctx):
+    small, lso, cons = ctx["ch5_small"], ctx["ch5_lso"], ctx["ch5_cons"]
+    large, column = ctx["ch5_large"], ctx["ch5_column"]
+    rows = []
+
+    def add(claim, published, measured, verdict):
+        rows.append(f"| {claim} | {published} | {measured} | {verdict} |")
+
+    def both(*vs, labels=("mass", "momentum")):
+        """'reproduced' when every verdict is, else the others, labelled."""
+        bad = [f"{lab}: {v}" for lab, v in zip(labels, vs) if not reproduced(v)]
+        return "reproduced" if not bad else "; ".join(bad)
+
+    tm, tp = cons[("MPM", "TLS")]
+    add(f"TLS mass / momentum error, bar, 40 cells ({src('bar_tls_mass')})",
+        f"{e(pub('bar_tls_mass'), 1)} / {e(pub('bar_tls_momentum'), 1)}", f"{e(tm, 1)} / {e(tp, 1)}",
+        both(verdict_value(tm, "bar_tls_mass", True), verdict_value(tp, "bar_tls_momentum", True)))
+    names = ("MPM", "DDMPM", "BSMPM")
+    add(f"CS mass error, bar: MPM, DDMPM, BSMPM ({src('bar_cs_mass_MPM')})",
+        ", ".join(f"{pub('bar_cs_mass_' + m):.5g}" for m in names),
+        ", ".join(e(cons[(m, "CS")][0], 3) for m in names),
+        both(*[verdict_value(cons[(m, "CS")][0], "bar_cs_mass_" + m, True) for m in names],
+             labels=names))
+    hp = 1.0 / (40 * 12)
+    midpoint = math.pi ** 2 * hp ** 2 / 24
+    cs_mom = [cons[(m, "CS")][1] for m in names]
+    vs_mom = [verdict_value(cons[(m, "CS")][1], "bar_cs_momentum_" + m, True) for m in names]
+    v_mom = "; ".join(f"{m}: {v}" for m, v in zip(names, vs_mom))
+    if not all(map(reproduced, vs_mom)) and all(abs(x / midpoint - 1) < 1e-2 for x in cs_mom):
+        v_mom += (f". Measured = the midpoint-rule error of the particle sum, pi^2 h_p^2 / 24 = "
+                  f"{midpoint:.4g}, independent of the basis; D's 3.7e-6 not explained")
+    add(f"CS momentum error, bar ({src('bar_cs_momentum_MPM')})",
+        ", ".join(f"{pub('bar_cs_momentum_' + m):.2g}" for m in names),
+        ", ".join(e(x, 3) for x in cs_mom), v_mom)
+    u_direct = small[("MPM", "direct", "lumped")][-1]["errors"]["displacement_rms"]
+    f_l = u_direct / small[("MPM", "TLS", "lumped")][-1]["errors"]["displacement_rms"]
+    f_c = u_direct / small[("MPM", "TLS", "consistent")][-1]["errors"]["displacement_rms"]
+    add(f"TLS lowers MPM's displacement error, 40 cells ({src('bar_tls_u_factor')})",
+        f"{pub('bar_tls_u_factor')}x", f"lumped {f_l:.3f}x; consistent {f_c:.1f}x",
+        f"lumped: {verdict_value(f_l, 'bar_tls_u_factor')}; consistent: "
+        f"{verdict_value(f_c, 'bar_tls_u_factor')}")
+    # BSMPM-TLS consistent: u and sigma from the table; v with dt = 1e-8 s (the dt = 1e-7 s
+    # velocity is limited by the start-up phase error, see the first section).
+    _, fine = R.study("vibrating_bar_small", "grid.cells=5,10,20,40", "bspline2/tls/consistent",
+                      ["time.dt=1e-8"], name="bstls_dt")
+    fr = list(fine.values())[0]
+    ov = ls_order(col(fr, "h"), col(fr, "velocity_rms_midstep"))
+    c = ("BSMPM", "TLS", "consistent")
+    ou, osig = lso[(c, "displacement_rms")], lso[(c, "stress_rms")]
+    vsig = verdict_order(osig, "bar_bstls_order_sigma")
+    if not reproduced(vsig) and osig is not None and abs(osig - 2) < ORDER_TOL:
+        vsig += " (order 2 is what the derivative of a quadratic spline projection gives)"
+    add(f"BSMPM-TLS, consistent mass, orders u, v, sigma ({src('bar_bstls_order_u')})",
+        "3, 3, 3", f"{o(ou)}, {o(ov)} (v with dt = 1e-8; successive grids "
+        f"{', '.join(o(x) for x in pair_orders(col(fr, 'h'), col(fr, 'velocity_rms_midstep'))[1:])}"
+        f"), {o(osig)}",
+        f"u: {verdict_order(ou, 'bar_bstls_order_u')}; v: "
+        f"{verdict_order(ov, 'bar_bstls_order_v')}; sigma: {vsig}")
+    r40 = small[c][-1]["errors"]
+    rl = small[("BSMPM", "TLS", "lumped")][-1]["errors"]
+    ratio_c = r40["stress_rms"] / r40["stress_rms_interior"]
+    ratio_l = rl["stress_rms"] / rl["stress_rms_interior"]
+    add("BSMPM-TLS (consistent) removes the boundary error (D Fig. 5.11); rule: all-particle / "
+        "interior stress error within 1.25", "yes",
+        f"{ratio_c:.2f} ({e(r40['stress_rms'])} vs {e(r40['stress_rms_interior'])} at 40 cells); "
+        f"lumped: {ratio_l:.0f}", verdict_claim(ratio_c <= FACTOR_TOL, f"ratio {ratio_c:.2f}"))
+    lt = large[("MPM", "TLS", "lumped")]["conservation"]
+    add(f"TLS mass / momentum, large bar ({src('large_tls_mass')})",
+        f"{e(pub('large_tls_mass'), 1)} / {e(pub('large_tls_momentum'), 1)}",
+        f"{e(lt['max_rel_mass_error'], 1)} / {e(lt['max_rel_momentum_error'], 1)}",
+        both(verdict_value(lt["max_rel_mass_error"], "large_tls_mass", True),
+             verdict_value(lt["max_rel_momentum_error"], "large_tls_momentum", True)))
+    lcs = [large[(m, "CS", "lumped")]["conservation"]["max_rel_mass_error"] for m in names]
+    add(f"CS mass error, large bar, lumped, MPM / DDMPM / BSMPM ({src('large_cs_mass_MPM')})",
+        " / ".join(e(pub("large_cs_mass_" + m)) for m in names), " / ".join(e(x) for x in lcs),
+        "; ".join(f"{m}: {verdict_value(x, 'large_cs_mass_' + m, True)}"
+                  for m, x in zip(names, lcs)))
+    base = large[("MPM", "direct", "lumped")]["errors"]["stress_rel_l2"]
+    fac = {}
+    for mp in ("TLS", "CS"):
+        for mass in ("lumped", "consistent"):
+            for m in ("BSMPM", "DDMPM"):
+                fac[(m, mp, mass)] = base / large[(m, mp, mass)]["errors"]["stress_rel_l2"]
+        for mass in ("lumped", "consistent"):
+            add(f"large bar, MPM error reduced by BSMPM-{mp} / DDMPM-{mp}, {mass} mass "
+                f"({src('large_factor_BSMPM_' + mp)})",
+                f"{pub('large_factor_BSMPM_' + mp)}x / {pub('large_factor_DDMPM_' + mp)}x",
+                f"{fac[('BSMPM', mp, mass)]:.1f}x / {fac[('DDMPM', mp, mass)]:.1f}x",
+                "BSMPM: " + verdict_value(fac[("BSMPM", mp, mass)], "large_factor_BSMPM_" + mp)
+                + "; DDMPM: " + verdict_value(fac[("DDMPM", mp, mass)],
+                                              "large_factor_DDMPM_" + mp))
+    ft = base / large[("MPM", "TLS", "lumped")]["errors"]["stress_rel_l2"]
+    fc = base / large[("MPM", "CS", "lumped")]["errors"]["stress_rel_l2"]
+    add("large bar, MPM with TLS / CS close to ULFEM (Fig. 5.12a); rule: both cut MPM's error "
+        "at least 2x", "close to ULFEM", f"{ft:.1f}x / {fc:.1f}x lower error",
+        verdict_claim(ft >= 2 and fc >= 2, f"{ft:.1f}x / {fc:.1f}x"))
+    ce = {k: v["errors"]["stress_rel_l2"] for k, v in column.items()}
+    ok_mpm = ce[("MPM", "TLS")] < ce[("MPM", "direct")] and ce[("MPM", "CS")] < ce[("MPM", "direct")]
+    ok_dd = (ce[("DDMPM", "TLS")] < ce[("DDMPM", "direct")] and
+             ce[("DDMPM", "CS")] < ce[("DDMPM", "direct")])
+    add("column: TLS and CS more accurate than the direct mapping for MPM and DDMPM (D 5.4.2); "
+        "rule: lower stress_rel_l2", "yes",
+        f"MPM {e(ce[('MPM', 'direct')])} -> TLS {e(ce[('MPM', 'TLS')])}, CS {e(ce[('MPM', 'CS')])}; "
+        f"DDMPM {e(ce[('DDMPM', 'direct')])} -> TLS {e(ce[('DDMPM', 'TLS')])}, "
+        f"CS {e(ce[('DDMPM', 'CS')])}",
+        f"MPM: {verdict_claim(ok_mpm, 'not lower')}; DDMPM: {verdict_claim(ok_dd, 'not lower for both')}")
+    ct = column[("MPM", "TLS")]["conservation"]
+    add(f"column: TLS mass / momentum ({src('column_tls_mass')})",
+        f"{e(pub('column_tls_mass'))} / {e(pub('column_tls_momentum'), 1)}",
+        f"{e(ct['max_rel_mass_error'], 1)} / {e(ct['max_rel_momentum_error'], 1)}",
+        both(verdict_value(ct["max_rel_mass_error"], "column_tls_mass", True),
+             verdict_value(ct["max_rel_momentum_error"], "column_tls_momentum", True)))
+    ccs = [column[(m, "CS")]["conservation"]["max_rel_mass_error"] for m in names]
+    add(f"column: CS mass error MPM / DDMPM / BSMPM ({src('column_cs_mass_MPM')})",
+        " / ".join(e(pub("column_cs_mass_" + m)) for m in names), " / ".join(e(x) for x in ccs),
+        "; ".join(f"{m}: {verdict_value(x, 'column_cs_mass_' + m, True)}"
+                  for m, x in zip(names, ccs)))
+    cmom = column[("MPM", "CS")]["conservation"]["max_rel_momentum_error"]
+    v_cmom = verdict_value(cmom, "column_cs_momentum_MPM", True)
+    add(f"column: CS momentum error, MPM ({src('column_cs_momentum_MPM')})",
+        e(pub("column_cs_momentum_MPM"), 1), e(cmom, 1), v_cmom)
+
+    notes = []
+    if not reproduced(verdict_value(fac[("BSMPM", "TLS", "lumped")], "large_factor_BSMPM_TLS")):
+        notes.append(
+            "- The dissertation does not say which mass matrix its large-deformation and column "
+            "runs use with the reconstructions (5.3 says lumped \"to avoid stability issues\"; "
+            "the small-deformation BSMPM-TLS results use consistent mass). Our lumped BSMPM "
+            "results are limited by the end error of the open-knot-vector B-splines (section "
+            "\"Boundary error\" above), which no mapping removes with lumped mass; with "
+            f"consistent mass BSMPM-TLS reduces MPM's error {fac[('BSMPM', 'TLS', 'consistent')]:.1f}x "
+            f"(published {pub('large_factor_BSMPM_TLS')}x). Both are tabulated above.")
+    if not reproduced(verdict_value(fac[("DDMPM", "TLS", "lumped")], "large_factor_DDMPM_TLS")):
+        notes.append(
+            "- DDMPM gains little or nothing from either reconstruction here. Its particle "
+            "stress update uses the DDMPM gradient at the particles, which the mappings do not "
+            "change; its error against the reference is dominated by that gradient. How D's "
+            "DDMPM evaluates its integrals over Omega is not stated (we use the particles), and "
+            "a different choice could explain this and its column error.")
+    if not reproduced(v_cmom):
+        notes.append(
+            "- The momentum errors of CS on the column are far above D's. Our measure divides by "
+            "sum m_p |v_p|; on the column the velocities are small and of both signs during the "
+            "ramp, and the extrapolation at the free top is in the momentum density. Not "
+            "resolved.")
+    return ("### Against the published figures\n\n" + VERDICT_RULES + "\n\n"
+            "| claim | published | measured here | verdict |\n|---|---|---|---|\n"
+            + "\n".join(rows) + "\n\n"
+            + ("Where we differ, what we know:\n" + "\n".join(notes) + "\n" if notes else ""))
+
+
+def sec_mms(R, ctx):
+    methods = ["linear/direct", "cpdi/direct", "bspline2/direct", "linear/imls",
+               "bspline2/imls", "linear/mls", "bspline2/mls"]
+    heads = ["MPM", "CPDI", "BSMPM (p=2)", "MPM+IMLS", "BSMPM+IMLS", "MPM+MLS", "BSMPM+MLS"]
+    out, rows = R.study("mms_1d", "grid.cells=8,16,32,64,128", ", ".join(methods), name="mms")
+    _, small = R.study("mms_1d", "grid.cells=8,16,32,64,128", "linear/direct",
+                       ["mms.amplitude=1e-4"], name="mms_small")
+    t = ["| cells | " + " | ".join(heads) + " |", "|---" * (len(heads) + 1) + "|"]
+    po = {m: pair_orders(col(rows[m], "h"), col(rows[m], "displacement_rms")) for m in methods}
+    for i in range(5):
+        cells = [f"{e(rows[m][i]['displacement_rms'])}"
+                 + (f" ({o(po[m][i])})" if po[m][i] is not None else "")
+                 + ("" if rows[m][i]["status"] == "ok" else " failed") for m in methods]
+        t.append(f"| {int(rows[methods[0]][i]['cells'])} | " + " | ".join(cells) + " |")
+    mpm_o = ls_order(col(rows["linear/direct"], "h"), col(rows["linear/direct"], "displacement_rms"))
+    cp = po["cpdi/direct"]
+    im = [x for x in po["linear/imls"][1:]]
+    small_o = ls_order(col(list(small.values())[0], "h"),
+                       col(list(small.values())[0], "displacement_rms"))
+    v_mpm = verdict_claim(mpm_o is None or mpm_o < 0.5, f"order {o(mpm_o)}")
+    v_cp1 = verdict_order(cp[1], "mms_cpdi_order")
+    v_cp2 = verdict_claim(cp[-1] is not None and cp[-1] < cp[1] - 0.5,
+                          f"last order {o(cp[-1])} against first {o(cp[1])}")
+    v_im = verdict_claim(all(x is not None and x >= pub("mms_imls_order") - ORDER_TOL for x in im),
+                         "orders " + ", ".join(o(x) for x in im))
+    bs_stall = po["bspline2/direct"][-1]
+    mls_keep = [po[m][-1] for m in ("linear/mls", "bspline2/mls")]
+    figs = plot_study(out, os.path.join(ctx["figdir"], "mms_1d"), "displacement_rms",
+                      "mms_1d (003), A = 0.1 m", energy=False)
+    return f"""## MLS and IMLS; 1D neo-Hookean manufactured solution (001, 003)
+
+Mappings `mls` (001 eq. 6-17: moment matrix A(x) = sum w p p^T, quadratic-spline weight with
+r = (x - x_p)/(2 l)) and `imls` (003 eq. 1-17: Gram-Schmidt orthogonal polynomials under the
+weighted inner product, terms with <p_i, p_i> <= 1e-10 <p_1, p_1> dropped, no matrix inverse;
+the MPM+IMLS step of 003 eq. 23-40 with the linear weight for the nodal velocity, lumped mass
+only), degree `method.mls_degree` 1 or 2, reconstructing density, body force and stress at 2
+Gauss points per active element. Unit tests: both reproduce polynomials up to their degree from
+scattered points, IMLS equals MLS where A is well conditioned, IMLS is finite with one particle
+(its value) and drops the quadratic term with two, the MLS condition number is reported
+(`tests/mapping/test_mls.cpp`). Choices: the body force is integrated as rho_hat b_hat at the
+Gauss points; where a B-spline DOF's Greville point is more than a cell from the body, the IMLS
+nodal velocity falls back to the quadratic-spline weight (counted).
+
+Benchmark `mms_1d` (003): mu = 3.846e6, lambda = 5.769e6 (E = 1e7, nu = 0.3), rho0 = 1000,
+A = 0.1, L = 1, 3 PPC, dt = 1e-5 s, T = 0.02 s, fixed ends. The body force is derived in closed
+form from the manufactured displacement and checked against a finite-difference residual of the
+momentum equation; it equals 003 eq. 47 with pi^2 instead of pi (METHODS.md erratum)
+(`tests/benchmarks/test_mms_exact.cpp`). At T = 0.02 s the exact displacement and stress vanish
+(c pi T / L = 2 pi), so `stress_rel_l2` is not defined there and is reported null.
+
+`build/mpm study examples/mms_1d.toml --refine grid.cells=8,16,32,64,128 --methods
+"{', '.join(methods)}"`, displacement RMS (observed order):
+
+{chr(10).join(t)}
+
+| claim (003 Figs. 4-6) | measured | verdict |
+|---|---|---|
+| MPM does not converge; rule: least-squares order below 0.5 | order {o(mpm_o)} | {v_mpm} |
+| CPDI second order on coarse grids ({src('mms_cpdi_order')}) | {o(cp[1])} (8 -> 16 cells) | {v_cp1} |
+| CPDI then loses rate; rule: last order below the first minus 0.5 | {", ".join(o(x) for x in cp[1:])} | {v_cp2} |
+| MPM+IMLS keeps second order ({src('mms_imls_order')}); rule: every order >= {pub('mms_imls_order') - ORDER_TOL:.1f} | {", ".join(o(x) for x in im)} | {v_im} |
+
+Not in 003: BSMPM alone has orders {", ".join(o(x) for x in po["bspline2/direct"][1:])} over
+the refinement (order {o(bs_stall)} between 64 and 128 cells), and MLS with
+either basis ends with orders {o(mls_keep[0])} (P1) and {o(mls_keep[1])} (BSMPM), as 001
+reports in 2D for MLS. With a small amplitude (`--set mms.amplitude=1e-4`) plain MPM converges
+with least-squares order {o(small_o)}, which checks the body force and exact solution against
+the solver. CI guards the IMLS and MLS orders between 16, 32 and 64 cells
+(`tests/scheme/test_reconstruction_mpm.cpp`) and `scripts/verify.py --quick`.
+
+{fig_md(ctx, figs, "mms_1d convergence")}"""
+
+
+STATIC_MLS2D = """### MLS and IMLS in 2D
+
+The same mappings run in 2D (`Simulation<2, ...>`): basis [1, x, y] or [1, x, y, x^2, xy, y^2]
+(001 eq. 15, 003 eq. 15) in coordinates scaled by the cell size per direction, the weight the
+tensor product w(r_x) w(r_y) (001 eq. 16), `method.gauss_points` per direction (default 2 x 2,
+001), every vector and stress component reconstructed with the same shape functions. Particles
+are binned by cell and an evaluation visits only the cells within the support. IMLS drops, besides
+the vanishing terms of 003 eq. 17, a term whose value at the evaluation point exceeds 1e3 times
+its weighted RMS over the data (`kMaxAmplification`; it bounds sum |phi_p| <= 1 + (m - 1) 1e3):
+in 2D the linear-weight support of a B-spline DOF outside a free edge holds one column of
+particles, which the deformation bends by ~1e-6 l; eq. 17 then keeps the term across the column
+and the nodal velocity jumped to 1e4 v0 within one step. Tests (`tests/mapping/test_mls2d.cpp`):
+reproduction of linear and quadratic fields at every point of the grid (edges and corners
+included) for both weights, IMLS with one particle, three particles (the plane through them) and
+a row (the y terms dropped), the binned search against an O(N) brute-force fit at random points,
+mass, body force, momentum and IMLS nodal velocity of linear fields on P1 and quadratic B-spline
+grids, rigid translation under MUSL (velocity to 1e-12, stress below 1e-12 E) and the energy of
+a free vibrating block.
+
+Reconstruction alone, sin(2x) cos(3y) + xy from 9 regular particles per cell, RMS at 3 x 3
+Gauss points per cell. `mpm reconstruct` does not run MLS in 2D, so this table is **not
+regenerated** by this script: it is the measurement of an earlier session (2026-11, from the
+test `Mls2d.ReconstructionConvergesAtOrderDegreePlusOne`, which guards the orders in CI):
+
+| cells a side | 8 | 16 | 32 | 64 |
+|---|---|---|---|---|
+| degree 1 | 3.13e-2 | 1.07e-2 (1.55) | 3.03e-3 (1.81) | 8.02e-4 (1.92) |
+| degree 2 | 2.97e-3 | 2.55e-4 (3.55) | 2.25e-5 (3.50) | 2.01e-6 (3.49) |
+
+(MLS and IMLS agreed to the digits shown.) The weight spans 6 cells, so degree 1 approaches
+order 2 only on the finer grids; degree 2 converges faster than order 3 on this symmetric
+pattern. Free block in its breathing mode (12 x 12 cells, 8 x 8 in the body, 9 particles per
+cell, strain 1e-4, MUSL, one period; `MlsMapping2d.VibrationEnergyBounded` keeps it within 0.5
+to 1.5 of its initial value in CI): the earlier session measured the total energy within 0.88 to 1.12 of its initial
+value for both mappings, both degrees and both bases (P1, quadratic B-splines), and in 1D a
+variation that shrinks under refinement (17 %, 5 %, 2 % on 8, 16, 32 cells).
+"""
+
+
+def sec_plate(R, ctx):
+    methods = "linear/direct/lumped, bspline2/direct/consistent, bspline2/direct/lumped"
+    out, rows = R.study("plate_mms_2d", "grid.cells=8,16,32", methods,
+                        ["mms.amplitude=1e-4", "time.end=1e-3"], name="plate_small")
+    po = {m: pair_orders(col(r, "h"), col(r, "displacement_rms"))[1:] for m, r in rows.items()}
+    figs = plot_study(out, os.path.join(ctx["figdir"], "plate_small_amplitude"),
+                      "displacement_rms,stress_rms", "plate_mms_2d, A = 1e-4 m, T = 1e-3 s",
+                      energy=False)
+    s = lambda m: ", ".join(o(x) for x in po[m])
+    ok_p1 = all(x is not None and x >= 2 - ORDER_TOL for x in po["linear/direct/lumped"])
+    ok_bs = all(x is not None and x >= 3 - ORDER_TOL for x in po["bspline2/direct/consistent"])
+    return f"""## Two dimensions: the axis-aligned vibration of a plate (001, D 3.4.1, 6.3.1)
+
+Benchmark `plate_mms_2d`: the unit square, plane-strain neo-Hookean (E = 1e7 Pa, nu = 0.3,
+rho0 = 1000 kg/m^3), the manufactured displacement u = (A sin(2 pi X) sin(omega t),
+-A sin(2 pi Y) sin(omega t)), omega = c pi, c = sqrt(E / rho0) = 100 m/s (001 eq. 38-39; 001's
+"c = sqrt(E)/gamma" and "E = 10e7" are read as in METHODS.md). The body force is
+b = u_tt - Div P / rho0 in closed form, 001 eq. 42 with pi^2 instead of pi; a test checks it,
+the velocity, F and the stress against central finite differences of the manufactured
+displacement and the library's own law (`tests/benchmarks/test_plate_mms.cpp`). "Fixed at the
+entire boundary" is implemented as rollers: u_x = 0 on X = 0, L and u_y = 0 on Y = 0, L; the
+tangential components follow the solution (u_y(0, Y, t) != 0, tested). Dirichlet conditions are
+per component (`FixedSide::components`); consistent mass then factorises once per component.
+Errors are the RMS over the particles at the final time (001 eq. 43), Euclidean norm for vectors,
+Frobenius for the stress.
+
+Small amplitude (A = 1e-4 m, no grid crossing, T = 1e-3 s, 8/16/32 cells, 9 particles per
+cell; `build/mpm study examples/plate_mms_2d.toml --refine grid.cells=8,16,32 --methods
+"{methods}" --set mms.amplitude=1e-4 --set time.end=1e-3`), displacement orders between
+successive grids: P1 lumped {s('linear/direct/lumped')} (expected 2:
+{"reproduced" if ok_p1 else "differs"}); quadratic B-splines with consistent mass
+{s('bspline2/direct/consistent')} (expected 3: {"reproduced" if ok_bs else "differs"});
+lumped-mass BSMPM {s('bspline2/direct/lumped')} (the boundary error of D Fig. 5.10). This checks
+body force, boundary conditions and solver together; the same orders are guarded in CI by
+`tests/scheme/test_plate_2d.cpp`, which also runs every 2D basis (P1, uGIMP, cpGIMP, CPDI,
+CPDI2, DDMPM, B-splines p = 1..5) with every 2D mapping (direct, TLS, MLS, IMLS) for 20 steps
+(within 20 % of the velocity amplitude; direct and TLS conserve mass and momentum to 1e-13) and
+checks bitwise restart from a checkpoint in 2D.
+
+{fig_md(ctx, figs, "plate at small amplitude: convergence")}"""
+
+
+def sec_plate_tls(R, ctx):
+    combos = [("P1", "direct", ["method.basis=linear", "method.mapping=direct"]),
+              ("P1", "TLS (6 terms)", ["method.basis=linear", "method.mapping=tls"]),
+              ("B-spline p=2", "direct", ["method.basis=bspline", "method.degree=2",
+                                          "method.mapping=direct"]),
+              ("B-spline p=2", "TLS (6 terms)", ["method.basis=bspline", "method.degree=2",
+                                                 "method.mapping=tls"])]
+    res = R.many([("plate_tls_2d", s, 0) for _, _, s in combos])
+    t = ["| basis | mapping | u [m] | v [m/s] | sigma [Pa] | mass | momentum | run time / P1 "
+         "direct | status |", "|---|---|---|---|---|---|---|---|---|"]
+    t0 = res[0].get("wall_seconds")
+    for (b, m, _), r in zip(combos, res):
+        er, cn = r["errors"], r["conservation"]
+        t.append(f"| {b} | {m} | {e(er.get('displacement_rms'))} | "
+                 f"{er.get('velocity_rms', float('nan')):.3g} | {e(er.get('stress_rms'))} | "
+                 f"{e(cn.get('max_rel_mass_error'), 1)} | "
+                 f"{e(cn.get('max_rel_momentum_error'), 1)} | "
+                 f"{r['wall_seconds'] / t0 if t0 and r.get('wall_seconds') else float('nan'):.1f} | "
+                 f"{r['status']} |")
+    p1, tl = res[0]["errors"], res[1]["errors"]
+    fu, fv, fs = (p1["displacement_rms"] / tl["displacement_rms"],
+                  p1["velocity_rms"] / tl["velocity_rms"], p1["stress_rms"] / tl["stress_rms"])
+    v_imp = verdict_claim(fu >= 2 and fs >= 2, f"{fu:.1f}x (u), {fs:.1f}x (stress)")
+    mass = max(r["conservation"]["max_rel_mass_error"] for r in res)
+    v_mass = verdict_value(mass, "plate_tls_mass", True)
+    bs_better = res[2]["errors"]["displacement_rms"] < res[3]["errors"]["displacement_rms"]
+    # A = 0.1 m: completions of the fragile sparse elements (P1, 16 cells, 9 PPC).
+    comp = ["reduce", "virtual", "neighbour"]
+    fr = []
+    for tend in ("5e-3", "1e-3"):
+        base = ["grid.cells=16", "particles.per_cell=3", "mms.amplitude=0.1",
+                "time.dt=1e-5", f"time.end={tend}", "method.basis=linear"]
+        fr.append(R.many([("plate_tls_2d", base + ["method.mapping=direct"], 0)] +
+                         [("plate_tls_2d", base + ["method.mapping=tls",
+                                                   f"method.tls_completion={c}"], 0)
+                          for c in comp]))
+
+    def vdesc(r):
+        if r["status"] != "ok":
+            return f"failed at step {r.get('steps', '?')}"
+        return f"{r['errors'].get('velocity_rms', float('nan')):.3g} m/s"
+    long_t = ["| T | direct | TLS reduce | TLS virtual | TLS neighbour |", "|---|---|---|---|---|"]
+    for tend, rs in zip(("5e-3 s", "1e-3 s"), fr):
+        long_t.append(f"| {tend} | " + " | ".join(vdesc(r) for r in rs) + " |")
+    return f"""### MPM and MPM-TLS on D's plate (D 6.3.1, Table 6.1, Fig. 6.8)
+
+`build/mpm run examples/plate_tls_2d.toml --set method.basis=... --set method.mapping=...`:
+32 x 32 elements, A = 0.05 m, dt = 1.25e-4 s, T = 0.015 s, MUSL, lumped mass; 25 particles per
+element (5 x 5; D: 24, which a k x k seeding cannot give). RMS errors at T and the largest
+relative mass and momentum errors over the run:
+
+{chr(10).join(t)}
+
+| claim | published | measured | verdict |
+|---|---|---|---|
+| TLS "significantly improves the MPM results" (Fig. 6.8); rule: P1 error cut at least 2x in u and stress | yes | {fu:.1f}x (u), {fv:.1f}x (v), {fs:.1f}x (stress) | {v_imp} |
+| mass conserved ({src('plate_tls_mass')}) | {e(pub('plate_tls_mass'), 1)} | {e(mass, 1)} (largest of the four runs) | {v_mass} |
+
+D reports absolute momentum errors (8e-11), not comparable in size with our relative ones.
+Run times are the wall times of this report's runs (one thread each, two runs at a time on a
+shared machine): indicative only. D's published run-time ratios (Table 4.1) compare OTM and the
+unified approach of D 4, which are not implemented.
+Not in D: with quadratic B-splines the direct mapping is
+{"already more accurate than" if bs_better else "less accurate than"} MPM-TLS on this plate.
+CI (`tests/scheme/test_plate_2d.cpp`) checks the P1 improvement (at least 2x in u and stress)
+and the conservation.
+
+D also reports (6.3.1) that MPM-TLS runs on triangles terminate when elements lose particles; on
+rectangles at A = 0.1 m (001's amplitude) the completions decide the result once elements near
+the boundary empty out (P1, 16 cells, 9 particles per cell, dt = 1e-5 s; velocity RMS at T):
+
+{chr(10).join(long_t)}
+
+Triangles are not implemented yet.
+"""
+
+
+STATIC_LONG = """### The published convergence set-up of 001 (Figs. 2-4): not reproduced, the runs break down
+
+`build/mpm study examples/plate_mms_2d.toml --refine grid.cells=8,16,32,64 --set time.end=0.2
+--methods "linear/direct, bspline2/direct, bspline2/tls, linear/tls, bspline2/mls"`: A = 0.1 m,
+9 particles per cell, dt = 1e-5 s, T = 0.2 s (20,000 steps), MUSL, lumped mass. These runs take
+about 30 min each on 64 cells, so they are **not part of the default report**: the numbers below
+are from single runs of an earlier session (2026-11, before this generator existed); regenerate
+them with `scripts/verify.py --long` (appends the raw study table below; several hours on 2
+cores).
+
+| cells | P1 u [m] | P1 sigma [Pa] | BSMPM u [m] | BSMPM v [m/s] | BSMPM sigma [Pa] |
+|---|---|---|---|---|---|
+| 8 | 1.65e-2 | 5.32e6 | 1.33e-1 | 190 | 2.54e8 |
+| 16 | 1.27e-1 | 8.08e7 | 3.85e-3 | 11.7 | 1.58e6 |
+| 32 | 3.19e-1 | 3.09e11 | 2.03e-3 | 10.5 | 1.57e6 |
+| 64 | 4.02e-1 | 3.35e12 | non-finite stress at step 14,423 (t = 0.144 s) | | |
+
+In those runs BSMPM with TLS (6 terms, `virtual` completion) and MPM with TLS stopped with
+non-finite stresses after 260-780 steps on every grid (8, 16, 32 cells); BSMPM with MLS
+(degree 1) stopped at step 2,772 on 8 cells and 4,989 on 16 cells, its mass error reaching 16
+(MLS is not conservative) before. The failing particles sat at the rollers (x ~ 0, slightly
+outside the square) where the manufactured solution compresses the material to F_xx = 0.37.
+
+Published (001 Figs. 2-4): MPM does not converge, BSMPM is far more accurate but stalls on fine
+grids, BSMPM+MLS keeps converging. What those runs reproduced: P1 MPM does not converge (its
+errors grow with refinement and exceed the amplitude), BSMPM is far more accurate on 16 and 32
+cells and converges slowly. What they did not: BSMPM broke down on 64 cells and BSMPM+MLS broke
+down on 8 and 16 cells instead of converging. The same code converges at the expected orders at
+small amplitude (above), so the body force, boundary conditions and mappings are right where
+deformation is small; the breakdown is a large-deformation robustness problem at the rollers
+(particles crossing the boundary, severe compression) that is not yet diagnosed. Earlier runs
+also found that a halved time step does not help (not a time-step instability) and that the MLS
+mass error grows by orders of magnitude before the breakdown, which points at the MLS density
+reconstruction at Gauss points whose support holds few, clustered particles (extrapolation);
+001 reports no mass errors. Open: diagnose the MLS mass growth, whether 001 keeps particles
+inside the square at the rollers, and the TLS completions under strong compression.
+"""
+
+
+def sec_long(R, ctx):
+    out, rows = R.study("plate_mms_2d", "grid.cells=8,16,32,64",
+                        "linear/direct, bspline2/direct, bspline2/tls, linear/tls, bspline2/mls",
+                        ["time.end=0.2"], name="plate_long")
+    with open(os.path.join(out, "study.txt")) as f:
+        table = f.read()
+    figs = plot_study(out, os.path.join(ctx["figdir"], "plate_long"),
+                      "displacement_rms,stress_rms", "plate_mms_2d, A = 0.1 m, T = 0.2 s",
+                      energy=False)
+    return ("Regenerated by `--long` in this report:\n\n```\n" + table + "```\n\n"
+            + fig_md(ctx, figs, "plate at A = 0.1 m"))
+
+
+# --------------------------------------------------------------------------------------------
+# Driver
+# --------------------------------------------------------------------------------------------
+def full(R, args):
+    t0 = time.time()
+    out = os.path.abspath(args.out or os.path.join(ROOT, "docs"))
+    figdir = os.path.join(out, "figures")
+    shutil.rmtree(figdir, ignore_errors=True)  # from scratch: no stale figures
+    os.makedirs(figdir, exist_ok=True)
+    ctx = {"out": out, "figdir": figdir}
+    parts = []
+    steps = [("small-deformation bar", sec_small_bar), ("bases", lambda R, c: STATIC_BASES),
+             ("grid crossing", sec_crossing), ("column (bases)", sec_column_bases),
+             ("traction bar", sec_traction),
+             ("boundary error", sec_boundary), ("reconstructions", sec_reconstruction_intro),
+             ("chapter 5 tables", sec_chapter5), ("against the published figures",
+                                                  sec_against_published),
+             ("mms_1d", sec_mms), ("2D MLS", lambda R, c: STATIC_MLS2D),
+             ("plate", sec_plate), ("plate TLS", sec_plate_tls),
+             ("001 long study", lambda R, c: STATIC_LONG)]
+    if args.long:
+        steps.append(("001 long study (--long)", sec_long))
+    for label, fn in steps:
+        t = time.time()
+        parts.append(fn(R, ctx))
+        print(f"verify: {label} ({time.time() - t:.0f} s)", flush=True)
+    wall = time.time() - t0
+    cmd = "/usr/bin/python3 scripts/verify.py" + (" --long" if args.long else "")
+    header = f"""# Verification
+
+<!-- Generated by scripts/verify.py from fresh runs of build/mpm; do not edit by hand. Edit
+the template text in scripts/verify.py and regenerate. -->
+
+Regenerate this document and `docs/figures/` with `{cmd}` (or `build/mpm verify`) after
+building `build/mpm`. The run that produced this version took {wall:.0f} s of wall time
+with {args.jobs} parallel run(s) of one thread each on a {os.cpu_count()}-core machine
+({time.strftime('%Y-%m-%d', time.gmtime())}). `scripts/verify.py --quick` (under a minute) is
+the CI variant: it checks observed orders against thresholds and writes nothing.
+
+Measured with this repository; the published figures come from the documents in
+`../shared/seeds/` (D = the dissertation), listed with their source in `PUBLISHED` in the
+script. {VERDICT_RULES}
+
+"""
+    with open(os.path.join(out, "verification.md"), "w") as f:
+        f.write(header + "\n".join(p.rstrip() + "\n" for p in parts))
+    print(f"verify: wrote {os.path.join(out, 'verification.md')} in {wall:.0f} s")
+    return 0
+
+
+def main(argv):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true",
+                    help="coarse convergence guard: print orders against thresholds, exit 1 "
+                         "if one is below (writes nothing into docs/)")
+    ap.add_argument("--threshold-scale", type=float, default=1.0,
+                    help="multiply the --quick thresholds (a test uses 10 to prove the guard "
+                         "can fail)")
+    ap.add_argument("--long", action="store_true",
+                    help="also run the 001 plate study at A = 0.1 m, T = 0.2 s (hours)")
+    ap.add_argument("--out", help="report directory (default: docs/ of the repository)")
+    ap.add_argument("--mpm", default=os.path.join(ROOT, "build", "mpm"),
+                    help="the mpm executable (default: %(default)s)")
+    ap.add_argument("--jobs", "-j", type=int, default=2, help="parallel runs (default 2)")
+    ap.add_argument("--keep", action="store_true", help="keep the run directories")
+    args = ap.parse_args(argv)
+    if not os.path.exists(args.mpm):
+        sys.exit(f"verify.py: {args.mpm} not found: build first (bash scripts/build.sh)")
+    work = tempfile.mkdtemp(prefix="mpm_verify_")
+    R = Runner(os.path.abspath(args.mpm), max(1, args.jobs), work)
+    try:
+        return quick(R, args.threshold_scale) if args.quick else full(R, args)
+    finally:
+        if args.keep:
+            print(f"verify: run directories kept in {work}")
+        else:
+            shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
