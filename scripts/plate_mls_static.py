@@ -82,7 +82,7 @@ def main():
     ap.add_argument("--s", type=float, default=1.0, help="sin(omega t) of the configuration")
     ap.add_argument("--dilation", type=float, default=2.0, help="a in r = dx / (a l) (001: 2)")
     args = ap.parse_args()
-    print(f"plate_mms_2d, A = {A} m, sin(omega t) = {args.s}, MLS dilation a = {args.dilation}")
+    print(f"plate_mms_2d, A = {A} m, sin(omega t) = {args.s}, MLS dilation a = {args.dilation}:\n")
     print("| cells | relative mass error | RMS density error / rho0 | particle density range |")
     print("|---|---|---|---|")
     prev = None

@@ -1272,10 +1272,9 @@ STATIC_LONG = """### The published convergence set-up of 001 (Figs. 2-4): not re
 `build/mpm study examples/plate_mms_2d.toml --refine grid.cells=8,16,32,64 --set time.end=0.2
 --methods "linear/direct, bspline2/direct, bspline2/tls, linear/tls, bspline2/mls"`: A = 0.1 m,
 9 particles per cell, dt = 1e-5 s, T = 0.2 s (20,000 steps), MUSL, lumped mass. These runs take
-about 30 min each on 64 cells, so they are **not part of the default report**: the numbers below
-are from single runs of an earlier session (2026-11, before this generator existed); regenerate
-them with `scripts/verify.py --long` (appends the raw study table below; several hours on 2
-cores).
+up to hours each, so they are **not part of the default report**: the numbers below are from
+single runs of the sessions of 2026-11-21 and 2026-11-22; regenerate the study with
+`scripts/verify.py --long` (appends the raw study table below; several hours on 2 cores).
 
 | cells | P1 u [m] | P1 sigma [Pa] | BSMPM u [m] | BSMPM v [m/s] | BSMPM sigma [Pa] |
 |---|---|---|---|---|---|
@@ -1284,26 +1283,63 @@ cores).
 | 32 | 3.19e-1 | 3.09e11 | 2.03e-3 | 10.5 | 1.57e6 |
 | 64 | 4.02e-1 | 3.35e12 | non-finite stress at step 14,423 (t = 0.144 s) | | |
 
-In those runs BSMPM with TLS (6 terms, `virtual` completion) and MPM with TLS stopped with
-non-finite stresses after 260-780 steps on every grid (8, 16, 32 cells); BSMPM with MLS
-(degree 1) stopped at step 2,772 on 8 cells and 4,989 on 16 cells, its mass error reaching 16
-(MLS is not conservative) before. The failing particles sat at the rollers (x ~ 0, slightly
-outside the square) where the manufactured solution compresses the material to F_xx = 0.37.
+The reconstruction variants stop before T on every grid run (step, time):
+
+| cells | BSMPM+MLS (001) | BSMPM+IMLS (003) | BSMPM+TLS, MPM+TLS |
+|---|---|---|---|
+| 8 | 2,772 (0.028 s) | 1,940 (0.019 s) | 260-780 steps |
+| 16 | 4,989 (0.050 s) | 3,167 (0.032 s) | 260-780 steps |
+| 32 | 6,851 (0.069 s) | not run | 260-780 steps |
 
 Published (001 Figs. 2-4): MPM does not converge, BSMPM is far more accurate but stalls on fine
-grids, BSMPM+MLS keeps converging. What those runs reproduced: P1 MPM does not converge (its
-errors grow with refinement and exceed the amplitude), BSMPM is far more accurate on 16 and 32
-cells and converges slowly. What they did not: BSMPM broke down on 64 cells and BSMPM+MLS broke
-down on 8 and 16 cells instead of converging. The same code converges at the expected orders at
-small amplitude (above), so the body force, boundary conditions and mappings are right where
-deformation is small; the breakdown is a large-deformation robustness problem at the rollers
-(particles crossing the boundary, severe compression) that is not yet diagnosed. Earlier runs
-also found that a halved time step does not help (not a time-step instability) and that the MLS
-mass error grows by orders of magnitude before the breakdown, which points at the MLS density
-reconstruction at Gauss points whose support holds few, clustered particles (extrapolation);
-001 reports no mass errors. Open: diagnose the MLS mass growth, whether 001 keeps particles
-inside the square at the rollers, and the TLS completions under strong compression.
+grids, BSMPM+MLS keeps converging. Reproduced: P1 MPM does not converge (its errors grow with
+refinement and exceed the amplitude); BSMPM is far more accurate on 16 and 32 cells and
+converges slowly. Not reproduced: BSMPM breaks down on 64 cells, and BSMPM+MLS breaks down on
+8, 16 and 32 cells instead of converging. The same code converges at the expected orders at
+small amplitude (above), so the body force, the rollers and the mappings are right where the
+deformation is small.
+
+**Diagnosis of the MLS breakdown (2026-11-22).** The manufactured solution at A = 0.1 m is
+severe: F_xx = 1 + 2 pi A cos(2 pi X) sin(omega t) spans 0.37 to 1.63, so J reaches 0.137 at
+(X, Y) = (0.5, 0) and the particle density varies twentyfold (377 to 7,235 kg/m^3) over half
+the square. 001's weight (eq. 16-17, r = |x - x_p| / (2 l)) spans six cells in each direction,
+half the square on 8 cells. The table below (computed for this report by
+`scripts/plate_mls_static.py`, no time stepping) places the particles exactly where the
+manufactured solution puts them at the largest deformation and integrates the MLS density as
+001 eq. 22 does: before any dynamics, the lumped mass is off by 18 % on 8 cells, 7 % on 16 and
+2 % on 32; the direct mapping conserves it exactly. The mass error shrinks like (a h)^2, so a
+narrower weight (`method.mls_dilation`, the a in r = |x - x_p| / (a l), 2 in 001) helps the
+reconstruction as much as a grid twice as fine:
+
+{mls_static}
+
+In the runs, this inconsistency between the reconstructed masses (and momenta) and the particles'
+feeds energy into the solution: on 16 cells the largest particle speed grows from the exact
+44 m/s to 100 m/s by t = 0.02 s and to 4,000 m/s at t = 0.05 s, and the relative mass error
+reaches 16 before the stress turns non-finite; on 32 cells the same growth ends at t = 0.069 s.
+With the direct mapping the same grids track the solution (largest speed 54-60 m/s, J within
+0.12-2.7 against the exact 0.137-2.65). A narrower weight trades this for the opposite failure:
+16 cells with a = 1 keep the mass error within 3 % to t = 0.05 s and the displacement error at
+5e-3 m, but stop at t = 0.143 s (8 cells: t = 0.090 s) with a singular moment matrix near a
+corner, where the stretched material leaves too few particles in the support; a = 1.5 blows up
+at t = 0.087 s. A halved time step does not help (earlier runs), so this is not a time-step
+instability. IMLS (003) breaks down earlier still. We conclude that 001's MLS-BSMPM, as
+specified, is not stable at A = 0.1 m on these grids in our implementation; 001 reports no
+mass errors, and its figures may rest on details the paper does not give (its own reading of
+eq. 16, a wider particle seeding, or a smaller effective amplitude). Open: the BSMPM breakdown
+on 64 cells and the TLS completions under strong compression.
 """
+
+
+def sec_001(R, ctx):
+    """The static 001 text, with the MLS density table of scripts/plate_mls_static.py computed
+    now (a = 2 as published, a = 1 for comparison; about a minute)."""
+    tables = []
+    for a in ("2", "1"):
+        res = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "plate_mls_static.py"),
+                              "--dilation", a], check=True, capture_output=True, text=True)
+        tables.append(res.stdout.strip())
+    return STATIC_LONG.replace("{mls_static}", "\n\n".join(tables))
 
 
 def sec_long(R, ctx):
@@ -1338,7 +1374,7 @@ def full(R, args):
                                                   sec_against_published),
              ("mms_1d", sec_mms), ("2D MLS", lambda R, c: STATIC_MLS2D),
              ("plate", sec_plate), ("plate TLS", sec_plate_tls),
-             ("001 long study", lambda R, c: STATIC_LONG)]
+             ("001 long study", sec_001)]
     if args.long:
         steps.append(("001 long study (--long)", sec_long))
     for label, fn in steps:
