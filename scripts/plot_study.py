@@ -139,6 +139,34 @@ def profile_and_history(plt, csv_path, methods, out, title):
         fig.tight_layout()
         written += save(fig, out, "conservation")
     plt.close(fig)
+    # The mapping's conservation errors per step (history.csv columns mass_error and
+    # momentum_error: |sum_i m_i - sum_p m_p| / sum_p m_p and |sum_i q_i - sum_p m_p v_p| /
+    # sum_p m_p |v_p| of the last step; D Tables 5.3, 5.5, 5.7 report their maxima).
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    plotted = 0
+    floor = 1e-17  # exact zeros on a log axis
+    for name, d in runs:
+        path = os.path.join(d, "history.csv")
+        if not os.path.exists(path):
+            continue
+        h = read_rows(path)[1:]  # row 0 is the initial state, before any mapping
+        if not h or "mass_error" not in h[0]:
+            continue
+        t = [x["time"] for x in h]
+        for ax, key in zip(axes, ("mass_error", "momentum_error")):
+            ax.plot(t, [max(abs(x[key]), floor) for x in h], lw=1.0, label=f"{name} (finest)")
+        plotted += 1
+    if plotted:
+        for ax, what in zip(axes, ("mass", "momentum")):
+            ax.set_ylabel(f"relative {what} error of the mapping")
+            ax.set_xlabel("t [s]")
+            ax.set_yscale("log")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.suptitle(f"{title}: grid against particle sums per step", fontsize=9)
+        fig.tight_layout()
+        written += save(fig, out, "conservation_mapping")
+    plt.close(fig)
     return written
 
 

@@ -151,6 +151,11 @@ class OutputSession {
     if (vtk_) io::write_file_atomic(dir_ / "grid.vtu", io::grid_vtu(pb.grid));
     history_ = "time,kinetic_energy,strain_energy,total_energy,mass";
     for (int d = 0; d < Dim; ++d) history_ += fmt::format(",momentum_{}", d + 1);
+    // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
+    // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
+    // report their maxima, which summary.json has).
+    mapping_errors_ = cfg.get_string("method.solver") == "mpm";
+    if (mapping_errors_) history_ += ",mass_error,momentum_error";
     history_ += "\n";
   }
 
@@ -175,6 +180,10 @@ class OutputSession {
     history_ += fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", sim.time, kin, strain,
                             kin + strain, mass);
     for (int d = 0; d < Dim; ++d) history_ += fmt::format(",{:.17g}", mom[d]);
+    if (mapping_errors_)
+      history_ += sim.diag ? fmt::format(",{:.17g},{:.17g}", sim.diag->rel_mass_error,
+                                         sim.diag->rel_momentum_error)
+                           : ",0,0";
     history_ += "\n";
   }
 
@@ -243,6 +252,7 @@ class OutputSession {
   ExactSolution<Dim> exact_;
   bool csv_ = true, vtk_ = true;
   std::string history_;
+  bool mapping_errors_ = false;  // history.csv has mass_error, momentum_error
   io::PvdSeries pvd_;
   int frames_ = 0;
   std::vector<double> frame_times_;
@@ -355,6 +365,8 @@ struct StateView {
   const Particles<Dim>& particles;
   double time;
   const Material& material;
+  // The MPM mapping's conservation errors (history.csv columns); null for other solvers.
+  const Diagnostics* diag = nullptr;
 };
 
 // The time loop shared by every solver: `advance(s)` takes step s to s + 1 (timed; may throw
@@ -612,7 +624,7 @@ RunResult run_typed(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt) 
         if (reference) reference->step(ts.dt);
       },
       [&] {
-        return StateView<Dim>{sim.particles, sim.time, sim.material};
+        return StateView<Dim>{sim.particles, sim.time, sim.material, &sim.diag};
       },
       [&](Index) { out.checkpoint(capture<Dim>(sim, reference, out, config_text)); }, res);
 

@@ -131,9 +131,10 @@ void map_mass(Sim& sim) {
   const double largest = m.empty() ? 0.0 : *std::max_element(m.begin(), m.end());
   const double particle_mass = deterministic_sum(
       static_cast<Index>(mp.size()), 0.0, [&](Index p) { return mp[static_cast<std::size_t>(p)]; });
-  if (particle_mass > 0.0)
-    sim.diag.max_rel_mass_error =
-        std::max(sim.diag.max_rel_mass_error, std::abs(total - particle_mass) / particle_mass);
+  if (particle_mass > 0.0) {
+    sim.diag.rel_mass_error = std::abs(total - particle_mass) / particle_mass;
+    sim.diag.max_rel_mass_error = std::max(sim.diag.max_rel_mass_error, sim.diag.rel_mass_error);
+  }
   const double threshold = sim.mass_tolerance * largest;
   parallel_for(static_cast<Index>(m.size()), [&](Index k) {
     const auto i = static_cast<std::size_t>(k);
@@ -186,9 +187,11 @@ void map_momentum(Sim& sim) {
   });
   const Vec<Dim> part_p = sums.template head<Dim>();
   const double scale = sums[Dim];
-  if (scale > 0.0)
+  if (scale > 0.0) {
+    sim.diag.rel_momentum_error = (grid_p - part_p).norm() / scale;
     sim.diag.max_rel_momentum_error =
-        std::max(sim.diag.max_rel_momentum_error, (grid_p - part_p).norm() / scale);
+        std::max(sim.diag.max_rel_momentum_error, sim.diag.rel_momentum_error);
+  }
 }
 
 // Internal and body forces from the mapping, then end tractions (a handful of points).

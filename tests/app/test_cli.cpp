@@ -167,10 +167,24 @@ TEST(Cli, RunWritesSummaryFramesHistoryAndVtk) {
   EXPECT_TRUE(std::filesystem::exists(out / "particles_00004.vtu"));
   EXPECT_FALSE(std::filesystem::exists(out / "particles_00005.vtu"));
   std::ifstream h(out / "history.csv");
-  std::string line;
+  std::string line, header, last;
   int rows = 0;
-  while (std::getline(h, line)) ++rows;
+  while (std::getline(h, line)) {
+    if (rows++ == 0) header = line;
+    last = line;
+  }
   EXPECT_EQ(rows, 1 + 20);  // header, t = 0 and 19 steps
+  // The mapping's per-step conservation errors are the last two columns; the direct mapping
+  // conserves mass and momentum to round-off, but not exactly zero in every step.
+  EXPECT_EQ(header.substr(header.rfind(",mass_error")), ",mass_error,momentum_error");
+  const auto momentum_at = last.rfind(',');
+  const auto mass_at = last.rfind(',', momentum_at - 1);
+  const double mass_error = std::stod(last.substr(mass_at + 1, momentum_at - mass_at - 1));
+  const double momentum_error = std::stod(last.substr(momentum_at + 1));
+  EXPECT_GE(mass_error, 0.0);
+  EXPECT_LT(mass_error, 1e-13);
+  EXPECT_GE(momentum_error, 0.0);
+  EXPECT_LT(momentum_error, 1e-13);
   std::filesystem::remove_all(out);
 }
 
