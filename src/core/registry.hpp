@@ -84,7 +84,8 @@ inline constexpr Entry kMaterials[] = {
 
 inline constexpr Entry kBoundaryTypes[] = {
     {"fixed", "all velocity components zero at the boundary degrees of freedom"},
-    {"free", "traction-free (natural) boundary"},
+    {"free", "traction-free (natural) boundary, or the traction.* of that side"},
+    {"roller", "normal velocity component zero, tangential free (1D: as fixed)"},
 };
 
 }  // namespace mpm::registry
