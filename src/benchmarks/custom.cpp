@@ -81,7 +81,9 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
       if (type == "fixed") pb.fixed_sides.push_back({d, side});
       if (type == "roller") pb.fixed_sides.push_back({d, side, 1u << d});
       const std::string key = fmt::format("traction.{}", kSideKeys[d][side]);
-      if (is_zero(cfg, key.c_str())) continue;  // traction-free
+      const std::string pkey = fmt::format("pressure.{}", kSideKeys[d][side]);
+      const Expression p = cfg.get_expression(pkey);
+      if (is_zero(cfg, key.c_str()) && p.text() == "0") continue;  // traction-free
       auto tau = expressions(cfg, key.c_str(), Dim, kComponents[Dim]);
       for (const auto& e : tau)
         if (e.uses_position())
@@ -89,9 +91,21 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
               fmt::format("{}: key '{}': the traction \"{}\" may depend on t "
                           "only, not on x, y or z (uniform over the face)",
                           cfg.where(key), key, e.text()));
+      if (p.uses_position())
+        throw InputError(
+            fmt::format("{}: key '{}': the pressure \"{}\" may depend on t only, "
+                        "not on x, y or z (uniform over the face)",
+                        cfg.where(pkey), pkey, p.text()));
+      // A pressure p pushes against the outward normal n = sign e_d of the reference face:
+      // tau = -p n (a dead load, like the traction).
+      const double sign = side == 0 ? -1.0 : 1.0;
       pb.tractions.push_back(
           body_face_traction<Dim>(pb.grid, pb.particles, b0, b1, per_cell, d, side == 0 ? -1 : +1,
-                                  [tau](double t) { return vector_from<Dim>(tau, 0.0, 0.0, t); }));
+                                  [tau, p, d, sign](double t) {
+                                    Vec<Dim> v = vector_from<Dim>(tau, 0.0, 0.0, t);
+                                    v[d] -= sign * p(0.0, 0.0, 0.0, t);
+                                    return v;
+                                  }));
     }
 }
 
@@ -178,6 +192,12 @@ Problem<1> make_custom_1d(const Config& cfg) {
   // indistinguishable from a given one in a restarted run's stored configuration).
   for (const char* key : {"traction.bottom", "traction.top"})
     if (!is_zero(cfg, key))
+      throw InputError(
+          fmt::format("{}: key '{}' applies to a 2D custom problem only (set "
+                      "grid.dimension = 2)",
+                      cfg.where(key), key));
+  for (const char* key : {"pressure.bottom", "pressure.top"})
+    if (cfg.get_string(key) != "0")
       throw InputError(
           fmt::format("{}: key '{}' applies to a 2D custom problem only (set "
                       "grid.dimension = 2)",

@@ -77,6 +77,11 @@ KeySpec choice(std::string name, std::optional<std::string> def,
   return k;
 }
 
+KeySpec expression(std::string name, std::string unit, std::string def, std::string description) {
+  return numeric(std::move(name), KeyType::Expression, std::move(unit), Value(std::move(def)),
+                 any(), std::move(description));
+}
+
 // One value per direction (RealVector) or component (ExpressionVector); see KeyType.
 KeySpec real_vector(std::string name, std::string unit, double def, std::string description) {
   return numeric(std::move(name), KeyType::RealVector, std::move(unit), Value(def), any(),
@@ -192,6 +197,15 @@ std::vector<KeySpec> declare() {
                         "traction on the body face y = body.min, as traction.left (2D custom)"),
       expression_vector("traction.top", "Pa", "0",
                         "traction on the body face y = body.max, as traction.left (2D custom)"),
+      expression("pressure.left", "Pa", "0",
+                 "normal pressure p(t) on the body face x = body.min, positive in compression: "
+                 "adds -p n (reference outward normal n) to traction.left (custom)"),
+      expression("pressure.right", "Pa", "0",
+                 "normal pressure on the body face x = body.max, as pressure.left (custom)"),
+      expression("pressure.bottom", "Pa", "0",
+                 "normal pressure on the body face y = body.min, as pressure.left (2D custom)"),
+      expression("pressure.top", "Pa", "0",
+                 "normal pressure on the body face y = body.max, as pressure.left (2D custom)"),
       expression_vector("exact.displacement", "m", "0",
                         "exact displacement u(X, t) for error norms, one expression of the "
                         "material position x, y and t per component (custom; all exact.* \"0\": "

@@ -25,6 +25,8 @@
 namespace mpm {
 namespace {
 
+void expect_input_error(const std::string& toml, const std::vector<std::string>& needles);
+
 // Steps a problem as run() does (P1 basis, direct mapping, MUSL, lumped mass).
 template <int Dim>
 Particles<Dim> step_problem(Problem<Dim> pb, double dt, int steps) {
@@ -215,6 +217,46 @@ top = ["q0", "p0"]
   std::printf("momentum (%.15g, %.15g) N s, impulse (%.15g, %.15g) N s, relative %.3g\n",
               momentum[0], momentum[1], impulse[0], impulse[1], rel);
   EXPECT_LT(rel, 1e-12);
+}
+
+// A normal pressure p is the traction -p n on the reference face (n its outward normal), added
+// to the face's traction.* vector.
+TEST(Traction2D, PressureIsMinusPTimesTheOutwardNormal) {
+  const Config c = Config::parse(std::string(R"toml(benchmark = "custom"
+[time]
+dt = 1e-4
+end = 1e-3
+[material]
+model = "linear_elastic"
+density = 1000.0
+youngs_modulus = 1e6
+[grid]
+dimension = 2
+min = [0.0, 0.0]
+max = [1.0, 1.0]
+[body]
+min = [0.25, 0.25]
+max = [0.75, 0.75]
+[pressure]
+left = "100*t"
+top = "7"
+[traction]
+top = ["3", "1"]
+)toml"),
+                                 "pressure.toml");
+  const auto pb = std::get<Problem<2>>(make_problem(c));
+  ASSERT_EQ(pb.tractions.size(), 2u);  // left, then top
+  EXPECT_EQ(pb.tractions[0].direction, 0);
+  EXPECT_EQ(pb.tractions[0].side, -1);
+  EXPECT_EQ(pb.tractions[0].value(2.0), Vec<2>(200.0, 0.0));  // pushes along +x
+  EXPECT_EQ(pb.tractions[1].direction, 1);
+  EXPECT_EQ(pb.tractions[1].side, 1);
+  EXPECT_EQ(pb.tractions[1].value(0.0), Vec<2>(3.0, 1.0 - 7.0));  // pushes along -y
+  // 1D: only left and right exist.
+  expect_input_error(
+      "benchmark = \"custom\"\n[time]\ndt = 1e-4\nend = 1e-3\n[material]\ndensity = 1000.0\n"
+      "youngs_modulus = 1e6\n[pressure]\ntop = \"1\"\n",
+      {"case.toml:9:", "pressure.top", "grid.dimension = 2"});
 }
 
 // examples/custom_plate_2d.toml: linear elastic plate with rollers on its sides under gravity
