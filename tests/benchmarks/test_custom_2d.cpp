@@ -159,6 +159,52 @@ TEST(Traction2D, PlaneStrainColumnMatchesTheTractionBarRowByRow) {
   EXPECT_LT(err2, 0.06);  // measured 0.0509 Pa (A = 1 Pa) on h = L / 32 (P1 MPM, 2 PPC)
 }
 
+// The 1D custom benchmark with traction.right is the traction bar (a roller in 1D is "fixed").
+TEST(Traction2D, OneDimensionalCustomTractionIsTheTractionBar) {
+  const Config c1 = Config::parse(kBar1D, "bar1d.toml");
+  const Config cc = Config::parse(R"toml(
+benchmark = "custom"
+[constants]
+A = 1.0
+c = 1.0
+L = 1.0
+[grid]
+cells = 40
+min = 0.0
+max = 1.25
+[body]
+min = 0.0
+max = 1.0
+[particles]
+per_cell = 2
+[time]
+dt = 1e-3
+end = 1.5
+[material]
+model = "neo_hookean"
+density = 100.0
+youngs_modulus = 100.0
+poisson_ratio = 0.0
+[boundary]
+left = "roller"
+right = "free"
+[traction]
+right = "-A*sin(pi*c*t/L)"
+)toml",
+                                  "custom1d.toml");
+  auto pc = std::get<Problem<1>>(make_problem(cc));
+  ASSERT_EQ(pc.fixed_sides.size(), 1u);
+  EXPECT_EQ(pc.fixed_sides[0].components, 1u);
+  const auto P1 = step_problem<1>(std::get<Problem<1>>(make_problem(c1)), 1e-3, 1500);
+  const auto PC = step_problem<1>(std::move(pc), 1e-3, 1500);
+  ASSERT_EQ(PC.x.size(), P1.x.size());
+  double max_ds = 0.0;
+  for (std::size_t i = 0; i < P1.x.size(); ++i)
+    max_ds = std::max(max_ds, std::abs(PC.stress[i](0, 0) - P1.stress[i](0, 0)));
+  // The traction evaluated by muparser instead of C++: round-off apart.
+  EXPECT_LT(max_ds, 1e-12);
+}
+
 // A free block (no Dirichlet condition, body inside the grid) under a ramped traction on its
 // right face and a constant one on its top face: the total momentum must equal the applied
 // impulse sum_s tau(t_s) A dt (the internal forces sum to zero, partition of unity). The faces
