@@ -53,6 +53,9 @@ void fuzz_config(std::string_view text) {
   }
   for (const mpm::KeySpec& spec : mpm::schema()) {
     if (spec.type == mpm::KeyType::Expression) evaluate(cfg.get_expression(spec.name));
+    if (spec.type == mpm::KeyType::ExpressionVector)
+      for (const std::string& text : cfg.get_expressions(spec.name))
+        evaluate(mpm::Expression(text, cfg.constants()));
     (void)cfg.where(spec.name);
   }
   // The written-back configuration must load again and give the same values.
@@ -78,6 +81,12 @@ void fuzz_config(std::string_view text) {
       case mpm::KeyType::String:
       case mpm::KeyType::Expression:
         same = cfg.get_string(spec.name) == again.get_string(spec.name);
+        break;
+      case mpm::KeyType::RealVector:
+        same = cfg.get_reals(spec.name) == again.get_reals(spec.name);
+        break;
+      case mpm::KeyType::ExpressionVector:
+        same = cfg.get_expressions(spec.name) == again.get_expressions(spec.name);
         break;
     }
     if (!same) bug("to_toml() changes a value", spec.name + "\n" + written);

@@ -73,8 +73,14 @@ struct PlateMms2DExact {
 };
 
 // 1D problem from the configuration alone: grid and body extents, initial velocity and stress
-// as expressions of x, body force as an expression of x and t, fixed or free ends.
+// as expressions of x, body force as an expression of x and t, fixed or free ends, tractions on
+// the body ends (traction.left/right, expressions of t), an exact solution by expressions.
 Problem<1> make_custom_1d(const Config& cfg);
+
+// The same in 2D (grid.dimension = 2): a box body in a box grid, vector keys as arrays
+// (body_force = ["0", "-9.81"]), per-side conditions fixed / roller / free, tractions on the
+// four body faces through the particles next to them (Traction), exact.* by expressions.
+Problem<2> make_custom_2d(const Config& cfg);
 
 // A bar on [0, L] filling a grid of grid.cells cells with particles.per_cell particles per
 // cell, density rho, fixed at both ends, released with velocity v(X) (vibrating bar, mms_1d).

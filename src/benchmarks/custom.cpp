@@ -5,6 +5,130 @@
 #include "io/expression.hpp"
 
 namespace mpm {
+namespace {
+
+constexpr const char* kSideKeys[2][2] = {{"left", "right"}, {"bottom", "top"}};
+
+// The values of a RealVector key, one per direction; InputError naming its line otherwise.
+template <int Dim>
+Vec<Dim> per_direction(const Config& cfg, const char* key) {
+  const std::vector<double> v = cfg.get_reals(key);
+  if (v.size() != static_cast<std::size_t>(Dim))
+    throw InputError(fmt::format(
+        "{}: key '{}' needs {} values (one per direction, x{}) for grid.dimension = {}, got {}",
+        cfg.where(key), key, Dim, Dim > 1 ? ", y" : "", Dim, v.size()));
+  Vec<Dim> out;
+  for (int d = 0; d < Dim; ++d) out[d] = v[static_cast<std::size_t>(d)];
+  return out;
+}
+
+// The key's value is the single expression "0" (the default of the vector keys): every
+// component zero, or, for traction.* and exact.*, none given.
+bool is_zero(const Config& cfg, const char* key) {
+  const std::vector<std::string> texts = cfg.get_expressions(key);
+  return texts.size() == 1 && texts[0] == "0";
+}
+
+// The compiled expressions of an ExpressionVector key, `count` of them (`what` names them);
+// InputError naming its line otherwise. The single value "0" stands for all components zero.
+// Expressions are checked when the config is loaded.
+std::vector<Expression> expressions(const Config& cfg, const char* key, std::size_t count,
+                                    const char* what) {
+  std::vector<std::string> texts = cfg.get_expressions(key);
+  if (is_zero(cfg, key)) texts.assign(count, "0");
+  if (texts.size() != count)
+    throw InputError(
+        fmt::format("{}: key '{}' needs {} expression{} ({}) for grid.dimension = "
+                    "{}, got {}",
+                    cfg.where(key), key, count, count > 1 ? "s" : "", what,
+                    cfg.get_int("grid.dimension"), texts.size()));
+  std::vector<Expression> out;
+  for (const auto& t : texts) out.emplace_back(t, cfg.constants());
+  return out;
+}
+
+// Stress components in the order of initial.stress and exact.stress: 1D xx; 2D xx, yy, xy.
+template <int Dim>
+Mat<Dim> stress_from(const std::vector<Expression>& s, double x, double y, double t) {
+  Mat<Dim> m = Mat<Dim>::Zero();
+  m(0, 0) = s[0](x, y, 0.0, t);
+  if constexpr (Dim == 2) {
+    m(1, 1) = s[1](x, y, 0.0, t);
+    m(0, 1) = m(1, 0) = s[2](x, y, 0.0, t);
+  }
+  return m;
+}
+
+template <int Dim>
+Vec<Dim> vector_from(const std::vector<Expression>& e, double x, double y, double t) {
+  Vec<Dim> v;
+  for (int d = 0; d < Dim; ++d) v[d] = e[static_cast<std::size_t>(d)](x, y, 0.0, t);
+  return v;
+}
+
+constexpr const char* kComponents[] = {"", "x", "x, y"};
+constexpr const char* kStressComponents[] = {"", "xx", "xx, yy, xy"};
+
+// Dirichlet conditions of the grid sides (boundary.*) and tractions on the body faces
+// (traction.*), in Dim directions.
+template <int Dim>
+void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, const Vec<Dim>& b1,
+                       int per_cell) {
+  for (int d = 0; d < Dim; ++d)
+    for (int side = 0; side < 2; ++side) {
+      const std::string type = cfg.get_string(fmt::format("boundary.{}", kSideKeys[d][side]));
+      // A roller fixes the normal component; in 1D that is the only one (as "fixed").
+      if (type == "fixed") pb.fixed_sides.push_back({d, side});
+      if (type == "roller") pb.fixed_sides.push_back({d, side, 1u << d});
+      const std::string key = fmt::format("traction.{}", kSideKeys[d][side]);
+      const std::string pkey = fmt::format("pressure.{}", kSideKeys[d][side]);
+      const Expression p = cfg.get_expression(pkey);
+      if (is_zero(cfg, key.c_str()) && p.text() == "0") continue;  // traction-free
+      auto tau = expressions(cfg, key.c_str(), Dim, kComponents[Dim]);
+      for (const auto& e : tau)
+        if (e.uses_position())
+          throw InputError(
+              fmt::format("{}: key '{}': the traction \"{}\" may depend on t "
+                          "only, not on x, y or z (uniform over the face)",
+                          cfg.where(key), key, e.text()));
+      if (p.uses_position())
+        throw InputError(
+            fmt::format("{}: key '{}': the pressure \"{}\" may depend on t only, "
+                        "not on x, y or z (uniform over the face)",
+                        cfg.where(pkey), pkey, p.text()));
+      // A pressure p pushes against the outward normal n = sign e_d of the reference face:
+      // tau = -p n (a dead load, like the traction).
+      const double sign = side == 0 ? -1.0 : 1.0;
+      pb.tractions.push_back(
+          body_face_traction<Dim>(pb.grid, pb.particles, b0, b1, per_cell, d, side == 0 ? -1 : +1,
+                                  [tau, p, d, sign](double t) {
+                                    Vec<Dim> v = vector_from<Dim>(tau, 0.0, 0.0, t);
+                                    v[d] -= sign * p(0.0, 0.0, 0.0, t);
+                                    return v;
+                                  }));
+    }
+}
+
+// The exact solution of exact.*: none when all three keys are "0" (their default); otherwise a
+// key left at "0" means that field is zero (e.g. the velocity of a static solution).
+template <int Dim>
+ExactSolution<Dim> exact_from_config(const Config& cfg) {
+  if (is_zero(cfg, "exact.displacement") && is_zero(cfg, "exact.velocity") &&
+      is_zero(cfg, "exact.stress"))
+    return {};
+  constexpr std::size_t ns = Dim == 1 ? 1 : 3;
+  auto u = expressions(cfg, "exact.displacement", Dim, kComponents[Dim]);
+  auto v = expressions(cfg, "exact.velocity", Dim, kComponents[Dim]);
+  auto s = expressions(cfg, "exact.stress", ns, kStressComponents[Dim]);
+  // Evaluated at the material position X (x, y in the expressions), only for outputs and norms.
+  return [u, v, s](const Vec<Dim>& X, double t) {
+    const double y = Dim > 1 ? X[Dim > 1 ? 1 : 0] : 0.0;
+    return ExactState<Dim>{vector_from<Dim>(u, X[0], y, t), vector_from<Dim>(v, X[0], y, t),
+                           stress_from<Dim>(s, X[0], y, t)};
+  };
+}
+
+}  // namespace
 
 Problem<1> make_custom_1d(const Config& cfg) {
   Problem<1> pb;
@@ -64,8 +188,94 @@ Problem<1> make_custom_1d(const Config& cfg) {
     for (std::size_t i = 0; i < P.x.size(); ++i) out[i][0] = b(P.x[i][0], 0.0, 0.0, t);
   };
 
-  if (cfg.get_string("boundary.left") == "fixed") pb.fixed_sides.push_back({0, 0});
-  if (cfg.get_string("boundary.right") == "fixed") pb.fixed_sides.push_back({0, 1});
+  // Values that only a 2D problem reads (boundary.bottom/top: their default, "fixed", is
+  // indistinguishable from a given one in a restarted run's stored configuration).
+  for (const char* key : {"traction.bottom", "traction.top"})
+    if (!is_zero(cfg, key))
+      throw InputError(
+          fmt::format("{}: key '{}' applies to a 2D custom problem only (set "
+                      "grid.dimension = 2)",
+                      cfg.where(key), key));
+  for (const char* key : {"pressure.bottom", "pressure.top"})
+    if (cfg.get_string(key) != "0")
+      throw InputError(
+          fmt::format("{}: key '{}' applies to a 2D custom problem only (set "
+                      "grid.dimension = 2)",
+                      cfg.where(key), key));
+  if (cfg.get_int("grid.cells_y") != 0)
+    throw InputError(
+        fmt::format("{}: key 'grid.cells_y' applies to a 2D custom problem only "
+                    "(set grid.dimension = 2)",
+                    cfg.where("grid.cells_y")));
+  sides_from_config<1>(pb, cfg, Vec<1>(b0), Vec<1>(b1),
+                       static_cast<int>(cfg.get_int("particles.per_cell")));
+  pb.exact = exact_from_config<1>(cfg);
+  return pb;
+}
+
+Problem<2> make_custom_2d(const Config& cfg) {
+  Problem<2> pb;
+  pb.benchmark = "custom";
+  const Vec<2> g0 = per_direction<2>(cfg, "grid.min"), g1 = per_direction<2>(cfg, "grid.max");
+  const Vec<2> b0 = per_direction<2>(cfg, "body.min"), b1 = per_direction<2>(cfg, "body.max");
+  for (int d = 0; d < 2; ++d) {
+    const char* axis = d == 0 ? "x" : "y";
+    if (!(g1[d] > g0[d]))
+      throw InputError(fmt::format("{}: grid.max = {} must exceed grid.min = {} in {}",
+                                   cfg.where("grid.max"), g1[d], g0[d], axis));
+    if (!(b1[d] > b0[d]))
+      throw InputError(fmt::format("{}: body.max = {} must exceed body.min = {} in {}",
+                                   cfg.where("body.max"), b1[d], b0[d], axis));
+    if (b0[d] < g0[d] || b1[d] > g1[d])
+      throw InputError(fmt::format(
+          "{}: the body [{}, {}] must lie inside the grid [{}, {}] in {} (grid.min, grid.max)",
+          cfg.where(b0[d] < g0[d] ? "body.min" : "body.max"), b0[d], b1[d], g0[d], g1[d], axis));
+  }
+  pb.material = material_from_config(cfg, 2);
+  const double rho = cfg.get_real("material.density");
+  const auto cx = static_cast<Index>(cfg.get_int("grid.cells"));
+  auto cy = static_cast<Index>(cfg.get_int("grid.cells_y"));
+  if (cy == 0) cy = std::max<Index>(1, std::llround((g1[1] - g0[1]) / ((g1[0] - g0[0]) / cx)));
+  pb.grid = Grid<2>(g0, g1, IVec<2>{cx, cy});
+  const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
+  pb.particles = seed_particles<2>(pb.grid, b0, b1, per_cell, rho);
+  pb.body_min = b0;
+  pb.body_max = b1;
+
+  const auto v0 = expressions(cfg, "initial.velocity", 2, kComponents[2]);
+  const auto s0 = expressions(cfg, "initial.stress", 3, kStressComponents[2]);
+  pb.initial_velocity = [v0](const Vec<2>& X) { return vector_from<2>(v0, X[0], X[1], 0.0); };
+  pb.initial_stress = [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0); };
+  const bool incremental_law = std::holds_alternative<Elastic1DSmall>(pb.material) ||
+                               std::holds_alternative<Elastic1DLarge>(pb.material);
+  auto& P = pb.particles;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    P.v[i] = pb.initial_velocity(P.x0[i]);
+    P.stress[i] = pb.initial_stress(P.x0[i]);
+    if (P.stress[i] != Mat<2>::Zero() && !incremental_law)
+      throw InputError(fmt::format(
+          "{}: an initial stress needs an incremental law; material.model = \"{}\" computes "
+          "the stress from F = I (no 2D law is incremental: leave initial.stress at 0)",
+          cfg.where("initial.stress"), material_name(pb.material)));
+  }
+
+  const auto b = expressions(cfg, "loading.body_force", 2, kComponents[2]);
+  pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time();
+  pb.body_force.position_dependent = b[0].uses_position() || b[1].uses_position();
+  // Serial: an Expression is not thread-safe (one parser per copy); the fill is once a step.
+  pb.body_force.fill = [b, uniform = !pb.body_force.position_dependent](
+                           const Particles<2>& P, double t, std::vector<Vec<2>>& out) {
+    if (uniform) {
+      const Vec<2> value = vector_from<2>(b, 0.0, 0.0, t);
+      for (auto& o : out) o = value;
+      return;
+    }
+    for (std::size_t i = 0; i < P.x.size(); ++i)
+      out[i] = vector_from<2>(b, P.x[i][0], P.x[i][1], t);
+  };
+
+  sides_from_config<2>(pb, cfg, b0, b1, per_cell);
+  pb.exact = exact_from_config<2>(cfg);
   return pb;
 }
 

@@ -8,15 +8,23 @@
 
 namespace mpm {
 
+namespace {
+// Particles per direction of seed_particles: per_cell per cell width, at least one.
+template <int Dim>
+IVec<Dim> seed_counts(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi, int per_cell) {
+  IVec<Dim> n{};
+  for (int d = 0; d < Dim; ++d)
+    n[d] = std::max<Index>(1, std::llround((hi[d] - lo[d]) / g.h[d] * per_cell));
+  return n;
+}
+}  // namespace
+
 template <int Dim>
 Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
                               int per_cell, double rho0) {
-  IVec<Dim> n{};
+  const IVec<Dim> n = seed_counts<Dim>(g, lo, hi, per_cell);
   Index total = 1;
-  for (int d = 0; d < Dim; ++d) {
-    n[d] = std::max<Index>(1, std::llround((hi[d] - lo[d]) / g.h[d] * per_cell));
-    total *= n[d];
-  }
+  for (int d = 0; d < Dim; ++d) total *= n[d];
   Particles<Dim> P;
   P.resize(total);
   const double vol = (hi - lo).prod() / static_cast<double>(total);
@@ -37,18 +45,59 @@ Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<
   return P;
 }
 
+template <int Dim>
+Traction<Dim> body_face_traction(const Grid<Dim>& g, const Particles<Dim>& P, const Vec<Dim>& lo,
+                                 const Vec<Dim>& hi, int per_cell, int direction, int side,
+                                 std::function<Vec<Dim>(double t)> value) {
+  const IVec<Dim> n = seed_counts<Dim>(g, lo, hi, per_cell);
+  Vec<Dim> spacing;
+  for (int d = 0; d < Dim; ++d) spacing[d] = (hi[d] - lo[d]) / static_cast<double>(n[d]);
+  // Each particle's share of the face: the product of its spacings along the face (1D: 1).
+  double area = 1.0;
+  for (int d = 0; d < Dim; ++d)
+    if (d != direction) area *= spacing[d];
+  Traction<Dim> tr;
+  tr.direction = direction;
+  tr.side = side;
+  tr.value = std::move(value);
+  // The outer layer lies half a spacing inside the face, the next one and a half spacings.
+  const double face = side > 0 ? hi[direction] : lo[direction];
+  for (Index p = 0; p < P.size(); ++p)
+    if (std::abs(P.x0[static_cast<std::size_t>(p)][direction] - face) < spacing[direction]) {
+      tr.particles.push_back(p);
+      tr.area.push_back(area);
+      tr.half_width.push_back(0.5 * spacing[direction]);
+    }
+  return tr;
+}
+
+template Traction<1> body_face_traction<1>(const Grid<1>&, const Particles<1>&, const Vec<1>&,
+                                           const Vec<1>&, int, int, int,
+                                           std::function<Vec<1>(double)>);
+template Traction<2> body_face_traction<2>(const Grid<2>&, const Particles<2>&, const Vec<2>&,
+                                           const Vec<2>&, int, int, int,
+                                           std::function<Vec<2>(double)>);
+
 template Particles<1> seed_particles<1>(const Grid<1>&, const Vec<1>&, const Vec<1>&, int, double);
 template Particles<2> seed_particles<2>(const Grid<2>&, const Vec<2>&, const Vec<2>&, int, double);
 template Particles<3> seed_particles<3>(const Grid<3>&, const Vec<3>&, const Vec<3>&, int, double);
 
 AnyProblem make_problem(const Config& cfg) {
   const std::string name = cfg.get_string("benchmark");
+  if (name != "custom" && cfg.get_int("grid.dimension") != 1)
+    throw InputError(
+        fmt::format("{}: grid.dimension applies to benchmark = \"custom\" only; "
+                    "\"{}\" fixes its own dimension",
+                    cfg.where("grid.dimension"), name));
   if (name == "vibrating_bar") return make_vibrating_bar(cfg, /*large=*/false);
   if (name == "vibrating_bar_large") return make_vibrating_bar(cfg, /*large=*/true);
   if (name == "column_compaction") return make_column_compaction(cfg);
   if (name == "traction_bar") return make_traction_bar(cfg);
   if (name == "mms_1d") return make_mms_1d(cfg);
-  if (name == "custom") return make_custom_1d(cfg);
+  if (name == "custom") {
+    if (cfg.get_int("grid.dimension") == 2) return make_custom_2d(cfg);
+    return make_custom_1d(cfg);
+  }
   if (name == "plate_mms_2d") return make_plate_mms_2d(cfg);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));

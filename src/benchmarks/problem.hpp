@@ -46,7 +46,7 @@ struct Problem {
   Material material;
   std::vector<FixedSide> fixed_sides;
   BodyForce<Dim> body_force;
-  std::vector<EndTraction<Dim>> tractions;
+  std::vector<Traction<Dim>> tractions;
   // The body before deformation and its initial fields as functions of the material position,
   // for solvers that discretise the body themselves (the updated-Lagrangian FEM reference).
   Vec<Dim> body_min = Vec<Dim>::Zero(), body_max = Vec<Dim>::Zero();
@@ -65,6 +65,14 @@ using AnyProblem = std::variant<Problem<1>, Problem<2>>;
 template <int Dim>
 Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
                               int per_cell, double rho0);
+
+// The traction tau(t) on the face of the body box [lo, hi] normal to `direction` (side +1: at
+// hi, -1: at lo), applied through the outer layer of the particles seed_particles(g, lo, hi,
+// per_cell, .) placed (P: those particles), each with its share of the face (Traction).
+template <int Dim>
+Traction<Dim> body_face_traction(const Grid<Dim>& g, const Particles<Dim>& P, const Vec<Dim>& lo,
+                                 const Vec<Dim>& hi, int per_cell, int direction, int side,
+                                 std::function<Vec<Dim>(double t)> value);
 
 // Builds the problem selected by `benchmark` (registry::kBenchmarks). Throws InputError.
 AnyProblem make_problem(const Config& cfg);

@@ -22,7 +22,9 @@ inline constexpr Entry kBenchmarks[] = {
      "1D neo-Hookean bar, fixed end, dynamic end traction, exact stress (D 4.6.2, eq. 4.93)"},
     {"mms_1d",
      "1D neo-Hookean manufactured solution, body force from the exact displacement (003)"},
-    {"custom", "1D problem built from the config alone: extents, fields by expression, ends"},
+    {"custom",
+     "1D or 2D (grid.dimension) problem built from the config alone: extents, fields and "
+     "forces by expression, side conditions, face tractions, optional exact solution"},
     {"plate_mms_2d",
      "2D axis-aligned vibration of a unit square, neo-Hookean manufactured solution (001, D "
      "3.4.1)"},
@@ -84,7 +86,8 @@ inline constexpr Entry kMaterials[] = {
 
 inline constexpr Entry kBoundaryTypes[] = {
     {"fixed", "all velocity components zero at the boundary degrees of freedom"},
-    {"free", "traction-free (natural) boundary"},
+    {"free", "traction-free (natural) boundary, or the traction.* of that side"},
+    {"roller", "normal velocity component zero, tangential free (1D: as fixed)"},
 };
 
 }  // namespace mpm::registry

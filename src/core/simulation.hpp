@@ -25,14 +25,23 @@ struct BodyForce {
   bool position_dependent = false;
 };
 
-// A traction on the free end of a 1D body, applied at the outer edge of the end particle's
-// domain: f_i += phi_i(x_end) tau(t) (the boundary integral of D eq. 2.21; unit area).
-// side = +1: the upper end x_p + V_p/2; -1: the lower end x_p - V_p/2 (1D: V_p is a length).
+// A traction tau(t) on a face of the body, applied through the particles adjacent to that face
+// (Steffen et al. 2008; D 4.6.2 and eq. 2.21 for the 1D traction bar): each loaded particle adds
+// the point force phi_i(x_f) tau(t) A_p at the centre x_f of the outer face of its domain, the
+// one-point quadrature of the boundary integral int phi_i tau dA over its share A_p of the face.
+// tau is a nominal traction (force per unit reference area, a dead load): its direction and the
+// areas A_p stay those of the undeformed body. The face centre follows the deformation:
+// x_f = x_p + side F_p (l_p e_d) with l_p the reference half-width of the particle domain along
+// the face normal e_d; in 1D x_f = x_p + side V_p / 2 (V_p is the current length; A_p = 1, the
+// force per unit cross-section).
 template <int Dim>
-struct EndTraction {
-  Index particle = 0;
-  int side = 1;
-  std::function<Vec<Dim>(double t)> value;  // traction vector tau(t) [Pa]
+struct Traction {
+  int direction = 0;               // d: the face normal is e_d
+  int side = 1;                    // +1: the upper face (outward normal +e_d); -1: the lower face
+  std::vector<Index> particles;    // the particles whose domains touch the face
+  std::vector<double> area;        // A_p [m^(Dim-1)] per loaded particle (1D: 1)
+  std::vector<double> half_width;  // l_p [m] per loaded particle (unused in 1D)
+  std::function<Vec<Dim>(double t)> value;  // tau(t) [Pa], evaluated once per step
 };
 
 // Conservation and grid-crossing bookkeeping reported in summary.json (D 5.4).
@@ -71,7 +80,7 @@ struct Simulation {
   MassType mass_type = MassType::Lumped;
   double mass_tolerance = 1e-10;  // relative to the largest nodal mass
   BodyForce<Dim> body_force;
-  std::vector<EndTraction<Dim>> tractions;
+  std::vector<Traction<Dim>> tractions;
 
   GridState<Dim> nodes;
   ConsistentMass consistent;

@@ -363,6 +363,18 @@ std::optional<std::string> value_text(const Config& cfg, const KeySpec& k) {
       case KeyType::String:
       case KeyType::Expression:
         return "\"" + cfg.get_string(k.name) + "\"";
+      case KeyType::RealVector: {
+        std::string text;
+        for (double v : cfg.get_reals(k.name))
+          text += (text.empty() ? "" : ", ") + fmt::format("{}", v);
+        return "[" + text + "]";
+      }
+      case KeyType::ExpressionVector: {
+        std::string text;
+        for (const auto& v : cfg.get_expressions(k.name))
+          text += (text.empty() ? "\"" : ", \"") + v + "\"";
+        return "[" + text + "]";
+      }
     }
   } catch (const InputError&) {
   }

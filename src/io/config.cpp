@@ -135,6 +135,10 @@ std::string expected(KeyType type) {
       return "a string";
     case KeyType::Expression:
       return "an expression (a string or a number)";
+    case KeyType::RealVector:
+      return "a number or an array of numbers (one per direction)";
+    case KeyType::ExpressionVector:
+      return "an expression or an array of expressions (one per component)";
   }
   return "?";
 }
@@ -149,8 +153,17 @@ std::string value_text(const Value& v) {
           return toml_float(x);
         } else if constexpr (std::is_same_v<T, bool>) {
           return x ? "true" : "false";
-        } else {
+        } else if constexpr (std::is_same_v<T, std::string>) {
           return quote(x);
+        } else {
+          std::vector<std::string> items;
+          for (const auto& item : x) {
+            if constexpr (std::is_same_v<std::decay_t<decltype(item)>, double>)
+              items.push_back(toml_float(item));
+            else
+              items.push_back(quote(item));
+          }
+          return "[" + join(items, ", ") + "]";
         }
       },
       v);
@@ -358,6 +371,10 @@ std::string_view type_name(KeyType type) {
       return "string";
     case KeyType::Expression:
       return "expression";
+    case KeyType::RealVector:
+      return "real[]";
+    case KeyType::ExpressionVector:
+      return "expression[]";
   }
   return "?";
 }
@@ -511,13 +528,23 @@ class ConfigBuilder {
   // configuration, the required keys. Throws the collected errors.
   void finish(bool check_required) {
     for (const KeySpec& spec : schema()) {
-      if (spec.type != KeyType::Expression) continue;
+      if (spec.type != KeyType::Expression && spec.type != KeyType::ExpressionVector) continue;
       const auto it = cfg_.values_.find(spec.name);
       if (it == cfg_.values_.end()) continue;  // defaults are valid expressions
-      try {
-        Expression(std::get<std::string>(it->second.value), cfg_.constants_);
-      } catch (const InputError& e) {
-        error_at(it->second.origin, order_of(spec.name), "key '" + spec.name + "': " + e.what());
+      std::vector<std::string> texts;
+      if (const auto* list = std::get_if<std::vector<std::string>>(&it->second.value))
+        texts = *list;
+      else
+        texts.push_back(std::get<std::string>(it->second.value));
+      for (std::size_t k = 0; k < texts.size(); ++k) {
+        try {
+          Expression(texts[k], cfg_.constants_);
+        } catch (const InputError& e) {
+          const std::string which =
+              texts.size() > 1 ? fmt::format(" (value {} of {})", k + 1, texts.size()) : "";
+          error_at(it->second.origin, order_of(spec.name),
+                   "key '" + spec.name + "'" + which + ": " + e.what());
+        }
       }
     }
     if (check_required && errors_.empty()) {
@@ -645,6 +672,40 @@ class ConfigBuilder {
           return Value(real_text(node.as_floating_point()->get()));
         }
         return wrong_type();
+      case KeyType::RealVector:
+      case KeyType::ExpressionVector: {
+        const toml::array* array = node.as_array();
+        if (!array) {
+          // A single value: checked as the scalar type, stored as a scalar.
+          KeySpec scalar = spec;
+          scalar.type = spec.type == KeyType::RealVector ? KeyType::Real : KeyType::Expression;
+          auto v = convert(scalar, node, problem);
+          // A value of the wrong type: say that an array would also do.
+          if (!v && problem.starts_with(key + " expects ")) return wrong_type();
+          return v;
+        }
+        if (array->empty() || array->size() > 6) {
+          problem = key + " expects " + expected(spec.type) + ": 1 to 6 values, got " +
+                    std::to_string(array->size());
+          return std::nullopt;
+        }
+        KeySpec element = spec;
+        element.type = spec.type == KeyType::RealVector ? KeyType::Real : KeyType::Expression;
+        std::vector<double> reals;
+        std::vector<std::string> texts;
+        for (std::size_t k = 0; k < array->size(); ++k) {
+          std::string element_problem;
+          auto v = convert(element, *array->get(k), element_problem);
+          if (!v) {
+            problem = fmt::format("{} (value {} of {})", element_problem, k + 1, array->size());
+            return std::nullopt;
+          }
+          if (auto* r = std::get_if<double>(&*v)) reals.push_back(*r);
+          if (auto* t = std::get_if<std::string>(&*v)) texts.push_back(std::move(*t));
+        }
+        if (spec.type == KeyType::RealVector) return Value(std::move(reals));
+        return Value(std::move(texts));
+      }
     }
     return wrong_type();
   }
@@ -781,8 +842,33 @@ std::int64_t Config::get_int(std::string_view key) const {
 double Config::get_real(std::string_view key) const {
   const KeySpec& spec = spec_or_throw(key);
   if (spec.type == KeyType::Integer) return static_cast<double>(get_int(key));
+  if (spec.type == KeyType::RealVector) {
+    const std::vector<double> v = get_reals(key);
+    if (v.size() != 1)
+      throw InputError(
+          fmt::format("{}: key '{}' needs a single value here (this benchmark is "
+                      "1D), got an array of {}",
+                      where(key), spec.name, v.size()));
+    return v[0];
+  }
   if (spec.type != KeyType::Real) wrong_accessor(spec, "get_real");
   return std::get<double>(value_of(spec));
+}
+
+std::vector<double> Config::get_reals(std::string_view key) const {
+  const KeySpec& spec = spec_or_throw(key);
+  if (spec.type != KeyType::RealVector) wrong_accessor(spec, "get_reals");
+  const Value& v = value_of(spec);
+  if (const auto* list = std::get_if<std::vector<double>>(&v)) return *list;
+  return {std::get<double>(v)};
+}
+
+std::vector<std::string> Config::get_expressions(std::string_view key) const {
+  const KeySpec& spec = spec_or_throw(key);
+  if (spec.type != KeyType::ExpressionVector) wrong_accessor(spec, "get_expressions");
+  const Value& v = value_of(spec);
+  if (const auto* list = std::get_if<std::vector<std::string>>(&v)) return *list;
+  return {std::get<std::string>(v)};
 }
 
 bool Config::get_bool(std::string_view key) const {
@@ -793,6 +879,15 @@ bool Config::get_bool(std::string_view key) const {
 
 std::string Config::get_string(std::string_view key) const {
   const KeySpec& spec = spec_or_throw(key);
+  if (spec.type == KeyType::ExpressionVector) {
+    const std::vector<std::string> v = get_expressions(key);
+    if (v.size() != 1)
+      throw InputError(
+          fmt::format("{}: key '{}' needs a single expression here (this benchmark "
+                      "is 1D), got an array of {}",
+                      where(key), spec.name, v.size()));
+    return v[0];
+  }
   if (spec.type != KeyType::String && spec.type != KeyType::Expression) {
     wrong_accessor(spec, "get_string");
   }
@@ -801,7 +896,8 @@ std::string Config::get_string(std::string_view key) const {
 
 Expression Config::get_expression(std::string_view key) const {
   const KeySpec& spec = spec_or_throw(key);
-  if (spec.type != KeyType::Expression) wrong_accessor(spec, "get_expression");
+  if (spec.type != KeyType::Expression && spec.type != KeyType::ExpressionVector)
+    wrong_accessor(spec, "get_expression");
   try {
     return Expression(get_string(key), constants_);
   } catch (const InputError& e) {

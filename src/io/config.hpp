@@ -16,10 +16,14 @@
 namespace mpm {
 
 // Expression: a muparser string of x, y, z, t and the constants (see Expression); a number is
-// also accepted and stored as its text.
-enum class KeyType { Integer, Real, Boolean, String, Expression };
+// also accepted and stored as its text. RealVector and ExpressionVector: one value per direction
+// (or per stress component), written as a TOML array (e.g. ["0", "-9.81"]) or, where one value
+// is enough (1D), as a single value; arrays are stored as vectors, single values as scalars.
+// The benchmark checks the length against its dimension (Config::where names the line).
+enum class KeyType { Integer, Real, Boolean, String, Expression, RealVector, ExpressionVector };
 
-using Value = std::variant<std::int64_t, double, bool, std::string>;
+using Value = std::variant<std::int64_t, double, bool, std::string, std::vector<double>,
+                           std::vector<std::string>>;
 
 struct KeySpec {
   std::string name;  // dotted: "grid.cells"; no dot for top-level keys ("benchmark")
@@ -65,6 +69,11 @@ class Config {
   std::string get_string(std::string_view key) const;  // String and Expression keys
   // An Expression key compiled with the [constants] table (already validated when loaded).
   Expression get_expression(std::string_view key) const;
+  // RealVector / ExpressionVector keys: every value (a single value gives one). get_real and
+  // get_string also read these keys when they hold one value, and otherwise throw InputError
+  // naming the key and its line.
+  std::vector<double> get_reals(std::string_view key) const;
+  std::vector<std::string> get_expressions(std::string_view key) const;
 
   // Given in the file or by --set / set(). Also accepts "constants.NAME".
   bool is_set(std::string_view key) const;

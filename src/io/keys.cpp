@@ -82,14 +82,33 @@ KeySpec expression(std::string name, std::string unit, std::string def, std::str
                  any(), std::move(description));
 }
 
+// One value per direction (RealVector) or component (ExpressionVector); see KeyType.
+KeySpec real_vector(std::string name, std::string unit, double def, std::string description) {
+  return numeric(std::move(name), KeyType::RealVector, std::move(unit), Value(def), any(),
+                 std::move(description));
+}
+
+KeySpec expression_vector(std::string name, std::string unit, std::string def,
+                          std::string description) {
+  return numeric(std::move(name), KeyType::ExpressionVector, std::move(unit), Value(std::move(def)),
+                 any(), std::move(description));
+}
+
 std::vector<KeySpec> declare() {
   using namespace registry;
   return {
       choice("benchmark", kRequired, kBenchmarks, "benchmark problem to run"),
 
       integer("grid.cells", 20, at_least(1), "number of cells (knot spans) per direction"),
-      real("grid.min", "m", 0.0, any(), "lower end of the background grid (custom benchmark)"),
-      real("grid.max", "m", 1.0, any(), "upper end of the background grid (custom benchmark)"),
+      integer("grid.dimension", 1, closed(1, 2),
+              "spatial dimension of the custom benchmark (the other benchmarks fix their own)"),
+      real_vector("grid.min", "m", 0.0,
+                  "lower corner of the background grid, one value per direction (custom)"),
+      real_vector("grid.max", "m", 1.0,
+                  "upper corner of the background grid, one value per direction (custom)"),
+      integer("grid.cells_y", 0, at_least(0),
+              "cells in y of a 2D custom grid (0: round((max_y - min_y) / h_x), at least 1, the "
+              "cells closest to square)"),
 
       integer("particles.per_cell", 4, at_least(1),
               "material points per cell per direction, evenly spaced"),
@@ -149,18 +168,56 @@ std::vector<KeySpec> declare() {
       real("traction.amplitude", "Pa", 1.0, any(),
            "amplitude A of the end traction -A sin(pi c t / L) of the traction bar (D 4.6.2)"),
 
-      real("body.min", "m", 0.0, any(), "lower end of the material body (custom benchmark)"),
-      real("body.max", "m", 1.0, any(), "upper end of the material body (custom benchmark)"),
+      real_vector("body.min", "m", 0.0,
+                  "lower corner of the material body, one value per direction (custom)"),
+      real_vector("body.max", "m", 1.0,
+                  "upper corner of the material body, one value per direction (custom)"),
 
-      expression("initial.velocity", "m/s", "0",
-                 "initial velocity as a function of position x (custom)"),
-      expression("initial.stress", "Pa", "0",
-                 "initial stress as a function of position x (custom)"),
-      expression("loading.body_force", "m/s^2", "0",
-                 "body force per unit mass as a function of x and t (custom)"),
+      expression_vector("initial.velocity", "m/s", "0",
+                        "initial velocity, one expression of the position x, y per component "
+                        "(custom; a single \"0\": all zero)"),
+      expression_vector("initial.stress", "Pa", "0",
+                        "initial Cauchy stress as expressions of x, y (custom; 1D: one, 2D: "
+                        "[xx, yy, xy]; incremental laws only)"),
+      expression_vector("loading.body_force", "m/s^2", "0",
+                        "body force per unit mass, one expression of the current position x, y "
+                        "and t per component (custom)"),
 
-      choice("boundary.left", "fixed", kBoundaryTypes, "condition at the lower grid end (custom)"),
-      choice("boundary.right", "fixed", kBoundaryTypes, "condition at the upper grid end (custom)"),
+      choice("boundary.left", "fixed", kBoundaryTypes,
+             "condition on the grid side x = grid.min (custom)"),
+      choice("boundary.right", "fixed", kBoundaryTypes,
+             "condition on the grid side x = grid.max (custom)"),
+      choice("boundary.bottom", "fixed", kBoundaryTypes,
+             "condition on the grid side y = grid.min (2D custom)"),
+      choice("boundary.top", "fixed", kBoundaryTypes,
+             "condition on the grid side y = grid.max (2D custom)"),
+      expression_vector("traction.left", "Pa", "0",
+                        "traction on the body face x = body.min, one expression of t per "
+                        "component, per unit reference area (custom; \"0\": traction-free)"),
+      expression_vector("traction.right", "Pa", "0",
+                        "traction on the body face x = body.max, as traction.left (custom)"),
+      expression_vector("traction.bottom", "Pa", "0",
+                        "traction on the body face y = body.min, as traction.left (2D custom)"),
+      expression_vector("traction.top", "Pa", "0",
+                        "traction on the body face y = body.max, as traction.left (2D custom)"),
+      expression("pressure.left", "Pa", "0",
+                 "normal pressure p(t) on the body face x = body.min, positive in compression: "
+                 "adds -p n (reference outward normal n) to traction.left (custom)"),
+      expression("pressure.right", "Pa", "0",
+                 "normal pressure on the body face x = body.max, as pressure.left (custom)"),
+      expression("pressure.bottom", "Pa", "0",
+                 "normal pressure on the body face y = body.min, as pressure.left (2D custom)"),
+      expression("pressure.top", "Pa", "0",
+                 "normal pressure on the body face y = body.max, as pressure.left (2D custom)"),
+      expression_vector("exact.displacement", "m", "0",
+                        "exact displacement u(X, t) for error norms, one expression of the "
+                        "material position x, y and t per component (custom; all exact.* \"0\": "
+                        "none)"),
+      expression_vector("exact.velocity", "m/s", "0",
+                        "exact velocity v(X, t), as exact.displacement (\"0\": zero)"),
+      expression_vector("exact.stress", "Pa", "0",
+                        "exact Cauchy stress sigma(X, t) (1D: one; 2D: [xx, yy, xy]; \"0\": "
+                        "zero)"),
 
       integer("output.frames", 10, at_least(0),
               "frames evenly spaced in time after the initial one, the final state always "

@@ -194,25 +194,34 @@ void map_momentum(Sim& sim) {
   }
 }
 
-// Internal and body forces from the mapping, then end tractions (a handful of points).
+// Internal and body forces from the mapping, then tractions through the particles next to the
+// loaded faces (Traction: one face point per loaded particle, tau evaluated once per face).
 template <class Sim>
 void map_forces(Sim& sim) {
   sim.mapping.map_forces(sim);
   constexpr int Dim = Sim::kDim;
+  const auto& P = sim.particles;
   for (const auto& tr : sim.tractions) {
-    const auto i = static_cast<std::size_t>(tr.particle);
-    Vec<Dim> x_end = sim.particles.x[i];
-    x_end[0] += 0.5 * tr.side * sim.particles.volume[i];
-    if (!sim.grid.inside(x_end))
-      throw RunError(exit_code::kLeftGrid,
-                     fmt::format("step {}, t = {:.9g} s: the loaded end of the body (particle {}, "
-                                 "edge at x = {:.6g}) left the grid",
-                                 sim.step, sim.time, tr.particle, x_end[0]));
-    typename Sim::StencilT s;
-    sim.basis.evaluate_point(x_end, s);
     const Vec<Dim> tau = tr.value(sim.time);
-    for (int a = 0; a < s.kSize; ++a)
-      sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * tau;
+    for (std::size_t k = 0; k < tr.particles.size(); ++k) {
+      const auto i = static_cast<std::size_t>(tr.particles[k]);
+      Vec<Dim> x_face = P.x[i];
+      if constexpr (Dim == 1)
+        x_face[0] += 0.5 * tr.side * P.volume[i];  // V_p: the current length
+      else
+        x_face += (tr.side * tr.half_width[k]) * P.F[i].col(tr.direction);
+      if (!sim.grid.inside(x_face))
+        throw RunError(exit_code::kLeftGrid,
+                       fmt::format("step {}, t = {:.9g} s: the loaded face of the body (particle "
+                                   "{}, face centre at x = {:.6g}) left the grid",
+                                   sim.step, sim.time, tr.particles[k], x_face[0]));
+      typename Sim::StencilT s;
+      sim.basis.evaluate_point(x_face, s);
+      // A_p = 1 in 1D: tau * 1.0 is exact, so the 1D forces are those of the end traction.
+      const Vec<Dim> f = tau * tr.area[k];
+      for (int a = 0; a < s.kSize; ++a)
+        sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
+    }
   }
 }
 

@@ -80,7 +80,7 @@ class Ulfem1D {
 
   Material material_;
   BodyForce<1> body_force_;
-  std::vector<EndTraction<1>> tractions_;
+  std::vector<Traction<1>> tractions_;
   bool fixed_lo_ = false, fixed_hi_ = false;
   double X_lo_ = 0.0, dX_ = 0.0;  // material coordinate of node 0, element length L0 [m]
 

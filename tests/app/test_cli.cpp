@@ -87,6 +87,28 @@ TEST(Cli, WrongTypeBadChoiceAndRangeErrors) {
   EXPECT_NE(s.out.find("--set method.scheme=leapfrog"), std::string::npos) << s.out;
 }
 
+TEST(Cli, Custom2DVectorKeyErrorsNameFileLineAndKey) {
+  const auto out = temp_dir("custom2d");
+  auto w = sh("run " + src("tests/data/custom_2d_wrong_length.toml") + " -q --out " + out.string());
+  EXPECT_EQ(w.code, 2) << w.out;
+  EXPECT_NE(w.out.find("custom_2d_wrong_length.toml:23:"), std::string::npos) << w.out;
+  EXPECT_NE(w.out.find("loading.body_force"), std::string::npos) << w.out;
+  EXPECT_NE(w.out.find("needs 2 expressions (x, y)"), std::string::npos) << w.out;
+  EXPECT_FALSE(std::filesystem::exists(out / "summary.json"));  // nothing ran
+  auto e = sh("run " + src("tests/data/custom_2d_bad_expression.toml") + " -q");
+  EXPECT_EQ(e.code, 2) << e.out;
+  EXPECT_NE(e.out.find("custom_2d_bad_expression.toml:24:"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("initial.velocity"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("value 2 of 2"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("sinn"), std::string::npos) << e.out;
+  // The same key overridden on the command line is named as such.
+  auto s = sh("run " + src("tests/data/custom_2d_bad_expression.toml") +
+              " -q --set 'initial.velocity=[\"0\", \"1\", \"2\"]'");
+  EXPECT_EQ(s.code, 2) << s.out;
+  EXPECT_NE(s.out.find("--set initial.velocity="), std::string::npos) << s.out;
+  EXPECT_NE(s.out.find("needs 2 expressions"), std::string::npos) << s.out;
+}
+
 TEST(Cli, BodyOutsideTheGridAndUnsupportedReconstructionAreRefusedBeforeTheFirstStep) {
   const auto out = temp_dir("outside");
   auto b = sh("run " + src("tests/data/body_outside_grid.toml") + " -q --out " + out.string());

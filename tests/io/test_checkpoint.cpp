@@ -191,6 +191,11 @@ TEST(Checkpoint, RestartIsBitwise2DPlate) {
   check_bitwise_restart({"plate_mms_2d", {"grid.cells=4", "method.basis=cpdi2"}, 20});
 }
 
+TEST(Checkpoint, RestartIsBitwise2DCustomWithTraction) {
+  // Vector keys (arrays) in the stored configuration, expression fields, a face traction.
+  check_bitwise_restart({"custom_plate_2d", {"traction.top=[\"1e3*t\", \"-1e3\"]"}, 50});
+}
+
 TEST(Checkpoint, RestartIsBitwiseLargeBarWithFemReference) {
   check_bitwise_restart({"vibrating_bar_large", {}, 100});
 }

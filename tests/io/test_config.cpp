@@ -177,7 +177,7 @@ TEST(ConfigErrors, UnknownKeySuggestsAndListsTheSection) {
   const std::string msg = error_of(kBase + "[grid]\ncell = 10\n");  // line 9
   EXPECT_CONTAINS(msg, "test.toml:9:1: unknown key 'grid.cell'");
   EXPECT_CONTAINS(msg, "(did you mean 'grid.cells'?)");
-  EXPECT_CONTAINS(msg, "; valid keys in [grid]: cells, max, min");
+  EXPECT_CONTAINS(msg, "; valid keys in [grid]: cells, cells_y, dimension, max, min");
 }
 
 TEST(ConfigErrors, KeyInTheWrongSectionSuggestsTheRightOne) {
@@ -216,9 +216,12 @@ TEST(ConfigErrors, WrongType) {
                   "key 'output.csv' expects a boolean (true or false), got an integer (1)");
   EXPECT_CONTAINS(error_of(kBase + "[method]\nscheme = 3\n"),
                   "key 'method.scheme' expects a string, got an integer (3); choose one of: usl");
-  EXPECT_CONTAINS(error_of(kBase + "[initial]\nvelocity = [1, 2]\n"),
+  EXPECT_CONTAINS(error_of(kBase + "[initial]\nvelocity = { a = 1 }\n"),
+                  "key 'initial.velocity' expects an expression or an array of expressions (one "
+                  "per component), got a table");
+  EXPECT_CONTAINS(error_of(kBase + "[initial]\nvelocity = [1, [2]]\n"),
                   "key 'initial.velocity' expects an expression (a string or a number), got an "
-                  "array");
+                  "array (value 2 of 2)");
   EXPECT_CONTAINS(error_of(kBase + "[grid]\nmin = nan\n"), "key 'grid.min' = nan is not a finite");
 }
 
@@ -398,7 +401,7 @@ TEST(ConfigOverrides, ErrorsNameTheArgument) {
   EXPECT_CONTAINS(error_of(kBase, {"grid.cells"}), "--set grid.cells: expected KEY=VALUE");
   EXPECT_CONTAINS(error_of(kBase, {"grid.cell=10"}),
                   "--set grid.cell=10: unknown key 'grid.cell' (did you mean 'grid.cells'?); "
-                  "valid keys in [grid]: cells, max, min");
+                  "valid keys in [grid]: cells, cells_y, dimension, max, min");
   EXPECT_CONTAINS(error_of(kBase, {"grid.cells=ten"}),
                   "--set grid.cells=ten: key 'grid.cells' expects an integer, got a string "
                   "(\"ten\")");
@@ -482,6 +485,12 @@ TEST(Config, ToTomlRoundTrips) {
         break;
       case KeyType::Boolean:
         EXPECT_EQ(d.get_bool(k.name), c.get_bool(k.name)) << k.name;
+        break;
+      case KeyType::RealVector:
+        EXPECT_EQ(d.get_reals(k.name), c.get_reals(k.name)) << k.name;
+        break;
+      case KeyType::ExpressionVector:
+        EXPECT_EQ(d.get_expressions(k.name), c.get_expressions(k.name)) << k.name;
         break;
       default:
         EXPECT_EQ(d.get_string(k.name), c.get_string(k.name)) << k.name;
