@@ -22,6 +22,8 @@ namespace grid_sum {
 inline constexpr unsigned kMass = 1;      // nodal masses (and the consistent matrix)
 inline constexpr unsigned kMomentum = 2;  // nodal momenta
 inline constexpr unsigned kForces = 4;    // internal and body forces
+// With kMomentum: first v_p += dt sum_i phi_i a_i (D eq. 2.47), then q from the new v_p (2.48).
+inline constexpr unsigned kVelocityFirst = 8;
 }  // namespace grid_sum
 
 // The grid-to-particle updates a fused pass computes (stages::update_particles), as bits.

@@ -31,9 +31,12 @@ struct DirectMapping {
   }
 
   // The sums of What (grid_sum bits) in one pass over the particles and their stencils
-  // (stages::map_to_grid): each output is bitwise the one of its own pass.
+  // (stages::map_to_grid): each output is bitwise the one of its own pass. With kVelocityFirst
+  // each particle's velocity is advanced by dt with the grid acceleration just before its
+  // momentum is scattered (every particle is in exactly one chunk, and evaluate_basis has
+  // stopped the run if any was outside the grid, so no chunk's range is empty).
   template <unsigned What, class Sim>
-  void map_fused(Sim& sim) const {
+  void map_fused(Sim& sim, double dt = 0.0) const {
     using V = Vec<Sim::kDim>;
     using namespace grid_sum;
     constexpr bool M = What & kMass, Q = What & kMomentum, F = What & kForces;
@@ -47,26 +50,31 @@ struct DirectMapping {
     if constexpr (M && Q && F) {
       scatter_fused(
           r,
-          [&](Index p, const auto& m, const auto& q, const auto& f) { add<What>(sim, p, m, q, f); },
+          [&](Index p, const auto& m, const auto& q, const auto& f) {
+            add<What>(sim, dt, p, m, q, f);
+          },
           mt, qt, ft);
     } else if constexpr (M && Q) {
       scatter_fused(
-          r, [&](Index p, const auto& m, const auto& q) { add<What>(sim, p, m, q, no); }, mt, qt);
+          r, [&](Index p, const auto& m, const auto& q) { add<What>(sim, dt, p, m, q, no); }, mt,
+          qt);
     } else if constexpr (M && F) {
       scatter_fused(
-          r, [&](Index p, const auto& m, const auto& f) { add<What>(sim, p, m, no, f); }, mt, ft);
+          r, [&](Index p, const auto& m, const auto& f) { add<What>(sim, dt, p, m, no, f); }, mt,
+          ft);
     } else if constexpr (Q && F) {
       scatter_fused(
-          r, [&](Index p, const auto& q, const auto& f) { add<What>(sim, p, no, q, f); }, qt, ft);
+          r, [&](Index p, const auto& q, const auto& f) { add<What>(sim, dt, p, no, q, f); }, qt,
+          ft);
     } else if constexpr (M) {
       scatter_fused(
-          r, [&](Index p, const auto& m) { add<What>(sim, p, m, no, no); }, mt);
+          r, [&](Index p, const auto& m) { add<What>(sim, dt, p, m, no, no); }, mt);
     } else if constexpr (Q) {
       scatter_fused(
-          r, [&](Index p, const auto& q) { add<What>(sim, p, no, q, no); }, qt);
+          r, [&](Index p, const auto& q) { add<What>(sim, dt, p, no, q, no); }, qt);
     } else if constexpr (F) {
       scatter_fused(
-          r, [&](Index p, const auto& f) { add<What>(sim, p, no, no, f); }, ft);
+          r, [&](Index p, const auto& f) { add<What>(sim, dt, p, no, no, f); }, ft);
     }
     if constexpr (M) {
       if (sim.mass_type != MassType::Consistent) return;
@@ -89,13 +97,21 @@ struct DirectMapping {
   struct None {};  // the slice of a sum not computed in this pass
 
   // Particle p's contributions to the sums of What into the slices m (mass), q (momentum) and
-  // f (forces), one pass over its stencil.
+  // f (forces), one pass over its stencil (two with kVelocityFirst).
   template <unsigned What, class Sim, class SM, class SQ, class SF>
-  static void add(const Sim& sim, Index p, const SM& m, const SQ& q, const SF& f) {
+  static void add(Sim& sim, double dt, Index p, const SM& m, const SQ& q, const SF& f) {
     using V = Vec<Sim::kDim>;
     using namespace grid_sum;
-    const auto& P = sim.particles;
+    auto& P = sim.particles;
     const auto i = static_cast<std::size_t>(p);
+    if constexpr ((What & kVelocityFirst) != 0) {  // as stages::update_particles<kVelocity>
+      const auto& a = sim.nodes.accel;
+      V acc = V::Zero();
+      for_each_entry(sim.stencils[i], sim.dof_stride, [&](Index dof, double w, const auto&) {
+        acc += w * a[static_cast<std::size_t>(dof)];
+      });
+      P.v[i] += dt * acc;
+    }
     const double mp = P.mass[i];
     [[maybe_unused]] V mv, mb;
     [[maybe_unused]] const Mat<Sim::kDim>* sigma = nullptr;

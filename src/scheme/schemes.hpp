@@ -43,9 +43,8 @@ struct Musl {
     refresh_body_force(sim);
     map_to_grid<grid_sum::kMass | grid_sum::kForces>(sim);  // M^s (2.44), f^s (2.45)
     solve_acceleration(sim);                                // a^s                (2.46)
-    update_particle_velocity(sim, dt);                      // v_p^{s+1}          (2.47)
-    map_momentum(sim);                                      // q from v_p^{s+1}   (2.48)
-    solve_velocity(sim);                                    // v_i^{s+1}          (2.49)
+    update_velocity_map_momentum(sim, dt);  // v_p^{s+1} (2.47), q from it (2.48): one pass
+    solve_velocity(sim);                    // v_i^{s+1}          (2.49)
     // x_p^{s+1} (2.50-2.51), F, V, rho, sigma (2.52-2.55) in one pass
     update_particles<particle_update::kPosition | particle_update::kStress>(sim, dt);
   }
@@ -89,9 +88,8 @@ struct Usavg {
     update_stress(sim, 0.5 * dt);                             // USF half
     map_forces(sim);
     solve_acceleration(sim);
-    update_particle_velocity(sim, dt);  // v_p^{s+1}
-    map_momentum(sim);                  // q from v_p^{s+1}
-    solve_velocity(sim);                // v_i^{s+1}
+    update_velocity_map_momentum(sim, dt);  // v_p^{s+1}, q from v_p^{s+1}: one pass
+    solve_velocity(sim);                    // v_i^{s+1}
     // x_p^{s+1} and the MUSL half of the stress increment in one pass
     update_particles<particle_update::kPosition | particle_update::kStress>(sim, dt, 0.5 * dt);
   }

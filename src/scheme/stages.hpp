@@ -401,4 +401,19 @@ void update_stress(Sim& sim, double dt) {
   update_particles<particle_update::kStress>(sim, dt);
 }
 
+// v_p^{s+1} = v_p^s + dt sum_i phi_i(x_p^s) a_i^s (D eq. 2.47), then q_i from v_p^{s+1}
+// (2.48) with its check: one pass over the particles with a mapping that fuses them
+// (DirectMapping; the same bits as the two stages), else the two stages.
+template <class Sim>
+void update_velocity_map_momentum(Sim& sim, double dt) {
+  using namespace grid_sum;
+  if constexpr (requires { sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt); }) {
+    sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt);
+    detail::after_momentum(sim);
+  } else {
+    update_particle_velocity(sim, dt);
+    map_momentum(sim);
+  }
+}
+
 }  // namespace mpm::stages
