@@ -12,6 +12,8 @@ cd "$(dirname "$0")/.."
 bash scripts/deps.sh
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+# Idle OpenMP threads sleep instead of spinning (see scripts/test.sh).
+export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 if [ ! -f build-asan/CMakeCache.txt ]; then
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O0" \
     -DMPM_SANITIZE=ON >/dev/null

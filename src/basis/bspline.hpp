@@ -71,12 +71,14 @@ class BSplineBasis {
   static constexpr int kDegree = Degree;
   static constexpr int kPerDim = Degree + 1;
   using StencilT = Stencil<Dim, ipow(Degree + 1, Dim)>;
+  using CachedStencilT = TensorStencil<Dim, Degree + 1>;
 
   explicit BSplineBasis(const Grid<Dim>& g) : grid_(g) {
     for (int d = 0; d < Dim; ++d) {
       n_[d] = g.cells[d] + Degree;  // functions = knots - degree - 1 = cells + degree
       inv_h_[d] = 1.0 / g.h[d];
     }
+    stride_ = dof_strides<Dim>(n_);
   }
 
   const Grid<Dim>& grid() const { return grid_; }
@@ -106,11 +108,27 @@ class BSplineBasis {
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
     evaluate_point(P.x[static_cast<std::size_t>(p)], s);
   }
+  // The compact form cached per particle (basis/stencil.hpp, TensorStencil).
+  void evaluate(const Particles<Dim>& P, Index p, CachedStencilT& s) const {
+    IVec<Dim> first;
+    factors(P.x[static_cast<std::size_t>(p)], first, s.w, s.dw);
+    s.dof0 = 0;
+    for (int d = 0; d < Dim; ++d) s.dof0 += first[d] * stride_[d];
+  }
 
   // Basis at any point with grid().inside(x).
   void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     IVec<Dim> first;
     std::array<std::array<double, Degree + 1>, Dim> w, dw;
+    factors(x, first, w, dw);
+    tensor_product<Dim, Degree + 1>(first, w, dw, n_, s);
+  }
+
+ private:
+  // The 1D factors at x: the first function per direction, values and derivatives [1/m].
+  void factors(const Vec<Dim>& x, IVec<Dim>& first,
+               std::array<std::array<double, Degree + 1>, Dim>& w,
+               std::array<std::array<double, Degree + 1>, Dim>& dw) const {
     for (int d = 0; d < Dim; ++d) {
       // Same rounding as Grid::cell_of (upper end in the last span), so t = s - c lies in [0, 1]
       // exactly, which keeps every left/right term in bspline_span non-negative.
@@ -121,12 +139,10 @@ class BSplineBasis {
       for (double& v : dw[d]) v *= inv_h_[d];  // d/dx = (1/h) d/dt [1/m]
       first[d] = c;  // span c (0-based) supports functions c .. c + Degree
     }
-    tensor_product<Dim, Degree + 1>(first, w, dw, n_, s);
   }
 
- private:
   Grid<Dim> grid_;
-  IVec<Dim> n_{};
+  IVec<Dim> n_{}, stride_{};
   Vec<Dim> inv_h_;
 };
 

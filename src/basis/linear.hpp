@@ -16,12 +16,14 @@ class LinearBasis {
   static constexpr std::string_view kName = "linear";
   static constexpr int kPerDim = 2;
   using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
+  using CachedStencilT = TensorStencil<Dim, kPerDim>;
 
   explicit LinearBasis(const Grid<Dim>& g) : grid_(g) {
     for (int d = 0; d < Dim; ++d) {
       n_[d] = g.cells[d] + 1;
       inv_h_[d] = 1.0 / g.h[d];
     }
+    stride_ = dof_strides<Dim>(n_);
   }
 
   const Grid<Dim>& grid() const { return grid_; }
@@ -37,11 +39,26 @@ class LinearBasis {
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
     evaluate_point(P.x[static_cast<std::size_t>(p)], s);
   }
+  // The compact form cached per particle (basis/stencil.hpp, TensorStencil).
+  void evaluate(const Particles<Dim>& P, Index p, CachedStencilT& s) const {
+    IVec<Dim> first;
+    factors(P.x[static_cast<std::size_t>(p)], first, s.w, s.dw);
+    s.dof0 = 0;
+    for (int d = 0; d < Dim; ++d) s.dof0 += first[d] * stride_[d];
+  }
 
   // The basis at any point inside the grid (tractions, quadrature points).
   void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     IVec<Dim> first;
     std::array<std::array<double, 2>, Dim> w, dw;
+    factors(x, first, w, dw);
+    tensor_product<Dim, 2>(first, w, dw, n_, s);
+  }
+
+ private:
+  // The 1D factors at x: the first node per direction, values and derivatives [1/m].
+  void factors(const Vec<Dim>& x, IVec<Dim>& first, std::array<std::array<double, 2>, Dim>& w,
+               std::array<std::array<double, 2>, Dim>& dw) const {
     for (int d = 0; d < Dim; ++d) {
       // Same rounding as Grid::cell_of, so xi = s - c lies in [0, 1] exactly (no negative
       // weights from round-off at the nodes).
@@ -52,12 +69,10 @@ class LinearBasis {
       w[d] = {1.0 - xi, xi};
       dw[d] = {-inv_h_[d], inv_h_[d]};
     }
-    tensor_product<Dim, 2>(first, w, dw, n_, s);
   }
 
- private:
   Grid<Dim> grid_;
-  IVec<Dim> n_{};
+  IVec<Dim> n_{}, stride_{};
   Vec<Dim> inv_h_;
 };
 

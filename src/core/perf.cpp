@@ -28,11 +28,16 @@ Index extra_dofs(const BenchOptions& opt) {
 }
 
 // Particle state + cached stencil + cell index + the grid's share: the GridState arrays and the
-// scatter slices of scheme/parallel.hpp (about one grid of mass and one of vectors).
+// scatter slices of scheme/parallel.hpp (about one grid of mass and one of vectors). Linear and
+// B-spline bases cache the compact TensorStencil (first DOF, K values and K derivatives per
+// direction), the others the full Stencil (DOF, value, gradient per entry).
 template <int Dim>
 double bytes_per_particle(const BenchOptions& opt, Index cells, Index particles) {
+  const auto k = static_cast<std::size_t>(stencil_per_dim(opt));
   const auto n = static_cast<std::size_t>(std::pow(stencil_per_dim(opt), Dim));
-  const std::size_t stencil = n * (sizeof(Index) + sizeof(double) + sizeof(Vec<Dim>));
+  const bool tensor = opt.basis == "linear" || opt.basis == "bspline";
+  const std::size_t stencil = tensor ? sizeof(Index) + 2 * Dim * k * sizeof(double)
+                                     : n * (sizeof(Index) + sizeof(double) + sizeof(Vec<Dim>));
   const double dofs = std::pow(static_cast<double>(cells + extra_dofs(opt)), Dim);
   const double per_dof =
       static_cast<double>(sizeof(double) + 4 * sizeof(Vec<Dim>) + 2 * sizeof(std::uint8_t) +

@@ -5,6 +5,7 @@
 #include <string_view>
 #include <vector>
 
+#include "basis/stencil.hpp"
 #include "grid/grid.hpp"
 #include "grid/grid_state.hpp"
 #include "material/materials.hpp"
@@ -15,6 +16,22 @@
 namespace mpm {
 
 enum class MassType { Lumped, Consistent };
+
+// The particle-to-grid sums a fused pass computes (stages::map_to_grid), as bits.
+namespace grid_sum {
+inline constexpr unsigned kMass = 1;      // nodal masses (and the consistent matrix)
+inline constexpr unsigned kMomentum = 2;  // nodal momenta
+inline constexpr unsigned kForces = 4;    // internal and body forces
+// With kMomentum: first v_p += dt sum_i phi_i a_i (D eq. 2.47), then q from the new v_p (2.48).
+inline constexpr unsigned kVelocityFirst = 8;
+}  // namespace grid_sum
+
+// The grid-to-particle updates a fused pass computes (stages::update_particles), as bits.
+namespace particle_update {
+inline constexpr unsigned kVelocity = 1;  // v_p from the grid acceleration
+inline constexpr unsigned kPosition = 2;  // x_p, u_p from the grid velocity
+inline constexpr unsigned kStress = 4;    // F, V, rho, sigma from the grid velocity gradient
+}  // namespace particle_update
 
 // Body force per unit mass b(x, t) [m/s^2]. `fill` writes b for all particles at once (one
 // indirect call per step, the loop inside); skipped when the force is constant in time.
@@ -60,6 +77,8 @@ struct Simulation {
   using BasisT = Basis;
   using MappingT = Mapping;
   using StencilT = typename Basis::StencilT;
+  // The per-particle cache: the compact 1D factors for tensor-product bases, else StencilT.
+  using CachedT = typename CachedStencilOf<Basis>::type;
 
   Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat)
       : grid(g),
@@ -69,6 +88,8 @@ struct Simulation {
         material(std::move(mat)) {
     nodes.resize(basis.num_dofs());
     stencils.resize(static_cast<std::size_t>(particles.size()));
+    if constexpr (requires { basis.dofs_per_dim(); })
+      dof_stride = dof_strides<Dim>(basis.dofs_per_dim());
     cell.assign(static_cast<std::size_t>(particles.size()), -1);
   }
 
@@ -85,7 +106,8 @@ struct Simulation {
   GridState<Dim> nodes;
   ConsistentMass consistent;
   bool consistent_per_component = false;  // one factorisation per velocity component
-  std::vector<StencilT> stencils;         // basis at x_p^s, refreshed by evaluate_basis()
+  std::vector<CachedT> stencils;          // basis at x_p^s, refreshed by evaluate_basis()
+  IVec<Dim> dof_stride{};                 // DOF strides of a tensor-product basis (CachedT)
   std::vector<Index> cell;                // cell of each particle at the last evaluation
   ScatterBuffers<Dim> scatter;            // per-chunk grid buffers of the parallel scatters
 

@@ -15,62 +15,126 @@ struct DirectMapping {
   // chunks (scheme/parallel.hpp): the same bits for any thread count.
   template <class Sim>
   void map_mass(Sim& sim) const {
-    const auto& P = sim.particles;
-    sim.scatter.scalar.scatter(sim.nodes.mass, 0.0, ranges(sim), [&](Index p, const auto& m) {
-      const auto& s = sim.stencils[static_cast<std::size_t>(p)];
-      const double mp = P.mass[static_cast<std::size_t>(p)];
-      for (int a = 0; a < s.kSize; ++a) m[s.dof[a]] += s.w[a] * mp;
-    });
-    if (sim.mass_type != MassType::Consistent) return;
-    // The triplet list is one shared structure and the consistent mass is rarely used: serial.
-    sim.consistent.begin(sim.nodes.size());
-    for (Index p = 0; p < P.size(); ++p) {
-      const auto& s = sim.stencils[static_cast<std::size_t>(p)];
-      const double mp = P.mass[static_cast<std::size_t>(p)];
-      for (int a = 0; a < s.kSize; ++a)
-        for (int b = 0; b < s.kSize; ++b)
-          sim.consistent.add(s.dof[a], s.dof[b], s.w[a] * mp * s.w[b]);
-    }
+    map_fused<grid_sum::kMass>(sim);
   }
 
   // q_i = sum_p phi_i(x_p) m_p v_p (D eq. 2.32 / 2.48).
   template <class Sim>
   void map_momentum(Sim& sim) const {
-    using V = Vec<Sim::kDim>;
-    const auto& P = sim.particles;
-    sim.scatter.vector.scatter(sim.nodes.momentum, V::Zero(), ranges(sim),
-                               [&](Index p, const auto& q) {
-                                 const auto i = static_cast<std::size_t>(p);
-                                 const auto& s = sim.stencils[i];
-                                 const V mv = P.mass[i] * P.v[i];
-                                 for (int a = 0; a < s.kSize; ++a) q[s.dof[a]] += s.w[a] * mv;
-                               });
+    map_fused<grid_sum::kMomentum>(sim);
   }
 
   // f_i = sum_p ( -V_p sigma_p grad phi_i + phi_i m_p b_p ) (D eq. 2.45; rho_p V_p = m_p).
   template <class Sim>
   void map_forces(Sim& sim) const {
+    map_fused<grid_sum::kForces>(sim);
+  }
+
+  // The sums of What (grid_sum bits) in one pass over the particles and their stencils
+  // (stages::map_to_grid): each output is bitwise the one of its own pass. With kVelocityFirst
+  // each particle's velocity is advanced by dt with the grid acceleration just before its
+  // momentum is scattered (every particle is in exactly one chunk, and evaluate_basis has
+  // stopped the run if any was outside the grid, so no chunk's range is empty).
+  template <unsigned What, class Sim>
+  void map_fused(Sim& sim, double dt = 0.0) const {
     using V = Vec<Sim::kDim>;
-    const auto& P = sim.particles;
-    sim.scatter.vector.scatter(sim.nodes.force, V::Zero(), ranges(sim),
-                               [&](Index p, const auto& f) {
-                                 const auto i = static_cast<std::size_t>(p);
-                                 const auto& s = sim.stencils[i];
-                                 const auto& sigma = P.stress[i];
-                                 const double Vp = P.volume[i];
-                                 const V mb = P.mass[i] * P.body[i];
-                                 for (int a = 0; a < s.kSize; ++a)
-                                   f[s.dof[a]] += s.w[a] * mb - Vp * (sigma * s.grad[a]);
-                               });
+    using namespace grid_sum;
+    constexpr bool M = What & kMass, Q = What & kMomentum, F = What & kForces;
+    auto& sc = sim.scatter;
+    const auto& r = ranges(sim);
+    const ScatterTarget<double> mt{sc.scalar, sim.nodes.mass, 0.0};
+    const ScatterTarget<V> qt{sc.vector, sim.nodes.momentum, V::Zero()};
+    // Forces use a buffer of their own when momentum is summed in the same pass.
+    const ScatterTarget<V> ft{Q ? sc.vector2 : sc.vector, sim.nodes.force, V::Zero()};
+    const None no;
+    if constexpr (M && Q && F) {
+      scatter_fused(
+          r,
+          [&](Index p, const auto& m, const auto& q, const auto& f) {
+            add<What>(sim, dt, p, m, q, f);
+          },
+          mt, qt, ft);
+    } else if constexpr (M && Q) {
+      scatter_fused(
+          r, [&](Index p, const auto& m, const auto& q) { add<What>(sim, dt, p, m, q, no); }, mt,
+          qt);
+    } else if constexpr (M && F) {
+      scatter_fused(
+          r, [&](Index p, const auto& m, const auto& f) { add<What>(sim, dt, p, m, no, f); }, mt,
+          ft);
+    } else if constexpr (Q && F) {
+      scatter_fused(
+          r, [&](Index p, const auto& q, const auto& f) { add<What>(sim, dt, p, no, q, f); }, qt,
+          ft);
+    } else if constexpr (M) {
+      scatter_fused(
+          r, [&](Index p, const auto& m) { add<What>(sim, dt, p, m, no, no); }, mt);
+    } else if constexpr (Q) {
+      scatter_fused(
+          r, [&](Index p, const auto& q) { add<What>(sim, dt, p, no, q, no); }, qt);
+    } else if constexpr (F) {
+      scatter_fused(
+          r, [&](Index p, const auto& f) { add<What>(sim, dt, p, no, no, f); }, ft);
+    }
+    if constexpr (M) {
+      if (sim.mass_type != MassType::Consistent) return;
+      // The triplet list is one shared structure and the consistent mass is rarely used: serial.
+      const auto& P = sim.particles;
+      sim.consistent.begin(sim.nodes.size());
+      for (Index p = 0; p < P.size(); ++p) {
+        const auto& s = sim.stencils[static_cast<std::size_t>(p)];
+        const double mp = P.mass[static_cast<std::size_t>(p)];
+        for_each_entry(s, sim.dof_stride, [&](Index da, double wa, const auto&) {
+          for_each_entry(s, sim.dof_stride, [&](Index db, double wb, const auto&) {
+            sim.consistent.add(da, db, wa * mp * wb);
+          });
+        });
+      }
+    }
   }
 
  private:
+  struct None {};  // the slice of a sum not computed in this pass
+
+  // Particle p's contributions to the sums of What into the slices m (mass), q (momentum) and
+  // f (forces), one pass over its stencil (two with kVelocityFirst).
+  template <unsigned What, class Sim, class SM, class SQ, class SF>
+  static void add(Sim& sim, double dt, Index p, const SM& m, const SQ& q, const SF& f) {
+    using V = Vec<Sim::kDim>;
+    using namespace grid_sum;
+    auto& P = sim.particles;
+    const auto i = static_cast<std::size_t>(p);
+    if constexpr ((What & kVelocityFirst) != 0) {  // as stages::update_particles<kVelocity>
+      const auto& a = sim.nodes.accel;
+      V acc = V::Zero();
+      for_each_entry(sim.stencils[i], sim.dof_stride, [&](Index dof, double w, const auto&) {
+        acc += w * a[static_cast<std::size_t>(dof)];
+      });
+      P.v[i] += dt * acc;
+    }
+    const double mp = P.mass[i];
+    [[maybe_unused]] V mv, mb;
+    [[maybe_unused]] const Mat<Sim::kDim>* sigma = nullptr;
+    [[maybe_unused]] double Vp = 0.0;
+    if constexpr ((What & kMomentum) != 0) mv = P.mass[i] * P.v[i];
+    if constexpr ((What & kForces) != 0) {
+      mb = P.mass[i] * P.body[i];
+      sigma = &P.stress[i];
+      Vp = P.volume[i];
+    }
+    for_each_entry(sim.stencils[i], sim.dof_stride, [&](Index dof, double w, const V& grad) {
+      if constexpr ((What & kMass) != 0) m[dof] += w * mp;
+      if constexpr ((What & kMomentum) != 0) q[dof] += w * mv;
+      if constexpr ((What & kForces) != 0) f[dof] += w * mb - Vp * (*sigma * grad);
+    });
+  }
+
   // The DOF range of each particle chunk, recorded by evaluate_basis (scanned here if a caller
   // filled the stencils some other way).
   template <class Sim>
   static const ChunkDofRanges& ranges(Sim& sim) {
     auto& r = sim.scatter.ranges;
-    if (r.particles != sim.particles.size()) r.scan(sim.stencils);
+    if (r.particles != sim.particles.size()) r.scan(sim.stencils, sim.dof_stride);
     return r;
   }
 };

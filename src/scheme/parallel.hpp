@@ -12,8 +12,10 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <tuple>
 #include <vector>
 
+#include "basis/stencil.hpp"
 #include "core/types.hpp"
 
 namespace mpm {
@@ -81,21 +83,20 @@ struct ChunkDofRanges {
   std::array<Index, ParticleChunks::kMax> lo{}, hi{};
 
   // Scans the stencils (fallback when evaluate_basis did not record them).
-  template <class Stencil>
-  void scan(const std::vector<Stencil>& stencils) {
+  // stride: the DOF strides of a tensor-product basis (for its compact stencils).
+  template <class Stencil, class Stride>
+  void scan(const std::vector<Stencil>& stencils, const Stride& stride) {
     const auto n = static_cast<Index>(stencils.size());
-    for_each_chunk(n, [&](int c, Index b, Index e) { record(c, stencils, b, e); });
+    for_each_chunk(n, [&](int c, Index b, Index e) { record(c, stencils, stride, b, e); });
     particles = n;
   }
-  template <class Stencil>
-  void record(int c, const std::vector<Stencil>& stencils, Index b, Index e) {
+  template <class Stencil, class Stride>
+  void record(int c, const std::vector<Stencil>& stencils, const Stride& stride, Index b, Index e) {
     Index l = std::numeric_limits<Index>::max(), h = -1;
     for (Index p = b; p < e; ++p) {
-      const auto& s = stencils[static_cast<std::size_t>(p)];
-      for (int a = 0; a < s.kSize; ++a) {
-        l = std::min(l, s.dof[a]);
-        h = std::max(h, s.dof[a]);
-      }
+      const auto [sl, sh] = dof_bounds(stencils[static_cast<std::size_t>(p)], stride);
+      l = std::min(l, sl);
+      h = std::max(h, sh);
     }
     lo[static_cast<std::size_t>(c)] = l;
     hi[static_cast<std::size_t>(c)] = h;
@@ -117,43 +118,35 @@ class GridAccumulator {
   // slice[dof]. Every chunk sums its particles in order into its own slice; the slices are
   // then added into `out` in chunk order. DOFs outside every range are set to zero.
   template <class F>
-  void scatter(std::vector<T>& out, const T& zero, const ChunkDofRanges& r, F&& scatter) {
-    const Index n = r.particles;
-    const int k = ParticleChunks::count(n);
+  void scatter(std::vector<T>& out, const T& zero, const ChunkDofRanges& r, F&& scatter);
+
+  // Lays out one slice per chunk of r (grows the buffer only: no allocation once steady).
+  void reserve(const ChunkDofRanges& r) {
+    const int k = ParticleChunks::count(r.particles);
     std::size_t size = 0;
     for (int c = 0; c < k; ++c) {
       const auto cc = static_cast<std::size_t>(c);
       offset_[cc] = size;
       size += static_cast<std::size_t>(std::max<Index>(0, r.hi[cc] - r.lo[cc] + 1));
     }
-    if (buf_.size() < size) buf_.resize(size);  // grows only: no allocation once steady
-    const auto nodes = static_cast<Index>(out.size());
-    constexpr Index kBlock = 4096;  // DOFs per reduction task
-    const Index blocks = (nodes + kBlock - 1) / kBlock;
-#pragma omp parallel if (n >= kParallelMin)
-    {
-#pragma omp for schedule(static)
-      for (int c = 0; c < k; ++c) {
-        const auto cc = static_cast<std::size_t>(c);
-        if (r.hi[cc] < r.lo[cc]) continue;
-        T* data = buf_.data() + offset_[cc];
-        std::fill(data, data + (r.hi[cc] - r.lo[cc] + 1), zero);
-        const Slice slice{data, r.lo[cc]};
-        const Index e = ParticleChunks::begin(n, c + 1, k);
-        for (Index p = ParticleChunks::begin(n, c, k); p < e; ++p) scatter(p, slice);
-      }
-      // The implicit barrier above: every slice is complete before any is added.
-#pragma omp for schedule(static)
-      for (Index blk = 0; blk < blocks; ++blk) {
-        const Index b = blk * kBlock, e = std::min(nodes, b + kBlock);
-        std::fill(out.begin() + b, out.begin() + e, zero);
-        for (int c = 0; c < k; ++c) {
-          const auto cc = static_cast<std::size_t>(c);
-          const Index lo = std::max(b, r.lo[cc]), hi = std::min(e, r.hi[cc] + 1);
-          const T* data = buf_.data() + offset_[cc];
-          for (Index i = lo; i < hi; ++i) out[static_cast<std::size_t>(i)] += data[i - r.lo[cc]];
-        }
-      }
+    if (buf_.size() < size) buf_.resize(size);
+  }
+  // Chunk c's slice, zeroed (c has a non-empty range).
+  Slice zero_slice(int c, const ChunkDofRanges& r, const T& zero) {
+    const auto cc = static_cast<std::size_t>(c);
+    T* data = buf_.data() + offset_[cc];
+    std::fill(data, data + (r.hi[cc] - r.lo[cc] + 1), zero);
+    return {data, r.lo[cc]};
+  }
+  // out[b, e) = the sum of the slices over those DOFs, in chunk order.
+  void reduce(std::vector<T>& out, const T& zero, const ChunkDofRanges& r, Index b, Index e) const {
+    std::fill(out.begin() + b, out.begin() + e, zero);
+    const int k = ParticleChunks::count(r.particles);
+    for (int c = 0; c < k; ++c) {
+      const auto cc = static_cast<std::size_t>(c);
+      const Index lo = std::max(b, r.lo[cc]), hi = std::min(e, r.hi[cc] + 1);
+      const T* data = buf_.data() + offset_[cc];
+      for (Index i = lo; i < hi; ++i) out[static_cast<std::size_t>(i)] += data[i - r.lo[cc]];
     }
   }
 
@@ -162,12 +155,60 @@ class GridAccumulator {
   std::array<std::size_t, ParticleChunks::kMax> offset_{};
 };
 
+// One output of scatter_fused: the grid array and the accumulator whose slices sum into it.
+template <class T>
+struct ScatterTarget {
+  GridAccumulator<T>& acc;
+  std::vector<T>& out;
+  T zero;
+};
+
+// Several particle-to-grid sums in one pass over the particles: scatter(p, slices...) adds
+// particle p's contributions into one slice per target (in the order of the targets). Each
+// output gets the same bits as a scatter of its own (same chunks, same order per chunk and
+// per DOF). The outputs have the same number of DOFs.
+template <class F, class... T>
+void scatter_fused(const ChunkDofRanges& r, F&& scatter, ScatterTarget<T>... t) {
+  const Index n = r.particles;
+  const int k = ParticleChunks::count(n);
+  (t.acc.reserve(r), ...);
+  const auto nodes = static_cast<Index>(std::get<0>(std::tie(t.out...)).size());
+  constexpr Index kBlock = 4096;  // DOFs per reduction task
+  const Index blocks = (nodes + kBlock - 1) / kBlock;
+#pragma omp parallel if (n >= kParallelMin)
+  {
+#pragma omp for schedule(static)
+    for (int c = 0; c < k; ++c) {
+      const auto cc = static_cast<std::size_t>(c);
+      if (r.hi[cc] < r.lo[cc]) continue;
+      const auto slices = std::make_tuple(t.acc.zero_slice(c, r, t.zero)...);
+      const Index e = ParticleChunks::begin(n, c + 1, k);
+      for (Index p = ParticleChunks::begin(n, c, k); p < e; ++p)
+        std::apply([&](const auto&... s) { scatter(p, s...); }, slices);
+    }
+    // The implicit barrier above: every slice is complete before any is added.
+#pragma omp for schedule(static)
+    for (Index blk = 0; blk < blocks; ++blk) {
+      const Index b = blk * kBlock, e = std::min(nodes, b + kBlock);
+      (t.acc.reduce(t.out, t.zero, r, b, e), ...);
+    }
+  }
+}
+
+template <class T>
+template <class F>
+void GridAccumulator<T>::scatter(std::vector<T>& out, const T& zero, const ChunkDofRanges& r,
+                                 F&& f) {
+  scatter_fused(r, f, ScatterTarget<T>{*this, out, zero});
+}
+
 // The scatter state a simulation keeps between steps: chunk ranges and buffers.
 template <int Dim>
 struct ScatterBuffers {
   ChunkDofRanges ranges;
   GridAccumulator<double> scalar;
   GridAccumulator<Vec<Dim>> vector;
+  GridAccumulator<Vec<Dim>> vector2;  // the second vector sum of a fused scatter
 };
 
 }  // namespace mpm

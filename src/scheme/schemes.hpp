@@ -1,6 +1,8 @@
 #pragma once
 // The four explicit update schemes as orders of the shared stages. Each step() reads like the
-// algorithm it implements; none of them copies a loop.
+// algorithm it implements; none of them copies a loop. Adjacent particle passes that read the
+// same grid state are fused (map_to_grid, update_particles: one pass over the particles and
+// their stencils instead of two or three, the same bits).
 #include <string_view>
 #include <variant>
 
@@ -19,15 +21,14 @@ struct Usl {
     using namespace stages;
     evaluate_basis(sim);  // phi_i(x_p^s), grad phi_i(x_p^s)
     refresh_body_force(sim);
-    map_mass(sim);                      // M^s       (2.31)
-    map_momentum(sim);                  // q^s       (2.32)
-    map_forces(sim);                    // f^s       (2.33)
-    solve_acceleration(sim);            // a^s       (2.34)
-    solve_velocity(sim);                // v_i^s     (2.35)
-    advance_grid_velocity(sim, dt);     // v_i^{s+1} (2.36)
-    update_particle_position(sim, dt);  // x_p^{s+1} (2.38)
-    update_particle_velocity(sim, dt);  // v_p^{s+1} (2.39)
-    update_stress(sim, dt);             // F, V, rho, sigma from v_i^{s+1} (2.40-2.43)
+    // M^s (2.31), q^s (2.32), f^s (2.33) in one pass over the particles
+    map_to_grid<grid_sum::kMass | grid_sum::kMomentum | grid_sum::kForces>(sim);
+    solve_acceleration(sim);         // a^s       (2.34)
+    solve_velocity(sim);             // v_i^s     (2.35)
+    advance_grid_velocity(sim, dt);  // v_i^{s+1} (2.36)
+    // x_p^{s+1} (2.38), v_p^{s+1} (2.39), F, V, rho, sigma from v_i^{s+1} (2.40-2.43) in one pass
+    using namespace particle_update;
+    update_particles<kPosition | kVelocity | kStress>(sim, dt);
   }
 };
 
@@ -40,14 +41,12 @@ struct Musl {
     using namespace stages;
     evaluate_basis(sim);
     refresh_body_force(sim);
-    map_mass(sim);                      // M^s                    (2.44)
-    map_forces(sim);                    // f^s                    (2.45)
-    solve_acceleration(sim);            // a^s                    (2.46)
-    update_particle_velocity(sim, dt);  // v_p^{s+1}              (2.47)
-    map_momentum(sim);                  // q from v_p^{s+1}       (2.48)
-    solve_velocity(sim);                // v_i^{s+1}              (2.49)
-    update_particle_position(sim, dt);  // x_p^{s+1}              (2.50-2.51)
-    update_stress(sim, dt);             // F, V, rho, sigma       (2.52-2.55)
+    map_to_grid<grid_sum::kMass | grid_sum::kForces>(sim);  // M^s (2.44), f^s (2.45)
+    solve_acceleration(sim);                                // a^s                (2.46)
+    update_velocity_map_momentum(sim, dt);  // v_p^{s+1} (2.47), q from it (2.48): one pass
+    solve_velocity(sim);                    // v_i^{s+1}          (2.49)
+    // x_p^{s+1} (2.50-2.51), F, V, rho, sigma (2.52-2.55) in one pass
+    update_particles<particle_update::kPosition | particle_update::kStress>(sim, dt);
   }
 };
 
@@ -62,11 +61,10 @@ struct Usf {
     using namespace stages;
     evaluate_basis(sim);
     refresh_body_force(sim);
-    map_mass(sim);
-    map_momentum(sim);       // q from v_p^s
-    solve_velocity(sim);     // v_i^s
-    update_stress(sim, dt);  // sigma^{s+1} from v_i^s
-    map_forces(sim);         // f with the updated stress and volume
+    map_to_grid<grid_sum::kMass | grid_sum::kMomentum>(sim);  // M^s, q from v_p^s
+    solve_velocity(sim);                                      // v_i^s
+    update_stress(sim, dt);                                   // sigma^{s+1} from v_i^s
+    map_forces(sim);  // f with the updated stress and volume
     solve_acceleration(sim);
     update_particle_velocity(sim, dt);  // v_p^{s+1}
     advance_grid_velocity(sim, dt);     // v_i^{s+1} = v_i^s + dt a_i
@@ -85,17 +83,15 @@ struct Usavg {
     using namespace stages;
     evaluate_basis(sim);
     refresh_body_force(sim);
-    map_mass(sim);
-    map_momentum(sim);             // q from v_p^s
-    solve_velocity(sim);           // v_i^s
-    update_stress(sim, 0.5 * dt);  // USF half
+    map_to_grid<grid_sum::kMass | grid_sum::kMomentum>(sim);  // M^s, q from v_p^s
+    solve_velocity(sim);                                      // v_i^s
+    update_stress(sim, 0.5 * dt);                             // USF half
     map_forces(sim);
     solve_acceleration(sim);
-    update_particle_velocity(sim, dt);  // v_p^{s+1}
-    map_momentum(sim);                  // q from v_p^{s+1}
-    solve_velocity(sim);                // v_i^{s+1}
-    update_particle_position(sim, dt);
-    update_stress(sim, 0.5 * dt);  // MUSL half
+    update_velocity_map_momentum(sim, dt);  // v_p^{s+1}, q from v_p^{s+1}: one pass
+    solve_velocity(sim);                    // v_i^{s+1}
+    // x_p^{s+1} and the MUSL half of the stress increment in one pass
+    update_particles<particle_update::kPosition | particle_update::kStress>(sim, dt, 0.5 * dt);
   }
 };
 

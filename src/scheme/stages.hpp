@@ -72,10 +72,9 @@ void evaluate_basis(Sim& sim) {
       sim.cell[i] = c;
       auto& s = sim.stencils[i];
       basis.evaluate(P, p, s);
-      for (int a = 0; a < s.kSize; ++a) {
-        lo = std::min(lo, s.dof[a]);
-        hi = std::max(hi, s.dof[a]);
-      }
+      const auto [sl, sh] = dof_bounds(s, sim.dof_stride);
+      lo = std::min(lo, sl);
+      hi = std::max(hi, sh);
     }
     ranges.lo[ck] = lo;
     ranges.hi[ck] = hi;
@@ -119,11 +118,11 @@ void refresh_body_force(Sim& sim) {
     sim.body_force.fill(sim.particles, sim.time, sim.particles.body);
 }
 
-// Nodal (lumped) masses, the consistent matrix if requested, the active set, and the mass
-// conservation check of the mapping.
+namespace detail {
+// The active set and the mass conservation check, and the consistent matrix if requested,
+// from the nodal masses of the mapping.
 template <class Sim>
-void map_mass(Sim& sim) {
-  sim.mapping.map_mass(sim);
+void after_mass(Sim& sim) {
   const auto& m = sim.nodes.mass;
   const auto& mp = sim.particles.mass;
   const double total = deterministic_sum(static_cast<Index>(m.size()), 0.0,
@@ -167,9 +166,9 @@ void map_mass(Sim& sim) {
   }
 }
 
+// The momentum conservation check from the nodal momenta of the mapping.
 template <class Sim>
-void map_momentum(Sim& sim) {
-  sim.mapping.map_momentum(sim);
+void after_momentum(Sim& sim) {
   constexpr int Dim = Sim::kDim;
   const auto& q = sim.nodes.momentum;
   const Vec<Dim> grid_p =
@@ -194,11 +193,10 @@ void map_momentum(Sim& sim) {
   }
 }
 
-// Internal and body forces from the mapping, then tractions through the particles next to the
-// loaded faces (Traction: one face point per loaded particle, tau evaluated once per face).
+// Tractions through the particles next to the loaded faces (Traction: one face point per loaded
+// particle, tau evaluated once per face), added to the forces of the mapping.
 template <class Sim>
-void map_forces(Sim& sim) {
-  sim.mapping.map_forces(sim);
+void after_forces(Sim& sim) {
   constexpr int Dim = Sim::kDim;
   const auto& P = sim.particles;
   for (const auto& tr : sim.tractions) {
@@ -223,6 +221,45 @@ void map_forces(Sim& sim) {
         sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
     }
   }
+}
+
+}  // namespace detail
+
+// The particle-to-grid sums of What (grid_sum bits: masses, D eq. 2.31 / 2.44; momenta,
+// 2.32 / 2.48; forces, 2.33 / 2.45) with their checks, and the tractions after the forces.
+// A mapping with map_fused computes them in one pass over the particles (the same bits as
+// separate passes); the others map them one by one.
+template <unsigned What, class Sim>
+void map_to_grid(Sim& sim) {
+  using namespace grid_sum;
+  if constexpr (requires { sim.mapping.template map_fused<What>(sim); }) {
+    sim.mapping.template map_fused<What>(sim);
+  } else {
+    if constexpr ((What & kMass) != 0) sim.mapping.map_mass(sim);
+    if constexpr ((What & kMomentum) != 0) sim.mapping.map_momentum(sim);
+    if constexpr ((What & kForces) != 0) sim.mapping.map_forces(sim);
+  }
+  if constexpr ((What & kMass) != 0) detail::after_mass(sim);
+  if constexpr ((What & kMomentum) != 0) detail::after_momentum(sim);
+  if constexpr ((What & kForces) != 0) detail::after_forces(sim);
+}
+
+// Nodal (lumped) masses, the consistent matrix if requested, the active set, and the mass
+// conservation check of the mapping.
+template <class Sim>
+void map_mass(Sim& sim) {
+  map_to_grid<grid_sum::kMass>(sim);
+}
+
+template <class Sim>
+void map_momentum(Sim& sim) {
+  map_to_grid<grid_sum::kMomentum>(sim);
+}
+
+// Internal and body forces from the mapping, then the tractions.
+template <class Sim>
+void map_forces(Sim& sim) {
+  map_to_grid<grid_sum::kForces>(sim);
 }
 
 namespace detail {
@@ -276,65 +313,59 @@ void advance_grid_velocity(Sim& sim, double dt) {
   });
 }
 
-// v_p^{s+1} = v_p^s + dt sum_i phi_i(x_p^s) a_i^s (D eq. 2.39 / 2.47).
-template <class Sim>
-void update_particle_velocity(Sim& sim, double dt) {
-  auto& P = sim.particles;
-  const auto& a = sim.nodes.accel;
-  parallel_for(P.size(), [&](Index p) {
-    const auto i = static_cast<std::size_t>(p);
-    const auto& s = sim.stencils[i];
-    Vec<Sim::kDim> acc = Vec<Sim::kDim>::Zero();
-    for (int k = 0; k < s.kSize; ++k) acc += s.w[k] * a[static_cast<std::size_t>(s.dof[k])];
-    P.v[i] += dt * acc;
-  });
-}
-
-// x_p^{s+1} = x_p^s + dt sum_i phi_i(x_p^s) v_i^{s+1}, and the same increment for u_p
-// (Euler-Cromer: positions use the new velocity; D eq. 2.38 / 2.51).
-template <class Sim>
-void update_particle_position(Sim& sim, double dt) {
-  auto& P = sim.particles;
-  const auto& v = sim.nodes.velocity;
-  parallel_for(P.size(), [&](Index p) {
-    const auto i = static_cast<std::size_t>(p);
-    const auto& s = sim.stencils[i];
-    Vec<Sim::kDim> dx = Vec<Sim::kDim>::Zero();
-    for (int k = 0; k < s.kSize; ++k) dx += s.w[k] * v[static_cast<std::size_t>(s.dof[k])];
-    dx *= dt;
-    P.x[i] += dx;
-    P.u[i] += dx;
-  });
-  // Bases that track particle-domain corners (CPDI2) move them with the same grid velocity.
-  if constexpr (requires { sim.basis.advect(sim, dt); }) sim.basis.advect(sim, dt);
-}
-
-// Velocity gradient from the current grid velocity, then F, V, rho and the stress
-// (D eq. 2.52-2.55 and step 14). dt is the increment this update covers (dt/2 in USAVG).
-template <class Sim>
-void update_stress(Sim& sim, double dt) {
+// The grid-to-particle updates of What (particle_update bits) in one pass over the particles
+// and their stencils at x_p^s (each particle's updates are independent of the others', so the
+// results are bitwise those of separate passes):
+//   velocity: v_p^{s+1} = v_p^s + dt sum_i phi_i a_i^s (D eq. 2.39 / 2.47);
+//   position: x_p^{s+1} = x_p^s + dt sum_i phi_i v_i^{s+1}, the same increment for u_p
+//     (Euler-Cromer: positions use the new velocity; D eq. 2.38 / 2.51);
+//   stress: the velocity gradient from the current grid velocity, then F, V, rho and the stress
+//     (D eq. 2.52-2.55 and step 14) over the increment stress_dt (dt/2 in USAVG).
+template <unsigned What, class Sim>
+void update_particles(Sim& sim, double dt, double stress_dt) {
+  using namespace particle_update;
   constexpr int Dim = Sim::kDim;
   auto& P = sim.particles;
+  const auto& a = sim.nodes.accel;
   const auto& v = sim.nodes.velocity;
   // The variant is resolved once, outside the parallel loop; `bad`: any particle failed.
   const bool bad = std::visit(
-      [&](const auto& law) {
+      [&]([[maybe_unused]] const auto& law) {
         return parallel_any(P.size(), [&](Index p) {
           const auto i = static_cast<std::size_t>(p);
-          const auto& s = sim.stencils[i];
+          Vec<Dim> acc = Vec<Dim>::Zero(), dx = Vec<Dim>::Zero();
           Mat<Dim> L = Mat<Dim>::Zero();  // L_ab = dv_a/dx_b
-          for (int k = 0; k < s.kSize; ++k)
-            L.noalias() += v[static_cast<std::size_t>(s.dof[k])] * s.grad[k].transpose();
-          const Mat<Dim> dtL = dt * L;
-          P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
-          const double J = P.F[i].determinant();
-          P.volume[i] = J * P.volume0[i];
-          P.density[i] = P.mass[i] / P.volume[i];
-          law.update(P.stress[i], P.F[i], dtL);
-          return !(J > 0.0) || !std::isfinite(P.stress[i].sum());
+          for_each_entry(sim.stencils[i], sim.dof_stride,
+                         [&](Index dof, double w, const Vec<Dim>& grad) {
+                           const auto k = static_cast<std::size_t>(dof);
+                           if constexpr ((What & kVelocity) != 0) acc += w * a[k];
+                           if constexpr ((What & kPosition) != 0) dx += w * v[k];
+                           if constexpr ((What & kStress) != 0)
+                             L.noalias() += v[k] * grad.transpose();
+                         });
+          if constexpr ((What & kVelocity) != 0) P.v[i] += dt * acc;
+          if constexpr ((What & kPosition) != 0) {
+            dx *= dt;
+            P.x[i] += dx;
+            P.u[i] += dx;
+          }
+          if constexpr ((What & kStress) != 0) {
+            const Mat<Dim> dtL = stress_dt * L;
+            P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
+            const double J = P.F[i].determinant();
+            P.volume[i] = J * P.volume0[i];
+            P.density[i] = P.mass[i] / P.volume[i];
+            law.update(P.stress[i], P.F[i], dtL);
+            return !(J > 0.0) || !std::isfinite(P.stress[i].sum());
+          }
+          return false;
         });
       },
       sim.material);
+  // Bases that track particle-domain corners (CPDI2) move them with the same grid velocity.
+  if constexpr ((What & kPosition) != 0) {
+    if constexpr (requires { sim.basis.advect(sim, dt); }) sim.basis.advect(sim, dt);
+  }
   if (bad) {
     std::vector<Index> inverted, nonfinite;
     for (Index p = 0; p < P.size(); ++p) {
@@ -355,6 +386,45 @@ void update_stress(Sim& sim, double dt) {
         fmt::format("step {}, t = {:.9g} s: det F <= 0 (inverted or degenerate "
                     "deformation) at {} particle(s): {}",
                     sim.step, sim.time, inverted.size(), detail::describe_particles(P, inverted)));
+  }
+}
+
+template <unsigned What, class Sim>
+void update_particles(Sim& sim, double dt) {
+  update_particles<What>(sim, dt, dt);
+}
+
+// v_p^{s+1} = v_p^s + dt sum_i phi_i(x_p^s) a_i^s (D eq. 2.39 / 2.47).
+template <class Sim>
+void update_particle_velocity(Sim& sim, double dt) {
+  update_particles<particle_update::kVelocity>(sim, dt);
+}
+
+// x_p^{s+1} = x_p^s + dt sum_i phi_i(x_p^s) v_i^{s+1}, and the same increment for u_p.
+template <class Sim>
+void update_particle_position(Sim& sim, double dt) {
+  update_particles<particle_update::kPosition>(sim, dt);
+}
+
+// F, V, rho and the stress from the current grid velocity (D eq. 2.52-2.55). dt is the
+// increment this update covers (dt/2 in USAVG).
+template <class Sim>
+void update_stress(Sim& sim, double dt) {
+  update_particles<particle_update::kStress>(sim, dt);
+}
+
+// v_p^{s+1} = v_p^s + dt sum_i phi_i(x_p^s) a_i^s (D eq. 2.47), then q_i from v_p^{s+1}
+// (2.48) with its check: one pass over the particles with a mapping that fuses them
+// (DirectMapping; the same bits as the two stages), else the two stages.
+template <class Sim>
+void update_velocity_map_momentum(Sim& sim, double dt) {
+  using namespace grid_sum;
+  if constexpr (requires { sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt); }) {
+    sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt);
+    detail::after_momentum(sim);
+  } else {
+    update_particle_velocity(sim, dt);
+    map_momentum(sim);
   }
 }
 

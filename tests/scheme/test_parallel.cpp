@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <cstddef>
 #include <cstring>
 #include <memory>
 #include <numbers>
@@ -143,11 +145,16 @@ TEST(Parallel, BitwiseStateUsavg) {
   expect_same_state<Usavg>();
 }
 
-// A stencil of three DOFs (ChunkDofRanges reads kSize and dof).
+// A stencil of three DOFs, with the DOF bounds ChunkDofRanges::scan reads (found by ADL; the
+// stride argument is for the compact tensor-product stencils and unused here).
 struct ThreeDofs {
   static constexpr int kSize = 3;
   std::array<Index, 3> dof;
 };
+std::array<Index, 2> dof_bounds(const ThreeDofs& s, std::nullptr_t /*stride*/) {
+  return {*std::min_element(s.dof.begin(), s.dof.end()),
+          *std::max_element(s.dof.begin(), s.dof.end())};
+}
 
 // The chunked scatter against a plain serial sum, with particles in random order so that the
 // chunks' DOF ranges overlap everywhere; equal to round-off, and the same bits for 1..3 threads.
@@ -167,7 +174,7 @@ TEST(Parallel, GridAccumulatorMatchesSerialSum) {
   for (std::size_t p = 0; p < st.size(); ++p)
     for (Index d : st[p].dof) serial[static_cast<std::size_t>(d)] += w[p];
   ChunkDofRanges r;
-  r.scan(st);
+  r.scan(st, nullptr);
   std::vector<double> first;
   for (int threads = 1; threads <= 3; ++threads) {
     const Threads t(threads);
