@@ -1,6 +1,8 @@
 #pragma once
 // The state of one run: grid, basis, mapping, particles, material, grid quantities and the
 // cached basis stencils. Stages (scheme/stages.hpp) operate on it; schemes order the stages.
+#include <algorithm>
+#include <cstdint>
 #include <functional>
 #include <string_view>
 #include <vector>
@@ -105,11 +107,13 @@ struct Simulation {
 
   GridState<Dim> nodes;
   ConsistentMass consistent;
-  bool consistent_per_component = false;  // one factorisation per velocity component
-  std::vector<CachedT> stencils;          // basis at x_p^s, refreshed by evaluate_basis()
-  IVec<Dim> dof_stride{};                 // DOF strides of a tensor-product basis (CachedT)
-  std::vector<Index> cell;                // cell of each particle at the last evaluation
-  ScatterBuffers<Dim> scatter;            // per-chunk grid buffers of the parallel scatters
+  // Some DOF is fixed in only some components (rollers): consistent mass then factorises once
+  // per velocity component. Set by fix_side, the only place that changes nodes.fixed.
+  bool consistent_per_component = false;
+  std::vector<CachedT> stencils;  // basis at x_p^s, refreshed by evaluate_basis()
+  IVec<Dim> dof_stride{};         // DOF strides of a tensor-product basis (CachedT)
+  std::vector<Index> cell;        // cell of each particle at the last evaluation
+  ScatterBuffers<Dim> scatter;    // per-chunk grid buffers of the parallel scatters
 
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s
@@ -120,6 +124,9 @@ struct Simulation {
   void fix_side(int d, int side, unsigned components = ~0u) {
     const auto mask = static_cast<std::uint8_t>(components & ((1u << Dim) - 1u));
     for (Index i : basis.boundary_dofs(d, side)) nodes.fixed[static_cast<std::size_t>(i)] |= mask;
+    constexpr std::uint8_t kAll = (1u << Dim) - 1u;
+    consistent_per_component = std::any_of(nodes.fixed.begin(), nodes.fixed.end(),
+                                           [](std::uint8_t f) { return f != 0 && f != kAll; });
   }
 };
 

@@ -147,9 +147,7 @@ void after_mass(Sim& sim) {
     // Fixed DOFs are eliminated: the prescribed value is zero, so M y = r with identity rows.
     // One factorisation serves every component unless some DOF is fixed in only some of them
     // (rollers): then component d gets its own (slot d).
-    const bool per_component =
-        std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
-    sim.consistent_per_component = per_component;
+    const bool per_component = sim.consistent_per_component;
     for (int d = 0; d < (per_component ? Dim : 1); ++d) {
       const auto bit = static_cast<std::uint8_t>(per_component ? 1u << d : kAll);
       if (!sim.consistent.factorize(
