@@ -80,6 +80,14 @@ def save(fig, out, stem):
     return paths
 
 
+def histories(runs):
+    """(method, history.csv rows) of each run directory that has a history.csv."""
+    for name, d in runs:
+        path = os.path.join(d, "history.csv")
+        if os.path.exists(path):
+            yield name, read_rows(path)
+
+
 def profile_and_history(plt, csv_path, methods, out, title):
     """Stress profile (1D) and conservation over time of the finest run of each method."""
     import glob
@@ -113,15 +121,10 @@ def profile_and_history(plt, csv_path, methods, out, title):
         written += save(fig, out, "stress_profile")
     plt.close(fig)
     # Conservation over time from history.csv: the total energy (the particle mass there is the
-    # particle sum, constant by construction; the mapping's per-step mass and momentum errors
-    # are only in summary.json, as maxima).
+    # particle sum, constant by construction; the mapping's errors are plotted below).
     fig, ax = plt.subplots(figsize=(6.0, 4.5))
     plotted = 0
-    for name, d in runs:
-        path = os.path.join(d, "history.csv")
-        if not os.path.exists(path):
-            continue
-        h = read_rows(path)
+    for name, h in histories(runs):
         if len(h) < 2 or not h[0].get("total_energy"):
             continue
         t = [x["time"] for x in h]
@@ -145,11 +148,8 @@ def profile_and_history(plt, csv_path, methods, out, title):
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
     plotted = 0
     floor = 1e-17  # exact zeros on a log axis
-    for name, d in runs:
-        path = os.path.join(d, "history.csv")
-        if not os.path.exists(path):
-            continue
-        h = read_rows(path)[1:]  # row 0 is the initial state, before any mapping
+    for name, h in histories(runs):
+        h = h[1:]  # row 0 is the initial state, before any mapping
         if not h or "mass_error" not in h[0]:
             continue
         t = [x["time"] for x in h]
