@@ -165,8 +165,14 @@ void after_mass(Sim& sim) {
   const double total = deterministic_sum(static_cast<Index>(m.size()), 0.0,
                                          [&](Index i) { return m[static_cast<std::size_t>(i)]; });
   const double largest = m.empty() ? 0.0 : *std::max_element(m.begin(), m.end());
-  const double particle_mass = deterministic_sum(
-      static_cast<Index>(mp.size()), 0.0, [&](Index p) { return mp[static_cast<std::size_t>(p)]; });
+  // sum m_p: taken by the mapping's scatter when it has one (the same bits), else a pass here.
+  auto& sc = sim.scatter;
+  const double particle_mass =
+      sc.has_particle_mass ? sc.particle_mass.total(static_cast<Index>(mp.size()), 0.0)
+                           : deterministic_sum(static_cast<Index>(mp.size()), 0.0, [&](Index p) {
+                               return mp[static_cast<std::size_t>(p)];
+                             });
+  sc.has_particle_mass = false;
   if (particle_mass > 0.0) {
     sim.diag.rel_mass_error = std::abs(total - particle_mass) / particle_mass;
     sim.diag.max_rel_mass_error = std::max(sim.diag.max_rel_mass_error, sim.diag.rel_mass_error);
@@ -209,16 +215,21 @@ void after_momentum(Sim& sim) {
   const Vec<Dim> grid_p =
       deterministic_sum(static_cast<Index>(q.size()), Vec<Dim>::Zero().eval(),
                         [&](Index i) { return q[static_cast<std::size_t>(i)]; });
-  // One pass over the particles: (sum m_p v_p, sum m_p |v_p|) as one vector.
+  // (sum m_p v_p, sum m_p |v_p|) as one vector: taken by the mapping's scatter when it has one
+  // (the same bits), else one pass over the particles here.
   using Sums = Eigen::Matrix<double, Dim + 1, 1>;
   const auto& P = sim.particles;
-  const Sums sums = deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
-    const auto i = static_cast<std::size_t>(p);
-    Sums r;
-    r.template head<Dim>() = P.mass[i] * P.v[i];
-    r[Dim] = P.mass[i] * P.v[i].norm();
-    return r;
-  });
+  auto& sc = sim.scatter;
+  const Sums sums = sc.has_particle_momentum
+                        ? sc.particle_momentum.total(P.size(), Sums::Zero().eval())
+                        : deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
+                            const auto i = static_cast<std::size_t>(p);
+                            Sums r;
+                            r.template head<Dim>() = P.mass[i] * P.v[i];
+                            r[Dim] = P.mass[i] * P.v[i].norm();
+                            return r;
+                          });
+  sc.has_particle_momentum = false;
   const Vec<Dim> part_p = sums.template head<Dim>();
   const double scale = sums[Dim];
   if (scale > 0.0) {
