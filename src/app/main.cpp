@@ -140,12 +140,13 @@ int cmd_bench(const mpm::BenchOptions& opt) {
   const std::string basis =
       opt.basis == "bspline" ? fmt::format("bspline degree {}", opt.degree) : opt.basis;
   std::cout << fmt::format(
-      "{}D {}{} step, {} basis, {} mapping, lumped mass: {} particles, {} cells{}, {} steps, "
+      "{}D {} step{}, {} basis, {} mapping, lumped mass: {} particles, {} cells{}, {} steps, "
       "{} thread(s), best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes "
       "per particle (particle state, cached stencil, grid share)\n",
-      opt.dim, opt.dim == 2 ? opt.problem + " " : "", opt.scheme, basis, opt.mapping, r.particles,
-      r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
-      r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
+      opt.dim, opt.scheme, opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis,
+      opt.mapping, r.particles, r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads,
+      opt.repeats, r.best_ns_per_particle_step, r.median_ns_per_particle_step,
+      r.bytes_per_particle);
   return 0;
 }
 
