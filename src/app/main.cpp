@@ -140,12 +140,13 @@ int cmd_bench(const mpm::BenchOptions& opt) {
   const std::string basis =
       opt.basis == "bspline" ? fmt::format("bspline degree {}", opt.degree) : opt.basis;
   std::cout << fmt::format(
-      "{}D {} step, {} basis, {} mapping, lumped mass: {} particles, {} cells{}, {} steps, "
+      "{}D {} step{}, {} basis, {} mapping, lumped mass: {} particles, {} cells{}, {} steps, "
       "{} thread(s), best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes "
       "per particle (particle state, cached stencil, grid share)\n",
-      opt.dim, opt.scheme, basis, opt.mapping, r.particles, r.cells,
-      opt.dim == 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
-      r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
+      opt.dim, opt.scheme, opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis,
+      opt.mapping, r.particles, r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads,
+      opt.repeats, r.best_ns_per_particle_step, r.median_ns_per_particle_step,
+      r.bytes_per_particle);
   return 0;
 }
 
@@ -188,7 +189,7 @@ int main(int argc, char** argv) {
 
   mpm::BenchOptions bopt;
   auto* bench = app.add_subcommand("bench", "time the explicit step (ns per particle-step)");
-  bench->add_option("--dim", bopt.dim, "1: vibrating bar; 2: plate_mms_2d (neo-Hookean)")
+  bench->add_option("--dim", bopt.dim, "1: vibrating bar; 2: neo-Hookean plate (--problem)")
       ->check(CLI::IsMember({1, 2}))
       ->capture_default_str();
   bench->add_option("--particles", bopt.particles, "number of particles (about, in 2D)")
@@ -204,6 +205,13 @@ int main(int argc, char** argv) {
   bench->add_option("--basis", bopt.basis, "grid basis (mpm list)")->capture_default_str();
   bench->add_option("--degree", bopt.degree, "B-spline degree")->capture_default_str();
   bench->add_option("--mapping", bopt.mapping, "particle-to-grid mapping")->capture_default_str();
+  bench
+      ->add_option("--problem", bopt.problem,
+                   "2D problem: plate (plate_mms_2d, body force b(X, t)) or refkernel (the "
+                   "problem of /work/shared/tools/refkernel.cpp: padded unit square, no body "
+                   "force, dt = 1e-6 s)")
+      ->check(CLI::IsMember({"plate", "refkernel"}))
+      ->capture_default_str();
 
   mpm::ReconstructOptions ropt;
   auto* rec = app.add_subcommand(

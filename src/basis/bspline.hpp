@@ -29,8 +29,8 @@ namespace mpm {
 // and multiplies non-negative numbers and divides by knot differences >= 1, so no weight can
 // come out negative from round-off.
 template <int P>
-inline void bspline_span(Index c, double t, Index n, std::array<double, P + 1>& N,
-                         std::array<double, P + 1>& dN) {
+inline void bspline_span_recursion(Index c, double t, Index n, std::array<double, P + 1>& N,
+                                   std::array<double, P + 1>& dN) {
   static_assert(P >= 1, "degree 0 has no derivative");
   std::array<double, P + 1> left{}, right{};
   // ndu[r][j] (r <= j): value of function r of degree j on this span (upper triangle);
@@ -60,6 +60,50 @@ inline void bspline_span(Index c, double t, Index n, std::array<double, P + 1>& 
     if (r <= P - 1) d -= ndu[r][P - 1] / ndu[P][r];
     dN[r] = static_cast<double>(P) * d;
   }
+}
+
+// Spans whose P knots on either side are all distinct, c in [P - 1, n - P]: there the knots are
+// uniform (spacing 1 in cell units) and the B-splines are the translates of the cardinal
+// B-spline, polynomials in t with constant coefficients (de Boor, A Practical Guide to Splines,
+// IX; the uniform quadratic and cubic weights of 001 eq. 4-5 and Steffen et al. 2008). Degrees 2
+// and 3 have them here; other degrees and the end spans of the open knot vector use the
+// recursion. They equal the recursion up to round-off (tests/basis/test_bspline.cpp) and are
+// non-negative in floating point: every term below is a square, a cube or a sum of
+// non-negative numbers for t in [0, 1].
+template <int P>
+inline constexpr bool kBsplineClosedForm = P == 2 || P == 3;
+
+template <int P>
+inline void bspline_span_uniform(double t, std::array<double, P + 1>& N,
+                                 std::array<double, P + 1>& dN) {
+  static_assert(kBsplineClosedForm<P>);
+  const double s = 1.0 - t;  // distance to the span's upper knot
+  if constexpr (P == 2) {
+    // N = (s^2, 1 + 2 t s, t^2) / 2, dN/dt = (-s, s - t, t).
+    N = {0.5 * s * s, 0.5 + t * s, 0.5 * t * t};
+    dN = {-s, s - t, t};
+  } else {
+    // N_0 = s^3 / 6, N_1 = (4 - 6 t^2 + 3 t^3) / 6 = 2/3 - t^2 (1 - t/2), N_2 = N_1(s),
+    // N_3 = t^3 / 6; dN/dt = (-s^2 / 2, t (3 t / 2 - 2), -s (3 s / 2 - 2), t^2 / 2).
+    constexpr double kSixth = 1.0 / 6.0, kTwoThirds = 2.0 / 3.0;
+    N = {kSixth * s * s * s, kTwoThirds - t * t * (1.0 - 0.5 * t),
+         kTwoThirds - s * s * (1.0 - 0.5 * s), kSixth * t * t * t};
+    dN = {-0.5 * s * s, t * (1.5 * t - 2.0), -s * (1.5 * s - 2.0), 0.5 * t * t};
+  }
+}
+
+// The non-zero B-splines of degree P on span c (see bspline_span_recursion): the closed form on
+// uniform spans of degrees 2 and 3, the recursion elsewhere.
+template <int P>
+inline void bspline_span(Index c, double t, Index n, std::array<double, P + 1>& N,
+                         std::array<double, P + 1>& dN) {
+  if constexpr (kBsplineClosedForm<P>) {
+    if (c >= P - 1 && c <= n - P) {
+      bspline_span_uniform<P>(t, N, dN);
+      return;
+    }
+  }
+  bspline_span_recursion<P>(c, t, n, N, dN);
 }
 
 template <int Dim, int Degree>
@@ -116,6 +160,14 @@ class BSplineBasis {
     for (int d = 0; d < Dim; ++d) s.dof0 += first[d] * stride_[d];
   }
 
+  // The compact form from the position in cell units s = (x - origin) / h and the cell c
+  // (cell_of_scaled), which stages::evaluate_basis has already computed for its checks.
+  void evaluate_scaled(const Vec<Dim>& s, const IVec<Dim>& c, CachedStencilT& st) const {
+    factors_scaled(s, c, st.w, st.dw);
+    st.dof0 = 0;
+    for (int d = 0; d < Dim; ++d) st.dof0 += c[d] * stride_[d];
+  }
+
   // Basis at any point with grid().inside(x).
   void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     IVec<Dim> first;
@@ -129,15 +181,23 @@ class BSplineBasis {
   void factors(const Vec<Dim>& x, IVec<Dim>& first,
                std::array<std::array<double, Degree + 1>, Dim>& w,
                std::array<std::array<double, Degree + 1>, Dim>& dw) const {
+    Vec<Dim> s;
     for (int d = 0; d < Dim; ++d) {
-      // Same rounding as Grid::cell_of (upper end in the last span), so t = s - c lies in [0, 1]
-      // exactly, which keeps every left/right term in bspline_span non-negative.
-      const double s_d = (x[d] - grid_.origin[d]) / grid_.h[d];
-      const Index c = grid_.cell_of(x[d], d);
-      const double t = s_d - static_cast<double>(c);
-      bspline_span<Degree>(c, t, grid_.cells[d], w[d], dw[d]);
+      s[d] = (x[d] - grid_.origin[d]) / grid_.h[d];
+      first[d] = cell_of_scaled(s[d], grid_.cells[d]);  // span c supports functions c .. c + p
+    }
+    factors_scaled(s, first, w, dw);
+  }
+  // The same from s = (x - origin) / h and the span c = cell_of_scaled(s): t = s - c lies in
+  // [0, 1] exactly (Grid::cell_of's rounding, upper end in the last span), which keeps every
+  // left/right term in bspline_span_recursion non-negative.
+  void factors_scaled(const Vec<Dim>& s, const IVec<Dim>& c,
+                      std::array<std::array<double, Degree + 1>, Dim>& w,
+                      std::array<std::array<double, Degree + 1>, Dim>& dw) const {
+    for (int d = 0; d < Dim; ++d) {
+      const double t = s[d] - static_cast<double>(c[d]);
+      bspline_span<Degree>(c[d], t, grid_.cells[d], w[d], dw[d]);
       for (double& v : dw[d]) v *= inv_h_[d];  // d/dx = (1/h) d/dt [1/m]
-      first[d] = c;  // span c (0-based) supports functions c .. c + Degree
     }
   }
 

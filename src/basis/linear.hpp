@@ -47,6 +47,14 @@ class LinearBasis {
     for (int d = 0; d < Dim; ++d) s.dof0 += first[d] * stride_[d];
   }
 
+  // The compact form from the position in cell units s = (x - origin) / h and the cell c
+  // (cell_of_scaled), which stages::evaluate_basis has already computed for its checks.
+  void evaluate_scaled(const Vec<Dim>& s, const IVec<Dim>& c, CachedStencilT& st) const {
+    factors_scaled(s, c, st.w, st.dw);
+    st.dof0 = 0;
+    for (int d = 0; d < Dim; ++d) st.dof0 += c[d] * stride_[d];
+  }
+
   // The basis at any point inside the grid (tractions, quadrature points).
   void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     IVec<Dim> first;
@@ -59,13 +67,20 @@ class LinearBasis {
   // The 1D factors at x: the first node per direction, values and derivatives [1/m].
   void factors(const Vec<Dim>& x, IVec<Dim>& first, std::array<std::array<double, 2>, Dim>& w,
                std::array<std::array<double, 2>, Dim>& dw) const {
+    Vec<Dim> s;
     for (int d = 0; d < Dim; ++d) {
-      // Same rounding as Grid::cell_of, so xi = s - c lies in [0, 1] exactly (no negative
-      // weights from round-off at the nodes).
-      const double s_d = (x[d] - grid_.origin[d]) / grid_.h[d];
-      const Index c = grid_.cell_of(x[d], d);
-      const double xi = s_d - static_cast<double>(c);
-      first[d] = c;
+      s[d] = (x[d] - grid_.origin[d]) / grid_.h[d];
+      first[d] = cell_of_scaled(s[d], grid_.cells[d]);
+    }
+    factors_scaled(s, first, w, dw);
+  }
+  // The same from s = (x - origin) / h and the cell c = cell_of_scaled(s): xi = s - c lies in
+  // [0, 1] exactly (Grid::cell_of's rounding), so no weight is negative from round-off.
+  void factors_scaled(const Vec<Dim>& s, const IVec<Dim>& c,
+                      std::array<std::array<double, 2>, Dim>& w,
+                      std::array<std::array<double, 2>, Dim>& dw) const {
+    for (int d = 0; d < Dim; ++d) {
+      const double xi = s[d] - static_cast<double>(c[d]);
       w[d] = {1.0 - xi, xi};
       dw[d] = {-inv_h_[d], inv_h_[d]};
     }

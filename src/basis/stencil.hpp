@@ -50,6 +50,15 @@ inline void tensor_product(const IVec<Dim>& first, const std::array<std::array<d
   }
 }
 
+// Grid::cell_of from the position in cell units s = (x - origin) / h, already computed, of a
+// point inside the grid (s in [0, cells]): the same cell (the upper end belongs to the last
+// cell) without a second division.
+// s >= 0, so truncation is the floor (and needs no libm call without SSE4.1).
+inline Index cell_of_scaled(double s, Index cells) {
+  const auto c = static_cast<Index>(s);
+  return c < cells ? c : cells - 1;
+}
+
 // The compact cached form of a tensor-product stencil (linear, B-spline bases): the first DOF
 // and the K 1D values and derivatives per direction, expanded on use by for_each_entry. The
 // expansion forms the same products in the same order as tensor_product, so every value and

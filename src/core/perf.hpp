@@ -17,6 +17,9 @@ struct BenchOptions {
   std::string basis = "linear";
   int degree = 2;
   std::string mapping = "direct";
+  // 2D problem: "plate" (plate_mms_2d) or "refkernel" (the problem of the yardstick
+  // /work/shared/tools/refkernel.cpp through the custom benchmark).
+  std::string problem = "plate";
 };
 
 struct BenchResult {
@@ -33,9 +36,12 @@ struct BenchResult {
 // lumped mass.
 BenchResult bench_1d(const BenchOptions& opt);
 
-// 2D manufactured-solution plate (plate_mms_2d: neo-Hookean, E = 1e7 Pa, nu = 0.3, rho = 1000
-// kg/m^3, amplitude 1e-3 m), about `particles` particles, per_cell per direction, dt = 0.1 h / c
-// with the P-wave speed c, lumped mass.
+// 2D, about `particles` particles, per_cell per direction, neo-Hookean (E = 1e7 Pa, nu = 0.3,
+// rho = 1000 kg/m^3), lumped mass. problem "plate": the manufactured-solution plate
+// (plate_mms_2d, amplitude 1e-3 m, rollers, its body force b(X, t) evaluated every step),
+// dt = 0.1 h / c with the P-wave speed c. problem "refkernel": the yardstick's problem, the
+// unit square body in a grid padded by two cells per side, v = (0.1 sin(2 pi x),
+// -0.1 sin(2 pi y)) m/s, no body force, free sides, dt = 1e-6 s.
 BenchResult bench_2d(const BenchOptions& opt);
 
 }  // namespace mpm

@@ -47,6 +47,10 @@ struct DirectMapping {
     // Forces use a buffer of their own when momentum is summed in the same pass.
     const ScatterTarget<V> ft{Q ? sc.vector2 : sc.vector, sim.nodes.force, V::Zero()};
     const None no;
+    // The particle sums of the conservation checks are taken in this pass (ChunkSums: the
+    // bits of a pass of their own).
+    if constexpr (M) sc.particle_mass.reset(0.0);
+    if constexpr (Q) sc.particle_momentum.reset(ScatterBuffers<Sim::kDim>::MomentumSums::Zero());
     if constexpr (M && Q && F) {
       scatter_fused(
           r,
@@ -76,6 +80,8 @@ struct DirectMapping {
       scatter_fused(
           r, [&](Index p, const auto& f) { add<What>(sim, dt, p, no, no, f); }, ft);
     }
+    if constexpr (M) sc.has_particle_mass = true;
+    if constexpr (Q) sc.has_particle_momentum = true;
     if constexpr (M) {
       if (sim.mass_type != MassType::Consistent) return;
       // The triplet list is one shared structure and the consistent mass is rarely used: serial.
@@ -121,6 +127,13 @@ struct DirectMapping {
       mb = P.mass[i] * P.body[i];
       sigma = &P.stress[i];
       Vp = P.volume[i];
+    }
+    if constexpr ((What & kMass) != 0) sim.scatter.particle_mass[m.chunk] += mp;
+    if constexpr ((What & kMomentum) != 0) {  // as stages::detail::after_momentum
+      typename ScatterBuffers<Sim::kDim>::MomentumSums r;
+      r.template head<Sim::kDim>() = mv;
+      r[Sim::kDim] = P.mass[i] * P.v[i].norm();
+      sim.scatter.particle_momentum[q.chunk] += r;
     }
     for_each_entry(sim.stencils[i], sim.dof_stride, [&](Index dof, double w, const V& grad) {
       if constexpr ((What & kMass) != 0) m[dof] += w * mp;

@@ -111,6 +111,7 @@ class GridAccumulator {
   struct Slice {
     T* data;
     Index lo;
+    int chunk;  // the particle chunk it belongs to (for per-chunk particle sums)
     T& operator[](Index dof) const { return data[dof - lo]; }
   };
 
@@ -136,7 +137,7 @@ class GridAccumulator {
     const auto cc = static_cast<std::size_t>(c);
     T* data = buf_.data() + offset_[cc];
     std::fill(data, data + (r.hi[cc] - r.lo[cc] + 1), zero);
-    return {data, r.lo[cc]};
+    return {data, r.lo[cc], c};
   }
   // out[b, e) = the sum of the slices over those DOFs, in chunk order.
   void reduce(std::vector<T>& out, const T& zero, const ChunkDofRanges& r, Index b, Index e) const {
@@ -202,6 +203,30 @@ void GridAccumulator<T>::scatter(std::vector<T>& out, const T& zero, const Chunk
   scatter_fused(r, f, ScatterTarget<T>{*this, out, zero});
 }
 
+// Per-chunk partial sums of a particle quantity taken inside a scatter (the chunk's particles in
+// order), combined in chunk order: the bits of deterministic_sum over the same particles, without
+// a pass of its own. One cache line per chunk, so threads do not share lines.
+template <class T>
+class ChunkSums {
+ public:
+  void reset(const T& zero) {
+    for (auto& p : part_) p.value = zero;
+  }
+  T& operator[](int chunk) { return part_[static_cast<std::size_t>(chunk)].value; }
+  T total(Index n, const T& zero) const {
+    T t = zero;
+    for (int c = 0; c < ParticleChunks::count(n); ++c)
+      t += part_[static_cast<std::size_t>(c)].value;
+    return t;
+  }
+
+ private:
+  struct alignas(64) Part {
+    T value;
+  };
+  std::array<Part, ParticleChunks::kMax> part_;
+};
+
 // The scatter state a simulation keeps between steps: chunk ranges and buffers.
 template <int Dim>
 struct ScatterBuffers {
@@ -209,6 +234,14 @@ struct ScatterBuffers {
   GridAccumulator<double> scalar;
   GridAccumulator<Vec<Dim>> vector;
   GridAccumulator<Vec<Dim>> vector2;  // the second vector sum of a fused scatter
+  // The particle sums of the conservation checks (stages::detail::after_mass, after_momentum),
+  // taken by a mapping's scatter when it reads the same particle data: sum m_p, and
+  // (sum m_p v_p, sum m_p |v_p|). `has_*`: set by the scatter, cleared by the check that uses it.
+  using MomentumSums = Eigen::Matrix<double, Dim + 1, 1>;
+  ChunkSums<double> particle_mass;
+  ChunkSums<MomentumSums> particle_momentum;
+  bool has_particle_mass = false;
+  bool has_particle_momentum = false;
 };
 
 }  // namespace mpm

@@ -46,6 +46,13 @@ void evaluate_basis(Sim& sim) {
   constexpr bool kHasDomain = requires {
     basis.fits(P, Index{0});
   };
+  constexpr int Dim = Sim::kDim;
+  // Tensor-product bases take the position in cell units computed here for the checks (one
+  // division per direction instead of three: inside, cell index, basis).
+  constexpr bool kScaled = requires(const Vec<Dim>& s, const IVec<Dim>& c) {
+    basis.evaluate_scaled(s, c, sim.stencils[0]);
+  };
+  const auto& g = sim.grid;
   // Per chunk: flags, crossings and the DOF range of the new stencils (recorded here, while
   // the stencils are in cache, for the scatters of DirectMapping).
   constexpr std::size_t K = ParticleChunks::kMax;
@@ -57,21 +64,51 @@ void evaluate_basis(Sim& sim) {
     Index lo = std::numeric_limits<Index>::max(), hi = -1;
     for (Index p = b; p < e; ++p) {
       const auto i = static_cast<std::size_t>(p);
-      if (!sim.grid.inside(P.x[i])) {
-        chunk_outside[ck] = 1;
-        continue;
-      }
-      if constexpr (kHasDomain) {
-        if (!basis.fits(P, p)) {
-          chunk_unfit[ck] = 1;
+      auto& s = sim.stencils[i];
+      Index c = 0;
+      if constexpr (kScaled) {
+        // Grid::inside and Grid::cell_index from s = (x - origin) / h: inside iff s is in
+        // [0, cells] in every direction (NaN fails), cell_of_scaled is Grid::cell_of there.
+        Vec<Dim> sx;
+        IVec<Dim> cx;
+        bool in = true;
+        Index stride = 1;
+        for (int d = 0; d < Dim; ++d) {
+          sx[d] = (P.x[i][d] - g.origin[d]) / g.h[d];
+          in = in && sx[d] >= 0.0 && sx[d] <= static_cast<double>(g.cells[d]);
+        }
+        if (!in) {
+          chunk_outside[ck] = 1;
           continue;
         }
+        if constexpr (kHasDomain) {
+          if (!basis.fits(P, p)) {
+            chunk_unfit[ck] = 1;
+            continue;
+          }
+        }
+        for (int d = 0; d < Dim; ++d) {
+          cx[d] = cell_of_scaled(sx[d], g.cells[d]);
+          c += cx[d] * stride;
+          stride *= g.cells[d];
+        }
+        basis.evaluate_scaled(sx, cx, s);
+      } else {
+        if (!g.inside(P.x[i])) {
+          chunk_outside[ck] = 1;
+          continue;
+        }
+        if constexpr (kHasDomain) {
+          if (!basis.fits(P, p)) {
+            chunk_unfit[ck] = 1;
+            continue;
+          }
+        }
+        c = g.cell_index(P.x[i]);
+        basis.evaluate(P, p, s);
       }
-      const Index c = sim.grid.cell_index(P.x[i]);
       if (sim.cell[i] >= 0 && c != sim.cell[i]) ++chunk_crossings[ck];
       sim.cell[i] = c;
-      auto& s = sim.stencils[i];
-      basis.evaluate(P, p, s);
       const auto [sl, sh] = dof_bounds(s, sim.dof_stride);
       lo = std::min(lo, sl);
       hi = std::max(hi, sh);
@@ -128,8 +165,14 @@ void after_mass(Sim& sim) {
   const double total = deterministic_sum(static_cast<Index>(m.size()), 0.0,
                                          [&](Index i) { return m[static_cast<std::size_t>(i)]; });
   const double largest = m.empty() ? 0.0 : *std::max_element(m.begin(), m.end());
-  const double particle_mass = deterministic_sum(
-      static_cast<Index>(mp.size()), 0.0, [&](Index p) { return mp[static_cast<std::size_t>(p)]; });
+  // sum m_p: taken by the mapping's scatter when it has one (the same bits), else a pass here.
+  auto& sc = sim.scatter;
+  const double particle_mass =
+      sc.has_particle_mass ? sc.particle_mass.total(static_cast<Index>(mp.size()), 0.0)
+                           : deterministic_sum(static_cast<Index>(mp.size()), 0.0, [&](Index p) {
+                               return mp[static_cast<std::size_t>(p)];
+                             });
+  sc.has_particle_mass = false;
   if (particle_mass > 0.0) {
     sim.diag.rel_mass_error = std::abs(total - particle_mass) / particle_mass;
     sim.diag.max_rel_mass_error = std::max(sim.diag.max_rel_mass_error, sim.diag.rel_mass_error);
@@ -172,16 +215,21 @@ void after_momentum(Sim& sim) {
   const Vec<Dim> grid_p =
       deterministic_sum(static_cast<Index>(q.size()), Vec<Dim>::Zero().eval(),
                         [&](Index i) { return q[static_cast<std::size_t>(i)]; });
-  // One pass over the particles: (sum m_p v_p, sum m_p |v_p|) as one vector.
+  // (sum m_p v_p, sum m_p |v_p|) as one vector: taken by the mapping's scatter when it has one
+  // (the same bits), else one pass over the particles here.
   using Sums = Eigen::Matrix<double, Dim + 1, 1>;
   const auto& P = sim.particles;
-  const Sums sums = deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
-    const auto i = static_cast<std::size_t>(p);
-    Sums r;
-    r.template head<Dim>() = P.mass[i] * P.v[i];
-    r[Dim] = P.mass[i] * P.v[i].norm();
-    return r;
-  });
+  auto& sc = sim.scatter;
+  const Sums sums = sc.has_particle_momentum
+                        ? sc.particle_momentum.total(P.size(), Sums::Zero().eval())
+                        : deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
+                            const auto i = static_cast<std::size_t>(p);
+                            Sums r;
+                            r.template head<Dim>() = P.mass[i] * P.v[i];
+                            r[Dim] = P.mass[i] * P.v[i].norm();
+                            return r;
+                          });
+  sc.has_particle_momentum = false;
   const Vec<Dim> part_p = sums.template head<Dim>();
   const double scale = sums[Dim];
   if (scale > 0.0) {

@@ -197,6 +197,55 @@ TYPED_TEST(BSplineSpanTest, ContinuityAtInteriorKnots) {
   }
 }
 
+// The closed-form weights of the uniform spans (degrees 2 and 3, bspline_span_uniform) against
+// the general recursion: values and derivatives to round-off, partition of unity, zero
+// derivative sum and non-negativity, on a dense set of t in [0, 1] including the knots. The
+// uniform spans are c in [p - 1, n - p]; bspline_span uses the closed form exactly there.
+TYPED_TEST(BSplineSpanTest, ClosedFormEqualsRecursionOnUniformSpans) {
+  constexpr int P = TypeParam::value;
+  if constexpr (kBsplineClosedForm<P>) {
+    constexpr double kEps = std::numeric_limits<double>::epsilon();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    std::vector<double> ts = {0.0, 1.0, 0.5, 0.25, 0.75, kEps, 1.0 - kEps};
+    for (int k = 0; k < 1000; ++k) ts.push_back(uni(rng));
+    for (Index n : {2 * P - 1, 2 * P, 9, 100}) {
+      for (Index c = P - 1; c <= n - P; ++c) {
+        for (double t : ts) {
+          std::array<double, P + 1> w, dw, wr, dr;
+          bspline_span_uniform<P>(t, w, dw);
+          bspline_span_recursion<P>(c, t, n, wr, dr);
+          double sum = 0.0, dsum = 0.0;
+          for (int r = 0; r <= P; ++r) {
+            // Values are at most 1 and derivatives at most p (1/cell): a few ulp of that.
+            EXPECT_NEAR(w[r], wr[r], 4 * kEps) << "n " << n << " c " << c << " t " << t;
+            EXPECT_NEAR(dw[r], dr[r], 4 * P * kEps) << "n " << n << " c " << c << " t " << t;
+            EXPECT_GE(w[r], 0.0);
+            sum += w[r];
+            dsum += dw[r];
+          }
+          EXPECT_NEAR(sum, 1.0, 4 * kEps);
+          EXPECT_NEAR(dsum, 0.0, 4 * P * kEps);
+          // The dispatcher picks the closed form on these spans.
+          std::array<double, P + 1> wd, dd;
+          bspline_span<P>(c, t, n, wd, dd);
+          EXPECT_EQ(wd, w);
+          EXPECT_EQ(dd, dw);
+        }
+      }
+      // The end spans keep the recursion (their knots repeat).
+      for (Index c : {Index{0}, n - 1}) {
+        if (c >= P - 1 && c <= n - P) continue;
+        std::array<double, P + 1> wd, dd, wr, dr;
+        bspline_span<P>(c, 0.3, n, wd, dd);
+        bspline_span_recursion<P>(c, 0.3, n, wr, dr);
+        EXPECT_EQ(wd, wr);
+        EXPECT_EQ(dd, dr);
+      }
+    }
+  }
+}
+
 // Open knot vector: interpolatory at the ends (D 3.1.1). On a side only the functions with
 // first / last index in that direction are non-zero, their values summing to 1; in 1D the end
 // function is exactly 1 and all others exactly 0. These are the boundary DOFs.

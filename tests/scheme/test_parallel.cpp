@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <memory>
@@ -143,6 +144,46 @@ TEST(Parallel, BitwiseStateUsf) {
 }
 TEST(Parallel, BitwiseStateUsavg) {
   expect_same_state<Usavg>();
+}
+
+// The particle sums of the conservation checks, taken inside the direct mapping's scatters
+// (ScatterBuffers::particle_mass, particle_momentum), give the bits of the separate
+// deterministic_sum passes they replace. After a MUSL or USAVG step the latest mapping is the
+// momentum remap from the final particle velocities, so both errors can be recomputed from the
+// final state. Two threads, so the chunk sums come from both.
+template <class Scheme>
+void expect_fused_sums_as_separate_passes() {
+  const auto ps = run_plate<Scheme>(2);
+  const PlateSim& sim = *ps;
+  const auto& P = sim.particles;
+  const auto mp = [&](Index p) { return P.mass[static_cast<std::size_t>(p)]; };
+  const double particle_mass = deterministic_sum(P.size(), 0.0, mp);
+  const auto& m = sim.nodes.mass;
+  const double grid_mass = deterministic_sum(
+      static_cast<Index>(m.size()), 0.0, [&](Index i) { return m[static_cast<std::size_t>(i)]; });
+  EXPECT_EQ(sim.diag.rel_mass_error, std::abs(grid_mass - particle_mass) / particle_mass);
+  using Sums = Eigen::Matrix<double, 3, 1>;
+  const Sums sums = deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
+    const auto i = static_cast<std::size_t>(p);
+    Sums r;
+    r.head<2>() = P.mass[i] * P.v[i];
+    r[2] = P.mass[i] * P.v[i].norm();
+    return r;
+  });
+  const auto& q = sim.nodes.momentum;
+  const Vec<2> grid_p = deterministic_sum(static_cast<Index>(q.size()), Vec<2>::Zero().eval(),
+                                          [&](Index i) { return q[static_cast<std::size_t>(i)]; });
+  const Vec<2> part_p = sums.head<2>();
+  EXPECT_EQ(sim.diag.rel_momentum_error, (grid_p - part_p).norm() / sums[2]);
+  EXPECT_FALSE(sim.scatter.has_particle_mass);  // consumed by the checks
+  EXPECT_FALSE(sim.scatter.has_particle_momentum);
+}
+
+TEST(Parallel, FusedConservationSumsMusl) {
+  expect_fused_sums_as_separate_passes<Musl>();
+}
+TEST(Parallel, FusedConservationSumsUsavg) {
+  expect_fused_sums_as_separate_passes<Usavg>();
 }
 
 // A stencil of three DOFs, with the DOF bounds ChunkDofRanges::scan reads (found by ADL; the

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/perf.hpp"
 #include "core/run.hpp"
 #include "core/variants.hpp"
 #include "io/config.hpp"
@@ -157,6 +158,30 @@ TEST(Plate2D, UnavailableCombinationsAreInputErrors) {
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("material.model"), std::string::npos) << e.what();
+  }
+}
+
+// `mpm bench --dim 2 --problem refkernel`: the yardstick's problem (n x n cells of the unit
+// square, 3 x 3 particles per cell) runs through the normal step with every quadratic B-spline
+// span interior (two padding cells per side), for one and two threads; the plate stays the
+// default problem.
+TEST(Plate2D, BenchRunsTheRefkernelProblem) {
+  BenchOptions opt;
+  opt.dim = 2;
+  opt.particles = 2000;
+  opt.steps = 2;
+  opt.repeats = 1;
+  opt.basis = "bspline";
+  opt.degree = 2;
+  EXPECT_EQ(opt.problem, "plate");
+  opt.problem = "refkernel";
+  for (int threads : {1, 2}) {
+    opt.threads = threads;
+    const BenchResult r = bench_2d(opt);
+    EXPECT_EQ(r.cells, 15);
+    EXPECT_EQ(r.particles, 15 * 15 * 9);
+    EXPECT_EQ(r.steps, 2);
+    EXPECT_GT(r.best_ns_per_particle_step, 0.0);
   }
 }
 
