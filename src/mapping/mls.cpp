@@ -89,23 +89,44 @@ double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, i
   // 001 eq. 10, A = sum_p w_p q_p q_p^T: only the lower triangle, the part the symmetric
   // eigensolver reads. Each entry is summed as (w q_i) q_j in point order, the rounding of the
   // full outer-product update it replaces, so the bits are unchanged at half the work.
-  // The sums are held in local scalars (registers) rather than in A, whose address escapes to
-  // the solver and which the compiler therefore updated in memory for every point.
-  constexpr int kDegree = M == Dim + 1 ? 1 : 2;  // M = mls_terms(Dim, degree)
-  double acc[M * (M + 1) / 2] = {};              // column by column: (0,0), (1,0), .., (1,1), ..
-  for (std::size_t k = 0; k < s.size(); ++k) {
-    double qk[M];
-    monomials<Dim>(s[k], kDegree, qk);
-    double wq[M];
-    for (int i = 0; i < M; ++i) wq[i] = w[k] * qk[i];
-    int l = 0;
-    for (int j = 0; j < M; ++j)
-      for (int i = j; i < M; ++i) acc[l++] += wq[i] * qk[j];
-  }
   Mat A = Mat::Zero();
-  for (int j = 0, l = 0; j < M; ++j)
-    for (int i = j; i < M; ++i) A(i, j) = acc[l++];
   Vec q = Vec::Zero();
+  constexpr bool kLinear = M == Dim + 1;  // degree 1: q = (1, s_0 .. s_{D-1})
+  if constexpr (kLinear) {
+    // Written out in scalars: the generic loop below kept A and q on the stack and reloaded
+    // them as 16-byte pairs right after 8-byte stores (store-forwarding stalls, most of the
+    // row's time). Entry (i, j) of the lower triangle is (w q_i) q_j summed in point order,
+    // the rounding of the generic loop (1 * x = x exactly), so the bits are unchanged.
+    double a[M * (M + 1) / 2] = {};  // (0,0), (1,0), .., (M-1,0), (1,1), (2,1), .., (M-1,M-1)
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const double wk = w[k];
+      if constexpr (Dim == 1) {
+        const double ws = wk * s[k][0];
+        a[0] += wk;
+        a[1] += ws;
+        a[2] += ws * s[k][0];
+      } else {
+        const double s0 = s[k][0], s1 = s[k][1];
+        const double ws0 = wk * s0, ws1 = wk * s1;
+        a[0] += wk;
+        a[1] += ws0;
+        a[2] += ws1;
+        a[3] += ws0 * s0;
+        a[4] += ws1 * s0;
+        a[5] += ws1 * s1;
+      }
+    }
+    for (int j = 0, l = 0; j < M; ++j)
+      for (int i = j; i < M; ++i) A(i, j) = a[l++];
+  } else {
+    // 001 eq. 10, A = sum_p w_p q_p q_p^T: the lower triangle, the part the eigensolver reads.
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      monomials<Dim>(s[k], degree, q.data());
+      const Vec wq = w[k] * q;
+      for (int j = 0; j < M; ++j)
+        for (int i = j; i < M; ++i) A(i, j) += wq[i] * q[j];
+    }
+  }
   Eigen::SelfAdjointEigenSolver<Mat> es;
   es.compute(A);                     // iterative: computeDirect loses ~1e-12 on 3x3 here
   const Vec lam = es.eigenvalues();  // ascending
@@ -114,9 +135,19 @@ double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, i
   // c = A^{-1} e_1 = V diag(1 / lambda) V^T e_1.
   Vec c = Vec::Zero();
   for (int j = 0; j < M; ++j) c += (V(0, j) / lam[j]) * V.col(j);
-  for (std::size_t k = 0; k < s.size(); ++k) {
-    monomials<Dim>(s[k], degree, q.data());
-    phi[k] = w[k] * q.dot(c);
+  if constexpr (kLinear) {
+    // q.dot(c) in Eigen's order for these sizes, (q_0 c_0 + q_1 c_1) + q_2 c_2, with q_0 = 1.
+    const double c0 = c[0], c1 = c[1], c2 = Dim == 2 ? c[M - 1] : 0.0;
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      double v = c0 + s[k][0] * c1;
+      if constexpr (Dim == 2) v += s[k][1] * c2;
+      phi[k] = w[k] * v;
+    }
+  } else {
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      monomials<Dim>(s[k], degree, q.data());
+      phi[k] = w[k] * q.dot(c);
+    }
   }
   return lam[M - 1] / lam[0];
 }
