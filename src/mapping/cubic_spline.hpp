@@ -184,7 +184,7 @@ class CubicSplineMapping {
     const auto& P = sim.particles;
     spline_.fit([&](std::size_t i) { return P.density[i]; });
     rho_g_.resize(samples_.size());
-    for (std::size_t g = 0; g < samples_.size(); ++g) rho_g_[g] = spline_.evaluate(samples_[g]);
+    at_points([&](std::size_t g, double v) { rho_g_[g] = v; });
     assemble_mass(sim, q, rho_g_);
   }
 
@@ -196,7 +196,7 @@ class CubicSplineMapping {
     const auto& P = sim.particles;
     spline_.fit([&](std::size_t i) { return P.density[i] * P.v[i][0]; });
     vec_g_.resize(samples_.size());
-    for (std::size_t g = 0; g < samples_.size(); ++g) vec_g_[g][0] = spline_.evaluate(samples_[g]);
+    at_points([&](std::size_t g, double v) { vec_g_[g][0] = v; });
     assemble_momentum(sim, q, vec_g_);
   }
 
@@ -210,14 +210,24 @@ class CubicSplineMapping {
     const std::size_t ng = samples_.size();
     spline_.fit([&](std::size_t i) { return P.stress[i](0, 0); });
     sig_g_.resize(ng);
-    for (std::size_t g = 0; g < ng; ++g) sig_g_[g](0, 0) = spline_.evaluate(samples_[g]);
+    at_points([&](std::size_t g, double v) { sig_g_[g](0, 0) = v; });
     spline_.fit([&](std::size_t i) { return P.density[i] * P.body[i][0]; });
     vec_g_.resize(ng);
-    for (std::size_t g = 0; g < ng; ++g) vec_g_[g][0] = spline_.evaluate(samples_[g]);
+    at_points([&](std::size_t g, double v) { vec_g_[g][0] = v; });
     assemble_forces(sim, q, vec_g_, sig_g_);
   }
 
  private:
+  // store(g, z(x_g)) for the fitted spline at every quadrature point (independent: parallel).
+  // The fit itself, a tridiagonal (Thomas) solve along the knots, stays serial.
+  template <class Store>
+  void at_points(Store&& store) const {
+    parallel_for(static_cast<Index>(samples_.size()), [&](Index g) {
+      const auto gi = static_cast<std::size_t>(g);
+      store(gi, spline_.evaluate(samples_[gi]));
+    });
+  }
+
   // Knots from the particle positions; n Gauss points in each half of every element holding a
   // particle (D Fig. 3.4), ascending; the basis and the spline coefficients at them. The n-point
   // rule is exact for degree 2n - 1 on each half; rho_hat has knots at the particles inside the

@@ -41,6 +41,7 @@ MovingLeastSquares<Dim>::MovingLeastSquares(bool improved, int degree, double ma
   if (!(dilation > 0.0))
     throw InputError(fmt::format("method.mls_dilation = {}: must be > 0", dilation));
   terms_ = mls_terms(Dim, degree);
+  scratch_.resize(1);
 }
 
 template <int Dim>
@@ -85,11 +86,46 @@ double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, i
                  double singular, std::vector<double>& phi) {
   using Mat = Eigen::Matrix<double, M, M>;
   using Vec = Eigen::Matrix<double, M, 1>;
+  // 001 eq. 10, A = sum_p w_p q_p q_p^T: only the lower triangle, the part the symmetric
+  // eigensolver reads. Each entry is summed as (w q_i) q_j in point order, the rounding of the
+  // full outer-product update it replaces, so the bits are unchanged at half the work.
   Mat A = Mat::Zero();
   Vec q = Vec::Zero();
-  for (std::size_t k = 0; k < s.size(); ++k) {
-    monomials<Dim>(s[k], degree, q.data());
-    A.noalias() += w[k] * q * q.transpose();  // 001 eq. 10
+  constexpr bool kLinear = M == Dim + 1;  // degree 1: q = (1, s_0 .. s_{D-1})
+  if constexpr (kLinear) {
+    // Written out in scalars: the generic loop below kept A and q on the stack and reloaded
+    // them as 16-byte pairs right after 8-byte stores (store-forwarding stalls, most of the
+    // row's time). Entry (i, j) of the lower triangle is (w q_i) q_j summed in point order,
+    // the rounding of the generic loop (1 * x = x exactly), so the bits are unchanged.
+    double a[M * (M + 1) / 2] = {};  // (0,0), (1,0), .., (M-1,0), (1,1), (2,1), .., (M-1,M-1)
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const double wk = w[k];
+      if constexpr (Dim == 1) {
+        const double ws = wk * s[k][0];
+        a[0] += wk;
+        a[1] += ws;
+        a[2] += ws * s[k][0];
+      } else {
+        const double s0 = s[k][0], s1 = s[k][1];
+        const double ws0 = wk * s0, ws1 = wk * s1;
+        a[0] += wk;
+        a[1] += ws0;
+        a[2] += ws1;
+        a[3] += ws0 * s0;
+        a[4] += ws1 * s0;
+        a[5] += ws1 * s1;
+      }
+    }
+    for (int j = 0, l = 0; j < M; ++j)
+      for (int i = j; i < M; ++i) A(i, j) = a[l++];
+  } else {
+    // 001 eq. 10, A = sum_p w_p q_p q_p^T: the lower triangle, the part the eigensolver reads.
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      monomials<Dim>(s[k], degree, q.data());
+      const Vec wq = w[k] * q;
+      for (int j = 0; j < M; ++j)
+        for (int i = j; i < M; ++i) A(i, j) += wq[i] * q[j];
+    }
   }
   Eigen::SelfAdjointEigenSolver<Mat> es;
   es.compute(A);                     // iterative: computeDirect loses ~1e-12 on 3x3 here
@@ -99,20 +135,48 @@ double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, i
   // c = A^{-1} e_1 = V diag(1 / lambda) V^T e_1.
   Vec c = Vec::Zero();
   for (int j = 0; j < M; ++j) c += (V(0, j) / lam[j]) * V.col(j);
-  for (std::size_t k = 0; k < s.size(); ++k) {
-    monomials<Dim>(s[k], degree, q.data());
-    phi[k] = w[k] * q.dot(c);
+  if constexpr (kLinear) {
+    // q.dot(c) in Eigen's order for these sizes, (q_0 c_0 + q_1 c_1) + q_2 c_2, with q_0 = 1.
+    const double c0 = c[0], c1 = c[1], c2 = Dim == 2 ? c[M - 1] : 0.0;
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      double v = c0 + s[k][0] * c1;
+      if constexpr (Dim == 2) v += s[k][1] * c2;
+      phi[k] = w[k] * v;
+    }
+  } else {
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      monomials<Dim>(s[k], degree, q.data());
+      phi[k] = w[k] * q.dot(c);
+    }
   }
   return lam[M - 1] / lam[0];
+}
+
+// sum_k w_k a_k b_k for columns a, b of a row-major table with stride S, in four partial sums
+// (k mod 4) added as (s0 + s1) + (s2 + s3). A single running sum makes the IMLS row
+// latency-bound (one dependent add per point, ~4 cycles, for ~300 points and 9 sums per row);
+// the grouping changes only the rounding.
+inline double weighted_dot(const double* w, const double* a, const double* b, std::size_t n,
+                           std::size_t S) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  std::size_t k = 0;
+  for (; k + 4 <= n; k += 4) {
+    s0 += w[k] * a[S * k] * b[S * k];
+    s1 += w[k + 1] * a[S * (k + 1)] * b[S * (k + 1)];
+    s2 += w[k + 2] * a[S * (k + 2)] * b[S * (k + 2)];
+    s3 += w[k + 3] * a[S * (k + 3)] * b[S * (k + 3)];
+  }
+  for (; k < n; ++k) s0 += w[k] * a[S * k] * b[S * k];
+  return (s0 + s1) + (s2 + s3);
 }
 
 }  // namespace
 
 template <int Dim>
-void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight) {
-  near_.clear();
-  s_.clear();
-  w_.clear();
+void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight, Scratch& sc) const {
+  sc.near.clear();
+  sc.s.clear();
+  sc.w.clear();
   // Cells overlapping the support box [x - R, x + R] per direction (clamped to the grid).
   IVec<Dim> lo, hi;
   for (int d = 0; d < Dim; ++d) {
@@ -142,9 +206,9 @@ void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight) {
       double wp = 1.0;  // 001 eq. 16: tensor product of the 1D weights
       for (int d = 0; d < Dim; ++d) wp *= mls_weight(weight, dx[d], grid_.h[d], dilation_);
       if (!(wp > 0.0)) continue;
-      near_.push_back(p);
-      s_.push_back(dx.cwiseQuotient(grid_.h));
-      w_.push_back(wp);
+      sc.near.push_back(p);
+      sc.s.push_back(dx.cwiseQuotient(grid_.h));
+      sc.w.push_back(wp);
     }
     int d = 1;
     for (; d < Dim; ++d) {
@@ -158,61 +222,70 @@ void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight) {
 template <int Dim>
 void MovingLeastSquares<Dim>::add_row(const Vec<Dim>& x, MlsWeight weight, ShapeTable& t,
                                       bool widen) {
-  gather(x, weight);
-  if (near_.empty() && widen && weight == MlsWeight::Linear) {
-    gather(x, MlsWeight::QuadraticSpline);
-    if (!near_.empty()) ++report_.widened;
+  row(x, weight, widen, scratch_[0], t, report_);
+}
+
+template <int Dim>
+void MovingLeastSquares<Dim>::row(const Vec<Dim>& x, MlsWeight weight, bool widen, Scratch& sc,
+                                  ShapeTable& t, MlsReport& rep) const {
+  gather(x, weight, sc);
+  if (sc.near.empty() && widen && weight == MlsWeight::Linear) {
+    gather(x, MlsWeight::QuadraticSpline, sc);
+    if (!sc.near.empty()) ++rep.widened;
   }
-  ++report_.points;
-  const std::size_t n = near_.size();
+  ++rep.points;
+  const std::size_t n = sc.near.size();
   const std::size_t row = t.point.size();
   if (n == 0) {
-    ++report_.empty;
+    ++rep.empty;
     t.start.push_back(row);
     return;
   }
-  t.point.insert(t.point.end(), near_.begin(), near_.end());
+  t.point.insert(t.point.end(), sc.near.begin(), sc.near.end());
   t.phi.resize(row + n);
 
   if (improved_) {
-    imls_row(row, t);
+    imls_row(row, sc, t, rep);
     t.start.push_back(row + n);
     return;
   }
-  p_.resize(n);  // phi scratch
+  sc.p.resize(n);  // phi scratch
   constexpr int M1 = mls_terms(Dim, 1), M2 = mls_terms(Dim, 2);
-  const double cond = degree_ == 1 ? mls_shape<M1, Dim>(s_, w_, degree_, kSingular, p_)
-                                   : mls_shape<M2, Dim>(s_, w_, degree_, kSingular, p_);
-  if (cond > report_.max_condition) {
-    report_.max_condition = cond;
-    report_.worst_x = x[0];
-    report_.worst_y = Dim > 1 ? x[Dim - 1] : 0.0;
+  const double cond = degree_ == 1 ? mls_shape<M1, Dim>(sc.s, sc.w, degree_, kSingular, sc.p)
+                                   : mls_shape<M2, Dim>(sc.s, sc.w, degree_, kSingular, sc.p);
+  if (cond > rep.max_condition) {
+    rep.max_condition = cond;
+    rep.worst_x = x[0];
+    rep.worst_y = Dim > 1 ? x[Dim - 1] : 0.0;
   }
   if (!std::isfinite(cond)) {
-    ++report_.singular;
+    ++rep.singular;
     t.point.resize(row);
     t.phi.resize(row);
     t.start.push_back(row);
     return;
   }
-  if (cond > max_condition_) ++report_.ill_conditioned;
-  std::copy(p_.begin(), p_.begin() + static_cast<std::ptrdiff_t>(n),
+  if (cond > max_condition_) ++rep.ill_conditioned;
+  std::copy(sc.p.begin(), sc.p.begin() + static_cast<std::ptrdiff_t>(n),
             t.phi.begin() + static_cast<std::ptrdiff_t>(row));
   t.start.push_back(row + n);
 }
 
 // IMLS: Gram-Schmidt (modified, two passes) of the monomials q_i under <f, g> = sum w f g
-// (003 eq. 16); p_[S k + i] = p_i(s_k), px[i] = p_i(0), nrm[i] = <p_i, p_i>. Terms whose norm
+// (003 eq. 16); p[S k + i] = p_i(s_k), px[i] = p_i(0), nrm[i] = <p_i, p_i>. Terms whose norm
 // vanishes relative to <p_1, p_1> (eq. 17) or that the data resolve too poorly at x
 // (kMaxAmplification) are dropped, then phi_p = w_p sum_i p_i(x) p_i(x_p) / <p_i, p_i>
 // (eq. 11, 14).
 template <int Dim>
-void MovingLeastSquares<Dim>::imls_row(std::size_t row, ShapeTable& t) {
-  constexpr std::size_t S = kMaxTerms;  // stride of p_
-  const std::size_t n = near_.size();
+void MovingLeastSquares<Dim>::imls_row(std::size_t row, Scratch& sc, ShapeTable& t,
+                                       MlsReport& rep) const {
+  constexpr std::size_t S = kMaxTerms;  // stride of p
+  const std::size_t n = sc.near.size();
   const int m = terms_;
-  p_.resize(S * n);
-  for (std::size_t k = 0; k < n; ++k) monomials<Dim>(s_[k], degree_, &p_[S * k]);
+  const std::vector<double>& w = sc.w;
+  std::vector<double>& p = sc.p;
+  p.resize(S * n);
+  for (std::size_t k = 0; k < n; ++k) monomials<Dim>(sc.s[k], degree_, &p[S * k]);
   double px[S] = {}, nrm[S] = {};
   bool keep[S] = {};
   int kept = 0;
@@ -222,14 +295,11 @@ void MovingLeastSquares<Dim>::imls_row(std::size_t row, ShapeTable& t) {
     for (int pass = 0; pass < 2; ++pass)
       for (std::size_t j = 0; j < ii; ++j) {
         if (!keep[j]) continue;
-        double dot = 0.0;
-        for (std::size_t k = 0; k < n; ++k) dot += w_[k] * p_[S * k + ii] * p_[S * k + j];
-        const double c = dot / nrm[j];
-        for (std::size_t k = 0; k < n; ++k) p_[S * k + ii] -= c * p_[S * k + j];
+        const double c = weighted_dot(w.data(), &p[ii], &p[j], n, S) / nrm[j];
+        for (std::size_t k = 0; k < n; ++k) p[S * k + ii] -= c * p[S * k + j];
         px[ii] -= c * px[j];
       }
-    double nn = 0.0;
-    for (std::size_t k = 0; k < n; ++k) nn += w_[k] * p_[S * k + ii] * p_[S * k + ii];
+    const double nn = weighted_dot(w.data(), &p[ii], &p[ii], n, S);
     nrm[ii] = nn;
     // Dropped when it vanishes (eq. 17) or when it would amplify the data at x too much:
     // |p_i(x)| > kMaxAmplification rms(p_i), rms(p_i)^2 = <p_i, p_i> / <p_1, p_1>.
@@ -238,21 +308,24 @@ void MovingLeastSquares<Dim>::imls_row(std::size_t row, ShapeTable& t) {
                             px[ii] * px[ii] * nrm[0] <= kMaxAmplification * kMaxAmplification * nn;
     if (keep[ii]) ++kept;
   }
-  if (kept < m) ++report_.reduced;
+  if (kept < m) ++rep.reduced;
+  // a_i = p_i(x) / <p_i, p_i> once per row, not per point (a division per term and point).
+  double a[S] = {};
+  for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i)
+    if (keep[i]) a[i] = px[i] / nrm[i];
   for (std::size_t k = 0; k < n; ++k) {
-    double a = 0.0;
-    for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i)
-      if (keep[i]) a += px[i] * p_[S * k + i] / nrm[i];
-    t.phi[row + k] = w_[k] * a;
+    double v = 0.0;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) v += a[i] * p[S * k + i];
+    t.phi[row + k] = w[k] * v;
   }
 }
 
 template <int Dim>
 double MovingLeastSquares<Dim>::evaluate(const Vec<Dim>& x, MlsWeight weight,
                                          std::span<const double> f) {
-  scratch_.clear();
-  add_row(x, weight, scratch_);
-  return scratch_.apply(0, [&](std::size_t p) { return f[p]; });
+  scratch_table_.clear();
+  add_row(x, weight, scratch_table_);
+  return scratch_table_.apply(0, [&](std::size_t p) { return f[p]; });
 }
 
 template class MovingLeastSquares<1>;

@@ -25,6 +25,7 @@
 
 #include <Eigen/Dense>
 #include <any>
+#include <array>
 #include <cstddef>
 #include <span>
 #include <stdexcept>
@@ -105,6 +106,29 @@ struct ShapeTable {
   }
 };
 
+// The rows of many evaluation points computed in parallel (MovingLeastSquares::add_rows): the
+// rows are split into the fixed chunks of ParticleChunks over the row count (a function of the
+// count only, not of the threads), chunk c holding rows begin(rows, c, k) .. begin(rows, c + 1, k)
+// as local rows 0, 1, ... of its own table. Each chunk is computed by one thread with its own
+// scratch, so the tables are the same for any thread count and a row is bitwise the row
+// add_row gives.
+struct ShapeTables {
+  Index rows = 0;
+  std::vector<ShapeTable> chunk;
+
+  int chunks() const { return ParticleChunks::count(rows); }
+  // f(r, table, local row) for every row r, chunks in parallel (f must only write row r's
+  // results).
+  template <class F>
+  void for_each_row(F&& f) const {
+    for_each_chunk(rows, [&](int c, Index b, Index e) {
+      const ShapeTable& t = chunk[static_cast<std::size_t>(c)];
+      for (Index r = b; r < e; ++r)
+        f(static_cast<std::size_t>(r), t, static_cast<std::size_t>(r - b));
+    });
+  }
+};
+
 template <int Dim = 1>
 class MovingLeastSquares {
   static_assert(Dim == 1 || Dim == 2, "MLS is implemented in 1D and 2D");
@@ -152,6 +176,33 @@ class MovingLeastSquares {
   void add_row(double x, MlsWeight weight, ShapeTable& t, bool widen = false) requires(Dim == 1) {
     add_row(Vec<1>(x), weight, t, widen);
   }
+  // The rows of n points x_of(0) .. x_of(n - 1) (x_of(i) -> Vec<Dim>, called concurrently) into
+  // t, chunks in parallel (ShapeTables); the report counts them as n add_row calls in order.
+  template <class XOf>
+  void add_rows(Index n, XOf&& x_of, MlsWeight weight, ShapeTables& t, bool widen = false) {
+    const int k = ParticleChunks::count(n);
+    const auto ks = static_cast<std::size_t>(k);
+    t.rows = n;
+    if (t.chunk.size() < ks) t.chunk.resize(ks);
+    if (scratch_.size() < ks) scratch_.resize(ks);
+    std::array<MlsReport, ParticleChunks::kMax> rep{};
+    const double per_row = expected_row_length(weight);
+    for_each_chunk(n, [&](int c, Index b, Index e) {
+      const auto cc = static_cast<std::size_t>(c);
+      ShapeTable& tc = t.chunk[cc];
+      tc.clear();
+      // Capacity for the expected entries (+10 %) at once: growing a table of tens of MB by
+      // doubling copied and page-faulted it several times in the first step of every run.
+      const auto rows = static_cast<std::size_t>(e - b);
+      tc.start.reserve(rows + 1);
+      tc.point.reserve(static_cast<std::size_t>(1.1 * per_row * static_cast<double>(rows)));
+      tc.phi.reserve(tc.point.capacity());
+      for (Index i = b; i < e; ++i) row(x_of(i), weight, widen, scratch_[cc], tc, rep[cc]);
+    });
+    // Chunk order: counts add exactly, and the first largest condition number wins as in a
+    // serial loop (accumulate keeps the earlier one on ties).
+    for (std::size_t c = 0; c < ks; ++c) accumulate(report_, rep[c]);
+  }
   // The reconstruction of the data f (one value per point of set_points) at x.
   double evaluate(const Vec<Dim>& x, MlsWeight weight, std::span<const double> f);
   double evaluate(double x, MlsWeight weight, std::span<const double> f) requires(Dim == 1) {
@@ -169,9 +220,33 @@ class MovingLeastSquares {
   void reset_report() { report_ = {}; }
 
  private:
-  void bin(const Grid<Dim>& g);                      // x_ into bins_
-  void gather(const Vec<Dim>& x, MlsWeight weight);  // near_, s_, w_
-  void imls_row(std::size_t row, ShapeTable& t);
+  // Scratch of one evaluation point (no allocation once the capacity is reached); one per chunk
+  // of add_rows, so that chunks can run concurrently.
+  struct Scratch {
+    std::vector<Index> near;
+    std::vector<Vec<Dim>> s;  // (x_p - x) / l per direction
+    std::vector<double> w;
+    std::vector<double> p;  // p[kMaxTerms k + i]: monomial / orthogonal p_i at point k
+  };
+
+  // Points in the support of a weight centred in the body: the mean points per occupied cell
+  // times the support area in cells, (2 R / l)^Dim (a capacity hint, no effect on results).
+  double expected_row_length(MlsWeight weight) const {
+    Index occupied = 0;
+    for (Index e = 0; e < grid_.num_cells(); ++e) occupied += bins_.count(e) > 0 ? 1 : 0;
+    double cells = 1.0;
+    for (int d = 0; d < Dim; ++d)
+      cells *= 2.0 * mls_support(weight, grid_.h[d], dilation_) / grid_.h[d];
+    return occupied > 0
+               ? cells * static_cast<double>(bins_.order.size()) / static_cast<double>(occupied)
+               : 0.0;
+  }
+  void bin(const Grid<Dim>& g);                                         // x_ into bins_
+  void gather(const Vec<Dim>& x, MlsWeight weight, Scratch& sc) const;  // near, s, w
+  // One row appended to t, counted in rep.
+  void row(const Vec<Dim>& x, MlsWeight weight, bool widen, Scratch& sc, ShapeTable& t,
+           MlsReport& rep) const;
+  void imls_row(std::size_t row, Scratch& sc, ShapeTable& t, MlsReport& rep) const;
 
   bool improved_;
   int degree_;
@@ -182,12 +257,8 @@ class MovingLeastSquares {
   std::vector<Vec<Dim>> x_;
   ElementBins<Dim> bins_;
   Index outside_ = 0;
-  // Scratch of one evaluation point (no allocation once the capacity is reached).
-  std::vector<Index> near_;
-  std::vector<Vec<Dim>> s_;  // (x_p - x) / l per direction
-  std::vector<double> w_;
-  std::vector<double> p_;  // p_[kMaxTerms k + i]: monomial / orthogonal p_i at point k
-  ShapeTable scratch_;
+  std::vector<Scratch> scratch_;  // scratch_[0]: add_row and evaluate; scratch_[c]: chunk c
+  ShapeTable scratch_table_;
   MlsReport report_;
 };
 
@@ -263,7 +334,6 @@ class MovingLeastSquaresMapping {
     mls.set_points(grid, P);
     auto& q = quad_.prepare<Sim>();
     q.clear();
-    gauss_.clear();
     // Tensor-product Gauss rule on each element holding a particle: point k has index
     // k_d = (k / n^d) % n in direction d (x fastest), weight prod_d (h_d / 2) w_{k_d}.
     const int n = static_cast<int>(rule_.xi.size());
@@ -286,24 +356,29 @@ class MovingLeastSquaresMapping {
           wg *= half[d] * rule_.w[j];
         }
         q.add(xg, wg, e);
-        mls.add_row(xg, MlsWeight::QuadraticSpline, gauss_);
       }
     }
+    // The shape functions at the Gauss points (the bulk of the step), rows in parallel.
+    const auto ng = static_cast<Index>(q.size());
+    mls.add_rows(
+        ng, [&](Index g) -> const Vec<Dim>& { return q.x[static_cast<std::size_t>(g)]; },
+        MlsWeight::QuadraticSpline, gauss_);
     q.evaluate(sim);
     rho_.resize(q.size());
-    for (std::size_t g = 0; g < q.size(); ++g)
-      rho_[g] = gauss_.apply(g, [&](std::size_t p) { return P.density[p]; });
+    gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
+      rho_[g] = t.apply(r, [&](std::size_t p) { return P.density[p]; });
+    });
     assemble_mass(sim, q, rho_);
     if constexpr (Improved) {
       // Nodal rows (003 eq. 31) for the DOFs that carry mass.
-      nodes_.clear();
       node_dof_.clear();
       const auto& m = sim.nodes.mass;
-      for (Index i = 0; i < sim.basis.num_dofs(); ++i) {
-        if (!(m[static_cast<std::size_t>(i)] > 0.0)) continue;
-        node_dof_.push_back(i);
-        mls.add_row(sim.basis.dof_position(i), MlsWeight::Linear, nodes_, true);
-      }
+      for (Index i = 0; i < sim.basis.num_dofs(); ++i)
+        if (m[static_cast<std::size_t>(i)] > 0.0) node_dof_.push_back(i);
+      mls.add_rows(
+          static_cast<Index>(node_dof_.size()),
+          [&](Index r) { return sim.basis.dof_position(node_dof_[static_cast<std::size_t>(r)]); },
+          MlsWeight::Linear, nodes_, true);
     }
     const MlsReport& rep = mls.report();
     accumulate(totals_, rep);
@@ -326,16 +401,17 @@ class MovingLeastSquaresMapping {
     if constexpr (Improved) {
       auto& out = sim.nodes.momentum;
       std::fill(out.begin(), out.end(), V::Zero());
-      for (std::size_t r = 0; r < node_dof_.size(); ++r) {
+      nodes_.for_each_row([&](std::size_t r, const ShapeTable& t, std::size_t k) {
         const auto i = static_cast<std::size_t>(node_dof_[r]);
-        out[i] = sim.nodes.mass[i] *
-                 nodes_.apply<V>(r, [&](std::size_t p) -> const V& { return P.v[p]; });
-      }
+        out[i] =
+            sim.nodes.mass[i] * t.apply<V>(k, [&](std::size_t p) -> const V& { return P.v[p]; });
+      });
     } else {
       auto& vec = std::get<Dim - 1>(work_).vec;
       vec.resize(q.size());
-      for (std::size_t g = 0; g < q.size(); ++g)
-        vec[g] = gauss_.apply<V>(g, [&](std::size_t p) -> V { return P.density[p] * P.v[p]; });
+      gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
+        vec[g] = t.apply<V>(r, [&](std::size_t p) -> V { return P.density[p] * P.v[p]; });
+      });
       assemble_momentum(sim, q, vec);
     }
   }
@@ -351,10 +427,19 @@ class MovingLeastSquaresMapping {
     auto& vec = std::get<Dim - 1>(work_).vec;
     sig.resize(q.size());
     vec.resize(q.size());
-    for (std::size_t g = 0; g < q.size(); ++g) {
-      sig[g] = gauss_.apply<M>(g, [&](std::size_t p) -> const M& { return P.stress[p]; });
-      vec[g] = rho_[g] * gauss_.apply<V>(g, [&](std::size_t p) -> const V& { return P.body[p]; });
-    }
+    // Stress and body force in one pass over each row: every sum runs over the row in the same
+    // order as separate applications, so the bits are theirs.
+    gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
+      M s = M::Zero();
+      V b = V::Zero();
+      for (std::size_t k = t.start[r]; k < t.start[r + 1]; ++k) {
+        const auto p = static_cast<std::size_t>(t.point[k]);
+        s += t.phi[k] * P.stress[p];
+        b += t.phi[k] * P.body[p];
+      }
+      sig[g] = s;
+      vec[g] = rho_[g] * b;
+    });
     assemble_forces(sim, q, vec, sig);
   }
 
@@ -374,7 +459,7 @@ class MovingLeastSquaresMapping {
   int dim_ = 1;  // dimension of the last map_mass
   GaussRule rule_;
   QuadratureStore quad_;
-  ShapeTable gauss_, nodes_;
+  ShapeTables gauss_, nodes_;  // rows at the Gauss points and (IMLS) at the nodes
   std::vector<Index> node_dof_;
   std::vector<double> rho_;
   MlsReport totals_;

@@ -2,13 +2,16 @@
 // Gauss-Legendre rules and per-step bookkeeping shared by the reconstruction mappings
 // (D 3.2.2: Gauss quadrature; 5.3.1: element-wise integration of the reconstructions).
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <any>
 #include <cmath>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <vector>
 
 #include "core/simulation.hpp"
+#include "scheme/parallel.hpp"
 
 namespace mpm {
 
@@ -83,6 +86,13 @@ struct ElementBins {
 // Quadrature points of one step with the basis evaluated once at each (D eq. 3.7-3.9, 5.16-5.17).
 // A reconstruction mapping fills x, w and element, then calls evaluate(); the assemble_*
 // functions integrate reconstructed fields given at the points.
+//
+// The assembly is a Gauss-point-to-grid scatter run like the particle scatters of the explicit
+// core (scheme/parallel.hpp): the points are split into the fixed chunks of ParticleChunks (a
+// function of the point count only), each chunk sums its points in order into its own slice of
+// grid buffer (the DOF range its stencils touch, recorded by evaluate()), and the slices are
+// added in chunk order. The result is bitwise the same for any thread count; up to
+// ParticleChunks::kMinSize points it is one chunk, summed exactly as a serial loop.
 template <class Sim>
 struct QuadraturePoints {
   static constexpr int Dim = Sim::kDim;
@@ -90,6 +100,11 @@ struct QuadraturePoints {
   std::vector<double> w;    // weight [m^Dim]
   std::vector<Index> element;
   std::vector<typename Sim::StencilT> stencil;
+  // Scatter state of the assembly: the DOF range of every chunk of points (evaluate()) and the
+  // chunk buffers. Mutable: integrating a field does not change the points.
+  ChunkDofRanges ranges;
+  mutable GridAccumulator<double> scalar;
+  mutable GridAccumulator<Vec<Dim>> vector;
 
   void clear() {
     x.clear();
@@ -103,8 +118,22 @@ struct QuadraturePoints {
   }
   std::size_t size() const { return x.size(); }
   void evaluate(const Sim& sim) {
+    const auto n = static_cast<Index>(x.size());
     stencil.resize(x.size());
-    for (std::size_t g = 0; g < x.size(); ++g) sim.basis.evaluate_point(x[g], stencil[g]);
+    for_each_chunk(n, [&](int c, Index b, Index e) {
+      Index lo = std::numeric_limits<Index>::max(), hi = -1;
+      for (Index g = b; g < e; ++g) {
+        auto& s = stencil[static_cast<std::size_t>(g)];
+        sim.basis.evaluate_point(x[static_cast<std::size_t>(g)], s);
+        for (int a = 0; a < s.kSize; ++a) {
+          lo = std::min(lo, s.dof[a]);
+          hi = std::max(hi, s.dof[a]);
+        }
+      }
+      ranges.lo[static_cast<std::size_t>(c)] = lo;
+      ranges.hi[static_cast<std::size_t>(c)] = hi;
+    });
+    ranges.particles = n;
   }
 };
 
@@ -138,22 +167,25 @@ class QuadratureStore {
 };
 
 // m_i = sum_g phi_i rho_g w_g (lumped row sums); with consistent mass also
-// M_ij = sum_g phi_i rho_g phi_j w_g (D eq. 3.9, 5.17).
+// M_ij = sum_g phi_i rho_g phi_j w_g (D eq. 3.9, 5.17; the triplet list stays serial).
 template <class Sim>
 void assemble_mass(Sim& sim, const QuadraturePoints<Sim>& q, const std::vector<double>& rho) {
   auto& m = sim.nodes.mass;
-  std::fill(m.begin(), m.end(), 0.0);
-  const bool consistent = sim.mass_type == MassType::Consistent;
-  if (consistent) sim.consistent.begin(sim.nodes.size());
+  q.scalar.scatter(m, 0.0, q.ranges, [&](Index g, const auto& slice) {
+    const auto gi = static_cast<std::size_t>(g);
+    const auto& s = q.stencil[gi];
+    const double rw = rho[gi] * q.w[gi];
+    for (int a = 0; a < s.kSize; ++a) slice[s.dof[a]] += s.w[a] * rw;
+  });
+  if (sim.mass_type != MassType::Consistent) return;
+  sim.consistent.begin(sim.nodes.size());
   for (std::size_t g = 0; g < q.size(); ++g) {
     const auto& s = q.stencil[g];
     const double rw = rho[g] * q.w[g];
-    for (int a = 0; a < s.kSize; ++a) m[static_cast<std::size_t>(s.dof[a])] += s.w[a] * rw;
-    if (consistent)
-      for (int a = 0; a < s.kSize; ++a)
-        for (int b = 0; b < s.kSize; ++b)
-          if (s.w[a] != 0.0 && s.w[b] != 0.0)
-            sim.consistent.add(s.dof[a], s.dof[b], s.w[a] * rw * s.w[b]);
+    for (int a = 0; a < s.kSize; ++a)
+      for (int b = 0; b < s.kSize; ++b)
+        if (s.w[a] != 0.0 && s.w[b] != 0.0)
+          sim.consistent.add(s.dof[a], s.dof[b], s.w[a] * rw * s.w[b]);
   }
 }
 
@@ -161,13 +193,12 @@ void assemble_mass(Sim& sim, const QuadraturePoints<Sim>& q, const std::vector<d
 template <class Sim>
 void assemble_momentum(Sim& sim, const QuadraturePoints<Sim>& q,
                        const std::vector<Vec<Sim::kDim>>& rhov) {
-  auto& out = sim.nodes.momentum;
-  std::fill(out.begin(), out.end(), Vec<Sim::kDim>::Zero());
-  for (std::size_t g = 0; g < q.size(); ++g) {
-    const auto& s = q.stencil[g];
-    for (int a = 0; a < s.kSize; ++a)
-      out[static_cast<std::size_t>(s.dof[a])] += (s.w[a] * q.w[g]) * rhov[g];
-  }
+  using V = Vec<Sim::kDim>;
+  q.vector.scatter(sim.nodes.momentum, V::Zero(), q.ranges, [&](Index g, const auto& slice) {
+    const auto gi = static_cast<std::size_t>(g);
+    const auto& s = q.stencil[gi];
+    for (int a = 0; a < s.kSize; ++a) slice[s.dof[a]] += (s.w[a] * q.w[gi]) * rhov[gi];
+  });
 }
 
 // f_i = sum_g ( phi_i (rho b)_g - sigma_g grad phi_i ) w_g (D eq. 3.7 and 5.11 with the body
@@ -176,13 +207,13 @@ template <class Sim>
 void assemble_forces(Sim& sim, const QuadraturePoints<Sim>& q,
                      const std::vector<Vec<Sim::kDim>>& rhob,
                      const std::vector<Mat<Sim::kDim>>& sigma) {
-  auto& out = sim.nodes.force;
-  std::fill(out.begin(), out.end(), Vec<Sim::kDim>::Zero());
-  for (std::size_t g = 0; g < q.size(); ++g) {
-    const auto& s = q.stencil[g];
+  using V = Vec<Sim::kDim>;
+  q.vector.scatter(sim.nodes.force, V::Zero(), q.ranges, [&](Index g, const auto& slice) {
+    const auto gi = static_cast<std::size_t>(g);
+    const auto& s = q.stencil[gi];
     for (int a = 0; a < s.kSize; ++a)
-      out[static_cast<std::size_t>(s.dof[a])] += q.w[g] * (s.w[a] * rhob[g] - sigma[g] * s.grad[a]);
-  }
+      slice[s.dof[a]] += q.w[gi] * (s.w[a] * rhob[gi] - sigma[gi] * s.grad[a]);
+  });
 }
 
 }  // namespace mpm

@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "io/config.hpp"
+#include "scheme/parallel.hpp"
 
 namespace mpm {
 
@@ -259,8 +260,9 @@ bool BasicTlsReconstruction<Dim>::coincides(const System& sys, const Vec<Dim>& s
 
 template <int Dim>
 void BasicTlsReconstruction<Dim>::add_datum(System& sys, Matrix& D, const Datum& d) {
-  data_.push_back(d);
-  sys.end = static_cast<Index>(data_.size());
+  // The element's slot in data_ holds its own points and the most completion points it can
+  // take (build_systems), so this never writes into the next element's slot.
+  data_[static_cast<std::size_t>(sys.end++)] = d;
   add_outer(D, d.psi);
 }
 
@@ -443,14 +445,10 @@ void BasicTlsReconstruction<Dim>::build_systems() {
   own_.resize(ne_s);
   systems_.resize(ne_s);
   info_.assign(ne_s, TlsElementInfo{});
-  data_.clear();
-  const std::size_t virtual_max = 2 * Dim * (Dim == 1 ? 1 : face_xi_.size());
-  data_.reserve(bins_.order.size() +
-                ne_s * (virtual_max + static_cast<std::size_t>(settings_.max_borrowed_used(Dim))));
 
   // Pass 1: each element from its own points (also decides which neighbours can lend virtual
-  // points).
-  for (Index e = 0; e < ne; ++e) {
+  // points). Elements are independent: parallel, and the same bits for any thread count.
+  parallel_for(ne, [&](Index e) {
     Own& o = own_[static_cast<std::size_t>(e)];
     o.D.setZero();
     o.distinct = 0;
@@ -476,26 +474,41 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     info_[static_cast<std::size_t>(e)].points = count;
     o.ok = count > 0 && well_posed(o.D, o.distinct, nb, o.condition);
     if (count == 0) o.condition = 0.0;
-  }
+  });
 
-  // Pass 2: data, completion, number of terms and factorisations.
-  for (Index e = 0; e < ne; ++e) {
+  // Every element gets a slot in data_ for its own points and the most completion points it can
+  // add, at a fixed offset, so that pass 2 can fill the slots in parallel (unused entries stay
+  // unused; sys.begin .. sys.end is what an element filled).
+  const std::size_t virtual_max = 2 * Dim * (Dim == 1 ? 1 : face_xi_.size());
+  const std::size_t extra = settings_.completion == TlsCompletion::Virtual ? virtual_max
+                            : settings_.completion == TlsCompletion::Neighbour
+                                ? static_cast<std::size_t>(settings_.max_borrowed_used(Dim))
+                                : 0;
+  std::size_t slots = 0;
+  for (std::size_t e = 0; e < ne_s; ++e) {
+    systems_[e].begin = static_cast<Index>(slots);
+    const auto count = static_cast<std::size_t>(info_[e].points);
+    if (count > 0) slots += count + (own_[e].ok ? 0 : extra);
+  }
+  data_.resize(slots);
+
+  // Pass 2: data, completion, number of terms and factorisations; independent per element (a
+  // completion reads only the pass-1 results of its neighbours).
+  parallel_for(ne, [&](Index e) {
     const Own& o = own_[static_cast<std::size_t>(e)];
     System& sys = systems_[static_cast<std::size_t>(e)];
     TlsElementInfo& info = info_[static_cast<std::size_t>(e)];
-    sys.begin = sys.end = static_cast<Index>(data_.size());
+    sys.end = sys.begin;
     sys.terms = 0;
     sys.has_virtual = false;
-    if (info.points == 0) continue;  // inactive: no reconstruction
-    ++report_.active;
+    if (info.points == 0) return;  // inactive: no reconstruction
     const Vec<Dim> xc = centre_vec(e);
     for (const Index* it = bins_.begin(e); it != bins_.end(e); ++it) {
       const Vec<Dim>& x = x_[static_cast<std::size_t>(*it)];
       Vec<Dim> s;
       for (int d = 0; d < Dim; ++d) s[d] = (x[d] - xc[d]) / dx[d];
-      data_.push_back(Datum::real(s, *it));
+      data_[static_cast<std::size_t>(sys.end++)] = Datum::real(s, *it);
     }
-    sys.end = static_cast<Index>(data_.size());
     Matrix D = o.D;
     int distinct = o.distinct;
     if (!o.ok) {
@@ -503,12 +516,7 @@ void BasicTlsReconstruction<Dim>::build_systems() {
         case TlsCompletion::None:
           info.failed = true;
           info.condition = o.condition;
-          if (report_.failed++ == 0) {
-            report_.failed_element = e;
-            report_.failed_points = info.points;
-            report_.failed_condition = o.condition;
-          }
-          continue;
+          return;
         case TlsCompletion::Reduce:
           break;
         case TlsCompletion::Virtual:
@@ -521,20 +529,38 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     }
     // Reduce (also the fallback of the completions): drop terms until well posed, 1D 3 -> 2 -> 1,
     // 2D 6 -> 3 -> 1 (complete polynomial spaces). One term is always well posed in an active
-    // element (D = number of data > 0).
+    // element (D = number of data > 0). An element that was well posed from its own points
+    // keeps D, so its pass-1 condition number stands (the same eigenvalues, not recomputed).
     int t = nb;
-    double cond = 0.0;
-    while (!well_posed(D, distinct, t, cond) && t > 1) t = Dim == 1 ? t - 1 : (t == 6 ? 3 : 1);
+    double cond = o.condition;
+    if (!o.ok)
+      while (!well_posed(D, distinct, t, cond) && t > 1) t = Dim == 1 ? t - 1 : (t == 6 ? 3 : 1);
     sys.terms = t;
     factorise(sys);
     info.terms = t;
     info.condition = cond;
-    if (o.ok) ++report_.full;
+  });
+
+  // The report, in element order (the first failed element is the lowest index).
+  for (Index e = 0; e < ne; ++e) {
+    const TlsElementInfo& info = info_[static_cast<std::size_t>(e)];
+    if (info.points == 0) continue;
+    ++report_.active;
+    if (info.failed) {
+      if (report_.failed++ == 0) {
+        report_.failed_element = e;
+        report_.failed_points = info.points;
+        report_.failed_condition = info.condition;
+      }
+      continue;
+    }
+    const int t = info.terms;
+    if (own_[static_cast<std::size_t>(e)].ok) ++report_.full;
     if (t < nb) ++report_.reduced;
     if (info.virtual_points > 0) ++report_.with_virtual;
     if (info.borrowed > 0) ++report_.with_neighbours;
     report_.min_terms = report_.min_terms > 0 ? std::min(report_.min_terms, t) : t;
-    report_.max_condition = std::max(report_.max_condition, cond);
+    report_.max_condition = std::max(report_.max_condition, info.condition);
   }
 }
 
@@ -548,21 +574,23 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f, const double* i
   const Index ne = grid_.num_cells();
   a.resize(static_cast<std::size_t>(ne));
   const double volume = grid_.cell_volume();  // |Omega_e| (D eq. 6.7)
+  // Elements are independent within a pass (pass 1 reads only pass-0 coefficients): parallel,
+  // the same bits for any thread count.
   for (int pass = 0; pass < 2; ++pass) {
-    for (Index e = 0; e < ne; ++e) {
+    parallel_for(ne, [&](Index e) {
       const auto ei = static_cast<std::size_t>(e);
       const System& sys = systems_[ei];
       if (pass == 0) {
         if (info_[ei].points == 0) {
           a[ei].setZero();
-          continue;
+          return;
         }
         if (info_[ei].failed) {
           a[ei].setConstant(std::numeric_limits<double>::quiet_NaN());
-          continue;
+          return;
         }
       }
-      if (sys.terms == 0 || sys.has_virtual != (pass == 1)) continue;
+      if (sys.terms == 0 || sys.has_virtual != (pass == 1)) return;
       const int t = sys.terms;
       auto value = [&](const Datum& d) {
         if (d.point >= 0) return f[static_cast<std::size_t>(d.point)];
@@ -600,7 +628,7 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f, const double* i
         }
       }
       a[ei] = coef;
-    }
+    });
   }
 }
 

@@ -456,7 +456,7 @@ class TlsMapping {
     st.rhov.resize(q.size());
     values_.resize(P.x.size());
     for (int d = 0; d < Dim; ++d) {
-      for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.density[i] * P.v[i][d];
+      fill_values([&](std::size_t i) { return P.density[i] * P.v[i][d]; });
       element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.v[i][d]; });
       st.recon.fit_conservative(values_, integrals_, st.coef);
       at_gauss(st, q, [&](std::size_t g, double v) { st.rhov[g][d] = v; });
@@ -477,14 +477,14 @@ class TlsMapping {
     st.sigma.resize(q.size());
     for (int r = 0; r < Dim; ++r)
       for (int c = 0; c < Dim; ++c) {
-        for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.stress[i](r, c);
+        fill_values([&](std::size_t i) { return P.stress[i](r, c); });
         st.recon.fit_plain(values_, st.coef);
         at_gauss(st, q, [&](std::size_t g, double v) { st.sigma[g](r, c) = v; });
       }
 
     st.rhob.resize(q.size());
     for (int d = 0; d < Dim; ++d) {
-      for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = P.density[i] * P.body[i][d];
+      fill_values([&](std::size_t i) { return P.density[i] * P.body[i][d]; });
       element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.body[i][d]; });
       st.recon.fit_conservative(values_, integrals_, st.coef);
       at_gauss(st, q, [&](std::size_t g, double v) { st.rhob[g][d] = v; });
@@ -516,21 +516,30 @@ class TlsMapping {
   template <class Recon, class Value>
   void element_sums(const Recon& recon, Value&& value) {
     const auto& bins = recon.bins();
-    integrals_.assign(static_cast<std::size_t>(recon.num_elements()), 0.0);
-    for (Index e = 0; e < recon.num_elements(); ++e) {
+    integrals_.resize(static_cast<std::size_t>(recon.num_elements()));
+    parallel_for(recon.num_elements(), [&](Index e) {
       double c = 0.0;
       for (const Index* p = bins.begin(e); p != bins.end(e); ++p)
         c += value(static_cast<std::size_t>(*p));
       integrals_[static_cast<std::size_t>(e)] = c;
-    }
+    });
+  }
+  // values_[i] = value(i) for every particle (values_ sized by the caller).
+  template <class Value>
+  void fill_values(Value&& value) {
+    parallel_for(static_cast<Index>(values_.size()), [&](Index i) {
+      values_[static_cast<std::size_t>(i)] = value(static_cast<std::size_t>(i));
+    });
   }
   // The reconstruction st.coef at every Gauss point: element e, local point k = g mod n^Dim.
   template <int Dim, class Sim, class Store>
   static void at_gauss(const TlsMappingState<Dim>& st, const QuadraturePoints<Sim>& q,
                        Store&& store) {
     const std::size_t n = st.psi.size();
-    for (std::size_t g = 0; g < q.size(); ++g)
+    parallel_for(static_cast<Index>(q.size()), [&](Index gi) {
+      const auto g = static_cast<std::size_t>(gi);
       store(g, st.coef[static_cast<std::size_t>(q.element[g])].dot(st.psi[g % n]));
+    });
   }
 
   TlsSettings settings_;
