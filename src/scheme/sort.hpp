@@ -87,9 +87,12 @@ struct SortState {
   // 5e3 particles, 1.4 at 1e6), random order about the chunk count (up to 64).
   static constexpr double kFirstSortSpan = 4.0;
   // Later measurements sort when the total exceeds this factor times the reference (the first
-  // measurement after the last sort). Measured in BENCHMARKS.md ("Particle re-sorting by cell"):
-  // one sort costs about a third of a MUSL step at 1e6 particles in 2D, so the step must lose
-  // a fair share of that to disorder before a sort pays; at twice the sorted spans it does.
+  // measurement after the last sort). From BENCHMARKS.md ("Particle re-sorting by cell", 2D
+  // quadratic B-spline MUSL, 1e6 particles): one sort costs about one step (190-330 ns per
+  // particle), random order (about 62 grids of extra span) about 210-420 ns per particle-step
+  // more than sorted order. Interpolated linearly, spans at twice the sorted ones (1.4 extra
+  // grids) cost about 5-10 ns per particle-step, so a sort then pays back within some 30-60
+  // steps, while a smaller factor would sort more often for less.
   static constexpr double kResortFactor = 2.0;
 
   SortMode mode = SortMode::Auto;
