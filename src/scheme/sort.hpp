@@ -9,7 +9,7 @@
 // When (sort_due): the measure is the total length T of the chunks' DOF ranges, which
 // evaluate_basis records every step anyway (ChunkDofRanges), against U, the length of their
 // union. The first measurement of a run sorts when T > kFirstSortSpan U (random order:
-// T ~ chunks x U; seeded or sorted order: T / U = 1.0-2.2 from one chunk to 1e6 particles);
+// T ~ chunks x U; seeded or sorted order: T / U about 1-2);
 // otherwise it, or the first measurement after a sort, becomes the reference T_ref, and the
 // particles are sorted again when T > kResortFactor T_ref. The decision depends only on the
 // particle state, never on the thread count, so runs stay bitwise identical for any thread
@@ -83,12 +83,15 @@ class Permutation {
 // The re-sorting state of a run (Simulation::sorting).
 struct SortState {
   // The first measurement of a run sorts when the chunks' ranges total more than this many
-  // times their union: sorted or seeded particles measure 1.0-2.2 (1D bar 1.0; 2D plate 1.8 at
-  // 5e3 particles, 1.4 at 1e6), random order about the chunk count (up to 64).
+  // times their union: sorted or seeded particles measure about 1-2 (the 20 x 20-cell plate of
+  // test_sort.cpp, 3600 particles in 8 chunks: 1.65 sorted, 8.0 shuffled; about 1.4 grids at 1e6
+  // particles in 2D, BENCHMARKS.md "Parallel design"), random order about the chunk count (up
+  // to 64). Below 4 chunks (2048 particles) random order is never sorted at the start: it costs
+  // at most 4 slices of small grids.
   static constexpr double kFirstSortSpan = 4.0;
   // Later measurements sort when the total exceeds this factor times the reference (the first
   // measurement after the last sort). From BENCHMARKS.md ("Particle re-sorting by cell", 2D
-  // quadratic B-spline MUSL, 1e6 particles): one sort costs about one step (190-330 ns per
+  // quadratic B-spline MUSL, 1e6 particles): one sort costs about one step (140-330 ns per
   // particle), random order (about 62 grids of extra span) about 210-420 ns per particle-step
   // more than sorted order. Interpolated linearly, spans at twice the sorted ones (1.4 extra
   // grids) cost about 5-10 ns per particle-step, so a sort then pays back within some 30-60
