@@ -147,6 +147,12 @@ int cmd_bench(const mpm::BenchOptions& opt) {
       opt.mapping, r.particles, r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads,
       opt.repeats, r.best_ns_per_particle_step, r.median_ns_per_particle_step,
       r.bytes_per_particle);
+  std::cout << fmt::format(
+      "  particles {}, method.sort = \"{}\": {} sort(s) per run{}; sort buffers {:.1f} bytes per "
+      "particle\n",
+      opt.shuffle ? "shuffled" : "in seeded order", opt.sort, r.sorts,
+      r.sorts > 0 ? fmt::format(", {:.1f} ns per particle per sort", r.ns_per_particle_sort) : "",
+      r.sort_bytes_per_particle);
   return 0;
 }
 
@@ -211,6 +217,11 @@ int main(int argc, char** argv) {
                    "problem of /work/shared/tools/refkernel.cpp: padded unit square, no body "
                    "force, dt = 1e-6 s)")
       ->check(CLI::IsMember({"plate", "refkernel"}))
+      ->capture_default_str();
+  bench->add_flag("--shuffle", bopt.shuffle,
+                  "start from the particles in random order (to measure method.sort)");
+  bench->add_option("--sort", bopt.sort, "method.sort: auto or never")
+      ->check(CLI::IsMember({"auto", "never"}))
       ->capture_default_str();
 
   mpm::ReconstructOptions ropt;

@@ -339,6 +339,11 @@ class Cpdi2Basis : public detail::NodalDomainBasis<Dim> {
   // The tracked corners (checkpoint state) and their replacement (restart).
   const std::vector<Corners>& corners() const { return corners_; }
   void set_corners(std::vector<Corners> c) { corners_ = std::move(c); }
+  // Re-sorted particles (scheme/sort.hpp): the corners move with their particles.
+  template <class Permutation>
+  void permute(Permutation& perm) {
+    if (static_cast<Index>(corners_.size()) == perm.size()) perm.apply(corners_);
+  }
 
   // Corners of particle p as evaluated: clamped into the grid.
   Corners clamped_corners(Index p) const {

@@ -46,20 +46,40 @@ double bytes_per_particle(const BenchOptions& opt, Index cells, Index particles)
          dofs * per_dof / static_cast<double>(particles);
 }
 
+// The re-sorting buffers (SortState): order and inverse permutation, the scratch of the largest
+// particle field (F or stress), one cursor per cell.
+template <int Dim>
+double sort_bytes_per_particle(Index cells, Index particles) {
+  return static_cast<double>(2 * sizeof(Index) + sizeof(Mat<Dim>)) +
+         static_cast<double>(cells + 1) * static_cast<double>(sizeof(Index)) /
+             static_cast<double>(particles);
+}
+
 std::string method_toml(const BenchOptions& opt) {
-  return fmt::format("[method]\nscheme = \"{}\"\nbasis = \"{}\"\ndegree = {}\nmapping = \"{}\"\n",
-                     opt.scheme, opt.basis, opt.degree, opt.mapping);
+  return fmt::format(
+      "[method]\nscheme = \"{}\"\nbasis = \"{}\"\ndegree = {}\nmapping = \"{}\"\nsort = \"{}\"\n",
+      opt.scheme, opt.basis, opt.degree, opt.mapping, opt.sort);
 }
 
 void time_runs(const Config& cfg, const BenchOptions& opt, BenchResult& r) {
   if (opt.threads > 0) omp_set_num_threads(opt.threads);
   r.threads = omp_get_max_threads();
   std::vector<double> ns;
+  double sort_seconds = 0.0;
   for (int k = 0; k < opt.repeats; ++k) {
     RunOptions ro;
     ro.quiet = true;
-    ns.push_back(run(cfg, ro).ns_per_particle_step);
+    ro.shuffle_seed = opt.shuffle ? 1 : 0;
+    const RunResult res = run(cfg, ro);
+    ns.push_back(res.ns_per_particle_step);
+    r.sorts = res.sorts;
+    sort_seconds += res.sort_seconds;
+    r.particles = res.particles;
   }
+  if (r.sorts > 0)
+    r.ns_per_particle_sort = 1e9 * sort_seconds /
+                             (static_cast<double>(r.sorts) * static_cast<double>(opt.repeats) *
+                              static_cast<double>(r.particles));
   std::sort(ns.begin(), ns.end());
   r.best_ns_per_particle_step = ns.front();
   r.median_ns_per_particle_step = ns[ns.size() / 2];
@@ -84,6 +104,7 @@ BenchResult bench_1d(const BenchOptions& opt) {
       r.cells, per_cell, dt, dt * static_cast<double>(opt.steps), method_toml(opt));
   time_runs(Config::parse(toml, "<bench>"), opt, r);
   r.bytes_per_particle = bytes_per_particle<1>(opt, r.cells, r.particles);
+  r.sort_bytes_per_particle = sort_bytes_per_particle<1>(r.cells, r.particles);
   return r;
 }
 
@@ -128,6 +149,7 @@ BenchResult bench_2d(const BenchOptions& opt) {
   time_runs(Config::parse(toml, "<bench>"), opt, r);
   const Index grid_cells = opt.problem == "refkernel" ? r.cells + 4 : r.cells;
   r.bytes_per_particle = bytes_per_particle<2>(opt, grid_cells, r.particles);
+  r.sort_bytes_per_particle = sort_bytes_per_particle<2>(grid_cells * grid_cells, r.particles);
   return r;
 }
 

@@ -20,6 +20,8 @@ struct BenchOptions {
   // 2D problem: "plate" (plate_mms_2d) or "refkernel" (the problem of the yardstick
   // /work/shared/tools/refkernel.cpp through the custom benchmark).
   std::string problem = "plate";
+  bool shuffle = false;       // start from the particles in random order (RunOptions::shuffle_seed)
+  std::string sort = "auto";  // method.sort
 };
 
 struct BenchResult {
@@ -30,6 +32,12 @@ struct BenchResult {
   double best_ns_per_particle_step = 0.0;
   double median_ns_per_particle_step = 0.0;
   double bytes_per_particle = 0.0;  // particle state + cached stencil + grid share
+  // Re-sorting (scheme/sort.hpp): sorts per run, mean wall time of one [ns per particle], and
+  // its buffers [bytes per particle] (order, inverse, scratch of the largest field, cursors per
+  // cell), allocated by the first sort.
+  Index sorts = 0;
+  double ns_per_particle_sort = 0.0;
+  double sort_bytes_per_particle = 0.0;
 };
 
 // 1D vibrating bar (D Table 3.1 set 2 material) with the given scheme, basis and mapping,

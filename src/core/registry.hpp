@@ -76,6 +76,12 @@ inline constexpr Entry kMassTypes[] = {
     {"consistent", "consistent mass matrix, solved exactly each step (D eq. 2.31/2.44)"},
 };
 
+// method.sort: re-sorting the particles by cell between steps (scheme/sort.hpp).
+inline constexpr Entry kSortModes[] = {
+    {"auto", "sort by cell when the order has degraded (chunk DOF spans twice the sorted ones)"},
+    {"never", "keep the particles in their order (seeded, or as a checkpoint stored them)"},
+};
+
 inline constexpr Entry kMaterials[] = {
     {"elastic_1d_small", "1D linear elastic, small deformation: sigma += E d_eps (004 eq. 4.15)"},
     {"elastic_1d_large",

@@ -1,5 +1,6 @@
 #pragma once
 // Running one configuration: build the problem, choose the variants once, step, write outputs.
+#include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -23,6 +24,9 @@ struct RunOptions {
   // names it in error messages.
   std::shared_ptr<const io::Checkpoint> restart;
   std::string restart_name;
+  // Non-zero: start from the particles in a random order drawn with this seed
+  // (shuffle_particles; tests and `mpm bench --shuffle` of the re-sorting). Ignored on restart.
+  std::uint64_t shuffle_seed = 0;
 };
 
 // Particle error norms at the final time (D eq. 4.92); empty when there is no exact solution.
@@ -54,6 +58,8 @@ struct RunResult {
   Index steps = 0;
   double wall_seconds = 0.0;
   double ns_per_particle_step = 0.0;
+  Index sorts = 0;            // re-sorts by cell over the run (scheme/sort.hpp; MPM only)
+  double sort_seconds = 0.0;  // their wall time, part of ns_per_particle_step [s]
   ErrorNorms errors;
   Diagnostics diag;
   nlohmann::ordered_json summary;  // what summary.json holds

@@ -13,6 +13,7 @@
 #include "material/materials.hpp"
 #include "particles/particles.hpp"
 #include "scheme/parallel.hpp"
+#include "scheme/sort.hpp"
 #include "solver/mass_matrix.hpp"
 
 namespace mpm {
@@ -114,6 +115,7 @@ struct Simulation {
   IVec<Dim> dof_stride{};         // DOF strides of a tensor-product basis (CachedT)
   std::vector<Index> cell;        // cell of each particle at the last evaluation
   ScatterBuffers<Dim> scatter;    // per-chunk grid buffers of the parallel scatters
+  SortState sorting;              // re-sorting by cell between steps (scheme/sort.hpp)
 
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s

@@ -106,6 +106,7 @@ void put(Writer& w, const ParticleArrays& a) {
   for (const auto* f : {&a.x, &a.x0, &a.u, &a.v, &a.mass, &a.volume, &a.volume0, &a.density, &a.F,
                         &a.stress, &a.body})
     w.reals(*f);
+  w.ints(a.id);
 }
 
 ParticleArrays get_particles(Reader& r) {
@@ -115,6 +116,7 @@ ParticleArrays get_particles(Reader& r) {
   for (auto* f : {&a.x, &a.x0, &a.u, &a.v, &a.mass, &a.volume, &a.volume0, &a.density, &a.F,
                   &a.stress, &a.body})
     *f = r.reals();
+  a.id = r.ints();
   return a;
 }
 
@@ -173,6 +175,7 @@ ParticleArrays pack_particles(const Particles<Dim>& p) {
   flatten(p.F, a.F);
   flatten(p.stress, a.stress);
   flatten(p.body, a.body);
+  a.id.assign(p.id.begin(), p.id.end());
   return a;
 }
 
@@ -193,6 +196,11 @@ Particles<Dim> unpack_particles(const ParticleArrays& a, const std::string& what
   unflatten(a.F, p.F, n, what, "F");
   unflatten(a.stress, p.stress, n, what, "stress");
   unflatten(a.body, p.body, n, what, "body");
+  // The ids in the stored order: a run re-sorted before the checkpoint continues in that order.
+  if (a.id.size() != n)
+    throw InputError(
+        fmt::format("{}: particle field id holds {} values, expected {}", what, a.id.size(), n));
+  p.id.assign(a.id.begin(), a.id.end());
   return p;
 }
 
@@ -240,6 +248,8 @@ std::string encode_checkpoint(const Checkpoint& c) {
   p.f64(c.time);
   put(p, c.particles);
   p.ints(c.cells);
+  p.i64(c.sort_reference);
+  p.i64(c.sorts);
   p.f64(c.diag.max_rel_mass_error);
   p.f64(c.diag.max_rel_momentum_error);
   p.i64(c.diag.grid_crossings);
@@ -309,6 +319,8 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
   c.time = r.f64();
   c.particles = get_particles(r);
   c.cells = r.ints();
+  c.sort_reference = r.i64();
+  c.sorts = r.i64();
   c.diag.max_rel_mass_error = r.f64();
   c.diag.max_rel_momentum_error = r.f64();
   c.diag.grid_crossings = r.i64();

@@ -12,8 +12,10 @@
 //   str config (Config::to_toml() of the run), str solver ("mpm" or "ulfem"), i64 dim,
 //   i64 step, f64 time,
 //   particles: i64 count, then f64[] x, x0, u, v, mass, volume, volume0, density, F, stress,
-//     body (vectors Dim values per particle, tensors Dim x Dim column-major),
+//     body (vectors Dim values per particle, tensors Dim x Dim column-major), i64[] id (version
+//     3: the stable ids in the stored order, which re-sorting may have changed),
 //   i64[] cell of each particle at the last basis evaluation,
+//   version 3: i64 re-sorting reference span (-1: none), i64 sorts so far (scheme/sort.hpp),
 //   diagnostics: f64 max_rel_mass_error, f64 max_rel_momentum_error, i64 grid_crossings,
 //   u8 FEM state present; if 1: f64[] node x, f64[] node v, f64[] node body, the element
 //     particles (as above), f64 time, f64 time_anchor, f64 last_dt, i64 steps,
@@ -39,7 +41,7 @@
 namespace mpm::io {
 
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
-inline constexpr std::uint32_t kCheckpointVersion = 2;
+inline constexpr std::uint32_t kCheckpointVersion = 3;
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 
@@ -51,6 +53,7 @@ struct ParticleArrays {
   std::int64_t dim = 0;
   std::int64_t count = 0;
   std::vector<double> x, x0, u, v, mass, volume, volume0, density, F, stress, body;
+  std::vector<std::int64_t> id;
 };
 
 template <int Dim>
@@ -76,6 +79,8 @@ struct Checkpoint {
   double time = 0.0;         // [s]
   ParticleArrays particles;  // MPM particles (empty for solver "ulfem")
   std::vector<std::int64_t> cells;
+  std::int64_t sort_reference = -1;  // SortState::reference
+  std::int64_t sorts = 0;            // SortState::sorts
   Diagnostics diag;
   std::optional<FemArrays> fem;  // the FEM reference alongside MPM, or the ULFEM solver
   std::string mapping;           // method.mapping

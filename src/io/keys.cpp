@@ -127,6 +127,9 @@ std::vector<KeySpec> declare() {
            "degrees of freedom with mass below this fraction of the largest nodal mass are "
            "inactive"),
       choice("method.solver", "mpm", kSolvers, "time-stepping method"),
+      choice("method.sort", "auto", kSortModes,
+             "re-sorting of the particles by cell between steps (locality of the parallel "
+             "scatters; changes results by round-off only)"),
       integer("method.tls_terms", 0, closed(0, 6),
               "Taylor basis functions per element of the TLS mapping (1D: 1-3; 2D: 1, 3 or 6; 0: "
               "the quadratic basis, 3 in 1D and 6 in 2D)"),

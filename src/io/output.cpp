@@ -110,6 +110,12 @@ void check_particles(const Particles<Dim>& p) {
   }
 }
 
+// The stable id of the particle at index i (Particles::id; the index where ids were not set).
+template <int Dim>
+Index particle_id(const Particles<Dim>& p, std::size_t i) {
+  return i < p.id.size() ? p.id[i] : static_cast<Index>(i);
+}
+
 // ---- VTK XML pieces ----------------------------------------------------------------------
 
 // VTK cell type ids (vtkCellType.h).
@@ -300,7 +306,7 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
   put(b, "\n");
 
   for (std::size_t i = 0; i < n; ++i) {
-    put_int(b, static_cast<Index>(i));
+    put_int(b, particle_id(p, i));
     const auto vec = [&](const Vec<Dim>& a) {
       for (int d = 0; d < Dim; ++d) {
         put(b, ",");
@@ -359,7 +365,7 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
   open_array(b, "Int64", "id", 1);
   for (std::size_t i = 0; i < n; ++i) {
     if (i > 0) put(b, "\n");
-    put_int(b, static_cast<Index>(i));
+    put_int(b, particle_id(p, i));
   }
   close_array(b);
   vector_array<Dim>(b, "x0", p.x0);

@@ -35,14 +35,15 @@ struct ScalarField {
 
 // CSV of the particle state: a header line, then one row per particle. Columns:
 // id, x0_1..x0_D, x_1..x_D, u_1..u_D, v_1..v_D, mass, volume, density, F_11..F_DD (row-major),
-// stress_11..stress_DD (row-major), then each extra field. id is the particle's index.
+// stress_11..stress_DD (row-major), then each extra field. id is the particle's stable id
+// (Particles::id); rows are in the order of p (the run writes its particles in id order).
 // Numbers are printed with 17 significant digits, so they parse back to the same double.
 template <int Dim>
 std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField>& extra = {});
 
 // VTK XML UnstructuredGrid (.vtu, ASCII) with one VTK_VERTEX cell per particle at its current
-// position (padded to 3 components). PointData: id (Int64), x0, u, v (3 components, zero
-// padded), mass, volume, density, F and stress (9 components, row-major: the Dim x Dim tensor
+// position (padded to 3 components). PointData: id (Int64, Particles::id), x0, u, v (3 components,
+// zero padded), mass, volume, density, F and stress (9 components, row-major: the Dim x Dim tensor
 // embedded in 3x3 with identity padding for F and zero padding for stress), then the extra
 // scalars. The time [s] is stored in FieldData as "TimeValue", which ParaView reads.
 template <int Dim>

@@ -1,5 +1,6 @@
 #pragma once
 // Material points as a struct of arrays (one contiguous array per field), D Algorithm 2 input.
+#include <numeric>
 #include <vector>
 
 #include "core/types.hpp"
@@ -19,6 +20,9 @@ struct Particles {
   std::vector<Mat<Dim>> F;       // deformation gradient F_p
   std::vector<Mat<Dim>> stress;  // Cauchy stress sigma_p [Pa]
   std::vector<Vec<Dim>> body;    // body force per unit mass b_p [m/s^2], refreshed every step
+  // Stable id: the particle's index when it was created. Re-sorting (scheme/sort.hpp) moves the
+  // particles in memory; outputs list them in id order and error messages name the id.
+  std::vector<Index> id;
 
   Index size() const { return static_cast<Index>(x.size()); }
 
@@ -35,12 +39,41 @@ struct Particles {
     F.resize(s, Mat<Dim>::Identity());
     stress.resize(s, Mat<Dim>::Zero());
     body.resize(s, Vec<Dim>::Zero());
+    // New particles get the next ids: the creation order (existing ones keep theirs).
+    const std::size_t old = id.size();
+    id.resize(s);
+    if (s > old) std::iota(id.begin() + static_cast<std::ptrdiff_t>(old), id.end(), Index(old));
+  }
+
+  // Whether the particles are in id order (never re-sorted, or sorted back).
+  bool in_id_order() const {
+    for (std::size_t i = 0; i < id.size(); ++i)
+      if (id[i] != static_cast<Index>(i)) return false;
+    return true;
+  }
+
+  // f(field) for every per-particle array, ids included: whatever reorders or copies the
+  // particles goes through this one list, so a new field cannot be forgotten.
+  template <class Fn>
+  void for_each_field(Fn&& f) {
+    f(x);
+    f(x0);
+    f(u);
+    f(v);
+    f(mass);
+    f(volume);
+    f(volume0);
+    f(density);
+    f(F);
+    f(stress);
+    f(body);
+    f(id);
   }
 
   // Bytes of particle state per particle (for the benchmark's memory figure): x, x0, u, v, body;
-  // mass, volume, volume0, density; F, stress.
+  // mass, volume, volume0, density; F, stress; id.
   static constexpr std::size_t bytes_per_particle() {
-    return 5 * sizeof(Vec<Dim>) + 4 * sizeof(double) + 2 * sizeof(Mat<Dim>);
+    return 5 * sizeof(Vec<Dim>) + 4 * sizeof(double) + 2 * sizeof(Mat<Dim>) + sizeof(Index);
   }
 };
 

@@ -19,14 +19,15 @@
 namespace mpm::stages {
 
 namespace detail {
-// Formats at most `limit` particle ids with their positions for failure messages.
+// Formats at most `limit` particles (indices) by stable id with their positions for failure
+// messages.
 template <int Dim>
 std::string describe_particles(const Particles<Dim>& P, const std::vector<Index>& ids,
                                std::size_t limit = 8) {
   std::string out;
   for (std::size_t k = 0; k < ids.size() && k < limit; ++k) {
     const auto i = static_cast<std::size_t>(ids[k]);
-    out += fmt::format("{}particle {} at x = (", k ? "; " : "", ids[k]);
+    out += fmt::format("{}particle {} at x = (", k ? "; " : "", i < P.id.size() ? P.id[i] : ids[k]);
     for (int d = 0; d < Dim; ++d) out += fmt::format("{}{:.6g}", d ? ", " : "", P.x[i][d]);
     out += ")";
   }
