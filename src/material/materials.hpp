@@ -61,39 +61,51 @@ struct Elastic1DLarge {
 struct LinearElastic {
   static constexpr std::string_view kName = "linear_elastic";
   ElasticParameters p;
+  explicit LinearElastic(const ElasticParameters& params = {})
+      : p(params), lambda_(params.lambda()), mu_(params.mu()) {}
   template <int Dim>
   void update(Mat<Dim>& sigma, const Mat<Dim>& F, const Mat<Dim>& /*dtL*/) const {
     const Mat<Dim> eps = 0.5 * (F + F.transpose()) - Mat<Dim>::Identity();
-    sigma = p.lambda() * eps.trace() * Mat<Dim>::Identity() + 2.0 * p.mu() * eps;
+    sigma = lambda_ * eps.trace() * Mat<Dim>::Identity() + 2.0 * mu_ * eps;
   }
   template <int Dim>
   double energy(const Mat<Dim>& /*sigma*/, const Mat<Dim>& F, double /*V*/, double V0) const {
     const Mat<Dim> eps = 0.5 * (F + F.transpose()) - Mat<Dim>::Identity();
     const double tr = eps.trace();
-    return (0.5 * p.lambda() * tr * tr + p.mu() * eps.squaredNorm()) * V0;
+    return (0.5 * lambda_ * tr * tr + mu_ * eps.squaredNorm()) * V0;
   }
-  double wave_speed() const { return std::sqrt((p.lambda() + 2.0 * p.mu()) / p.density); }
+  double wave_speed() const { return std::sqrt((lambda_ + 2.0 * mu_) / p.density); }
+
+ private:
+  // The Lame constants of p, computed once: update() runs per particle per step, and the
+  // compiler cannot hoist p.lambda() (two divisions) out of a loop that stores doubles.
+  double lambda_, mu_;
 };
 
 // Compressible neo-Hookean (D eq. 2.14): sigma = lambda ln(J)/J I + mu/J (F F^T - I).
 struct NeoHookean {
   static constexpr std::string_view kName = "neo_hookean";
   ElasticParameters p;
+  explicit NeoHookean(const ElasticParameters& params = {})
+      : p(params), lambda_(params.lambda()), mu_(params.mu()) {}
   template <int Dim>
   void update(Mat<Dim>& sigma, const Mat<Dim>& F, const Mat<Dim>& /*dtL*/) const {
     const double J = F.determinant();
-    sigma = (p.lambda() * std::log(J) / J) * Mat<Dim>::Identity() +
-            (p.mu() / J) * (F * F.transpose() - Mat<Dim>::Identity());
+    sigma = (lambda_ * std::log(J) / J) * Mat<Dim>::Identity() +
+            (mu_ / J) * (F * F.transpose() - Mat<Dim>::Identity());
   }
   // W = mu/2 (tr(F^T F) - d) - mu ln J + lambda/2 (ln J)^2 per reference volume.
   template <int Dim>
   double energy(const Mat<Dim>& /*sigma*/, const Mat<Dim>& F, double /*V*/, double V0) const {
     const double lnJ = std::log(F.determinant());
-    return (0.5 * p.mu() * ((F.transpose() * F).trace() - Dim) - p.mu() * lnJ +
-            0.5 * p.lambda() * lnJ * lnJ) *
+    return (0.5 * mu_ * ((F.transpose() * F).trace() - Dim) - mu_ * lnJ +
+            0.5 * lambda_ * lnJ * lnJ) *
            V0;
   }
-  double wave_speed() const { return std::sqrt((p.lambda() + 2.0 * p.mu()) / p.density); }
+  double wave_speed() const { return std::sqrt((lambda_ + 2.0 * mu_) / p.density); }
+
+ private:
+  double lambda_, mu_;  // of p, computed once (see LinearElastic)
 };
 
 using Material = std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean>;
