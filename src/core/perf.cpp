@@ -42,7 +42,8 @@ double bytes_per_particle(const BenchOptions& opt, Index cells, Index particles)
   const double per_dof =
       static_cast<double>(sizeof(double) + 4 * sizeof(Vec<Dim>) + 2 * sizeof(std::uint8_t) +
                           sizeof(double) + sizeof(Vec<Dim>));
-  return static_cast<double>(Particles<Dim>::bytes_per_particle() + stencil + sizeof(Index)) +
+  return static_cast<double>(Particles<Dim>::bytes_per_particle() + stencil +
+                             sizeof(CompactIndex)) +
          dofs * per_dof / static_cast<double>(particles);
 }
 
@@ -50,7 +51,7 @@ double bytes_per_particle(const BenchOptions& opt, Index cells, Index particles)
 // particle field (F or stress), one cursor per cell.
 template <int Dim>
 double sort_bytes_per_particle(Index cells, Index particles) {
-  return static_cast<double>(2 * sizeof(Index) + sizeof(Mat<Dim>)) +
+  return static_cast<double>(2 * sizeof(CompactIndex) + sizeof(Mat<Dim>)) +
          static_cast<double>(cells + 1) * static_cast<double>(sizeof(Index)) /
              static_cast<double>(particles);
 }

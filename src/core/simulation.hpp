@@ -94,6 +94,12 @@ struct Simulation {
     if constexpr (requires { basis.dofs_per_dim(); })
       dof_stride = dof_strides<Dim>(basis.dofs_per_dim());
     cell.assign(static_cast<std::size_t>(particles.size()), -1);
+    // Particle ids and cells are stored as CompactIndex (core/types.hpp).
+    constexpr Index kMax = std::numeric_limits<CompactIndex>::max();
+    if (particles.size() > kMax || grid.num_cells() > kMax)
+      throw InputError("a run holds at most " + std::to_string(kMax) + " particles and cells; " +
+                       "this one has " + std::to_string(particles.size()) + " particles and " +
+                       std::to_string(grid.num_cells()) + " cells");
   }
 
   Grid<Dim> grid;
@@ -111,11 +117,11 @@ struct Simulation {
   // Some DOF is fixed in only some components (rollers): consistent mass then factorises once
   // per velocity component. Set by fix_side, the only place that changes nodes.fixed.
   bool consistent_per_component = false;
-  std::vector<CachedT> stencils;  // basis at x_p^s, refreshed by evaluate_basis()
-  IVec<Dim> dof_stride{};         // DOF strides of a tensor-product basis (CachedT)
-  std::vector<Index> cell;        // cell of each particle at the last evaluation
-  ScatterBuffers<Dim> scatter;    // per-chunk grid buffers of the parallel scatters
-  SortState sorting;              // re-sorting by cell between steps (scheme/sort.hpp)
+  std::vector<CachedT> stencils;   // basis at x_p^s, refreshed by evaluate_basis()
+  IVec<Dim> dof_stride{};          // DOF strides of a tensor-product basis (CachedT)
+  std::vector<CompactIndex> cell;  // cell of each particle at the last evaluation
+  ScatterBuffers<Dim> scatter;     // per-chunk grid buffers of the parallel scatters
+  SortState sorting;               // re-sorting by cell between steps (scheme/sort.hpp)
 
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s

@@ -22,7 +22,7 @@ struct Particles {
   std::vector<Vec<Dim>> body;    // body force per unit mass b_p [m/s^2], refreshed every step
   // Stable id: the particle's index when it was created. Re-sorting (scheme/sort.hpp) moves the
   // particles in memory; outputs list them in id order and error messages name the id.
-  std::vector<Index> id;
+  std::vector<CompactIndex> id;
 
   Index size() const { return static_cast<Index>(x.size()); }
 
@@ -42,7 +42,9 @@ struct Particles {
     // New particles get the next ids: the creation order (existing ones keep theirs).
     const std::size_t old = id.size();
     id.resize(s);
-    if (s > old) std::iota(id.begin() + static_cast<std::ptrdiff_t>(old), id.end(), Index(old));
+    if (s > old)
+      std::iota(id.begin() + static_cast<std::ptrdiff_t>(old), id.end(),
+                static_cast<CompactIndex>(old));
   }
 
   // Whether the particles are in id order (never re-sorted, or sorted back).
@@ -73,7 +75,7 @@ struct Particles {
   // Bytes of particle state per particle (for the benchmark's memory figure): x, x0, u, v, body;
   // mass, volume, volume0, density; F, stress; id.
   static constexpr std::size_t bytes_per_particle() {
-    return 5 * sizeof(Vec<Dim>) + 4 * sizeof(double) + 2 * sizeof(Mat<Dim>) + sizeof(Index);
+    return 5 * sizeof(Vec<Dim>) + 4 * sizeof(double) + 2 * sizeof(Mat<Dim>) + sizeof(CompactIndex);
   }
 };
 

@@ -41,14 +41,16 @@ enum class SortMode { Auto, Never };
 // One permutation of the particles: after apply(v), v[k] is the old v[order[k]].
 class Permutation {
  public:
-  std::vector<Index> order;    // new index -> old index
-  std::vector<Index> inverse;  // old index -> new index (set_inverse)
+  // 32-bit like the ids (core/types.hpp: a run holds fewer than 2^31 particles).
+  std::vector<CompactIndex> order;    // new index -> old index
+  std::vector<CompactIndex> inverse;  // old index -> new index (set_inverse)
 
   Index size() const { return static_cast<Index>(order.size()); }
   void set_inverse() {
     inverse.resize(order.size());
     parallel_for(size(), [&](Index k) {
-      inverse[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
+      inverse[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] =
+          static_cast<CompactIndex>(k);
     });
   }
   bool identity() const {
@@ -147,15 +149,15 @@ inline bool sort_due(const ChunkDofRanges& r, SortState& st) {
 
 // perm.order = the particles in cell order, stable (equal cells keep their relative order): a
 // counting sort over cell[p] in [0, cells). Serial: two streaming passes over the cells.
-inline void cell_order(const std::vector<Index>& cell, Index cells, SortState& st) {
+inline void cell_order(const std::vector<CompactIndex>& cell, Index cells, SortState& st) {
   auto& cur = st.cursor;
   cur.assign(static_cast<std::size_t>(cells) + 1, 0);
-  for (const Index c : cell) ++cur[static_cast<std::size_t>(c) + 1];
+  for (const CompactIndex c : cell) ++cur[static_cast<std::size_t>(c) + 1];
   for (std::size_t c = 1; c < cur.size(); ++c) cur[c] += cur[c - 1];
   st.perm.order.resize(cell.size());
   for (std::size_t p = 0; p < cell.size(); ++p)
     st.perm.order[static_cast<std::size_t>(cur[static_cast<std::size_t>(cell[p])]++)] =
-        static_cast<Index>(p);
+        static_cast<CompactIndex>(p);
 }
 
 // Applies st.perm to everything indexed by particle in sim (file comment).
@@ -200,7 +202,7 @@ template <class ParticlesT, class Tractions>
 void shuffle_particles(ParticlesT& P, Tractions& tractions, std::uint64_t seed) {
   Permutation perm;
   perm.order.resize(static_cast<std::size_t>(P.size()));
-  std::iota(perm.order.begin(), perm.order.end(), Index{0});
+  std::iota(perm.order.begin(), perm.order.end(), CompactIndex{0});
   std::mt19937_64 gen(seed);
   std::shuffle(perm.order.begin(), perm.order.end(), gen);
   P.for_each_field([&](auto& field) { perm.apply(field); });
@@ -217,7 +219,7 @@ ParticlesT particles_in_id_order(const ParticlesT& P) {
   Permutation perm;
   perm.order.resize(P.id.size());
   for (std::size_t i = 0; i < P.id.size(); ++i)
-    perm.order[static_cast<std::size_t>(P.id[i])] = static_cast<Index>(i);
+    perm.order[static_cast<std::size_t>(P.id[i])] = static_cast<CompactIndex>(i);
   out.for_each_field([&](auto& field) { perm.apply(field); });
   return out;
 }

@@ -109,7 +109,7 @@ void evaluate_basis(Sim& sim) {
         basis.evaluate(P, p, s);
       }
       if (sim.cell[i] >= 0 && c != sim.cell[i]) ++chunk_crossings[ck];
-      sim.cell[i] = c;
+      sim.cell[i] = static_cast<CompactIndex>(c);
       const auto [sl, sh] = dof_bounds(s, sim.dof_stride);
       lo = std::min(lo, sl);
       hi = std::max(hi, sh);
