@@ -14,6 +14,7 @@
 #include <random>
 #include <vector>
 
+#include "../support/threads.hpp"
 #include "benchmarks/problem.hpp"
 #include "core/variants.hpp"
 #include "scheme/parallel.hpp"
@@ -21,22 +22,8 @@
 namespace mpm {
 namespace {
 
-// Restores the thread count of the process when a test ends.
-class Threads {
- public:
-  explicit Threads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
-  ~Threads() { omp_set_num_threads(saved_); }
-  Threads(const Threads&) = delete;
-  Threads& operator=(const Threads&) = delete;
-
- private:
-  int saved_;
-};
-
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
+using test::same_bits;
+using test::Threads;
 
 template <int Dim>
 Grid<Dim> make_grid() {

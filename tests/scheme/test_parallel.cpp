@@ -13,6 +13,7 @@
 #include <numbers>
 #include <random>
 
+#include "../support/threads.hpp"
 #include "benchmarks/problem.hpp"
 #include "core/run.hpp"
 #include "core/variants.hpp"
@@ -22,22 +23,8 @@
 namespace mpm {
 namespace {
 
-// Restores the thread count of the process when a test ends.
-class Threads {
- public:
-  explicit Threads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
-  ~Threads() { omp_set_num_threads(saved_); }
-  Threads(const Threads&) = delete;
-  Threads& operator=(const Threads&) = delete;
-
- private:
-  int saved_;
-};
-
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
+using test::same_bits;
+using test::Threads;
 
 RunResult run_with_threads(int threads, const std::string& example,
                            const std::vector<std::string>& sets) {

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/threads.hpp"
 #include "benchmarks/problem.hpp"
 #include "core/run.hpp"
 #include "core/variants.hpp"
@@ -30,19 +31,10 @@
 namespace mpm {
 namespace {
 
+using test::same_bits;
+using test::Threads;
+
 namespace fs = std::filesystem;
-
-// Restores the thread count of the process when a test ends.
-class Threads {
- public:
-  explicit Threads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
-  ~Threads() { omp_set_num_threads(saved_); }
-  Threads(const Threads&) = delete;
-  Threads& operator=(const Threads&) = delete;
-
- private:
-  int saved_;
-};
 
 class TempDir {
  public:
@@ -272,11 +264,6 @@ TEST(Sort, SeededOrderIsNotSortedAndTriggerFollowsTheReference) {
   SortState never;
   never.mode = SortMode::Never;
   EXPECT_FALSE(sort_due(r, never));
-}
-
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
 std::unique_ptr<PlateSim> step_plate(int threads) {
