@@ -21,10 +21,12 @@ class Threads {
 };
 
 // Byte-for-byte equality of two arrays (the thread-count tests demand the same bits, not
-// closeness; NaNs with equal payloads compare equal, as they should here).
+// closeness; NaNs with equal payloads compare equal, as they should here). Empty arrays may
+// hold a null data(), which memcmp must not be given even for zero bytes.
 template <class T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 }  // namespace mpm::test
