@@ -32,6 +32,10 @@ SLOW+='|BasesInTheStep\.BsmpmCutsTheColumnCompactionStressError|Ulfem\.LargeDefo
 SLOW+='|ReconstructionMpm\.(TlsImprovesMpmOnTheColumn|ReconstructionsReduceTheLargeDeformationError'
 SLOW+='|EveryBasisSchemeAndMassWithTlsAndCubicSpline)'
 SLOW+='|VerifyQuick\.'  # refinement studies through build/mpm (scripts/verify.py --quick)
+# Thread-count comparisons whose code paths the kept ones cover (MLS 1D/2D linear, IMLS 1D,
+# TLS, the other re-sorting cases): 30-40 s each under the sanitizers.
+SLOW+='|MappingParallel\.(Mls2DQuadraticBSpline|Imls2DQuadraticBSpline|Imls2D)SameForOneAndTwoThreads'
+SLOW+='|Sort\.ShuffledTractionBar1DCpdiMatchesSeeded'
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
 else
