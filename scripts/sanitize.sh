@@ -35,7 +35,11 @@ SLOW+='|VerifyQuick\.'  # refinement studies through build/mpm (scripts/verify.p
 # Thread-count comparisons whose code paths the kept ones cover (MLS 1D/2D linear, IMLS 1D,
 # TLS, the other re-sorting cases): 30-40 s each under the sanitizers.
 SLOW+='|MappingParallel\.(Mls2DQuadraticBSpline|Imls2DQuadraticBSpline|Imls2D)SameForOneAndTwoThreads'
-SLOW+='|Sort\.ShuffledTractionBar1DCpdiMatchesSeeded'
+SLOW+='|Sort\.Shuffled(TractionBar1DCpdi|Plate2DCpdi2)MatchesSeeded'
+SLOW+='|MappingParallel\.Tls2DNeighbourCompletionSameForOneAndTwoThreads'
+# 2D runs of 20-40 s under the sanitizers whose stages the 1D and smaller 2D tests exercise.
+SLOW+='|Parallel\.Plate2DQuadraticBSplineEverySchemeSameForOneAndTwoThreads'
+SLOW+='|Traction2D\.PlaneStrainColumnMatchesTheTractionBarRowByRow|Custom2D\.GravityPlateMatchesTheQuasiStaticSolution'
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
 else
