@@ -7,7 +7,7 @@
 #include <cmath>
 #include <vector>
 
-#include "core/run.hpp"
+#include "driver/run.hpp"
 #include "grid/grid_state.hpp"
 #include "io/config.hpp"
 #include "particles/particles.hpp"

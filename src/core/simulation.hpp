@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <limits>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -74,37 +76,17 @@ struct Diagnostics {
   double rel_momentum_error = 0.0;
 };
 
-template <int Dim, class Basis, class Mapping>
-struct Simulation {
+// The basis- and mapping-independent state of an MPM run: what the driver (driver/) reads and
+// writes between steps (outputs, checkpoints, error norms), with the grid quantities the stages
+// share. Simulation adds the basis, the mapping and the cached stencils.
+template <int Dim>
+struct RunState {
   static constexpr int kDim = Dim;
-  using BasisT = Basis;
-  using MappingT = Mapping;
-  using StencilT = typename Basis::StencilT;
-  // The per-particle cache: the compact 1D factors for tensor-product bases, else StencilT.
-  using CachedT = typename CachedStencilOf<Basis>::type;
 
-  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat)
-      : grid(g),
-        basis(std::move(b)),
-        mapping(std::move(m)),
-        particles(std::move(p)),
-        material(std::move(mat)) {
-    nodes.resize(basis.num_dofs());
-    stencils.resize(static_cast<std::size_t>(particles.size()));
-    if constexpr (requires { basis.dofs_per_dim(); })
-      dof_stride = dof_strides<Dim>(basis.dofs_per_dim());
-    cell.assign(static_cast<std::size_t>(particles.size()), -1);
-    // Particle ids and cells are stored as CompactIndex (core/types.hpp).
-    constexpr Index kMax = std::numeric_limits<CompactIndex>::max();
-    if (particles.size() > kMax || grid.num_cells() > kMax)
-      throw InputError("a run holds at most " + std::to_string(kMax) + " particles and cells; " +
-                       "this one has " + std::to_string(particles.size()) + " particles and " +
-                       std::to_string(grid.num_cells()) + " cells");
-  }
+  RunState(const Grid<Dim>& g, Particles<Dim> p, Material mat)
+      : grid(g), particles(std::move(p)), material(std::move(mat)) {}
 
   Grid<Dim> grid;
-  Basis basis;
-  Mapping mapping;
   Particles<Dim> particles;
   Material material;
   MassType mass_type = MassType::Lumped;
@@ -115,9 +97,9 @@ struct Simulation {
   GridState<Dim> nodes;
   ConsistentMass consistent;
   // Some DOF is fixed in only some components (rollers): consistent mass then factorises once
-  // per velocity component. Set by fix_side, the only place that changes nodes.fixed.
+  // per velocity component. Set by Simulation::fix_side, the only place that changes
+  // nodes.fixed.
   bool consistent_per_component = false;
-  std::vector<CachedT> stencils;   // basis at x_p^s, refreshed by evaluate_basis()
   IVec<Dim> dof_stride{};          // DOF strides of a tensor-product basis (CachedT)
   std::vector<CompactIndex> cell;  // cell of each particle at the last evaluation
   ScatterBuffers<Dim> scatter;     // per-chunk grid buffers of the parallel scatters
@@ -126,15 +108,45 @@ struct Simulation {
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s
   Diagnostics diag;
+};
+
+template <int Dim, class Basis, class Mapping>
+struct Simulation : RunState<Dim> {
+  using BasisT = Basis;
+  using MappingT = Mapping;
+  using StencilT = typename Basis::StencilT;
+  // The per-particle cache: the compact 1D factors for tensor-product bases, else StencilT.
+  using CachedT = typename CachedStencilOf<Basis>::type;
+
+  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat)
+      : RunState<Dim>(g, std::move(p), std::move(mat)), basis(std::move(b)), mapping(std::move(m)) {
+    auto& particles = this->particles;
+    this->nodes.resize(basis.num_dofs());
+    stencils.resize(static_cast<std::size_t>(particles.size()));
+    if constexpr (requires { basis.dofs_per_dim(); })
+      this->dof_stride = dof_strides<Dim>(basis.dofs_per_dim());
+    this->cell.assign(static_cast<std::size_t>(particles.size()), -1);
+    // Particle ids and cells are stored as CompactIndex (core/types.hpp).
+    constexpr Index kMax = std::numeric_limits<CompactIndex>::max();
+    if (particles.size() > kMax || this->grid.num_cells() > kMax)
+      throw InputError("a run holds at most " + std::to_string(kMax) + " particles and cells; " +
+                       "this one has " + std::to_string(particles.size()) + " particles and " +
+                       std::to_string(this->grid.num_cells()) + " cells");
+  }
+
+  Basis basis;
+  Mapping mapping;
+  std::vector<CachedT> stencils;  // basis at x_p^s, refreshed by evaluate_basis()
 
   // Prescribe zero velocity on a grid side (d: direction, side 0/1) in the components whose
   // bit is set in `components` (all by default); conditions on several sides combine.
   void fix_side(int d, int side, unsigned components = ~0u) {
+    auto& fixed = this->nodes.fixed;
     const auto mask = static_cast<std::uint8_t>(components & ((1u << Dim) - 1u));
-    for (Index i : basis.boundary_dofs(d, side)) nodes.fixed[static_cast<std::size_t>(i)] |= mask;
+    for (Index i : basis.boundary_dofs(d, side)) fixed[static_cast<std::size_t>(i)] |= mask;
     constexpr std::uint8_t kAll = (1u << Dim) - 1u;
-    consistent_per_component = std::any_of(nodes.fixed.begin(), nodes.fixed.end(),
-                                           [](std::uint8_t f) { return f != 0 && f != kAll; });
+    this->consistent_per_component =
+        std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
   }
 };
 

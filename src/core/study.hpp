@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "core/run.hpp"
+#include "driver/run.hpp"
 
 namespace mpm {
 

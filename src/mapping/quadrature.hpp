@@ -1,7 +1,7 @@
 #pragma once
 // Gauss-Legendre rules and per-step bookkeeping shared by the reconstruction mappings
 // (D 3.2.2: Gauss quadrature; 5.3.1: element-wise integration of the reconstructions).
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <algorithm>
 #include <any>
 #include <cmath>
@@ -21,26 +21,7 @@ struct GaussRule {
   std::vector<double> xi, w;
 };
 
-inline GaussRule gauss_legendre(int n) {
-  GaussRule r;
-  if (n == 1) {
-    r.xi = {0.0};
-    r.w = {2.0};
-    return r;
-  }
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
-  for (int k = 1; k < n; ++k) {
-    const double b = k / std::sqrt(4.0 * k * k - 1.0);
-    J(k - 1, k) = J(k, k - 1) = b;
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
-  for (int k = 0; k < n; ++k) {
-    r.xi.push_back(es.eigenvalues()[k]);
-    const double v0 = es.eigenvectors()(0, k);
-    r.w.push_back(2.0 * v0 * v0);
-  }
-  return r;
-}
+GaussRule gauss_legendre(int n);  // quadrature.cpp
 
 // Particles grouped by the grid cell (element, knot span) containing them: a counting sort,
 // O(particles + cells) per step, no allocation after the first step.

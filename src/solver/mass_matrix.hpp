@@ -31,30 +31,25 @@ class ConsistentMass {
   // particle distribution).
   template <class Keep>
   bool factorize(Keep&& keep, int slot = 0) {
-    std::vector<Triplet> t;
-    t.reserve(triplets_.size() + static_cast<std::size_t>(n_));
-    for (const auto& e : triplets_)
-      if (keep(e.row()) && keep(e.col())) t.push_back(e);
-    for (Index i = 0; i < n_; ++i)
-      if (!keep(i)) t.emplace_back(i, i, 1.0);
-    auto& M = M_[static_cast<std::size_t>(slot)];
-    auto& solver = solver_[static_cast<std::size_t>(slot)];
-    M.resize(n_, n_);
-    M.setFromTriplets(t.begin(), t.end());
-    solver.compute(M);
-    return solver.info() == Eigen::Success && (solver.vectorD().array() > 0.0).all();
+    kept_.resize(static_cast<std::size_t>(n_));
+    for (Index i = 0; i < n_; ++i) kept_[static_cast<std::size_t>(i)] = keep(i) ? 1 : 0;
+    return factorize_kept(slot);
   }
 
-  Eigen::VectorXd solve(const Eigen::VectorXd& rhs, int slot = 0) const {
-    return solver_[static_cast<std::size_t>(slot)].solve(rhs);
-  }
+  // y = M^-1 rhs with the factorisation of `slot`.
+  Eigen::VectorXd solve(const Eigen::VectorXd& rhs, int slot = 0) const;
   const Eigen::SparseMatrix<double>& matrix(int slot = 0) const {
     return M_[static_cast<std::size_t>(slot)];
   }
 
  private:
+  // Out of line (mass_matrix.cpp): the sparse factorisation is a large share of the compile
+  // time of every unit that steps a simulation.
+  bool factorize_kept(int slot);
+
   Index n_ = 0;
   std::vector<Triplet> triplets_;
+  std::vector<unsigned char> kept_;  // keep(i) of the latest factorize
   std::array<Eigen::SparseMatrix<double>, kSlots> M_;
   std::array<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>, kSlots> solver_;
 };

@@ -4,7 +4,7 @@
 
 #include <filesystem>
 
-#include "core/run.hpp"
+#include "driver/run.hpp"
 #include "io/config.hpp"
 
 namespace mpm {

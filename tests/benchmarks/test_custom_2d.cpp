@@ -18,8 +18,8 @@
 
 #include "benchmarks/benchmarks.hpp"
 #include "benchmarks/problem.hpp"
-#include "core/run.hpp"
 #include "core/variants.hpp"
+#include "driver/run.hpp"
 #include "io/config.hpp"
 
 namespace mpm {

@@ -14,7 +14,7 @@
 #include <iterator>
 #include <memory>
 
-#include "core/run.hpp"
+#include "driver/run.hpp"
 #include "io/checkpoint.hpp"
 #include "io/config.hpp"
 

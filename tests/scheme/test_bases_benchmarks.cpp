@@ -13,8 +13,8 @@
 #include <sstream>
 #include <string>
 
-#include "core/run.hpp"
 #include "core/study.hpp"
+#include "driver/run.hpp"
 #include "io/config.hpp"
 
 namespace mpm {

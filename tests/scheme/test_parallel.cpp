@@ -15,8 +15,8 @@
 
 #include "../support/threads.hpp"
 #include "benchmarks/problem.hpp"
-#include "core/run.hpp"
 #include "core/variants.hpp"
+#include "driver/run.hpp"
 #include "io/config.hpp"
 #include "scheme/parallel.hpp"
 

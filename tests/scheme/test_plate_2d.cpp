@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "core/perf.hpp"
-#include "core/run.hpp"
 #include "core/variants.hpp"
+#include "driver/run.hpp"
 #include "io/config.hpp"
 
 namespace mpm {

@@ -9,8 +9,8 @@
 #include <cmath>
 #include <string>
 
-#include "core/run.hpp"
 #include "core/study.hpp"
+#include "driver/run.hpp"
 #include "io/config.hpp"
 
 namespace mpm {

@@ -20,8 +20,8 @@
 
 #include "../support/threads.hpp"
 #include "benchmarks/problem.hpp"
-#include "core/run.hpp"
 #include "core/variants.hpp"
+#include "driver/run.hpp"
 #include "io/checkpoint.hpp"
 #include "io/config.hpp"
 #include "scheme/parallel.hpp"

@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 #include <cmath>
 
-#include "core/run.hpp"
 #include "core/study.hpp"
+#include "driver/run.hpp"
 #include "io/config.hpp"
 
 namespace mpm {

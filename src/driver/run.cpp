@@ -1,11 +1,17 @@
-#include "core/run.hpp"
+#include "driver/run.hpp"
 
-#include "core/run_impl.hpp"
+#include <fmt/format.h>
+
+#include "core/registry.hpp"
+#include "core/variants.hpp"
+#include "driver/driver.hpp"
+#include "driver/run_mpm.hpp"
+#include "io/checkpoint.hpp"
 
 namespace mpm {
 namespace {
 
-using namespace run_detail;
+using namespace driver;
 
 // method.solver = "ulfem": the updated-Lagrangian FEM on the problem's body, one linear element
 // per grid cell covered by the body; outputs and errors at the element midpoints.
@@ -115,7 +121,7 @@ RunResult run(const Config& cfg, const RunOptions& opt) {
   return std::visit(
       [&](auto& pb) {
         constexpr int Dim = std::decay_t<decltype(pb)>::kDim;
-        return run_dim<Dim>(pb, cfg, opt, basis, mapping, scheme);
+        return run_mpm<Dim>(pb, cfg, opt, basis, mapping, scheme);
       },
       problem);
 }

@@ -1,0 +1,265 @@
+#include "driver/driver.hpp"
+
+#include "io/checkpoint.hpp"
+#include "mpm/version.hpp"
+
+namespace mpm::driver {
+
+template <int Dim>
+ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
+                       const ExactSolution<Dim>& exact, double t, double dt, double velocity_time,
+                       int boundary_cells) {
+  ErrorNorms e;
+  if (!exact || P.x.empty()) return e;
+  IVec<Dim> first = grid.cells, last;
+  last.fill(-1);
+  for (const auto& X : P.x0)
+    for (int d = 0; d < Dim; ++d) {
+      const Index c = grid.cell_of(X[d], d);
+      first[d] = std::min(first[d], c);
+      last[d] = std::max(last[d], c);
+    }
+  double su = 0, sv = 0, svm = 0, svs = 0, ss = 0, num = 0, den = 0;
+  double iu = 0, ivs = 0, is = 0, in = 0;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    const auto ex = exact(P.x0[i], t);
+    const double eu = (ex.u - P.u[i]).squaredNorm();
+    sv += (ex.v - P.v[i]).squaredNorm();
+    svm += (exact(P.x0[i], t - 0.5 * dt).v - P.v[i]).squaredNorm();
+    const double evs = (exact(P.x0[i], t + velocity_time * dt).v - P.v[i]).squaredNorm();
+    const double es = (ex.stress - P.stress[i]).squaredNorm();
+    su += eu;
+    svs += evs;
+    ss += es;
+    num += P.volume0[i] * es;
+    den += P.volume0[i] * ex.stress.squaredNorm();
+    bool interior = true;
+    for (int d = 0; d < Dim; ++d) {
+      const Index c = grid.cell_of(P.x0[i][d], d);
+      interior = interior && c >= first[d] + boundary_cells && c <= last[d] - boundary_cells;
+    }
+    if (interior) {
+      iu += eu;
+      ivs += evs;
+      is += es;
+      in += 1.0;
+    }
+  }
+  const double n = static_cast<double>(P.x.size());
+  e.displacement_rms = std::sqrt(su / n);
+  e.velocity_rms = std::sqrt(sv / n);
+  e.velocity_rms_midstep = std::sqrt(svm / n);
+  e.velocity_rms_scheme_time = std::sqrt(svs / n);
+  e.stress_rms = std::sqrt(ss / n);
+  // A relative norm needs a reference of some size: none when the exact stress vanishes at T
+  // (below 1e-8 of the computed one, e.g. mms_1d at a full period).
+  double computed = 0.0;
+  for (std::size_t i = 0; i < P.x.size(); ++i) computed += P.volume0[i] * P.stress[i].squaredNorm();
+  if (den > 1e-16 * computed && den > 0.0) e.stress_rel_l2 = std::sqrt(num / den);
+  if (in > 0.0) {
+    e.displacement_rms_interior = std::sqrt(iu / in);
+    e.velocity_rms_scheme_time_interior = std::sqrt(ivs / in);
+    e.stress_rms_interior = std::sqrt(is / in);
+  }
+  return e;
+}
+
+template <int Dim>
+OutputSession<Dim>::OutputSession(const RunOptions& opt, const Config& cfg, const Problem<Dim>& pb)
+    : dir_(opt.out_dir), exact_(pb.exact) {
+  if (dir_.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(dir_, ec);
+  if (ec)
+    throw InputError(
+        fmt::format("cannot create output directory '{}': {}", dir_.string(), ec.message()));
+  csv_ = cfg.get_bool("output.csv");
+  vtk_ = cfg.get_bool("output.vtk");
+  io::write_file_atomic(dir_ / "config.toml", cfg.to_toml());
+  if (vtk_) io::write_file_atomic(dir_ / "grid.vtu", io::grid_vtu(pb.grid));
+  history_ = "time,kinetic_energy,strain_energy,total_energy,mass";
+  for (int d = 0; d < Dim; ++d) history_ += fmt::format(",momentum_{}", d + 1);
+  // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
+  // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
+  // report their maxima, which summary.json has).
+  mapping_errors_ = cfg.get_string("method.solver") == "mpm";
+  if (mapping_errors_) history_ += ",mass_error,momentum_error";
+  history_ += "\n";
+}
+
+template <int Dim>
+void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
+  if (!enabled()) return;
+  const auto& P = sim.particles;
+  double kin = 0.0, strain = 0.0, mass = 0.0;
+  Vec<Dim> mom = Vec<Dim>::Zero();
+  std::visit(
+      [&](const auto& law) {
+        for (std::size_t i = 0; i < P.x.size(); ++i) {
+          kin += 0.5 * P.mass[i] * P.v[i].squaredNorm();
+          strain += law.energy(P.stress[i], P.F[i], P.volume[i], P.volume0[i]);
+          mass += P.mass[i];
+          mom += P.mass[i] * P.v[i];
+        }
+      },
+      sim.material);
+  history_ += fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", sim.time, kin, strain,
+                          kin + strain, mass);
+  for (int d = 0; d < Dim; ++d) history_ += fmt::format(",{:.17g}", mom[d]);
+  if (mapping_errors_)
+    history_ += sim.diag ? fmt::format(",{:.17g},{:.17g}", sim.diag->rel_mass_error,
+                                       sim.diag->rel_momentum_error)
+                         : ",0,0";
+  history_ += "\n";
+}
+
+template <int Dim>
+void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
+  if (!enabled()) return;
+  // In id order, whatever order re-sorting (scheme/sort.hpp) left them in.
+  std::optional<Particles<Dim>> ordered;
+  if (!sim.particles.in_id_order()) ordered = particles_in_id_order(sim.particles);
+  const Particles<Dim>& P = ordered ? *ordered : sim.particles;
+  // The exact solution at the particles: u_exact, v_exact, stress_exact in 1D; per component
+  // (u_exact_1, ..., stress_exact_12, ...) in more dimensions, like the particle columns.
+  std::vector<io::ScalarField> extra;
+  constexpr int kFields = 2 * Dim + Dim * Dim;
+  std::array<std::vector<double>, kFields> values;
+  if (exact_) {
+    std::array<std::string, kFields> names;
+    int k = 0;
+    for (const char* f : {"u_exact", "v_exact"})
+      for (int d = 0; d < Dim; ++d) names[k++] = Dim == 1 ? f : fmt::format("{}_{}", f, d + 1);
+    for (int r = 0; r < Dim; ++r)
+      for (int c = 0; c < Dim; ++c)
+        names[k++] = Dim == 1 ? "stress_exact" : fmt::format("stress_exact_{}{}", r + 1, c + 1);
+    for (auto& v : values) v.resize(P.x.size());
+    for (std::size_t i = 0; i < P.x.size(); ++i) {
+      const auto ex = exact_(P.x0[i], sim.time);
+      for (int d = 0; d < Dim; ++d) {
+        values[d][i] = ex.u[d];
+        values[Dim + d][i] = ex.v[d];
+      }
+      for (int r = 0; r < Dim; ++r)
+        for (int c = 0; c < Dim; ++c) values[2 * Dim + r * Dim + c][i] = ex.stress(r, c);
+    }
+    for (int f = 0; f < kFields; ++f) extra.push_back({names[f], &values[f]});
+  }
+  frame_times_.push_back(sim.time);
+  const std::string stem = fmt::format("particles_{:05d}", frames_);
+  if (csv_) io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(P, extra));
+  if (vtk_) {
+    io::write_file_atomic(dir_ / (stem + ".vtu"), io::particles_vtu(P, sim.time, extra));
+    pvd_.add(sim.time, stem + ".vtu");
+    io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
+  }
+  io::write_file_atomic(dir_ / "history.csv", history_);
+  ++frames_;
+}
+
+template <int Dim>
+void OutputSession<Dim>::summary(const nlohmann::ordered_json& j) {
+  if (enabled()) io::write_file_atomic(dir_ / "summary.json", j.dump(2) + "\n");
+}
+
+template <int Dim>
+void OutputSession<Dim>::resume(const io::Checkpoint& c) {
+  frames_ = static_cast<int>(c.frames);
+  frame_times_ = c.frame_times;
+  if (vtk_)
+    for (std::size_t k = 0; k < frame_times_.size(); ++k)
+      pvd_.add(frame_times_[k], fmt::format("particles_{:05d}.vtu", k));
+}
+template <int Dim>
+void OutputSession<Dim>::checkpoint(const io::Checkpoint& c) {
+  if (enabled()) io::write_checkpoint(dir_ / io::kCheckpointFile, c);
+}
+
+// Stops before the first step when dt exceeds the limit, unless time.allow_unstable.
+void check_stability(const Config& cfg, double dt, double h, const Material& material,
+                     double factor, int dim, std::string_view what) {
+  const double c = wave_speed(material);
+  const double limit = factor * h / (c * std::sqrt(static_cast<double>(dim)));
+  if (dt > limit && !cfg.get_bool("time.allow_unstable"))
+    throw InputError(fmt::format(
+        "{}: time.dt = {:.6g} s exceeds the explicit stability limit {:.6g} s = {:.4g} h / c "
+        "(h = {:.6g} m, c = {:.6g} m/s, {}); reduce time.dt or set time.allow_unstable = true",
+        cfg.where("time.dt"), dt, limit, factor, h, c, what));
+}
+
+TimeSetup time_setup(const Config& cfg) {
+  const double dt = cfg.get_real("time.dt"), end = cfg.get_real("time.end");
+  const double ratio = end / dt;
+  const auto steps = static_cast<Index>(std::llround(ratio));
+  if (steps < 1 || std::abs(ratio - static_cast<double>(steps)) > 1e-6 * std::max(1.0, ratio))
+    throw InputError(fmt::format(
+        "{}: time.end = {} must be a positive whole multiple of time.dt = {} (it is {:.6g} "
+        "steps)",
+        cfg.where("time.end"), end, dt, ratio));
+  return {dt, steps};
+}
+
+nlohmann::ordered_json make_summary(const RunResult& res, const Config& cfg,
+                                    const Material& material, const TimeSetup& ts, double t_end,
+                                    nlohmann::ordered_json method, double velocity_time) {
+  nlohmann::ordered_json j;
+  j["mpmlab_version"] = kVersion;
+  j["status"] = res.exit_code == exit_code::kOk ? "ok" : "failed";
+  if (res.exit_code != exit_code::kOk) {
+    j["exit_code"] = res.exit_code;
+    j["failure"] = res.failure;
+  }
+  j["benchmark"] = res.benchmark;
+  j["dim"] = res.dim;
+  j["method"] = std::move(method);
+  j["material"] = {{"model", std::string(material_name(material))},
+                   {"density", cfg.get_real("material.density")},
+                   {"youngs_modulus", cfg.get_real("material.youngs_modulus")},
+                   {"poisson_ratio", cfg.get_real("material.poisson_ratio")}};
+  j["cells"] = res.cells;
+  j["h"] = res.h;
+  j["particles"] = res.particles;
+  j["dt"] = ts.dt;
+  j["t_end"] = t_end;
+  j["steps"] = res.steps;
+  j["velocity_time_offset_dt"] = velocity_time;
+  j["wall_seconds"] = res.wall_seconds;
+  j["ns_per_particle_step"] = res.ns_per_particle_step;
+  j["sorts"] = res.sorts;
+  j["errors"] = {
+      {"displacement_rms", opt_json(res.errors.displacement_rms)},
+      {"velocity_rms", opt_json(res.errors.velocity_rms)},
+      {"velocity_rms_midstep", opt_json(res.errors.velocity_rms_midstep)},
+      {"velocity_rms_scheme_time", opt_json(res.errors.velocity_rms_scheme_time)},
+      {"stress_rms", opt_json(res.errors.stress_rms)},
+      {"stress_rel_l2", opt_json(res.errors.stress_rel_l2)},
+      {"displacement_rms_interior", opt_json(res.errors.displacement_rms_interior)},
+      {"velocity_rms_scheme_time_interior", opt_json(res.errors.velocity_rms_scheme_time_interior)},
+      {"stress_rms_interior", opt_json(res.errors.stress_rms_interior)}};
+  j["conservation"] = {{"max_rel_mass_error", res.diag.max_rel_mass_error},
+                       {"max_rel_momentum_error", res.diag.max_rel_momentum_error}};
+  j["grid_crossings"] = res.diag.grid_crossings;
+  return j;
+}
+
+void reference_errors(const Particles<1>& P, const Ulfem1D& ref, ErrorNorms& e) {
+  double ss = 0, num = 0, den = 0;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    const double sr = ref.stress_at(P.x0[i][0]);
+    const double d = P.stress[i](0, 0) - sr;
+    ss += d * d;
+    num += P.volume0[i] * d * d;
+    den += P.volume0[i] * sr * sr;
+  }
+  e.stress_rms = std::sqrt(ss / static_cast<double>(P.x.size()));
+  if (den > 0.0) e.stress_rel_l2 = std::sqrt(num / den);
+}
+
+template ErrorNorms error_norms<1>(const Particles<1>&, const Grid<1>&, const ExactSolution<1>&,
+                                   double, double, double, int);
+template ErrorNorms error_norms<2>(const Particles<2>&, const Grid<2>&, const ExactSolution<2>&,
+                                   double, double, double, int);
+template class OutputSession<1>;
+template class OutputSession<2>;
+
+}  // namespace mpm::driver

@@ -1,0 +1,205 @@
+#pragma once
+// The parts of `mpm run` that do not depend on the basis, mapping or scheme, compiled once per
+// dimension (driver.cpp): the time set-up, the time loop, the output session, error norms, the
+// stability check and summary.json. The steppers (driver/stepper.hpp) are the only typed part.
+#include <unistd.h>
+
+#include <fmt/format.h>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "benchmarks/problem.hpp"
+#include "core/simulation.hpp"
+#include "driver/run.hpp"
+#include "io/config.hpp"
+#include "io/output.hpp"
+#include "solver/ulfem.hpp"
+
+namespace mpm::io {
+struct Checkpoint;
+}
+
+namespace mpm::driver {
+
+using Clock = std::chrono::steady_clock;
+
+inline double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Terminal progress for runs longer than a second: steps, simulated time, rate, time left.
+class Progress {
+ public:
+  Progress(bool enabled, Index total, Index particles, Index start = 0)
+      : enabled_(enabled),
+        total_(total),
+        particles_(particles),
+        start_step_(start),
+        tty_(isatty(STDERR_FILENO)) {}
+  void update(Index step, double t) {
+    if (!enabled_) return;
+    const double el = seconds_since(start_);
+    if (el < 1.0 || el - last_ < (tty_ ? 0.25 : 10.0)) return;
+    last_ = el;
+    const double rate = static_cast<double>(step - start_step_) / el;
+    const double left = rate > 0 ? static_cast<double>(total_ - step) / rate : 0.0;
+    std::cerr << fmt::format("{}step {}/{}  t = {:.4g} s  {:.3g} particle-steps/s  {:.0f} s left{}",
+                             tty_ ? "\r" : "", step, total_, t,
+                             rate * static_cast<double>(particles_), left, tty_ ? "   " : "\n");
+    shown_ = true;
+  }
+  void finish() {
+    if (shown_ && tty_) std::cerr << "\n";
+  }
+
+ private:
+  bool enabled_;
+  Index total_, particles_, start_step_;
+  bool tty_;
+  Clock::time_point start_ = Clock::now();
+  double last_ = 0.0;
+  bool shown_ = false;
+};
+
+// Error norms at the particles (D eq. 4.92; 001 eq. 43 in 2D, |.| the Euclidean or Frobenius
+// norm). The interior norms leave out the particles whose initial position lies in the first or
+// last `boundary_cells` grid cells occupied by the body in any direction, where boundary effects of
+// some bases concentrate (D Fig. 5.10): one cell for nodal bases, p cells for B-splines of degree
+// p, whose asymmetric end functions phi_0 .. phi_{p-1} of the open knot vector reach p cells into
+// the domain.
+template <int Dim>
+ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
+                       const ExactSolution<Dim>& exact, double t, double dt, double velocity_time,
+                       int boundary_cells);
+
+inline nlohmann::ordered_json opt_json(const std::optional<double>& v) {
+  return v ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
+}
+
+// What the time loop sees of a solver's state: the particles (MPM) or element midpoints (FEM)
+// with the time and the material, for history rows and frames.
+template <int Dim>
+struct StateView {
+  const Particles<Dim>& particles;
+  double time;
+  const Material& material;
+  // The MPM mapping's conservation errors (history.csv columns); null for other solvers.
+  const Diagnostics* diag = nullptr;
+};
+
+// Everything written into the output directory during a run.
+template <int Dim>
+class OutputSession {
+ public:
+  OutputSession(const RunOptions& opt, const Config& cfg, const Problem<Dim>& pb);
+  bool enabled() const { return !dir_.empty(); }
+  void history_row(const StateView<Dim>& s);
+  void frame(const StateView<Dim>& s);
+  void summary(const nlohmann::ordered_json& j);
+
+  // Checkpoints: the frames written so far, and continuing after a restart (numbering goes on;
+  // particles.pvd lists the earlier frames again, history.csv starts anew).
+  int frames() const { return frames_; }
+  const std::vector<double>& frame_times() const { return frame_times_; }
+  void resume(const io::Checkpoint& c);
+  void checkpoint(const io::Checkpoint& c);
+
+ private:
+  std::filesystem::path dir_;
+  ExactSolution<Dim> exact_;
+  bool csv_ = true, vtk_ = true;
+  std::string history_;
+  bool mapping_errors_ = false;  // history.csv has mass_error, momentum_error
+  io::PvdSeries pvd_;
+  int frames_ = 0;
+  std::vector<double> frame_times_;
+};
+
+// Stops before the first step when dt exceeds the limit factor h / (c sqrt(dim)), unless
+// time.allow_unstable; `what` names the basis and bound in the message.
+void check_stability(const Config& cfg, double dt, double h, const Material& material,
+                     double factor, int dim, std::string_view what);
+
+struct TimeSetup {
+  double dt;
+  Index steps;
+};
+
+// time.dt and the number of steps to time.end (a whole multiple of dt, else InputError).
+TimeSetup time_setup(const Config& cfg);
+
+// The time loop shared by every solver: `advance(s)` takes step s to s + 1 (timed; may throw
+// RunError), `after()` runs untimed companions (the FEM reference), `view()` exposes the state.
+// Writes history rows and frames, shows progress, and on a RunError keeps the failing state as
+// the last frame and records the failure in `res`. `start`: the step the state is at (non-zero
+// after a restart: no initial frame then). `save(step)` writes a checkpoint every
+// output.checkpoint_every steps.
+template <int Dim, class Advance, class After, class View, class Save>
+void drive(const TimeSetup& ts, const Config& cfg, const RunOptions& opt, OutputSession<Dim>& out,
+           Index start, Advance&& advance, After&& after, View&& view, Save&& save,
+           RunResult& res) {
+  const int frames = static_cast<int>(cfg.get_int("output.frames"));
+  const Index history_every = cfg.get_int("output.history_every");
+  const Index checkpoint_every = cfg.get_int("output.checkpoint_every");
+  if (start > ts.steps)
+    throw InputError(
+        fmt::format("{}: the checkpoint is at step {}, beyond time.end = {} ({} steps of time.dt)",
+                    cfg.where("time.end"), start, cfg.get_real("time.end"), ts.steps));
+  Index next_frame = 1;
+  auto frame_step = [&](Index k) {
+    return frames > 0 ? (k * ts.steps + frames - 1) / frames : ts.steps;
+  };
+  while (next_frame <= frames && start >= frame_step(next_frame)) ++next_frame;
+  out.history_row(view());
+  if (start == 0) out.frame(view());
+  Progress progress(!opt.quiet, ts.steps, res.particles, start);
+  double step_seconds = 0.0;
+  Index step = start;
+  try {
+    while (step < ts.steps) {
+      const auto t0 = Clock::now();
+      advance(step);
+      step_seconds += seconds_since(t0);
+      ++step;
+      after();
+      const bool last = step == ts.steps;
+      if (step % history_every == 0 || last) out.history_row(view());
+      if (last || (frames > 0 && step >= frame_step(next_frame))) {
+        while (next_frame <= frames && step >= frame_step(next_frame)) ++next_frame;
+        out.frame(view());
+      }
+      if (checkpoint_every > 0 && step % checkpoint_every == 0) save(step);
+      progress.update(step, view().time);
+    }
+  } catch (const RunError& e) {
+    res.exit_code = e.exit_code();
+    res.failure = e.what();
+    out.history_row(view());
+    out.frame(view());  // the state the failure was detected in, for diagnosis
+  }
+  progress.finish();
+  res.steps = step;
+  const Index taken = step - start;
+  res.ns_per_particle_step =
+      taken > 0
+          ? 1e9 * step_seconds / (static_cast<double>(taken) * static_cast<double>(res.particles))
+          : 0.0;
+}
+
+// The fields of summary.json common to every solver; `method` describes the solver.
+nlohmann::ordered_json make_summary(const RunResult& res, const Config& cfg,
+                                    const Material& material, const TimeSetup& ts, double t_end,
+                                    nlohmann::ordered_json method, double velocity_time);
+
+// Stress errors of the particles against the FEM reference at their material positions
+// (D 5.4.1: the large-deformation bar is compared with ULFEM, 120 DOFs).
+void reference_errors(const Particles<1>& P, const Ulfem1D& ref, ErrorNorms& e);
+
+}  // namespace mpm::driver

@@ -1,0 +1,181 @@
+#include "driver/run_mpm.hpp"
+
+#include <fmt/format.h>
+#include <optional>
+
+#include "driver/driver.hpp"
+#include "driver/stepper.hpp"
+#include "io/checkpoint.hpp"
+#include "scheme/sort.hpp"
+
+namespace mpm::driver {
+namespace {
+
+template <class Variant>
+std::string_view name_of(const Variant& v) {
+  return std::visit([](const auto& a) { return std::decay_t<decltype(a)>::kName; }, v);
+}
+
+double velocity_time(const Scheme& scheme) {
+  return std::visit([](auto s) { return decltype(s)::kVelocityTime; }, scheme);
+}
+
+// Checkpoints (io/checkpoint.hpp). The state of an MPM run with its FEM reference: everything a
+// step reads that an earlier step wrote (the grid quantities and stencils are rebuilt per step).
+template <int Dim>
+io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
+                       const std::optional<Ulfem1D>& reference, const OutputSession<Dim>& out,
+                       const std::string& config) {
+  const RunState<Dim>& sim = stepper.state();
+  io::Checkpoint c;
+  c.config = config;
+  c.solver = "mpm";
+  c.dim = Dim;
+  c.step = sim.step;
+  c.time = sim.time;
+  c.particles = io::pack_particles(sim.particles);
+  c.cells.assign(sim.cell.begin(), sim.cell.end());
+  c.sort_reference = sim.sorting.reference;
+  c.sorts = sim.sorting.sorts;
+  c.diag = sim.diag;
+  if (reference) c.fem = io::pack_fem(reference->save());
+  c.mapping = std::string(mapping);
+  c.frames = out.frames();
+  c.frame_times = out.frame_times();
+  stepper.save(c);  // mapping totals, basis state
+  return c;
+}
+
+// Puts the checkpoint's state into a freshly set-up run; returns the step it is at.
+template <int Dim>
+Index restore(const RunOptions& opt, Stepper<Dim>& stepper, std::string_view mapping,
+              std::optional<Ulfem1D>& reference, OutputSession<Dim>& out) {
+  const io::Checkpoint& c = *opt.restart;
+  RunState<Dim>& sim = stepper.state();
+  const std::string what = fmt::format("checkpoint '{}'", opt.restart_name);
+  if (c.solver != "mpm" || c.dim != Dim || c.mapping != mapping)
+    throw InputError(
+        fmt::format("{} holds a {} run ({}D, mapping {}), not this {}D mpm run with "
+                    "mapping {}",
+                    what, c.solver, c.dim, c.mapping, Dim, mapping));
+  auto p = io::unpack_particles<Dim>(c.particles, what);
+  if (p.size() != sim.particles.size() || c.cells.size() != sim.cell.size() ||
+      reference.has_value() != c.fem.has_value())
+    throw InputError(fmt::format("{} does not fit the problem: {} particles ({} set up){}", what,
+                                 p.size(), sim.particles.size(),
+                                 reference.has_value() != c.fem.has_value()
+                                     ? ", FEM reference state missing or unexpected"
+                                     : ""));
+  sim.particles = std::move(p);
+  sim.cell.assign(c.cells.begin(), c.cells.end());
+  sim.sorting.reference = c.sort_reference;
+  sim.sorting.sorts = c.sorts;
+  sim.diag = c.diag;
+  sim.step = c.step;
+  sim.time = c.time;
+  if (reference) reference->restore(io::unpack_fem(*c.fem, what));
+  stepper.load(c, what);  // mapping totals, basis state
+  out.resume(c);
+  return c.step;
+}
+
+}  // namespace
+
+template <int Dim>
+RunResult run_mpm(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt,
+                  const BasisKind& basis, const MappingKind& mapping, const Scheme& scheme) {
+  if (!std::visit([](auto k) { return supports_dimension<decltype(k)>(Dim); }, basis))
+    throw InputError(fmt::format("{}: method.basis = \"{}\" is not available in {}D",
+                                 cfg.where("method.basis"), basis_name(basis), Dim));
+  if (!std::visit([](const auto& m) { return supports_dimension<std::decay_t<decltype(m)>>(Dim); },
+                  mapping))
+    throw InputError(fmt::format("{}: method.mapping = \"{}\" is not available in {}D",
+                                 cfg.where("method.mapping"), name_of(mapping), Dim));
+  const std::string_view mapping_name = name_of(mapping);
+  const double scheme_velocity_time = velocity_time(scheme);
+
+  const auto t_start = Clock::now();
+  const TimeSetup ts = time_setup(cfg);
+
+  // The FEM reference of benchmarks without an exact solution, stepped alongside (untimed).
+  std::optional<Ulfem1D> reference;
+  if constexpr (Dim == 1)
+    if (pb.fem_reference) reference.emplace(pb, cfg.get_int("reference.dofs") - 1);
+
+  check_stability(cfg, ts.dt, pb.grid.h.minCoeff(), pb.material, stability_factor(basis), Dim,
+                  fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
+
+  if (opt.shuffle_seed != 0 && !opt.restart)
+    shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
+  const auto stepper = make_stepper<Dim>(basis, {pb, cfg, mapping, scheme, !opt.restart});
+  RunState<Dim>& sim = stepper->state();
+
+  // Outputs start once the input has passed every check above.
+  OutputSession<Dim> out(opt, cfg, pb);
+  RunResult res;
+  res.benchmark = pb.benchmark;
+  res.dim = Dim;
+  res.cells = sim.grid.num_cells();
+  res.h = sim.grid.h[0];
+  res.particles = sim.particles.size();
+  const Index start = opt.restart ? restore<Dim>(opt, *stepper, mapping_name, reference, out) : 0;
+  const std::string config_text = cfg.to_toml();
+  drive<Dim>(
+      ts, cfg, opt, out, start,
+      [&](Index s) {
+        stepper->step(ts.dt);
+        sim.step = s + 1;
+        sim.time = static_cast<double>(sim.step) * ts.dt;
+        // Re-sorting for the next step, timed with this one. Here rather than before the step:
+        // the decision reads this step's chunk ranges, and a checkpoint written after the step
+        // (also the last one of a shortened run) holds the sorted state, so a restart repeats it.
+        const Index sorts = sim.sorting.sorts;
+        const auto t0 = Clock::now();
+        if (stepper->sort_if_due()) {
+          res.sort_seconds += seconds_since(t0);
+          res.sorts += sim.sorting.sorts - sorts;
+        }
+      },
+      [&] {
+        if (reference) reference->step(ts.dt);
+      },
+      [&] {
+        return StateView<Dim>{sim.particles, sim.time, sim.material, &sim.diag};
+      },
+      [&](Index) {
+        out.checkpoint(capture<Dim>(*stepper, mapping_name, reference, out, config_text));
+      },
+      res);
+
+  if (res.exit_code == exit_code::kOk) {
+    res.errors = error_norms<Dim>(sim.particles, sim.grid, pb.exact, sim.time, ts.dt,
+                                  scheme_velocity_time, boundary_cells(basis));
+    if constexpr (Dim == 1)
+      if (reference) reference_errors(sim.particles, *reference, res.errors);
+  }
+  res.diag = sim.diag;
+  res.wall_seconds = seconds_since(t_start);
+
+  nlohmann::ordered_json method = {{"solver", "mpm"},
+                                   {"basis", std::string(basis_name(basis))},
+                                   {"mapping", std::string(mapping_name)},
+                                   {"scheme", std::string(name_of(scheme))},
+                                   {"mass", cfg.get_string("method.mass")}};
+  if (basis_degree(basis) > 0) method["degree"] = basis_degree(basis);
+  res.summary =
+      make_summary(res, cfg, sim.material, ts, sim.time, std::move(method), scheme_velocity_time);
+  stepper->report(res.summary);
+  if (reference)
+    res.summary["reference"] = {{"solver", "ulfem"},
+                                {"dofs", cfg.get_int("reference.dofs")},
+                                {"compared", "stress at the particles' material positions"}};
+  out.summary(res.summary);
+  return res;
+}
+
+template RunResult run_mpm<1>(Problem<1>&, const Config&, const RunOptions&, const BasisKind&,
+                              const MappingKind&, const Scheme&);
+template RunResult run_mpm<2>(Problem<2>&, const Config&, const RunOptions&, const BasisKind&,
+                              const MappingKind&, const Scheme&);
+
+}  // namespace mpm::driver

@@ -1,0 +1,14 @@
+#pragma once
+// The MPM run of one problem with the chosen basis, mapping and scheme (run_mpm.cpp, compiled
+// once per dimension; the typed stepping is behind driver/stepper.hpp).
+#include "benchmarks/problem.hpp"
+#include "core/variants.hpp"
+#include "driver/run.hpp"
+
+namespace mpm::driver {
+
+template <int Dim>
+RunResult run_mpm(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt,
+                  const BasisKind& basis, const MappingKind& mapping, const Scheme& scheme);
+
+}  // namespace mpm::driver

@@ -1,0 +1,95 @@
+#pragma once
+// The typed part of an MPM run, behind one per-run interface: a Stepper owns the
+// Simulation<Dim, Basis, Mapping> and takes it one step with the chosen scheme. Everything
+// per step or per run around it (time loop, outputs, summary, checkpoints, error norms) is the
+// driver's (driver/run_mpm.cpp), compiled once per dimension.
+//
+// What stays compile-time, and why: the basis and the mapping are in every per-particle loop
+// (stencil size, weights, the mapping's scatters and fits), so each (dimension, basis, mapping)
+// is its own Simulation type. The scheme is an order of stage calls made once per step: a
+// std::visit per step costs nothing measurable (BENCHMARKS.md, "Architecture step"), so it is a
+// run-time choice inside the stepper and adds no driver instances. The steppers of one
+// (dimension, basis kind) are instantiated in one generated translation unit
+// (driver/stepper_kind.cpp.in, CMakeLists.txt), so a 2-core build compiles them in parallel and
+// an edit to one basis rebuilds only that basis's units.
+#include <cstddef>
+#include <memory>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <variant>
+
+#include "benchmarks/problem.hpp"
+#include "core/simulation.hpp"
+#include "core/variants.hpp"
+
+namespace mpm {
+
+class Config;
+namespace io {
+struct Checkpoint;
+}
+
+namespace driver {
+
+template <int Dim>
+class Stepper {
+ public:
+  virtual ~Stepper() = default;
+  // Takes the state from step s to s + 1 with the scheme (may throw RunError). The driver sets
+  // the step counter and the time afterwards.
+  virtual void step(double dt) = 0;
+  // Re-sorts the particles by cell if due (scheme/sort.hpp); true when it did.
+  virtual bool sort_if_due() = 0;
+  // The basis- and mapping-independent state (particles, grid, time, diagnostics).
+  virtual RunState<Dim>& state() = 0;
+  virtual const RunState<Dim>& state() const = 0;
+  // The state a checkpoint needs beyond the RunState: the mapping's run-long counters and the
+  // basis's per-particle state (CPDI2 corners). load() throws InputError naming `what`.
+  virtual void save(io::Checkpoint& c) const = 0;
+  virtual void load(const io::Checkpoint& c, const std::string& what) = 0;
+  // The mapping's report over the run (TLS completions, MLS conditioning) into summary.json.
+  virtual void report(nlohmann::ordered_json& summary) const = 0;
+};
+
+// What a stepper is built from. `check_input`: run the reconstruction's input checks on the
+// initial particles (not on a restart).
+template <int Dim>
+struct StepperInput {
+  Problem<Dim>& problem;  // its particles are moved into the stepper
+  const Config& cfg;
+  const MappingKind& mapping;
+  const Scheme& scheme;
+  bool check_input = true;
+};
+
+// The stepper of basis kind `basis` (and the input's mapping and scheme) in Dim dimensions.
+// The caller has checked that basis and mapping exist in Dim (supports_dimension).
+template <int Dim>
+std::unique_ptr<Stepper<Dim>> make_stepper(const BasisKind& basis, const StepperInput<Dim>& in);
+
+// The stepper of the I-th basis kind of BasisKind: defined in stepper_impl.hpp and instantiated
+// in the generated unit of (Dim, I).
+template <int Dim, std::size_t I>
+std::unique_ptr<Stepper<Dim>> make_stepper_for(const StepperInput<Dim>& in);
+
+// The mapping's report over the run into summary.json: how often the TLS completions were
+// needed (D 5.2.3), where MLS moment matrices were ill-conditioned or IMLS dropped terms (001,
+// 003); nothing for the other mappings. Out of line (stepper.cpp), so that the steppers' units
+// do not compile the JSON library.
+void report_mapping(nlohmann::ordered_json& summary, const TlsMapping& m, int dim);
+void report_mapping(nlohmann::ordered_json& summary, const MlsMapping& m, int dim);
+void report_mapping(nlohmann::ordered_json& summary, const ImlsMapping& m, int dim);
+template <class Mapping>
+void report_mapping(nlohmann::ordered_json&, const Mapping&, int) {}
+
+// Per basis kind, what the driver needs without instantiating the basis:
+// the explicit stability factor (dt <= factor h / c in 1D, lumped mass; see stepper.cpp),
+double stability_factor(const BasisKind& basis);
+// the cells at each end of the body left out of the interior error norms (ErrorNorms),
+int boundary_cells(const BasisKind& basis);
+// and the name and B-spline degree (0 for the others) reported in summary.json.
+std::string_view basis_name(const BasisKind& basis);
+int basis_degree(const BasisKind& basis);
+
+}  // namespace driver
+}  // namespace mpm

@@ -1,0 +1,155 @@
+#pragma once
+// The stepper of one (dimension, basis, mapping): included only by the generated units
+// (driver/stepper_kind.cpp.in), one per (dimension, basis kind), which instantiate it for every
+// mapping of that dimension.
+#include <fmt/format.h>
+#include <memory>
+#include <string>
+#include <type_traits>
+#include <variant>
+
+#include "driver/stepper.hpp"
+#include "io/checkpoint.hpp"
+#include "io/config.hpp"
+#include "scheme/schemes.hpp"
+#include "scheme/sort.hpp"
+
+namespace mpm::driver {
+
+// The mapping built with its settings from the configuration (reconstruction mappings),
+// validated for the problem's dimension.
+template <int Dim, class Mapping>
+Mapping make_mapping(const Config& cfg) {
+  try {
+    if constexpr (requires { Mapping::from_config(cfg); })
+      return Mapping::from_config(cfg);
+    else if constexpr (std::is_same_v<Mapping, TlsMapping>)
+      return TlsMapping(tls_settings_from_config(cfg, Dim), Dim);
+    else
+      return Mapping{};
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", cfg.where("method.mapping"), e.what()));
+  }
+}
+
+// Before the first step: with method.tls_completion = "none" every element holding particles
+// must support the Taylor basis on its own (D 5.2.3, 6.3.1); otherwise the run would stop at
+// step 0, so the input is refused with what to change.
+template <int Dim, class Mapping>
+void check_reconstruction_input(const Config& cfg, const Grid<Dim>& grid, const Particles<Dim>& P,
+                                const Mapping& mapping) {
+  if constexpr (std::is_same_v<Mapping, TlsMapping>) {
+    const TlsSettings& s = mapping.settings();
+    if (s.completion != TlsCompletion::None) return;
+    BasicTlsReconstruction<Dim> recon(s);
+    const TlsReport& rep = recon.set_points(grid, P);
+    if (rep.failed > 0)
+      throw InputError(fmt::format(
+          "{}: method.tls_completion = \"none\", but the initial particles cannot support {} "
+          "Taylor terms in {} element(s): element {} has {} particle(s) (condition number "
+          "{:.3g}, limit method.tls_max_condition = {:.3g}); seed more particles "
+          "(particles.per_cell), use fewer terms (method.tls_terms) or set "
+          "method.tls_completion = \"reduce\", \"virtual\" or \"neighbour\"",
+          cfg.where("method.tls_completion"), s.terms_used(Dim), rep.failed,
+          recon.describe(rep.failed_element), rep.failed_points, rep.failed_condition,
+          s.max_condition));
+  }
+}
+
+template <int Dim, class Basis, class Mapping>
+class TypedStepper final : public Stepper<Dim> {
+ public:
+  using Sim = Simulation<Dim, Basis, Mapping>;
+
+  TypedStepper(const StepperInput<Dim>& in)
+      : scheme_(in.scheme),
+        sim_(in.problem.grid, Basis(in.problem.grid), make_mapping<Dim, Mapping>(in.cfg),
+             std::move(in.problem.particles), in.problem.material) {
+    const Config& cfg = in.cfg;
+    const Problem<Dim>& pb = in.problem;
+    if (in.check_input)
+      check_reconstruction_input<Dim>(cfg, sim_.grid, sim_.particles, sim_.mapping);
+    sim_.mass_type =
+        cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
+    sim_.mass_tolerance = cfg.get_real("method.mass_tolerance");
+    sim_.sorting.mode = cfg.get_string("method.sort") == "never" ? SortMode::Never : SortMode::Auto;
+    for (const auto& f : pb.fixed_sides) sim_.fix_side(f.direction, f.side, f.components);
+    sim_.body_force = pb.body_force;
+    sim_.tractions = pb.tractions;
+    if (sim_.body_force.fill) sim_.body_force.fill(sim_.particles, 0.0, sim_.particles.body);
+  }
+
+  void step(double dt) override {
+    std::visit([&](auto scheme) { decltype(scheme)::step(sim_, dt); }, scheme_);
+  }
+
+  bool sort_if_due() override {
+    const Index sorts = sim_.sorting.sorts;
+    sort_particles_if_due(sim_);
+    return sim_.sorting.sorts != sorts;
+  }
+
+  RunState<Dim>& state() override { return sim_; }
+  const RunState<Dim>& state() const override { return sim_; }
+
+  void save(io::Checkpoint& c) const override {
+    if constexpr (requires { io::encode_totals(sim_.mapping.totals()); })
+      c.mapping_totals = io::encode_totals(sim_.mapping.totals());
+    if constexpr (requires { sim_.basis.corners(); })
+      for (const auto& corners : sim_.basis.corners())
+        for (const auto& x : corners)
+          for (int d = 0; d < Dim; ++d) c.basis_state.push_back(x[d]);
+  }
+
+  void load(const io::Checkpoint& c, const std::string& what) override {
+    if constexpr (requires { io::encode_totals(sim_.mapping.totals()); }) {
+      auto t = sim_.mapping.totals();
+      io::decode_totals(c.mapping_totals, t);
+      sim_.mapping.set_totals(t);
+    }
+    if constexpr (requires { sim_.basis.corners(); }) {
+      // CPDI2: the tracked corners, 2^Dim per particle.
+      using Corners = typename std::decay_t<decltype(sim_.basis.corners())>::value_type;
+      constexpr std::size_t kPer = std::tuple_size_v<Corners> * Dim;
+      if (c.basis_state.size() != kPer * sim_.particles.x.size())
+        throw InputError(fmt::format("{} holds {} values of basis state; the {} basis needs {}",
+                                     what, c.basis_state.size(), Basis::kName,
+                                     kPer * sim_.particles.x.size()));
+      std::vector<Corners> corners(sim_.particles.x.size());
+      std::size_t k = 0;
+      for (auto& cs : corners)
+        for (auto& x : cs)
+          for (int d = 0; d < Dim; ++d) x[d] = c.basis_state[k++];
+      sim_.basis.set_corners(std::move(corners));
+    }
+  }
+
+  void report(nlohmann::ordered_json& summary) const override {
+    report_mapping(summary, sim_.mapping, Dim);
+  }
+
+ private:
+  Scheme scheme_;
+  Sim sim_;
+};
+
+template <int Dim, std::size_t I>
+std::unique_ptr<Stepper<Dim>> make_stepper_for(const StepperInput<Dim>& in) {
+  using Kind = std::variant_alternative_t<I, BasisKind>;
+  if constexpr (!supports_dimension<Kind>(Dim)) {
+    throw std::logic_error("make_stepper_for: basis not available in this dimension");
+  } else {
+    using Basis = typename Kind::template type<Dim>;
+    return std::visit(
+        [&](auto m) -> std::unique_ptr<Stepper<Dim>> {
+          using Mapping = decltype(m);
+          if constexpr (!supports_dimension<Mapping>(Dim))
+            throw std::logic_error("make_stepper_for: mapping not available in this dimension");
+          else
+            return std::make_unique<TypedStepper<Dim, Basis, Mapping>>(in);
+        },
+        in.mapping);
+  }
+}
+
+}  // namespace mpm::driver
