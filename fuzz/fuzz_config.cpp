@@ -16,8 +16,8 @@
 #include <string_view>
 
 #include "core/types.hpp"
-#include "io/config.hpp"
-#include "io/expression.hpp"
+#include "setup/config.hpp"
+#include "setup/expression.hpp"
 
 namespace {
 

@@ -2,9 +2,9 @@
 # Builds everything with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ (Debug at
 # -O0, g++) and runs the fast tests there; any sanitizer report fails the run.
 #
-# -O0: the instrumented build of the dispatch files (every basis x mapping x scheme, src/core/
-# run_1d.cpp and run_2d.cpp) takes about half the compile time of -O1, which keeps CI within its
-# budget. The slow tests (SLOW below; under a second to a few seconds each in Release, up to
+# -O0: the instrumented build of the typed steppers (every basis x mapping x scheme, the
+# generated units of src/driver/stepper_kind.cpp.in) takes about half the compile time of -O1,
+# which keeps CI within its budget. The slow tests (SLOW below; under a second to a few seconds each in Release, up to
 # 80 s here) are left out here and run in the Release suite of scripts/test.sh. SANITIZE_ALL=1
 # runs every test.
 set -euo pipefail

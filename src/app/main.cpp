@@ -8,14 +8,14 @@
 #include <memory>
 #include <optional>
 
-#include "core/perf.hpp"
-#include "core/reconstruct.hpp"
-#include "core/registry.hpp"
-#include "core/study.hpp"
+#include "app/perf.hpp"
+#include "app/reconstruct.hpp"
+#include "app/study.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
-#include "io/config.hpp"
 #include "mpm/version.hpp"
+#include "setup/config.hpp"
+#include "setup/registry.hpp"
 
 namespace {
 
@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
   bench
       ->add_option("--problem", bopt.problem,
                    "2D problem: plate (plate_mms_2d, body force b(X, t)) or refkernel (the "
-                   "problem of /work/shared/tools/refkernel.cpp: padded unit square, no body "
+                   "problem of ../shared/tools/refkernel.cpp: padded unit square, no body "
                    "force, dt = 1e-6 s)")
       ->check(CLI::IsMember({"plate", "refkernel"}))
       ->capture_default_str();

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "basis/basis.hpp"
 #include "basis/stencil.hpp"
 #include "grid/grid.hpp"
 #include "particles/particles.hpp"
@@ -114,6 +115,10 @@ class BSplineBasis {
   static constexpr std::string_view kName = "bspline";
   static constexpr int kDegree = Degree;
   static constexpr int kPerDim = Degree + 1;
+  // Capabilities (basis/basis.hpp): compact tensor-product stencils evaluated from cell
+  // coordinates; no particle domain, no preparation pass, no tracked per-particle state.
+  static constexpr bool kTensorProduct = true, kParticleDomain = false, kPrepare = false,
+                        kTrackedCorners = false;
   using StencilT = Stencil<Dim, ipow(Degree + 1, Dim)>;
   using CachedStencilT = TensorStencil<Dim, Degree + 1>;
 
@@ -205,5 +210,8 @@ class BSplineBasis {
   IVec<Dim> n_{}, stride_{};
   Vec<Dim> inv_h_;
 };
+
+// The basis concept (basis/basis.hpp).
+static_assert(Basis<BSplineBasis<1, 2>, 1> && Basis<BSplineBasis<2, 3>, 2>);
 
 }  // namespace mpm

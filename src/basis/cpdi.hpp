@@ -59,6 +59,7 @@
 #include <utility>
 #include <vector>
 
+#include "basis/basis.hpp"
 #include "basis/gimp.hpp"
 
 namespace mpm {
@@ -314,6 +315,9 @@ class Cpdi2Basis : public detail::NodalDomainBasis<Dim> {
  public:
   static constexpr std::string_view kName = "cpdi2";
   static constexpr int kCorners = 4;
+  // Capabilities (basis/basis.hpp): the corners are set up by prepare() and tracked between
+  // steps (corners(), set_corners(), advect(), permute()).
+  static constexpr bool kPrepare = true, kTrackedCorners = true;
   using Base::kPerDim;
   using typename Base::StencilT;
   using Corners = std::array<Vec<Dim>, kCorners>;  // numbered as CpdiBasis::corners()
@@ -407,5 +411,9 @@ class Cpdi2Basis : public detail::NodalDomainBasis<Dim> {
  private:
   std::vector<Corners> corners_;
 };
+
+// The basis concept (basis/basis.hpp).
+static_assert(Basis<CpdiBasis<1>, 1> && Basis<CpdiBasis<2>, 2>);
+static_assert(Basis<Cpdi2Basis<2>, 2>);
 
 }  // namespace mpm

@@ -33,6 +33,7 @@
 #include <string_view>
 #include <vector>
 
+#include "basis/basis.hpp"
 #include "basis/linear.hpp"
 
 namespace mpm {
@@ -45,6 +46,10 @@ class DdmpmBasis {
  public:
   static constexpr std::string_view kName = "ddmpm";
   static constexpr int kPerDim = 4;  // nodes c-1 .. c+2 carry smoothed gradients
+  // Capabilities (basis/basis.hpp): full stencils at the particle position; prepare() refreshes
+  // the node volumes from the particles before each evaluation pass.
+  static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = true,
+                        kTrackedCorners = false;
   using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
 
   explicit DdmpmBasis(const Grid<Dim>& g) : p1_(g), n_(p1_.dofs_per_dim()) {
@@ -160,5 +165,8 @@ class DdmpmBasis {
   std::vector<Neighbours> G_;  // per node j: (1/V_j) int phi_j grad phi_{j+o}, o in {-1,0,1}^Dim
   std::vector<double> V_;      // V_j [m^Dim], scratch of prepare()
 };
+
+// The basis concept (basis/basis.hpp).
+static_assert(Basis<DdmpmBasis<1>, 1> && Basis<DdmpmBasis<2>, 2>);
 
 }  // namespace mpm

@@ -27,6 +27,7 @@
 #include <string_view>
 #include <vector>
 
+#include "basis/basis.hpp"
 #include "basis/stencil.hpp"
 #include "grid/grid.hpp"
 #include "particles/particles.hpp"
@@ -61,6 +62,10 @@ class NodalDomainBasis {
  public:
   static constexpr int kPerDim = kDomainPerDim;
   using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
+  // Capabilities (basis/basis.hpp): full stencils of a particle domain that must fit them
+  // (fits()); CPDI2 adds its preparation pass and tracked corners.
+  static constexpr bool kTensorProduct = false, kParticleDomain = true, kPrepare = false,
+                        kTrackedCorners = false;
 
   explicit NodalDomainBasis(const Grid<Dim>& g) : grid_(g) {
     for (int d = 0; d < Dim; ++d) {
@@ -278,5 +283,9 @@ class CpGimpBasis : public detail::GimpBasis<Dim, true> {
   static constexpr std::string_view kName = "cpgimp";
   using detail::GimpBasis<Dim, true>::GimpBasis;
 };
+
+// The basis concept (basis/basis.hpp).
+static_assert(Basis<UGimpBasis<1>, 1> && Basis<UGimpBasis<2>, 2>);
+static_assert(Basis<CpGimpBasis<1>, 1> && Basis<CpGimpBasis<2>, 2>);
 
 }  // namespace mpm

@@ -4,6 +4,7 @@
 #include <string_view>
 #include <vector>
 
+#include "basis/basis.hpp"
 #include "basis/stencil.hpp"
 #include "grid/grid.hpp"
 #include "particles/particles.hpp"
@@ -15,6 +16,10 @@ class LinearBasis {
  public:
   static constexpr std::string_view kName = "linear";
   static constexpr int kPerDim = 2;
+  // Capabilities (basis/basis.hpp): compact tensor-product stencils evaluated from cell
+  // coordinates; no particle domain, no preparation pass, no tracked per-particle state.
+  static constexpr bool kTensorProduct = true, kParticleDomain = false, kPrepare = false,
+                        kTrackedCorners = false;
   using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
   using CachedStencilT = TensorStencil<Dim, kPerDim>;
 
@@ -90,5 +95,8 @@ class LinearBasis {
   IVec<Dim> n_{}, stride_{};
   Vec<Dim> inv_h_;
 };
+
+// The basis concept (basis/basis.hpp).
+static_assert(Basis<LinearBasis<1>, 1> && Basis<LinearBasis<2>, 2>);
 
 }  // namespace mpm

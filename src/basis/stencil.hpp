@@ -133,15 +133,12 @@ inline std::array<Index, 2> dof_bounds(const TensorStencil<Dim, K>& s,
 
 // The stencil type a basis caches per particle: its compact CachedStencilT when it has one
 // (tensor-product bases), else the full StencilT (GIMP, CPDI, DDMPM).
-template <class Basis>
+template <class Basis, bool kTensor = Basis::kTensorProduct>
 struct CachedStencilOf {
   using type = typename Basis::StencilT;
 };
 template <class Basis>
-requires requires {
-  typename Basis::CachedStencilT;
-}
-struct CachedStencilOf<Basis> {
+struct CachedStencilOf<Basis, true> {
   using type = typename Basis::CachedStencilT;
 };
 

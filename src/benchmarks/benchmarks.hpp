@@ -2,9 +2,14 @@
 // Constructors of the built-in benchmarks (one file each).
 #include <numbers>
 
-#include "benchmarks/problem.hpp"
+#include "model/problem.hpp"
 
 namespace mpm {
+
+class Config;
+
+// Builds the problem selected by `benchmark` (registry::kBenchmarks). Throws InputError.
+AnyProblem make_problem(const Config& cfg);
 
 // Vibrating bar with fixed ends (D 3.4.1, 5.4.1; 004 4.5). Small deformation: exact solution
 // u = v0/omega sin(omega t) sin(pi X/L), v = v0 cos(omega t) sin(pi X/L),

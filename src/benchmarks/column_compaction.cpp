@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "benchmarks/benchmarks.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 

@@ -1,8 +1,8 @@
 #include <fmt/format.h>
 
 #include "benchmarks/benchmarks.hpp"
-#include "io/config.hpp"
-#include "io/expression.hpp"
+#include "setup/config.hpp"
+#include "setup/expression.hpp"
 
 namespace mpm {
 namespace {

@@ -3,8 +3,8 @@
 #include <numbers>
 
 #include "benchmarks/benchmarks.hpp"
-#include "io/config.hpp"
-#include "scheme/parallel.hpp"
+#include "core/parallel.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 

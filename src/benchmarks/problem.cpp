@@ -1,10 +1,10 @@
-#include "benchmarks/problem.hpp"
+#include "model/problem.hpp"
 
 #include <fmt/format.h>
 #include <cmath>
 
 #include "benchmarks/benchmarks.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 

@@ -3,7 +3,7 @@
 #include <numbers>
 
 #include "benchmarks/benchmarks.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 

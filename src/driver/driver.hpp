@@ -15,11 +15,11 @@
 #include <string_view>
 #include <vector>
 
-#include "benchmarks/problem.hpp"
-#include "core/simulation.hpp"
 #include "driver/run.hpp"
-#include "io/config.hpp"
 #include "io/output.hpp"
+#include "model/problem.hpp"
+#include "scheme/simulation.hpp"
+#include "setup/config.hpp"
 #include "solver/ulfem.hpp"
 
 namespace mpm::io {

@@ -2,11 +2,12 @@
 
 #include <fmt/format.h>
 
-#include "core/registry.hpp"
-#include "core/variants.hpp"
+#include "benchmarks/benchmarks.hpp"
 #include "driver/driver.hpp"
 #include "driver/run_mpm.hpp"
 #include "io/checkpoint.hpp"
+#include "scheme/variants.hpp"
+#include "setup/registry.hpp"
 
 namespace mpm {
 namespace {
@@ -80,8 +81,8 @@ template <std::size_t I = 0>
 BasisKind choose_basis(std::string_view name, int degree) {
   if constexpr (I < std::variant_size_v<BasisKind>) {
     using Alt = std::variant_alternative_t<I, BasisKind>;
-    bool match = name == Alt::kName;
-    if constexpr (requires { Alt::kDegree; }) match = match && degree == Alt::kDegree;
+    // B-spline kinds match by degree too (kDegree 0: not a B-spline).
+    const bool match = name == Alt::kName && (Alt::kDegree == 0 || degree == Alt::kDegree);
     if (match) return BasisKind(std::in_place_index<I>);
     return choose_basis<I + 1>(name, degree);
   } else {

@@ -6,8 +6,8 @@
 #include <optional>
 #include <string>
 
-#include "core/simulation.hpp"
 #include "core/types.hpp"
+#include "scheme/simulation.hpp"
 
 namespace mpm {
 

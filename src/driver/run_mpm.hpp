@@ -1,9 +1,9 @@
 #pragma once
 // The MPM run of one problem with the chosen basis, mapping and scheme (run_mpm.cpp, compiled
 // once per dimension; the typed stepping is behind driver/stepper.hpp).
-#include "benchmarks/problem.hpp"
-#include "core/variants.hpp"
 #include "driver/run.hpp"
+#include "model/problem.hpp"
+#include "scheme/variants.hpp"
 
 namespace mpm::driver {
 

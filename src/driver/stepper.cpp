@@ -102,7 +102,7 @@ void report_mapping(nlohmann::ordered_json& summary, const ImlsMapping& m, int d
 double stability_factor(const BasisKind& basis) {
   return std::visit(
       [](auto k) {
-        if constexpr (requires { decltype(k)::kDegree; })
+        if constexpr (decltype(k)::kDegree > 0)
           return bspline_stability_factor<decltype(k)::kDegree>();
         else
           return 1.0;
@@ -122,14 +122,7 @@ std::string_view basis_name(const BasisKind& basis) {
 }
 
 int basis_degree(const BasisKind& basis) {
-  return std::visit(
-      [](auto k) {
-        if constexpr (requires { decltype(k)::kDegree; })
-          return decltype(k)::kDegree;
-        else
-          return 0;
-      },
-      basis);
+  return std::visit([](auto k) { return decltype(k)::kDegree; }, basis);
 }
 
 }  // namespace mpm::driver

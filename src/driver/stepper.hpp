@@ -18,9 +18,9 @@
 #include <string>
 #include <variant>
 
-#include "benchmarks/problem.hpp"
-#include "core/simulation.hpp"
-#include "core/variants.hpp"
+#include "model/problem.hpp"
+#include "scheme/simulation.hpp"
+#include "scheme/variants.hpp"
 
 namespace mpm {
 

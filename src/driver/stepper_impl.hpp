@@ -8,29 +8,16 @@
 #include <type_traits>
 #include <variant>
 
+#include "basis/basis.hpp"
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
-#include "io/config.hpp"
+#include "mapping/mapping.hpp"
 #include "scheme/schemes.hpp"
 #include "scheme/sort.hpp"
+#include "setup/config.hpp"
+#include "setup/method_settings.hpp"
 
 namespace mpm::driver {
-
-// The mapping built with its settings from the configuration (reconstruction mappings),
-// validated for the problem's dimension.
-template <int Dim, class Mapping>
-Mapping make_mapping(const Config& cfg) {
-  try {
-    if constexpr (requires { Mapping::from_config(cfg); })
-      return Mapping::from_config(cfg);
-    else if constexpr (std::is_same_v<Mapping, TlsMapping>)
-      return TlsMapping(tls_settings_from_config(cfg, Dim), Dim);
-    else
-      return Mapping{};
-  } catch (const InputError& e) {
-    throw InputError(fmt::format("{}: {}", cfg.where("method.mapping"), e.what()));
-  }
-}
 
 // Before the first step: with method.tls_completion = "none" every element holding particles
 // must support the Taylor basis on its own (D 5.2.3, 6.3.1); otherwise the run would stop at
@@ -60,6 +47,8 @@ template <int Dim, class Basis, class Mapping>
 class TypedStepper final : public Stepper<Dim> {
  public:
   using Sim = Simulation<Dim, Basis, Mapping>;
+  static_assert(mpm::Basis<Basis, Dim>, "basis/basis.hpp");
+  static_assert(MappingFor<Mapping, Sim>, "mapping/mapping.hpp");
 
   TypedStepper(const StepperInput<Dim>& in)
       : scheme_(in.scheme),
@@ -93,21 +82,20 @@ class TypedStepper final : public Stepper<Dim> {
   const RunState<Dim>& state() const override { return sim_; }
 
   void save(io::Checkpoint& c) const override {
-    if constexpr (requires { io::encode_totals(sim_.mapping.totals()); })
-      c.mapping_totals = io::encode_totals(sim_.mapping.totals());
-    if constexpr (requires { sim_.basis.corners(); })
+    if constexpr (Mapping::kRunTotals) c.mapping_totals = io::encode_totals(sim_.mapping.totals());
+    if constexpr (Basis::kTrackedCorners)
       for (const auto& corners : sim_.basis.corners())
         for (const auto& x : corners)
           for (int d = 0; d < Dim; ++d) c.basis_state.push_back(x[d]);
   }
 
   void load(const io::Checkpoint& c, const std::string& what) override {
-    if constexpr (requires { io::encode_totals(sim_.mapping.totals()); }) {
+    if constexpr (Mapping::kRunTotals) {
       auto t = sim_.mapping.totals();
       io::decode_totals(c.mapping_totals, t);
       sim_.mapping.set_totals(t);
     }
-    if constexpr (requires { sim_.basis.corners(); }) {
+    if constexpr (Basis::kTrackedCorners) {
       // CPDI2: the tracked corners, 2^Dim per particle.
       using Corners = typename std::decay_t<decltype(sim_.basis.corners())>::value_type;
       constexpr std::size_t kPer = std::tuple_size_v<Corners> * Dim;

@@ -2,14 +2,22 @@
 // Uniform structured background grid: the cells (knot spans) and their geometry. Which
 // degrees of freedom live on it is decided by the basis (nodes for P1, control points for
 // B-splines), so nodal storage is sized by the basis, not here.
+#include <array>
 #include <cmath>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include "core/types.hpp"
+#include "grid/mesh.hpp"
 
 namespace mpm {
 
 template <int Dim>
 struct Grid {
+  static constexpr int kDim = Dim;
+  static constexpr int kCellVertices = 1 << Dim;
+
   Vec<Dim> origin = Vec<Dim>::Zero();  // lower corner [m]
   Vec<Dim> h = Vec<Dim>::Ones();       // cell size per direction [m]
   IVec<Dim> cells{};                   // number of cells per direction
@@ -56,6 +64,62 @@ struct Grid {
     }
     return idx;
   }
+
+  // The mesh interface (grid/mesh.hpp): vertices x fastest, (cells[d] + 1) per direction.
+  Index num_vertices() const {
+    Index n = 1;
+    for (int d = 0; d < Dim; ++d) n *= cells[d] + 1;
+    return n;
+  }
+  Vec<Dim> vertex(Index i) const {
+    Vec<Dim> x;
+    for (int d = 0; d < Dim; ++d) {
+      const Index n = cells[d] + 1;
+      x[d] = origin[d] + h[d] * static_cast<double>(i % n);
+      i /= n;
+    }
+    return x;
+  }
+  // The 2^Dim vertices of cell c, lexicographic with x fastest (lower-left first).
+  std::array<Index, kCellVertices> cell_vertices(Index c) const {
+    IVec<Dim> ci;
+    for (int d = 0; d < Dim; ++d) {
+      ci[d] = c % cells[d];
+      c /= cells[d];
+    }
+    std::array<Index, kCellVertices> out{};
+    for (int k = 0; k < kCellVertices; ++k) {
+      Index v = 0, stride = 1;
+      for (int d = 0; d < Dim; ++d) {
+        v += (ci[d] + ((k >> d) & 1)) * stride;
+        stride *= cells[d] + 1;
+      }
+      out[static_cast<std::size_t>(k)] = v;
+    }
+    return out;
+  }
+  double cell_volume(Index /*c*/) const { return cell_volume(); }
+  // Boundary vertex sets by name: "x-", "x+" (and "y-", "y+" in 2D, "z-", "z+" in 3D), the
+  // vertices on the lower or upper grid side normal to that axis. InputError for another name.
+  std::vector<std::string> boundary_names() const {
+    std::vector<std::string> names;
+    for (int d = 0; d < Dim; ++d)
+      for (const char* s : {"-", "+"}) names.push_back(std::string(1, "xyz"[d]) + s);
+    return names;
+  }
+  std::vector<Index> boundary_vertices(std::string_view name) const {
+    const auto [d, side] = boundary_side<Dim>(name);
+    std::vector<Index> out;
+    for (Index i = 0; i < num_vertices(); ++i) {
+      Index k = i;
+      for (int e = 0; e < d; ++e) k /= cells[e] + 1;
+      if (k % (cells[d] + 1) == (side == 0 ? 0 : cells[d])) out.push_back(i);
+    }
+    return out;
+  }
 };
+
+static_assert(Mesh<Grid<1>>);
+static_assert(Mesh<Grid<2>>);
 
 }  // namespace mpm

@@ -31,11 +31,11 @@
 #include <string_view>
 #include <vector>
 
-#include "core/simulation.hpp"
-#include "io/config.hpp"
 #include "mapping/mls.hpp"
 #include "mapping/tls.hpp"
 #include "particles/particles.hpp"
+#include "scheme/simulation.hpp"
+#include "setup/config.hpp"
 #include "solver/ulfem.hpp"
 
 namespace mpm::io {

@@ -8,8 +8,6 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "io/config.hpp"
-
 namespace mpm {
 
 namespace {
@@ -185,12 +183,6 @@ CubicSplineMapping::CubicSplineMapping(const Settings& s) : settings_(s), spline
   if (settings_.gauss_points_per_half == 0)
     settings_.gauss_points_per_half = Settings::kDefaultGaussPointsPerHalf;
   rule_ = gauss_legendre(settings_.gauss_points_per_half);
-}
-
-CubicSplineMapping CubicSplineMapping::from_config(const Config& cfg) {
-  Settings s;
-  s.gauss_points_per_half = static_cast<int>(cfg.get_int("method.gauss_points"));
-  return CubicSplineMapping(s);
 }
 
 }  // namespace mpm

@@ -16,12 +16,12 @@
 #include <string_view>
 #include <vector>
 
-#include "core/simulation.hpp"
+#include "basis/linear.hpp"
+#include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
+#include "scheme/simulation.hpp"
 
 namespace mpm {
-
-class Config;
 
 // What the spline does outside [x_1, x_M], the range of its data.
 //   kLinear: z(x) = z(x_end) + z'(x_end) (x - x_end). The natural spline is the minimiser of
@@ -152,17 +152,18 @@ struct CubicSplineSettings {
 class CubicSplineMapping {
  public:
   static constexpr std::string_view kName = "cubic_spline";
+  static constexpr std::string_view kDescription =
+      "global natural cubic spline through particle values, 2x2 Gauss points per element (D 3.2)";
   using Settings = CubicSplineSettings;
   // D formulates the reconstruction in one dimension only (3.2: "presented for one-dimensional
   // problems"); the run set-up rejects other dimensions with this before instantiating.
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
+  // Capabilities (mapping/mapping.hpp).
+  static constexpr bool kFusedScatter = false, kRunTotals = false;
 
   CubicSplineMapping() : CubicSplineMapping(Settings{}) {}
   // Throws InputError for a negative number of Gauss points.
   explicit CubicSplineMapping(const Settings& s);
-  // Settings from method.gauss_points (Gauss points per half element, 0: D's 2); the run set-up
-  // calls this through make_mapping().
-  static CubicSplineMapping from_config(const Config& cfg);
 
   const Settings& settings() const { return settings_; }
   int gauss_points_per_half() const { return static_cast<int>(rule_.xi.size()); }
@@ -293,5 +294,9 @@ class CubicSplineMapping {
   std::vector<Vec<1>> vec_g_;          // (rho v)_hat [kg/(m^2 s)] or (rho b)_hat [N/m^3]
   std::vector<Mat<1>> sig_g_;          // sigma_hat [Pa]
 };
+
+// The mapping concept (mapping/mapping.hpp), checked with the P1 basis; the steppers check
+// every basis they instantiate.
+static_assert(MappingFor<CubicSplineMapping, Simulation<1, LinearBasis<1>, CubicSplineMapping>>);
 
 }  // namespace mpm

@@ -3,16 +3,23 @@
 // (D eq. 2.25, 2.44-2.45, 2.48; 004 eq. 4.5-4.7, 4.10).
 #include <string_view>
 
-#include "core/simulation.hpp"
+#include "basis/linear.hpp"
+#include "mapping/mapping.hpp"
+#include "scheme/simulation.hpp"
 
 namespace mpm {
 
 struct DirectMapping {
   static constexpr std::string_view kName = "direct";
+  static constexpr std::string_view kDescription =
+      "standard MPM mapping: particles are the quadrature points (D 3.2, 004 4.4)";
+  // Capabilities (mapping/mapping.hpp).
+  static constexpr bool kFusedScatter = true, kRunTotals = false;
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
 
   // m_i = sum_p phi_i(x_p) m_p (lumped, D eq. 2.24); with consistent mass also
   // M_ij = sum_p phi_i m_p phi_j (D eq. 2.44). The sums run in parallel over fixed particle
-  // chunks (scheme/parallel.hpp): the same bits for any thread count.
+  // chunks (core/parallel.hpp): the same bits for any thread count.
   template <class Sim>
   void map_mass(Sim& sim) const {
     map_fused<grid_sum::kMass>(sim);
@@ -151,5 +158,10 @@ struct DirectMapping {
     return r;
   }
 };
+
+// The mapping concept (mapping/mapping.hpp), checked with the P1 basis; the steppers check
+// every basis they instantiate.
+static_assert(MappingFor<DirectMapping, Simulation<1, LinearBasis<1>, DirectMapping>> &&
+              MappingFor<DirectMapping, Simulation<2, LinearBasis<2>, DirectMapping>>);
 
 }  // namespace mpm

@@ -5,8 +5,6 @@
 #include <cmath>
 #include <limits>
 
-#include "io/config.hpp"
-
 namespace mpm {
 
 double mls_weight(MlsWeight kind, double distance, double cell, double dilation) {
@@ -330,15 +328,5 @@ double MovingLeastSquares<Dim>::evaluate(const Vec<Dim>& x, MlsWeight weight,
 
 template class MovingLeastSquares<1>;
 template class MovingLeastSquares<2>;
-
-MlsSettings mls_settings_from_config(const Config& cfg, bool improved) {
-  MlsSettings s;
-  s.degree = static_cast<int>(cfg.get_int("method.mls_degree"));
-  s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
-  s.dilation = cfg.get_real("method.mls_dilation");
-  if (improved && cfg.get_string("method.mass") != "lumped")
-    throw InputError("method.mapping = imls needs method.mass = lumped (003 eq. 32)");
-  return s;
-}
 
 }  // namespace mpm

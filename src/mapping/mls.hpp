@@ -34,12 +34,12 @@
 #include <type_traits>
 #include <vector>
 
-#include "core/simulation.hpp"
+#include "basis/linear.hpp"
+#include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
+#include "scheme/simulation.hpp"
 
 namespace mpm {
-
-class Config;
 
 enum class MlsWeight {
   // 003 eq. 27 / 001 eq. 17: w(r), r = |x - x_p| / (a l), nonzero for |x - x_p| < 1.5 a l (per
@@ -291,8 +291,14 @@ template <bool Improved>
 class MovingLeastSquaresMapping {
  public:
   static constexpr std::string_view kName = Improved ? "imls" : "mls";
+  static constexpr std::string_view kDescription =
+      Improved
+          ? "improved MLS: Gram-Schmidt orthogonal basis, no moment-matrix inverse (003 eq. 1-40)"
+          : "moving least squares at Gauss points, quadratic-spline weight (001 eq. 6-37)";
   using Settings = MlsSettings;
   static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  // Capabilities (mapping/mapping.hpp).
+  static constexpr bool kFusedScatter = false, kRunTotals = true;
 
   MovingLeastSquaresMapping() : MovingLeastSquaresMapping(Settings{}) {}
   // Throws InputError for a degree other than 1, 2 or negative Gauss points.
@@ -301,8 +307,6 @@ class MovingLeastSquaresMapping {
     if (s.gauss_points < 0) throw InputError("method.gauss_points must be >= 0");
     rule_ = gauss_legendre(s.gauss_points_used());
   }
-  // method.mls_degree and method.gauss_points; IMLS also checks method.mass = lumped.
-  static MovingLeastSquaresMapping from_config(const Config& cfg);
 
   const Settings& settings() const { return settings_; }
   template <int Dim = 1>
@@ -468,13 +472,11 @@ class MovingLeastSquaresMapping {
 using MlsMapping = MovingLeastSquaresMapping<false>;
 using ImlsMapping = MovingLeastSquaresMapping<true>;
 
-// Settings from method.mls_degree, method.gauss_points (and method.mass for IMLS).
-MlsSettings mls_settings_from_config(const Config& cfg, bool improved);
-
-template <bool Improved>
-MovingLeastSquaresMapping<Improved> MovingLeastSquaresMapping<Improved>::from_config(
-    const Config& cfg) {
-  return MovingLeastSquaresMapping(mls_settings_from_config(cfg, Improved));
-}
+// The mapping concept (mapping/mapping.hpp), checked with the P1 basis; the steppers check
+// every basis they instantiate.
+static_assert(MappingFor<MlsMapping, Simulation<1, LinearBasis<1>, MlsMapping>> &&
+              MappingFor<MlsMapping, Simulation<2, LinearBasis<2>, MlsMapping>>);
+static_assert(MappingFor<ImlsMapping, Simulation<1, LinearBasis<1>, ImlsMapping>> &&
+              MappingFor<ImlsMapping, Simulation<2, LinearBasis<2>, ImlsMapping>>);
 
 }  // namespace mpm

@@ -10,8 +10,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/simulation.hpp"
-#include "scheme/parallel.hpp"
+#include "core/parallel.hpp"
+#include "scheme/simulation.hpp"
 
 namespace mpm {
 
@@ -69,7 +69,7 @@ struct ElementBins {
 // functions integrate reconstructed fields given at the points.
 //
 // The assembly is a Gauss-point-to-grid scatter run like the particle scatters of the explicit
-// core (scheme/parallel.hpp): the points are split into the fixed chunks of ParticleChunks (a
+// core (core/parallel.hpp): the points are split into the fixed chunks of ParticleChunks (a
 // function of the point count only), each chunk sums its points in order into its own slice of
 // grid buffer (the DOF range its stencils touch, recorded by evaluate()), and the slices are
 // added in chunk order. The result is bitwise the same for any thread count; up to

@@ -9,8 +9,7 @@
 #include <limits>
 #include <type_traits>
 
-#include "io/config.hpp"
-#include "scheme/parallel.hpp"
+#include "core/parallel.hpp"
 
 namespace mpm {
 
@@ -127,16 +126,6 @@ void validate(const TlsSettings& s, int dim) {
         "direction integrate degree 2n - 1, the {}D basis has degree {}); use 2 or more Gauss "
         "points, or 0 for the default",
         s.gauss_points, terms, dim, taylor_degree(terms, dim)));
-}
-
-TlsSettings tls_settings_from_config(const Config& cfg, int dim) {
-  TlsSettings s;
-  s.terms = static_cast<int>(cfg.get_int("method.tls_terms"));
-  s.completion = parse_tls_completion(cfg.get_string("method.tls_completion"));
-  s.max_condition = cfg.get_real("method.tls_max_condition");
-  s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
-  validate(s, dim);
-  return s;
 }
 
 void accumulate(TlsReport& total, const TlsReport& step) {

@@ -28,12 +28,12 @@
 #include <type_traits>
 #include <vector>
 
-#include "core/simulation.hpp"
+#include "basis/linear.hpp"
+#include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
+#include "scheme/simulation.hpp"
 
 namespace mpm {
-
-class Config;
 
 // What an element does when its data cannot support the requested Taylor basis (D 5.2.3, 6.3.2;
 // registry::kTlsCompletions holds the user-facing names).
@@ -88,10 +88,6 @@ struct TlsSettings {
 // per direction integrate degree 2n - 1, the basis must be integrated exactly, otherwise mass and
 // momentum are not conserved; in 2D, 6 terms need 2 points per direction).
 void validate(const TlsSettings& s, int dim = 1);
-
-// The method.tls_* and method.gauss_points keys of a run configuration (io/keys.cpp), validated
-// for `dim`.
-TlsSettings tls_settings_from_config(const Config& cfg, int dim = 1);
 
 // What one point set (one MPM step) needed. An element can count in several of reduced,
 // with_virtual and with_neighbours (e.g. completed with one virtual point and still reduced).
@@ -365,8 +361,12 @@ struct TlsMappingState {
 class TlsMapping {
  public:
   static constexpr std::string_view kName = "tls";
+  static constexpr std::string_view kDescription =
+      "Taylor least squares per element, mass and momentum conservative (D 5.3, 000, 004 4.4)";
   // The run set-up rejects other dimensions with a clear message before instantiating.
   static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  // Capabilities (mapping/mapping.hpp).
+  static constexpr bool kFusedScatter = false, kRunTotals = true;
 
   TlsMapping() : TlsMapping(TlsSettings{}) {}
   // Validates s for dimension dim (throws InputError).
@@ -550,5 +550,10 @@ class TlsMapping {
   std::vector<double> values_, integrals_;  // per particle, per element
   TlsReport totals_;
 };
+
+// The mapping concept (mapping/mapping.hpp), checked with the P1 basis; the steppers check
+// every basis they instantiate.
+static_assert(MappingFor<TlsMapping, Simulation<1, LinearBasis<1>, TlsMapping>> &&
+              MappingFor<TlsMapping, Simulation<2, LinearBasis<2>, TlsMapping>>);
 
 }  // namespace mpm

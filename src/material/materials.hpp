@@ -3,6 +3,7 @@
 // stress stage visits the material variant once and then loops over particles (no virtual
 // calls in the loop). Stress is the Cauchy stress [Pa]; F the deformation gradient.
 #include <cmath>
+#include <concepts>
 #include <string_view>
 #include <variant>
 
@@ -107,6 +108,21 @@ struct NeoHookean {
  private:
   double lambda_, mu_;  // of p, computed once (see LinearElastic)
 };
+
+// The constitutive-law concept: the per-particle stress update over a step (dtL = dt L, the
+// velocity gradient times the increment; F already updated), the strain energy of a particle
+// (history.csv), and the wave speed of the stability limit.
+template <class Law, int Dim>
+concept ConstitutiveLaw = requires(const Law& law, Mat<Dim>& sigma, const Mat<Dim>& F,
+                                   const Mat<Dim>& dtL, double V, double V0) {
+  { Law::kName } -> std::convertible_to<std::string_view>;
+  law.update(sigma, F, dtL);
+  { law.energy(sigma, F, V, V0) } -> std::convertible_to<double>;
+  { law.wave_speed() } -> std::convertible_to<double>;
+};
+static_assert(ConstitutiveLaw<Elastic1DSmall, 1> && ConstitutiveLaw<Elastic1DLarge, 1>);
+static_assert(ConstitutiveLaw<LinearElastic, 1> && ConstitutiveLaw<LinearElastic, 2>);
+static_assert(ConstitutiveLaw<NeoHookean, 1> && ConstitutiveLaw<NeoHookean, 2>);
 
 using Material = std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean>;
 

@@ -13,6 +13,8 @@ namespace mpm {
 // Update stress last, D Algorithm 1.
 struct Usl {
   static constexpr std::string_view kName = "usl";
+  static constexpr std::string_view kDescription =
+      "update stress last: grid velocity advanced from grid acceleration (D Algorithm 1)";
   // The particle velocity after a step approximates v(t + kVelocityTime dt): Euler-Cromer's
   // velocity is the leapfrog half-step velocity when the stress is updated last (D 2.3.2).
   static constexpr double kVelocityTime = -0.5;
@@ -35,6 +37,8 @@ struct Usl {
 // Modified update stress last, D Algorithm 2 (004 4.2.2).
 struct Musl {
   static constexpr std::string_view kName = "musl";
+  static constexpr std::string_view kDescription =
+      "modified USL: grid velocity remapped from updated particle velocity (D Alg. 2)";
   static constexpr double kVelocityTime = -0.5;
   template <class Sim>
   static void step(Sim& sim, double dt) {
@@ -54,6 +58,8 @@ struct Musl {
 // velocity of v_p^s, then forces use the new stress.
 struct Usf {
   static constexpr std::string_view kName = "usf";
+  static constexpr std::string_view kDescription =
+      "update stress first: stress from the start-of-step grid velocity (D 2.6.3)";
   // The stress leads: sigma^{s+1} uses v^s, so v_p^s plays the role of v^{s+1/2}.
   static constexpr double kVelocityTime = +0.5;
   template <class Sim>
@@ -76,6 +82,8 @@ struct Usf {
 // start-of-step grid velocity (USF), half from the remapped end-of-step velocity (MUSL).
 struct Usavg {
   static constexpr std::string_view kName = "usavg";
+  static constexpr std::string_view kDescription =
+      "update stress averaged: half USF, half MUSL stress increment (D 2.6.3, Nairn)";
   // Half of each: the velocity is centred on the step end.
   static constexpr double kVelocityTime = 0.0;
   template <class Sim>

@@ -1,5 +1,5 @@
 #pragma once
-// Re-sorting the particles by cell (issue 8). The parallel scatters (scheme/parallel.hpp) give
+// Re-sorting the particles by cell (issue 8). The parallel scatters (core/parallel.hpp) give
 // each fixed chunk of consecutive particles a grid slice covering the DOF range its stencils
 // touch. Particles seeded cell by cell make those ranges narrow bands (about 1.4 grids in all at
 // 1e6 particles in 2D); particles in random order, or mixed by a long flow, make every range
@@ -31,8 +31,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "core/parallel.hpp"
 #include "core/types.hpp"
-#include "scheme/parallel.hpp"
 
 namespace mpm {
 
@@ -165,8 +165,8 @@ template <class Sim>
 void apply_particle_order(Sim& sim, Permutation& perm) {
   sim.particles.for_each_field([&](auto& field) { perm.apply(field); });
   perm.apply(sim.cell);
-  if constexpr (requires { sim.basis.permute(perm); }) sim.basis.permute(perm);
-  if constexpr (requires { sim.mapping.permute(perm); }) sim.mapping.permute(perm);
+  // Mappings hold no per-particle state (mapping/mapping.hpp).
+  if constexpr (Sim::BasisT::kTrackedCorners) sim.basis.permute(perm);
   perm.set_inverse();
   for (auto& tr : sim.tractions)
     for (auto& p : tr.particles) p = perm.inverse[static_cast<std::size_t>(p)];

@@ -2,7 +2,7 @@
 // The shared stages of every update scheme (D Algorithms 1-2, D 2.6.3). A scheme is an order of
 // these calls; no stage knows which scheme calls it. Per-particle loops are plain loops over the
 // struct-of-arrays with the basis and material resolved at compile time, run in parallel with
-// OpenMP (scheme/parallel.hpp); every sum across particles has the same rounding for any
+// OpenMP (core/parallel.hpp); every sum across particles has the same rounding for any
 // thread count.
 #include <fmt/format.h>
 #include <algorithm>
@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "core/simulation.hpp"
-#include "scheme/parallel.hpp"
+#include "core/parallel.hpp"
+#include "scheme/simulation.hpp"
 
 namespace mpm::stages {
 
@@ -42,17 +42,11 @@ template <class Sim>
 void evaluate_basis(Sim& sim) {
   auto& P = sim.particles;
   auto& basis = sim.basis;
-  // Bases built from the particle distribution (DDMPM node volumes) refresh it first.
-  if constexpr (requires { basis.prepare(P); }) basis.prepare(P);
-  constexpr bool kHasDomain = requires {
-    basis.fits(P, Index{0});
-  };
+  // Bases built from the particle distribution (DDMPM node volumes, CPDI2 corners) refresh it
+  // first.
+  using B = typename Sim::BasisT;
+  if constexpr (B::kPrepare) basis.prepare(P);
   constexpr int Dim = Sim::kDim;
-  // Tensor-product bases take the position in cell units computed here for the checks (one
-  // division per direction instead of three: inside, cell index, basis).
-  constexpr bool kScaled = requires(const Vec<Dim>& s, const IVec<Dim>& c) {
-    basis.evaluate_scaled(s, c, sim.stencils[0]);
-  };
   const auto& g = sim.grid;
   // Per chunk: flags, crossings and the DOF range of the new stencils (recorded here, while
   // the stencils are in cache, for the scatters of DirectMapping).
@@ -66,28 +60,34 @@ void evaluate_basis(Sim& sim) {
     for (Index p = b; p < e; ++p) {
       const auto i = static_cast<std::size_t>(p);
       auto& s = sim.stencils[i];
-      Index c = 0;
-      if constexpr (kScaled) {
-        // Grid::inside and Grid::cell_index from s = (x - origin) / h: inside iff s is in
-        // [0, cells] in every direction (NaN fails), cell_of_scaled is Grid::cell_of there.
-        Vec<Dim> sx;
-        IVec<Dim> cx;
-        bool in = true;
-        Index stride = 1;
+      // Tensor-product bases take the position in cell units computed here for the checks (one
+      // division per direction instead of three: inside, cell index, basis): inside iff s is in
+      // [0, cells] in every direction (NaN fails), as Grid::inside.
+      [[maybe_unused]] Vec<Dim> sx;
+      bool in = true;
+      if constexpr (B::kTensorProduct) {
         for (int d = 0; d < Dim; ++d) {
           sx[d] = (P.x[i][d] - g.origin[d]) / g.h[d];
           in = in && sx[d] >= 0.0 && sx[d] <= static_cast<double>(g.cells[d]);
         }
-        if (!in) {
-          chunk_outside[ck] = 1;
+      } else {
+        in = g.inside(P.x[i]);
+      }
+      if (!in) {
+        chunk_outside[ck] = 1;
+        continue;
+      }
+      if constexpr (B::kParticleDomain) {
+        if (!basis.fits(P, p)) {
+          chunk_unfit[ck] = 1;
           continue;
         }
-        if constexpr (kHasDomain) {
-          if (!basis.fits(P, p)) {
-            chunk_unfit[ck] = 1;
-            continue;
-          }
-        }
+      }
+      Index c = 0;
+      if constexpr (B::kTensorProduct) {
+        // cell_of_scaled is Grid::cell_of on the scaled position.
+        IVec<Dim> cx;
+        Index stride = 1;
         for (int d = 0; d < Dim; ++d) {
           cx[d] = cell_of_scaled(sx[d], g.cells[d]);
           c += cx[d] * stride;
@@ -95,16 +95,6 @@ void evaluate_basis(Sim& sim) {
         }
         basis.evaluate_scaled(sx, cx, s);
       } else {
-        if (!g.inside(P.x[i])) {
-          chunk_outside[ck] = 1;
-          continue;
-        }
-        if constexpr (kHasDomain) {
-          if (!basis.fits(P, p)) {
-            chunk_unfit[ck] = 1;
-            continue;
-          }
-        }
         c = g.cell_index(P.x[i]);
         basis.evaluate(P, p, s);
       }
@@ -124,7 +114,7 @@ void evaluate_basis(Sim& sim) {
     unfit = unfit || chunk_unfit[c];
     sim.diag.grid_crossings += chunk_crossings[c];
   }
-  if constexpr (kHasDomain) {
+  if constexpr (B::kParticleDomain) {
     if (unfit && !outside) {
       std::vector<Index> ids;
       for (Index p = 0; p < P.size(); ++p)
@@ -279,7 +269,7 @@ void after_forces(Sim& sim) {
 template <unsigned What, class Sim>
 void map_to_grid(Sim& sim) {
   using namespace grid_sum;
-  if constexpr (requires { sim.mapping.template map_fused<What>(sim); }) {
+  if constexpr (Sim::MappingT::kFusedScatter) {
     sim.mapping.template map_fused<What>(sim);
   } else {
     if constexpr ((What & kMass) != 0) sim.mapping.map_mass(sim);
@@ -411,7 +401,7 @@ void update_particles(Sim& sim, double dt, double stress_dt) {
       sim.material);
   // Bases that track particle-domain corners (CPDI2) move them with the same grid velocity.
   if constexpr ((What & kPosition) != 0) {
-    if constexpr (requires { sim.basis.advect(sim, dt); }) sim.basis.advect(sim, dt);
+    if constexpr (Sim::BasisT::kTrackedCorners) sim.basis.advect(sim, dt);
   }
   if (bad) {
     std::vector<Index> inverted, nonfinite;
@@ -466,7 +456,7 @@ void update_stress(Sim& sim, double dt) {
 template <class Sim>
 void update_velocity_map_momentum(Sim& sim, double dt) {
   using namespace grid_sum;
-  if constexpr (requires { sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt); }) {
+  if constexpr (Sim::MappingT::kFusedScatter) {
     sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt);
     detail::after_momentum(sim);
   } else {

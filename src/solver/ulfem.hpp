@@ -9,7 +9,7 @@
 #include <functional>
 #include <vector>
 
-#include "benchmarks/problem.hpp"
+#include "model/problem.hpp"
 
 namespace mpm {
 

@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "driver/run.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

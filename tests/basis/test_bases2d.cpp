@@ -20,8 +20,8 @@
 #include "basis/ddmpm.hpp"
 #include "basis/gimp.hpp"
 #include "basis/linear.hpp"
-#include "benchmarks/problem.hpp"
-#include "core/variants.hpp"
+#include "model/problem.hpp"
+#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace {

@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "basis/ddmpm.hpp"
-#include "benchmarks/problem.hpp"
+#include "model/problem.hpp"
 
 namespace mpm {
 namespace {

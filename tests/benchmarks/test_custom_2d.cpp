@@ -17,10 +17,10 @@
 #include <vector>
 
 #include "benchmarks/benchmarks.hpp"
-#include "benchmarks/problem.hpp"
-#include "core/variants.hpp"
 #include "driver/run.hpp"
-#include "io/config.hpp"
+#include "model/problem.hpp"
+#include "scheme/variants.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

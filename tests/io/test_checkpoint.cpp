@@ -16,7 +16,7 @@
 
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

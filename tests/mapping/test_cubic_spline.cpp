@@ -21,9 +21,10 @@
 #include "basis/ddmpm.hpp"
 #include "basis/gimp.hpp"
 #include "basis/linear.hpp"
-#include "io/config.hpp"
 #include "mapping/cubic_spline.hpp"
 #include "scheme/schemes.hpp"
+#include "setup/config.hpp"
+#include "setup/method_settings.hpp"
 
 namespace mpm {
 namespace {
@@ -369,9 +370,9 @@ TEST(CubicSplineMapping, SettingsSelectTheGaussPointsPerHalfElement) {
   EXPECT_THROW(CubicSplineMapping(CubicSplineSettings{-1}), InputError);
   // method.gauss_points: 0 (the default) is D's 2 per half element.
   Config cfg;
-  EXPECT_EQ(CubicSplineMapping::from_config(cfg).gauss_points_per_half(), 2);
+  EXPECT_EQ(CubicSplineMapping(cubic_spline_settings(cfg)).gauss_points_per_half(), 2);
   cfg.set("method.gauss_points", "4", "test");
-  EXPECT_EQ(CubicSplineMapping::from_config(cfg).gauss_points_per_half(), 4);
+  EXPECT_EQ(CubicSplineMapping(cubic_spline_settings(cfg)).gauss_points_per_half(), 4);
   EXPECT_EQ(CubicSplineMapping::kName, "cubic_spline");
   EXPECT_TRUE(CubicSplineMapping::supports_dimension(1));
   EXPECT_FALSE(CubicSplineMapping::supports_dimension(2));

@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "../support/threads.hpp"
-#include "benchmarks/problem.hpp"
-#include "core/variants.hpp"
-#include "scheme/parallel.hpp"
+#include "core/parallel.hpp"
+#include "model/problem.hpp"
+#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace {

@@ -6,13 +6,13 @@
 #include <random>
 #include <vector>
 
+#include "app/reconstruct.hpp"
 #include "basis/bspline.hpp"
 #include "basis/linear.hpp"
-#include "benchmarks/problem.hpp"
-#include "core/reconstruct.hpp"
-#include "core/variants.hpp"
 #include "mapping/mls.hpp"
 #include "material/materials.hpp"
+#include "model/problem.hpp"
+#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace {

@@ -15,10 +15,10 @@
 
 #include "basis/bspline.hpp"
 #include "basis/linear.hpp"
-#include "benchmarks/problem.hpp"
-#include "core/variants.hpp"
 #include "mapping/mls.hpp"
 #include "material/materials.hpp"
+#include "model/problem.hpp"
+#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace {

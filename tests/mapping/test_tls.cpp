@@ -16,8 +16,8 @@
 #include "basis/ddmpm.hpp"
 #include "basis/gimp.hpp"
 #include "basis/linear.hpp"
-#include "benchmarks/problem.hpp"
 #include "mapping/tls.hpp"
+#include "model/problem.hpp"
 #include "scheme/schemes.hpp"
 
 namespace mpm {

@@ -10,13 +10,13 @@
 #include <string>
 #include <vector>
 
+#include "app/reconstruct.hpp"
 #include "basis/bspline.hpp"
 #include "basis/cpdi.hpp"
 #include "basis/gimp.hpp"
 #include "basis/linear.hpp"
-#include "benchmarks/problem.hpp"
-#include "core/reconstruct.hpp"
 #include "mapping/tls.hpp"
+#include "model/problem.hpp"
 #include "scheme/schemes.hpp"
 
 namespace mpm {

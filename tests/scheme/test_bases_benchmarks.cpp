@@ -13,9 +13,9 @@
 #include <sstream>
 #include <string>
 
-#include "core/study.hpp"
+#include "app/study.hpp"
 #include "driver/run.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

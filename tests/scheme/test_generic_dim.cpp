@@ -3,8 +3,8 @@
 // (the P1 basis reproduces constants, so L = sum v grad phi_i = 0).
 #include <gtest/gtest.h>
 
-#include "benchmarks/problem.hpp"
-#include "core/variants.hpp"
+#include "model/problem.hpp"
+#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace {

@@ -1,4 +1,4 @@
-// The OpenMP explicit core (scheme/parallel.hpp) gives the same bits for any thread count: the
+// The OpenMP explicit core (core/parallel.hpp) gives the same bits for any thread count: the
 // particle sums run over a fixed partition into chunks that does not depend on the threads.
 // Every problem here has more than one chunk (> ParticleChunks::kMinSize particles) and more
 // than kParallelMin particles, so two threads really split the work.
@@ -14,11 +14,11 @@
 #include <random>
 
 #include "../support/threads.hpp"
-#include "benchmarks/problem.hpp"
-#include "core/variants.hpp"
+#include "core/parallel.hpp"
 #include "driver/run.hpp"
-#include "io/config.hpp"
-#include "scheme/parallel.hpp"
+#include "model/problem.hpp"
+#include "scheme/variants.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "core/perf.hpp"
-#include "core/variants.hpp"
+#include "app/perf.hpp"
 #include "driver/run.hpp"
-#include "io/config.hpp"
+#include "scheme/variants.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

@@ -9,9 +9,9 @@
 #include <cmath>
 #include <string>
 
-#include "core/study.hpp"
+#include "app/study.hpp"
 #include "driver/run.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

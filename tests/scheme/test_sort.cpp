@@ -19,14 +19,14 @@
 #include <vector>
 
 #include "../support/threads.hpp"
-#include "benchmarks/problem.hpp"
-#include "core/variants.hpp"
+#include "core/parallel.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
-#include "io/config.hpp"
-#include "scheme/parallel.hpp"
+#include "model/problem.hpp"
 #include "scheme/schemes.hpp"
 #include "scheme/sort.hpp"
+#include "scheme/variants.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

@@ -7,9 +7,9 @@
 #include <fmt/format.h>
 #include <cmath>
 
-#include "core/study.hpp"
+#include "app/study.hpp"
 #include "driver/run.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {

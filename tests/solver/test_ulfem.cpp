@@ -10,8 +10,9 @@
 #include <numbers>
 #include <string>
 
-#include "benchmarks/problem.hpp"
-#include "io/config.hpp"
+#include "benchmarks/benchmarks.hpp"
+#include "model/problem.hpp"
+#include "setup/config.hpp"
 #include "solver/ulfem.hpp"
 
 namespace mpm {

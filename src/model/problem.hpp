@@ -9,14 +9,12 @@
 #include <variant>
 #include <vector>
 
-#include "core/simulation.hpp"
 #include "grid/grid.hpp"
 #include "material/materials.hpp"
+#include "model/loads.hpp"
 #include "particles/particles.hpp"
 
 namespace mpm {
-
-class Config;
 
 template <int Dim>
 struct ExactState {
@@ -73,8 +71,5 @@ template <int Dim>
 Traction<Dim> body_face_traction(const Grid<Dim>& g, const Particles<Dim>& P, const Vec<Dim>& lo,
                                  const Vec<Dim>& hi, int per_cell, int direction, int side,
                                  std::function<Vec<Dim>(double t)> value);
-
-// Builds the problem selected by `benchmark` (registry::kBenchmarks). Throws InputError.
-AnyProblem make_problem(const Config& cfg);
 
 }  // namespace mpm

@@ -1,8 +1,15 @@
 #pragma once
 // The single list of every run-time choice (config values and `mpm list`). The configuration
-// schema takes its allowed choices from here, so a name exists in exactly one place.
+// schema takes its allowed choices from here; the bases, mappings and schemes are generated from
+// their classes (kName, kDescription), so a name exists in exactly one place.
+#include <array>
+#include <cstddef>
 #include <span>
 #include <string_view>
+#include <utility>
+#include <variant>
+
+#include "scheme/variants.hpp"
 
 namespace mpm::registry {
 
@@ -10,6 +17,46 @@ struct Entry {
   std::string_view name;
   std::string_view description;
 };
+
+namespace detail {
+template <class Variant, std::size_t... I>
+constexpr auto all_entries(std::index_sequence<I...>) {
+  return std::array<Entry, sizeof...(I)>{
+      Entry{std::variant_alternative_t<I, Variant>::kName,
+            std::variant_alternative_t<I, Variant>::kDescription}...};
+}
+template <class Variant>
+constexpr auto all_entries() {
+  return all_entries<Variant>(std::make_index_sequence<std::variant_size_v<Variant>>{});
+}
+template <class Variant>
+constexpr std::size_t distinct_names() {
+  const auto all = all_entries<Variant>();
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    bool seen = false;
+    for (std::size_t j = 0; j < i; ++j) seen = seen || all[j].name == all[i].name;
+    n += seen ? 0 : 1;
+  }
+  return n;
+}
+}  // namespace detail
+
+// The entries of a method variant (bases, mappings, schemes), from each alternative's kName and
+// kDescription: one entry per distinct name (the five B-spline kinds are one "bspline"), in
+// variant order. The names are declared once, in the numerics.
+template <class Variant>
+constexpr auto entries_of() {
+  const auto all = detail::all_entries<Variant>();
+  std::array<Entry, detail::distinct_names<Variant>()> out{};
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    bool seen = false;
+    for (std::size_t j = 0; j < n; ++j) seen = seen || out[j].name == all[i].name;
+    if (!seen) out[n++] = all[i];
+  }
+  return out;
+}
 
 inline constexpr Entry kBenchmarks[] = {
     {"vibrating_bar",
@@ -30,27 +77,9 @@ inline constexpr Entry kBenchmarks[] = {
      "3.4.1)"},
 };
 
-inline constexpr Entry kBases[] = {
-    {"linear", "piecewise-linear (P1) nodal basis, tensor product (D 2.5)"},
-    {"ugimp", "uniform GIMP: P1 averaged over the initial particle domain (D 2.6.4, eq. 2.61)"},
-    {"cpgimp", "contiguous-particle GIMP: particle domain sized by the diagonal of F (D 2.6.4)"},
-    {"cpdi", "CPDI: domain convected by F, P1 interpolated at its corners (D 2.6.4, eq. 2.64)"},
-    {"cpdi2", "CPDI2: quadrilateral domains, corners moved with the grid velocity (D 2.6.4; 2D)"},
-    {"bspline",
-     "B-splines of degree method.degree (1-5) from one open uniform knot vector (D 3.1)"},
-    {"ddmpm", "dual domain MPM: P1 values, smoothed gradients (D 2.6.4; 1D and 2D)"},
-};
+inline constexpr auto kBases = entries_of<BasisKind>();
 
-inline constexpr Entry kMappings[] = {
-    {"direct", "standard MPM mapping: particles are the quadrature points (D 3.2, 004 4.4)"},
-    {"cubic_spline",
-     "global natural cubic spline through particle values, 2x2 Gauss points per element (D 3.2)"},
-    {"tls",
-     "Taylor least squares per element, mass and momentum conservative (D 5.3, 000, 004 4.4)"},
-    {"mls", "moving least squares at Gauss points, quadratic-spline weight (001 eq. 6-37)"},
-    {"imls",
-     "improved MLS: Gram-Schmidt orthogonal basis, no moment-matrix inverse (003 eq. 1-40)"},
-};
+inline constexpr auto kMappings = entries_of<MappingKind>();
 
 inline constexpr Entry kSolvers[] = {
     {"mpm", "material point method with the chosen basis, mapping and scheme"},
@@ -64,12 +93,7 @@ inline constexpr Entry kTlsCompletions[] = {
     {"neighbour", "borrow the nearest particles of the neighbouring elements (D 5.2.3)"},
 };
 
-inline constexpr Entry kSchemes[] = {
-    {"usl", "update stress last: grid velocity advanced from grid acceleration (D Algorithm 1)"},
-    {"usf", "update stress first: stress from the start-of-step grid velocity (D 2.6.3)"},
-    {"musl", "modified USL: grid velocity remapped from updated particle velocity (D Alg. 2)"},
-    {"usavg", "update stress averaged: half USF, half MUSL stress increment (D 2.6.3, Nairn)"},
-};
+inline constexpr auto kSchemes = entries_of<Scheme>();
 
 inline constexpr Entry kMassTypes[] = {
     {"lumped", "row-sum lumped (diagonal) mass matrix (D eq. 2.22-2.24)"},

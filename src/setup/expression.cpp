@@ -1,4 +1,4 @@
-#include "io/expression.hpp"
+#include "setup/expression.hpp"
 
 #include <muParser.h>
 

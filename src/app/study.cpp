@@ -1,4 +1,4 @@
-#include "core/study.hpp"
+#include "app/study.hpp"
 
 #include <fmt/format.h>
 #include <algorithm>
@@ -12,9 +12,9 @@
 
 #include <omp.h>
 
-#include "core/registry.hpp"
-#include "io/config.hpp"
 #include "io/output.hpp"
+#include "setup/config.hpp"
+#include "setup/registry.hpp"
 
 namespace mpm {
 namespace {

@@ -1,4 +1,4 @@
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 #include <fmt/format.h>
 

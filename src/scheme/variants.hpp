@@ -24,6 +24,10 @@ namespace mpm {
 // Basis kinds carry the basis template, instantiated with the problem's dimension.
 struct LinearKind {
   static constexpr std::string_view kName = "linear";
+  static constexpr std::string_view kDescription =
+      "piecewise-linear (P1) nodal basis, tensor product (D 2.5)";
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = LinearBasis<Dim>;
 };
@@ -33,15 +37,21 @@ struct LinearKind {
 template <int P>
 struct BSplineKind {
   static constexpr std::string_view kName = "bspline";
+  static constexpr std::string_view kDescription =
+      "B-splines of degree method.degree (1-5) from one open uniform knot vector (D 3.1)";
   static constexpr int kDegree = P;
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
   template <int Dim>
   using type = BSplineBasis<Dim, P>;
 };
 
 struct DdmpmKind {
   static constexpr std::string_view kName = "ddmpm";
+  static constexpr std::string_view kDescription =
+      "dual domain MPM: P1 values, smoothed gradients (D 2.6.4; 1D and 2D)";
   // 1D as in D; 2D with the tensor-product weight alpha derived in basis/ddmpm.hpp.
   static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = DdmpmBasis<Dim>;
 };
@@ -49,18 +59,30 @@ struct DdmpmKind {
 // Domain-averaged bases (D 2.6.4): GIMP with the initial or F-diagonal particle size, and CPDI.
 struct UGimpKind {
   static constexpr std::string_view kName = "ugimp";
+  static constexpr std::string_view kDescription =
+      "uniform GIMP: P1 averaged over the initial particle domain (D 2.6.4, eq. 2.61)";
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = UGimpBasis<Dim>;
 };
 
 struct CpGimpKind {
   static constexpr std::string_view kName = "cpgimp";
+  static constexpr std::string_view kDescription =
+      "contiguous-particle GIMP: particle domain sized by the diagonal of F (D 2.6.4)";
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = CpGimpBasis<Dim>;
 };
 
 struct CpdiKind {
   static constexpr std::string_view kName = "cpdi";
+  static constexpr std::string_view kDescription =
+      "CPDI: domain convected by F, P1 interpolated at its corners (D 2.6.4, eq. 2.64)";
+  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = CpdiBasis<Dim>;
 };
@@ -68,25 +90,26 @@ struct CpdiKind {
 // CPDI2: quadrilateral domains with tracked corners (2D only; basis/cpdi.hpp).
 struct Cpdi2Kind {
   static constexpr std::string_view kName = "cpdi2";
+  static constexpr std::string_view kDescription =
+      "CPDI2: quadrilateral domains, corners moved with the grid velocity (D 2.6.4; 2D)";
   static constexpr bool supports_dimension(int dim) { return dim == 2; }
+  static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = Cpdi2Basis<Dim>;
 };
 
+// The order is that of `mpm list` and of the choices in error messages (setup/registry.hpp).
 using BasisKind =
-    std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi2Kind, DdmpmKind, BSplineKind<1>,
-                 BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>>;
+    std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi2Kind, BSplineKind<1>,
+                 BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>, DdmpmKind>;
 using MappingKind =
     std::variant<DirectMapping, CubicSplineMapping, TlsMapping, MlsMapping, ImlsMapping>;
 
-// Whether a basis kind or mapping runs in `dim` dimensions: those that are not
-// dimension-generic declare supports_dimension(); the run set-up checks it before instantiating.
+// Whether a basis kind or mapping runs in `dim` dimensions (each declares supports_dimension();
+// the driver checks it before instantiating, with an input error naming the key).
 template <class T>
 constexpr bool supports_dimension(int dim) {
-  if constexpr (requires { T::supports_dimension(dim); })
-    return T::supports_dimension(dim);
-  else
-    return true;
+  return T::supports_dimension(dim);
 }
 
 template <class Variant, std::size_t I = 0>

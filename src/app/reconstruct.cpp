@@ -1,4 +1,4 @@
-#include "core/reconstruct.hpp"
+#include "app/reconstruct.hpp"
 
 #include <fmt/format.h>
 #include <array>
@@ -6,11 +6,11 @@
 #include <functional>
 #include <random>
 
-#include "io/expression.hpp"
 #include "mapping/cubic_spline.hpp"
 #include "mapping/mls.hpp"
 #include "mapping/quadrature.hpp"
 #include "mapping/tls.hpp"
+#include "setup/expression.hpp"
 
 namespace mpm {
 namespace {

@@ -15,7 +15,6 @@
 #include <tuple>
 #include <vector>
 
-#include "basis/stencil.hpp"
 #include "core/types.hpp"
 
 namespace mpm {
@@ -83,7 +82,9 @@ struct ChunkDofRanges {
   std::array<Index, ParticleChunks::kMax> lo{}, hi{};
 
   // Scans the stencils (fallback when evaluate_basis did not record them).
-  // stride: the DOF strides of a tensor-product basis (for its compact stencils).
+  // stride: the DOF strides of a tensor-product basis (for its compact stencils). dof_bounds
+  // is the stencil's own (basis/stencil.hpp), found by argument-dependent lookup: the ground
+  // layer does not include the numerics.
   template <class Stencil, class Stride>
   void scan(const std::vector<Stencil>& stencils, const Stride& stride) {
     const auto n = static_cast<Index>(stencils.size());

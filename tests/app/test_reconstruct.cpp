@@ -1,7 +1,7 @@
 // The reconstruction playground (`mpm reconstruct`, D 5.2.3, Table 5.1).
 #include <gtest/gtest.h>
 
-#include "core/reconstruct.hpp"
+#include "app/reconstruct.hpp"
 
 namespace mpm {
 namespace {

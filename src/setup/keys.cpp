@@ -1,12 +1,12 @@
 // The configuration schema: every key `mpm` understands is declared here, once. Parsing,
 // validation, `mpm keys`, the defaults and the written-back config.toml all read this table.
-// Choices for String keys come from core/registry.hpp, so a model/scheme name exists in one place.
+// Choices for String keys come from setup/registry.hpp, so a model/scheme name exists in one place.
 #include <span>
 #include <string>
 #include <vector>
 
-#include "core/registry.hpp"
-#include "io/config.hpp"
+#include "setup/config.hpp"
+#include "setup/registry.hpp"
 
 namespace mpm {
 namespace {

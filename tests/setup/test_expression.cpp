@@ -1,5 +1,5 @@
 // mpm::Expression: muparser wrapper for user fields of position and time.
-#include "io/expression.hpp"
+#include "setup/expression.hpp"
 
 #include <gtest/gtest.h>
 

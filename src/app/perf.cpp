@@ -1,4 +1,4 @@
-#include "core/perf.hpp"
+#include "app/perf.hpp"
 
 #include <fmt/format.h>
 #include <omp.h>
@@ -9,8 +9,8 @@
 
 #include "driver/run.hpp"
 #include "grid/grid_state.hpp"
-#include "io/config.hpp"
 #include "particles/particles.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 
@@ -28,7 +28,7 @@ Index extra_dofs(const BenchOptions& opt) {
 }
 
 // Particle state + cached stencil + cell index + the grid's share: the GridState arrays and the
-// scatter slices of scheme/parallel.hpp (about one grid of mass and one of vectors). Linear and
+// scatter slices of core/parallel.hpp (about one grid of mass and one of vectors). Linear and
 // B-spline bases cache the compact TensorStencil (first DOF, K values and K derivatives per
 // direction), the others the full Stencil (DOF, value, gradient per entry).
 template <int Dim>

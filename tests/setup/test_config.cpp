@@ -1,6 +1,6 @@
 // Configuration: schema, TOML parsing, the user-facing error messages, --set overrides,
 // constants, where() and the written-back effective configuration.
-#include "io/config.hpp"
+#include "setup/config.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,8 @@
 #include <sstream>
 #include <string>
 
-#include "core/registry.hpp"
 #include "core/types.hpp"
+#include "setup/registry.hpp"
 
 namespace mpm {
 namespace {

@@ -18,7 +18,7 @@ struct BenchOptions {
   int degree = 2;
   std::string mapping = "direct";
   // 2D problem: "plate" (plate_mms_2d) or "refkernel" (the problem of the yardstick
-  // /work/shared/tools/refkernel.cpp through the custom benchmark).
+  // ../shared/tools/refkernel.cpp through the custom benchmark).
   std::string problem = "plate";
   bool shuffle = false;       // start from the particles in random order (RunOptions::shuffle_seed)
   std::string sort = "auto";  // method.sort

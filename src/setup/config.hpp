@@ -1,7 +1,7 @@
 #pragma once
 // Run configuration: a TOML file plus command-line overrides, checked against one declared schema
-// (src/io/keys.cpp). Every user mistake is reported as an InputError that names the file, line and
-// column (or the --set argument) and says what would have been valid.
+// (src/setup/keys.cpp). Every user mistake is reported as an InputError that names the file, line
+// and column (or the --set argument) and says what would have been valid.
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -11,7 +11,7 @@
 #include <variant>
 #include <vector>
 
-#include "io/expression.hpp"
+#include "setup/expression.hpp"
 
 namespace mpm {
 

@@ -1,0 +1,36 @@
+#pragma once
+// The mapping concept: how particle quantities reach the grid (D 3.2, 5.3; 004 4.4). Every
+// mapping maps masses, momenta and forces for a simulation type Sim, and declares its optional
+// capabilities as constants that the stages and the driver branch on (never on whether a member
+// happens to exist; the concept checks that a declared capability has its members):
+//   kFusedScatter  map_fused<What>(sim[, dt]): several grid sums in one pass over the particles,
+//                  the bits of separate passes (DirectMapping; stages::map_to_grid)
+//   kRunTotals     totals() / set_totals(): counters over the run (TLS completions, MLS
+//                  conditioning), reported in summary.json and kept in checkpoints
+// Mappings hold no per-particle state, so re-sorting the particles (scheme/sort.hpp) needs
+// nothing from them.
+#include <concepts>
+#include <string_view>
+
+#include "scheme/simulation.hpp"
+
+namespace mpm {
+
+template <class M, class Sim>
+concept MappingFor = requires(M& m, Sim& sim, int dim) {
+  { M::kName } -> std::convertible_to<std::string_view>;
+  { M::kFusedScatter } -> std::convertible_to<bool>;
+  { M::kRunTotals } -> std::convertible_to<bool>;
+  { M::supports_dimension(dim) } -> std::convertible_to<bool>;
+  m.map_mass(sim);      // nodal masses (and the consistent matrix), D eq. 2.31 / 2.44
+  m.map_momentum(sim);  // nodal momenta, 2.32 / 2.48
+  m.map_forces(sim);    // internal and body forces, 2.33 / 2.45
+}
+&&(!M::kFusedScatter ||
+   requires(M & m, Sim& sim, double dt) {
+     m.template map_fused<grid_sum::kMass | grid_sum::kMomentum | grid_sum::kForces>(sim);
+     m.template map_fused<grid_sum::kMomentum | grid_sum::kVelocityFirst>(sim, dt);
+   }) &&
+    (!M::kRunTotals || requires(M & m, const M& cm) { m.set_totals(cm.totals()); });
+
+}  // namespace mpm

@@ -1,0 +1,31 @@
+#include "setup/method_settings.hpp"
+
+namespace mpm {
+
+TlsSettings tls_settings(const Config& cfg, int dim) {
+  TlsSettings s;
+  s.terms = static_cast<int>(cfg.get_int("method.tls_terms"));
+  s.completion = parse_tls_completion(cfg.get_string("method.tls_completion"));
+  s.max_condition = cfg.get_real("method.tls_max_condition");
+  s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
+  validate(s, dim);
+  return s;
+}
+
+MlsSettings mls_settings(const Config& cfg, bool improved) {
+  MlsSettings s;
+  s.degree = static_cast<int>(cfg.get_int("method.mls_degree"));
+  s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
+  s.dilation = cfg.get_real("method.mls_dilation");
+  if (improved && cfg.get_string("method.mass") != "lumped")
+    throw InputError("method.mapping = imls needs method.mass = lumped (003 eq. 32)");
+  return s;
+}
+
+CubicSplineSettings cubic_spline_settings(const Config& cfg) {
+  CubicSplineSettings s;
+  s.gauss_points_per_half = static_cast<int>(cfg.get_int("method.gauss_points"));
+  return s;
+}
+
+}  // namespace mpm
