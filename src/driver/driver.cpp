@@ -218,6 +218,7 @@ nlohmann::ordered_json make_summary(const RunResult& res, const Config& cfg,
                    {"poisson_ratio", cfg.get_real("material.poisson_ratio")}};
   j["cells"] = res.cells;
   j["h"] = res.h;
+  if (res.cell_size.size() > 1) j["cell_size"] = res.cell_size;
   j["particles"] = res.particles;
   j["dt"] = ts.dt;
   j["t_end"] = t_end;

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/types.hpp"
 #include "scheme/simulation.hpp"
@@ -53,7 +54,8 @@ struct RunResult {
   std::string benchmark;
   int dim = 1;
   Index cells = 0;
-  double h = 0.0;
+  double h = 0.0;                 // the largest cell size over the directions [m]
+  std::vector<double> cell_size;  // per direction [m] (summary.json in more than 1D)
   Index particles = 0;
   Index steps = 0;
   double wall_seconds = 0.0;

@@ -116,7 +116,8 @@ RunResult run_mpm(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt,
   res.benchmark = pb.benchmark;
   res.dim = Dim;
   res.cells = sim.grid.num_cells();
-  res.h = sim.grid.h[0];
+  res.h = sim.grid.h.maxCoeff();
+  res.cell_size.assign(sim.grid.h.data(), sim.grid.h.data() + Dim);
   res.particles = sim.particles.size();
   const Index start = opt.restart ? restore<Dim>(opt, *stepper, mapping_name, reference, out) : 0;
   const std::string config_text = cfg.to_toml();

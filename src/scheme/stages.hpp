@@ -34,6 +34,25 @@ std::string describe_particles(const Particles<Dim>& P, const std::vector<Index>
   if (ids.size() > limit) out += fmt::format("; and {} more", ids.size() - limit);
   return out;
 }
+
+// A point as "0.5" in 1D and "(0.5, 0.25)" in more dimensions.
+template <int Dim>
+std::string describe_point(const Vec<Dim>& x) {
+  if constexpr (Dim == 1) return fmt::format("{:.6g}", x[0]);
+  std::string out = "(";
+  for (int d = 0; d < Dim; ++d) out += fmt::format("{}{:.6g}", d ? ", " : "", x[d]);
+  return out + ")";
+}
+
+// The grid's extent as "[0, 1]" in 1D and "[0, 1] x [0, 2]" in more dimensions.
+template <int Dim>
+std::string describe_box(const Grid<Dim>& g) {
+  const Vec<Dim> hi = g.upper();
+  std::string out;
+  for (int d = 0; d < Dim; ++d)
+    out += fmt::format("{}[{:.6g}, {:.6g}]", d ? " x " : "", g.origin[d], hi[d]);
+  return out;
+}
 }  // namespace detail
 
 // D Alg. 2 step 3: basis values and gradients at x_p^s. Stops the run (exit code 4) when a
@@ -132,10 +151,9 @@ void evaluate_basis(Sim& sim) {
     for (Index p = 0; p < P.size(); ++p)
       if (!sim.grid.inside(P.x[static_cast<std::size_t>(p)])) ids.push_back(p);
     throw RunError(exit_code::kLeftGrid,
-                   fmt::format("step {}, t = {:.9g} s: {} particle(s) left the grid [{:.6g}, "
-                               "{:.6g}]: {}",
-                               sim.step, sim.time, ids.size(), sim.grid.origin[0],
-                               sim.grid.upper()[0], detail::describe_particles(P, ids)));
+                   fmt::format("step {}, t = {:.9g} s: {} particle(s) left the grid {}: {}",
+                               sim.step, sim.time, ids.size(), detail::describe_box(sim.grid),
+                               detail::describe_particles(P, ids)));
   }
 }
 
@@ -248,8 +266,9 @@ void after_forces(Sim& sim) {
       if (!sim.grid.inside(x_face))
         throw RunError(exit_code::kLeftGrid,
                        fmt::format("step {}, t = {:.9g} s: the loaded face of the body (particle "
-                                   "{}, face centre at x = {:.6g}) left the grid",
-                                   sim.step, sim.time, tr.particles[k], x_face[0]));
+                                   "{}, face centre at x = {}) left the grid {}",
+                                   sim.step, sim.time, P.id[i], detail::describe_point(x_face),
+                                   detail::describe_box(sim.grid)));
       typename Sim::StencilT s;
       sim.basis.evaluate_point(x_face, s);
       // A_p = 1 in 1D: tau * 1.0 is exact, so the 1D forces are those of the end traction.

@@ -46,3 +46,29 @@ TEST(GenericDimension, RigidTranslation2DUsavg) {
 
 }  // namespace
 }  // namespace mpm
+
+namespace mpm {
+namespace {
+
+// A 2D body that leaves the grid stops the run with the whole box in the message (not only the
+// extent along x) and the particles by id with both coordinates.
+TEST(GenericDimension, LeavingTheGridIn2DNamesTheBox) {
+  Grid<2> g(Vec<2>(0.0, -1.0), Vec<2>(1.0, 1.0), IVec<2>{4, 8});
+  auto P = seed_particles<2>(g, Vec<2>(0.25, 0.5), Vec<2>(0.5, 0.75), 2, 1000.0);
+  for (auto& v : P.v) v = Vec<2>(0.0, 30.0);  // up through y = 1 within a few steps
+  ElasticParameters ep{1000.0, 1e6, 0.3};
+  Simulation<2, LinearBasis<2>, DirectMapping> sim(g, LinearBasis<2>(g), DirectMapping{}, P,
+                                                   NeoHookean{ep});
+  try {
+    for (int s = 0; s < 100; ++s) Musl::step(sim, 1e-3);
+    FAIL() << "the body did not leave the grid";
+  } catch (const RunError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(e.exit_code(), exit_code::kLeftGrid);
+    EXPECT_NE(m.find("left the grid [0, 1] x [-1, 1]"), std::string::npos) << m;
+    EXPECT_NE(m.find("at x = (0."), std::string::npos) << m;
+  }
+}
+
+}  // namespace
+}  // namespace mpm
