@@ -65,7 +65,8 @@ ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
 }
 
 template <int Dim>
-OutputSession<Dim>::OutputSession(const RunOptions& opt, const Config& cfg, const Problem<Dim>& pb)
+OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
+                                  const std::string& config_text, const Problem<Dim>& pb)
     : dir_(opt.out_dir), exact_(pb.exact) {
   if (dir_.empty()) return;
   std::error_code ec;
@@ -73,16 +74,16 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const Config& cfg, cons
   if (ec)
     throw InputError(
         fmt::format("cannot create output directory '{}': {}", dir_.string(), ec.message()));
-  csv_ = cfg.get_bool("output.csv");
-  vtk_ = cfg.get_bool("output.vtk");
-  io::write_file_atomic(dir_ / "config.toml", cfg.to_toml());
+  csv_ = s.output.csv;
+  vtk_ = s.output.vtk;
+  io::write_file_atomic(dir_ / "config.toml", config_text);
   if (vtk_) io::write_file_atomic(dir_ / "grid.vtu", io::grid_vtu(pb.grid));
   history_ = "time,kinetic_energy,strain_energy,total_energy,mass";
   for (int d = 0; d < Dim; ++d) history_ += fmt::format(",momentum_{}", d + 1);
   // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
   // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
   // report their maxima, which summary.json has).
-  mapping_errors_ = cfg.get_string("method.solver") == "mpm";
+  mapping_errors_ = s.method.solver == Solver::Mpm;
   if (mapping_errors_) history_ += ",mass_error,momentum_error";
   history_ += "\n";
 }
@@ -176,31 +177,19 @@ void OutputSession<Dim>::checkpoint(const io::Checkpoint& c) {
 }
 
 // Stops before the first step when dt exceeds the limit, unless time.allow_unstable.
-void check_stability(const Config& cfg, double dt, double h, const Material& material,
-                     double factor, int dim, std::string_view what) {
+void check_stability(const TimeSettings& time, double h, const Material& material, double factor,
+                     int dim, std::string_view what) {
   const double c = wave_speed(material);
   const double limit = factor * h / (c * std::sqrt(static_cast<double>(dim)));
-  if (dt > limit && !cfg.get_bool("time.allow_unstable"))
+  if (time.dt > limit && !time.allow_unstable)
     throw InputError(fmt::format(
         "{}: time.dt = {:.6g} s exceeds the explicit stability limit {:.6g} s = {:.4g} h / c "
         "(h = {:.6g} m, c = {:.6g} m/s, {}); reduce time.dt or set time.allow_unstable = true",
-        cfg.where("time.dt"), dt, limit, factor, h, c, what));
+        time.where_dt, time.dt, limit, factor, h, c, what));
 }
 
-TimeSetup time_setup(const Config& cfg) {
-  const double dt = cfg.get_real("time.dt"), end = cfg.get_real("time.end");
-  const double ratio = end / dt;
-  const auto steps = static_cast<Index>(std::llround(ratio));
-  if (steps < 1 || std::abs(ratio - static_cast<double>(steps)) > 1e-6 * std::max(1.0, ratio))
-    throw InputError(fmt::format(
-        "{}: time.end = {} must be a positive whole multiple of time.dt = {} (it is {:.6g} "
-        "steps)",
-        cfg.where("time.end"), end, dt, ratio));
-  return {dt, steps};
-}
-
-nlohmann::ordered_json make_summary(const RunResult& res, const Config& cfg,
-                                    const Material& material, const TimeSetup& ts, double t_end,
+nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& settings,
+                                    const Material& material, double t_end,
                                     nlohmann::ordered_json method, double velocity_time) {
   nlohmann::ordered_json j;
   j["mpmlab_version"] = kVersion;
@@ -213,14 +202,14 @@ nlohmann::ordered_json make_summary(const RunResult& res, const Config& cfg,
   j["dim"] = res.dim;
   j["method"] = std::move(method);
   j["material"] = {{"model", std::string(material_name(material))},
-                   {"density", cfg.get_real("material.density")},
-                   {"youngs_modulus", cfg.get_real("material.youngs_modulus")},
-                   {"poisson_ratio", cfg.get_real("material.poisson_ratio")}};
+                   {"density", settings.material.density},
+                   {"youngs_modulus", settings.material.youngs_modulus},
+                   {"poisson_ratio", settings.material.poisson_ratio}};
   j["cells"] = res.cells;
   j["h"] = res.h;
   if (res.cell_size.size() > 1) j["cell_size"] = res.cell_size;
   j["particles"] = res.particles;
-  j["dt"] = ts.dt;
+  j["dt"] = settings.time.dt;
   j["t_end"] = t_end;
   j["steps"] = res.steps;
   j["velocity_time_offset_dt"] = velocity_time;

@@ -19,7 +19,7 @@
 #include "io/output.hpp"
 #include "model/problem.hpp"
 #include "scheme/simulation.hpp"
-#include "setup/config.hpp"
+#include "setup/run_settings.hpp"
 #include "solver/ulfem.hpp"
 
 namespace mpm::io {
@@ -98,7 +98,9 @@ struct StateView {
 template <int Dim>
 class OutputSession {
  public:
-  OutputSession(const RunOptions& opt, const Config& cfg, const Problem<Dim>& pb);
+  // config_text: Config::to_toml() of the run (config.toml).
+  OutputSession(const RunOptions& opt, const RunSettings& s, const std::string& config_text,
+                const Problem<Dim>& pb);
   bool enabled() const { return !dir_.empty(); }
   void history_row(const StateView<Dim>& s);
   void frame(const StateView<Dim>& s);
@@ -122,18 +124,10 @@ class OutputSession {
   std::vector<double> frame_times_;
 };
 
-// Stops before the first step when dt exceeds the limit factor h / (c sqrt(dim)), unless
+// Stops before the first step when time.dt exceeds the limit factor h / (c sqrt(dim)), unless
 // time.allow_unstable; `what` names the basis and bound in the message.
-void check_stability(const Config& cfg, double dt, double h, const Material& material,
-                     double factor, int dim, std::string_view what);
-
-struct TimeSetup {
-  double dt;
-  Index steps;
-};
-
-// time.dt and the number of steps to time.end (a whole multiple of dt, else InputError).
-TimeSetup time_setup(const Config& cfg);
+void check_stability(const TimeSettings& time, double h, const Material& material, double factor,
+                     int dim, std::string_view what);
 
 // The time loop shared by every solver: `advance(s)` takes step s to s + 1 (timed; may throw
 // RunError), `after()` runs untimed companions (the FEM reference), `view()` exposes the state.
@@ -142,16 +136,16 @@ TimeSetup time_setup(const Config& cfg);
 // after a restart: no initial frame then). `save(step)` writes a checkpoint every
 // output.checkpoint_every steps.
 template <int Dim, class Advance, class After, class View, class Save>
-void drive(const TimeSetup& ts, const Config& cfg, const RunOptions& opt, OutputSession<Dim>& out,
-           Index start, Advance&& advance, After&& after, View&& view, Save&& save,
-           RunResult& res) {
-  const int frames = static_cast<int>(cfg.get_int("output.frames"));
-  const Index history_every = cfg.get_int("output.history_every");
-  const Index checkpoint_every = cfg.get_int("output.checkpoint_every");
+void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim>& out, Index start,
+           Advance&& advance, After&& after, View&& view, Save&& save, RunResult& res) {
+  const TimeSettings& ts = settings.time;
+  const int frames = settings.output.frames;
+  const Index history_every = settings.output.history_every;
+  const Index checkpoint_every = settings.output.checkpoint_every;
   if (start > ts.steps)
     throw InputError(
         fmt::format("{}: the checkpoint is at step {}, beyond time.end = {} ({} steps of time.dt)",
-                    cfg.where("time.end"), start, cfg.get_real("time.end"), ts.steps));
+                    ts.where_end, start, ts.end, ts.steps));
   Index next_frame = 1;
   auto frame_step = [&](Index k) {
     return frames > 0 ? (k * ts.steps + frames - 1) / frames : ts.steps;
@@ -194,8 +188,8 @@ void drive(const TimeSetup& ts, const Config& cfg, const RunOptions& opt, Output
 }
 
 // The fields of summary.json common to every solver; `method` describes the solver.
-nlohmann::ordered_json make_summary(const RunResult& res, const Config& cfg,
-                                    const Material& material, const TimeSetup& ts, double t_end,
+nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& settings,
+                                    const Material& material, double t_end,
                                     nlohmann::ordered_json method, double velocity_time);
 
 // Stress errors of the particles against the FEM reference at their material positions

@@ -6,8 +6,8 @@
 #include "driver/driver.hpp"
 #include "driver/run_mpm.hpp"
 #include "io/checkpoint.hpp"
-#include "scheme/variants.hpp"
-#include "setup/registry.hpp"
+#include "setup/config.hpp"
+#include "setup/run_settings.hpp"
 
 namespace mpm {
 namespace {
@@ -16,13 +16,14 @@ using namespace driver;
 
 // method.solver = "ulfem": the updated-Lagrangian FEM on the problem's body, one linear element
 // per grid cell covered by the body; outputs and errors at the element midpoints.
-RunResult run_ulfem(Problem<1>& pb, const Config& cfg, const RunOptions& opt) {
+RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::string& config_text,
+                    const RunOptions& opt) {
   const auto t_start = Clock::now();
-  const TimeSetup ts = time_setup(cfg);
-  OutputSession<1> out(opt, cfg, pb);
+  const TimeSettings& ts = settings.time;
+  OutputSession<1> out(opt, settings, config_text, pb);
   const auto elements =
       std::max<Index>(1, std::llround((pb.body_max[0] - pb.body_min[0]) / pb.grid.h[0]));
-  check_stability(cfg, ts.dt, (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements),
+  check_stability(ts, (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements),
                   pb.material, 1.0, 1, "linear elements");
   Ulfem1D fem(pb, elements);
   RunResult res;
@@ -41,9 +42,8 @@ RunResult run_ulfem(Problem<1>& pb, const Config& cfg, const RunOptions& opt) {
     out.resume(c);
     start = c.step;
   }
-  const std::string config_text = cfg.to_toml();
   drive<1>(
-      ts, cfg, opt, out, start, [&](Index) { fem.step(ts.dt); }, [] {},
+      settings, opt, out, start, [&](Index) { fem.step(ts.dt); }, [] {},
       [&] {
         return StateView<1>{fem.elements(), fem.time(), pb.material};
       },
@@ -68,7 +68,7 @@ RunResult run_ulfem(Problem<1>& pb, const Config& cfg, const RunOptions& opt) {
   }
   res.wall_seconds = seconds_since(t_start);
   res.summary =
-      make_summary(res, cfg, pb.material, ts, fem.time(),
+      make_summary(res, settings, pb.material, fem.time(),
                    {{"solver", "ulfem"}, {"elements", elements}, {"mass", "lumped"}}, -0.5);
   out.summary(res.summary);
   return res;
@@ -76,53 +76,18 @@ RunResult run_ulfem(Problem<1>& pb, const Config& cfg, const RunOptions& opt) {
 
 }  // namespace
 
-// A basis kind matches by name and, for B-splines, by degree (method.degree).
-template <std::size_t I = 0>
-BasisKind choose_basis(std::string_view name, int degree) {
-  if constexpr (I < std::variant_size_v<BasisKind>) {
-    using Alt = std::variant_alternative_t<I, BasisKind>;
-    // B-spline kinds match by degree too (kDegree 0: not a B-spline).
-    const bool match = name == Alt::kName && (Alt::kDegree == 0 || degree == Alt::kDegree);
-    if (match) return BasisKind(std::in_place_index<I>);
-    return choose_basis<I + 1>(name, degree);
-  } else {
-    std::string choices;
-    for (const auto& e : registry::kBases)
-      choices += fmt::format("{}{}", choices.empty() ? "" : ", ", e.name);
-    throw InputError(fmt::format(
-        "method.basis = \"{}\" (method.degree = {}) is not available; choose one of: {}", name,
-        degree, choices));
-  }
-}
-
 RunResult run(const Config& cfg, const RunOptions& opt) {
   AnyProblem problem = make_problem(cfg);
-  if (cfg.get_string("method.solver") == "ulfem") {
-    if (auto* pb = std::get_if<Problem<1>>(&problem)) return run_ulfem(*pb, cfg, opt);
-    throw InputError(fmt::format("{}: method.solver = \"ulfem\" is one-dimensional",
-                                 cfg.where("method.solver")));
-  }
-  auto with_key = [&](const char* key, auto&& fn) {
-    try {
-      return fn();
-    } catch (const InputError& e) {
-      throw InputError(fmt::format("{}: {}", cfg.where(key), e.what()));
-    }
-  };
-  const auto basis = with_key("method.basis", [&] {
-    return choose_basis(cfg.get_string("method.basis"),
-                        static_cast<int>(cfg.get_int("method.degree")));
-  });
-  const auto mapping = with_key("method.mapping", [&] {
-    return choose_alternative<MappingKind>(cfg.get_string("method.mapping"), "method.mapping");
-  });
-  const auto scheme = with_key("method.scheme", [&] {
-    return choose_alternative<Scheme>(cfg.get_string("method.scheme"), "method.scheme");
-  });
+  const int dim =
+      std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);
+  const RunSettings settings = run_settings(cfg, dim);
+  const std::string config_text = cfg.to_toml();
+  if (settings.method.solver == Solver::Ulfem)
+    return run_ulfem(std::get<Problem<1>>(problem), settings, config_text, opt);
   return std::visit(
       [&](auto& pb) {
         constexpr int Dim = std::decay_t<decltype(pb)>::kDim;
-        return run_mpm<Dim>(pb, cfg, opt, basis, mapping, scheme);
+        return run_mpm<Dim>(pb, settings, config_text, opt);
       },
       problem);
 }

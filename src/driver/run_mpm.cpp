@@ -82,36 +82,32 @@ Index restore(const RunOptions& opt, Stepper<Dim>& stepper, std::string_view map
 }  // namespace
 
 template <int Dim>
-RunResult run_mpm(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt,
-                  const BasisKind& basis, const MappingKind& mapping, const Scheme& scheme) {
-  if (!std::visit([](auto k) { return supports_dimension<decltype(k)>(Dim); }, basis))
-    throw InputError(fmt::format("{}: method.basis = \"{}\" is not available in {}D",
-                                 cfg.where("method.basis"), basis_name(basis), Dim));
-  if (!std::visit([](const auto& m) { return supports_dimension<std::decay_t<decltype(m)>>(Dim); },
-                  mapping))
-    throw InputError(fmt::format("{}: method.mapping = \"{}\" is not available in {}D",
-                                 cfg.where("method.mapping"), name_of(mapping), Dim));
-  const std::string_view mapping_name = name_of(mapping);
-  const double scheme_velocity_time = velocity_time(scheme);
+RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::string& config_text,
+                  const RunOptions& opt) {
+  // run_settings() has checked that the basis and mapping exist in Dim, and the time step.
+  const MethodSettings& method = settings.method;
+  const BasisKind& basis = method.basis;
+  const std::string_view mapping_name = name_of(method.mapping);
+  const double scheme_velocity_time = velocity_time(method.scheme);
 
   const auto t_start = Clock::now();
-  const TimeSetup ts = time_setup(cfg);
+  const TimeSettings& ts = settings.time;
 
   // The FEM reference of benchmarks without an exact solution, stepped alongside (untimed).
   std::optional<Ulfem1D> reference;
   if constexpr (Dim == 1)
-    if (pb.fem_reference) reference.emplace(pb, cfg.get_int("reference.dofs") - 1);
+    if (pb.fem_reference) reference.emplace(pb, settings.reference_dofs - 1);
 
-  check_stability(cfg, ts.dt, pb.grid.h.minCoeff(), pb.material, stability_factor(basis), Dim,
+  check_stability(ts, pb.grid.h.minCoeff(), pb.material, stability_factor(basis), Dim,
                   fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
 
   if (opt.shuffle_seed != 0 && !opt.restart)
     shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
-  const auto stepper = make_stepper<Dim>(basis, {pb, cfg, mapping, scheme, !opt.restart});
+  const auto stepper = make_stepper<Dim>(basis, {pb, method, !opt.restart});
   RunState<Dim>& sim = stepper->state();
 
   // Outputs start once the input has passed every check above.
-  OutputSession<Dim> out(opt, cfg, pb);
+  OutputSession<Dim> out(opt, settings, config_text, pb);
   RunResult res;
   res.benchmark = pb.benchmark;
   res.dim = Dim;
@@ -120,9 +116,8 @@ RunResult run_mpm(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt,
   res.cell_size.assign(sim.grid.h.data(), sim.grid.h.data() + Dim);
   res.particles = sim.particles.size();
   const Index start = opt.restart ? restore<Dim>(opt, *stepper, mapping_name, reference, out) : 0;
-  const std::string config_text = cfg.to_toml();
   drive<Dim>(
-      ts, cfg, opt, out, start,
+      settings, opt, out, start,
       [&](Index s) {
         stepper->step(ts.dt);
         sim.step = s + 1;
@@ -157,26 +152,27 @@ RunResult run_mpm(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt,
   res.diag = sim.diag;
   res.wall_seconds = seconds_since(t_start);
 
-  nlohmann::ordered_json method = {{"solver", "mpm"},
-                                   {"basis", std::string(basis_name(basis))},
-                                   {"mapping", std::string(mapping_name)},
-                                   {"scheme", std::string(name_of(scheme))},
-                                   {"mass", cfg.get_string("method.mass")}};
-  if (basis_degree(basis) > 0) method["degree"] = basis_degree(basis);
-  res.summary =
-      make_summary(res, cfg, sim.material, ts, sim.time, std::move(method), scheme_velocity_time);
+  nlohmann::ordered_json method_json = {
+      {"solver", "mpm"},
+      {"basis", std::string(basis_name(basis))},
+      {"mapping", std::string(mapping_name)},
+      {"scheme", std::string(name_of(method.scheme))},
+      {"mass", method.mass == MassType::Consistent ? "consistent" : "lumped"}};
+  if (basis_degree(basis) > 0) method_json["degree"] = basis_degree(basis);
+  res.summary = make_summary(res, settings, sim.material, sim.time, std::move(method_json),
+                             scheme_velocity_time);
   stepper->report(res.summary);
   if (reference)
     res.summary["reference"] = {{"solver", "ulfem"},
-                                {"dofs", cfg.get_int("reference.dofs")},
+                                {"dofs", settings.reference_dofs},
                                 {"compared", "stress at the particles' material positions"}};
   out.summary(res.summary);
   return res;
 }
 
-template RunResult run_mpm<1>(Problem<1>&, const Config&, const RunOptions&, const BasisKind&,
-                              const MappingKind&, const Scheme&);
-template RunResult run_mpm<2>(Problem<2>&, const Config&, const RunOptions&, const BasisKind&,
-                              const MappingKind&, const Scheme&);
+template RunResult run_mpm<1>(Problem<1>&, const RunSettings&, const std::string&,
+                              const RunOptions&);
+template RunResult run_mpm<2>(Problem<2>&, const RunSettings&, const std::string&,
+                              const RunOptions&);
 
 }  // namespace mpm::driver

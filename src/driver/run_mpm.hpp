@@ -3,12 +3,13 @@
 // once per dimension; the typed stepping is behind driver/stepper.hpp).
 #include "driver/run.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
+#include "setup/run_settings.hpp"
 
 namespace mpm::driver {
 
+// config_text: Config::to_toml() of the run (config.toml, checkpoints).
 template <int Dim>
-RunResult run_mpm(Problem<Dim>& pb, const Config& cfg, const RunOptions& opt,
-                  const BasisKind& basis, const MappingKind& mapping, const Scheme& scheme);
+RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::string& config_text,
+                  const RunOptions& opt);
 
 }  // namespace mpm::driver

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <utility>
 
+#include "basis/bspline.hpp"
 #include "mapping/quadrature.hpp"
 
 namespace mpm::driver {

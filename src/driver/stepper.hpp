@@ -21,10 +21,10 @@
 #include "model/problem.hpp"
 #include "scheme/simulation.hpp"
 #include "scheme/variants.hpp"
+#include "setup/run_settings.hpp"
 
 namespace mpm {
 
-class Config;
 namespace io {
 struct Checkpoint;
 }
@@ -51,14 +51,13 @@ class Stepper {
   virtual void report(nlohmann::ordered_json& summary) const = 0;
 };
 
-// What a stepper is built from. `check_input`: run the reconstruction's input checks on the
-// initial particles (not on a restart).
+// What a stepper is built from: the problem (its particles are moved into the stepper) and the
+// method settings (the mapping alternative holds the configured mapping). `check_input`: run
+// the reconstruction's input checks on the initial particles (not on a restart).
 template <int Dim>
 struct StepperInput {
-  Problem<Dim>& problem;  // its particles are moved into the stepper
-  const Config& cfg;
-  const MappingKind& mapping;
-  const Scheme& scheme;
+  Problem<Dim>& problem;
+  const MethodSettings& method;
   bool check_input = true;
 };
 

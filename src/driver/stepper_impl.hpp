@@ -14,8 +14,7 @@
 #include "mapping/mapping.hpp"
 #include "scheme/schemes.hpp"
 #include "scheme/sort.hpp"
-#include "setup/config.hpp"
-#include "setup/method_settings.hpp"
+#include "setup/run_settings.hpp"
 
 namespace mpm::driver {
 
@@ -23,8 +22,8 @@ namespace mpm::driver {
 // must support the Taylor basis on its own (D 5.2.3, 6.3.1); otherwise the run would stop at
 // step 0, so the input is refused with what to change.
 template <int Dim, class Mapping>
-void check_reconstruction_input(const Config& cfg, const Grid<Dim>& grid, const Particles<Dim>& P,
-                                const Mapping& mapping) {
+void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& grid,
+                                const Particles<Dim>& P, const Mapping& mapping) {
   if constexpr (std::is_same_v<Mapping, TlsMapping>) {
     const TlsSettings& s = mapping.settings();
     if (s.completion != TlsCompletion::None) return;
@@ -37,7 +36,7 @@ void check_reconstruction_input(const Config& cfg, const Grid<Dim>& grid, const 
           "{:.3g}, limit method.tls_max_condition = {:.3g}); seed more particles "
           "(particles.per_cell), use fewer terms (method.tls_terms) or set "
           "method.tls_completion = \"reduce\", \"virtual\" or \"neighbour\"",
-          cfg.where("method.tls_completion"), s.terms_used(Dim), rep.failed,
+          method.where_tls_completion, s.terms_used(Dim), rep.failed,
           recon.describe(rep.failed_element), rep.failed_points, rep.failed_condition,
           s.max_condition));
   }
@@ -50,18 +49,18 @@ class TypedStepper final : public Stepper<Dim> {
   static_assert(mpm::Basis<Basis, Dim>, "basis/basis.hpp");
   static_assert(MappingFor<Mapping, Sim>, "mapping/mapping.hpp");
 
-  TypedStepper(const StepperInput<Dim>& in)
-      : scheme_(in.scheme),
-        sim_(in.problem.grid, Basis(in.problem.grid), make_mapping<Dim, Mapping>(in.cfg),
+  // The mapping is the configured one of the settings (run_settings, make_mapping).
+  explicit TypedStepper(const StepperInput<Dim>& in)
+      : scheme_(in.method.scheme),
+        sim_(in.problem.grid, Basis(in.problem.grid), std::get<Mapping>(in.method.mapping),
              std::move(in.problem.particles), in.problem.material) {
-    const Config& cfg = in.cfg;
+    const MethodSettings& method = in.method;
     const Problem<Dim>& pb = in.problem;
     if (in.check_input)
-      check_reconstruction_input<Dim>(cfg, sim_.grid, sim_.particles, sim_.mapping);
-    sim_.mass_type =
-        cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
-    sim_.mass_tolerance = cfg.get_real("method.mass_tolerance");
-    sim_.sorting.mode = cfg.get_string("method.sort") == "never" ? SortMode::Never : SortMode::Auto;
+      check_reconstruction_input<Dim>(method, sim_.grid, sim_.particles, sim_.mapping);
+    sim_.mass_type = method.mass;
+    sim_.mass_tolerance = method.mass_tolerance;
+    sim_.sorting.mode = method.sort;
     for (const auto& f : pb.fixed_sides) sim_.fix_side(f.direction, f.side, f.components);
     sim_.body_force = pb.body_force;
     sim_.tractions = pb.tractions;
@@ -129,14 +128,14 @@ std::unique_ptr<Stepper<Dim>> make_stepper_for(const StepperInput<Dim>& in) {
   } else {
     using Basis = typename Kind::template type<Dim>;
     return std::visit(
-        [&](auto m) -> std::unique_ptr<Stepper<Dim>> {
-          using Mapping = decltype(m);
+        [&](const auto& m) -> std::unique_ptr<Stepper<Dim>> {
+          using Mapping = std::decay_t<decltype(m)>;
           if constexpr (!supports_dimension<Mapping>(Dim))
             throw std::logic_error("make_stepper_for: mapping not available in this dimension");
           else
             return std::make_unique<TypedStepper<Dim, Basis, Mapping>>(in);
         },
-        in.mapping);
+        in.method.mapping);
   }
 }
 

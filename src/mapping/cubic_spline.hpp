@@ -16,7 +16,6 @@
 #include <string_view>
 #include <vector>
 
-#include "basis/linear.hpp"
 #include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
 #include "scheme/simulation.hpp"
@@ -294,9 +293,5 @@ class CubicSplineMapping {
   std::vector<Vec<1>> vec_g_;          // (rho v)_hat [kg/(m^2 s)] or (rho b)_hat [N/m^3]
   std::vector<Mat<1>> sig_g_;          // sigma_hat [Pa]
 };
-
-// The mapping concept (mapping/mapping.hpp), checked with the P1 basis; the steppers check
-// every basis they instantiate.
-static_assert(MappingFor<CubicSplineMapping, Simulation<1, LinearBasis<1>, CubicSplineMapping>>);
 
 }  // namespace mpm

@@ -3,7 +3,6 @@
 // (D eq. 2.25, 2.44-2.45, 2.48; 004 eq. 4.5-4.7, 4.10).
 #include <string_view>
 
-#include "basis/linear.hpp"
 #include "mapping/mapping.hpp"
 #include "scheme/simulation.hpp"
 
@@ -158,10 +157,5 @@ struct DirectMapping {
     return r;
   }
 };
-
-// The mapping concept (mapping/mapping.hpp), checked with the P1 basis; the steppers check
-// every basis they instantiate.
-static_assert(MappingFor<DirectMapping, Simulation<1, LinearBasis<1>, DirectMapping>> &&
-              MappingFor<DirectMapping, Simulation<2, LinearBasis<2>, DirectMapping>>);
 
 }  // namespace mpm

@@ -34,7 +34,6 @@
 #include <type_traits>
 #include <vector>
 
-#include "basis/linear.hpp"
 #include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
 #include "scheme/simulation.hpp"
@@ -471,12 +470,5 @@ class MovingLeastSquaresMapping {
 
 using MlsMapping = MovingLeastSquaresMapping<false>;
 using ImlsMapping = MovingLeastSquaresMapping<true>;
-
-// The mapping concept (mapping/mapping.hpp), checked with the P1 basis; the steppers check
-// every basis they instantiate.
-static_assert(MappingFor<MlsMapping, Simulation<1, LinearBasis<1>, MlsMapping>> &&
-              MappingFor<MlsMapping, Simulation<2, LinearBasis<2>, MlsMapping>>);
-static_assert(MappingFor<ImlsMapping, Simulation<1, LinearBasis<1>, ImlsMapping>> &&
-              MappingFor<ImlsMapping, Simulation<2, LinearBasis<2>, ImlsMapping>>);
 
 }  // namespace mpm

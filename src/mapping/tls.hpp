@@ -28,7 +28,6 @@
 #include <type_traits>
 #include <vector>
 
-#include "basis/linear.hpp"
 #include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
 #include "scheme/simulation.hpp"
@@ -550,10 +549,5 @@ class TlsMapping {
   std::vector<double> values_, integrals_;  // per particle, per element
   TlsReport totals_;
 };
-
-// The mapping concept (mapping/mapping.hpp), checked with the P1 basis; the steppers check
-// every basis they instantiate.
-static_assert(MappingFor<TlsMapping, Simulation<1, LinearBasis<1>, TlsMapping>> &&
-              MappingFor<TlsMapping, Simulation<2, LinearBasis<2>, TlsMapping>>);
 
 }  // namespace mpm

@@ -7,11 +7,6 @@
 #include <string_view>
 #include <variant>
 
-#include "basis/bspline.hpp"
-#include "basis/cpdi.hpp"
-#include "basis/ddmpm.hpp"
-#include "basis/gimp.hpp"
-#include "basis/linear.hpp"
 #include "core/types.hpp"
 #include "mapping/cubic_spline.hpp"
 #include "mapping/direct.hpp"
@@ -20,6 +15,24 @@
 #include "scheme/schemes.hpp"
 
 namespace mpm {
+
+// The basis templates (basis/*.hpp; basis/bases.hpp has them all), only declared here: a kind
+// names its basis, and the generated stepper unit of a kind includes that basis's header
+// (CMakeLists.txt, MPM_BASIS_KIND_HEADERS), so that an edit to one basis rebuilds only its units.
+template <int Dim>
+class LinearBasis;
+template <int Dim, int Degree>
+class BSplineBasis;
+template <int Dim>
+class UGimpBasis;
+template <int Dim>
+class CpGimpBasis;
+template <int Dim>
+class CpdiBasis;
+template <int Dim>
+class Cpdi2Basis;
+template <int Dim>
+class DdmpmBasis;
 
 // Basis kinds carry the basis template, instantiated with the problem's dimension.
 struct LinearKind {

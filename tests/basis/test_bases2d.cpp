@@ -16,6 +16,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "basis/bases.hpp"
 #include "basis/cpdi.hpp"
 #include "basis/ddmpm.hpp"
 #include "basis/gimp.hpp"

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "basis/bases.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "driver/run.hpp"
 #include "model/problem.hpp"

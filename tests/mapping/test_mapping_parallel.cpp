@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "../support/threads.hpp"
+#include "basis/bases.hpp"
 #include "core/parallel.hpp"
 #include "model/problem.hpp"
 #include "scheme/variants.hpp"

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "app/reconstruct.hpp"
+#include "basis/bases.hpp"
 #include "basis/bspline.hpp"
 #include "basis/linear.hpp"
 #include "mapping/mls.hpp"

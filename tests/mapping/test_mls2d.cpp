@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "basis/bases.hpp"
 #include "basis/bspline.hpp"
 #include "basis/linear.hpp"
 #include "mapping/mls.hpp"

@@ -3,6 +3,7 @@
 // (the P1 basis reproduces constants, so L = sum v grad phi_i = 0).
 #include <gtest/gtest.h>
 
+#include "basis/bases.hpp"
 #include "model/problem.hpp"
 #include "scheme/variants.hpp"
 

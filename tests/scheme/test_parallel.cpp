@@ -14,6 +14,7 @@
 #include <random>
 
 #include "../support/threads.hpp"
+#include "basis/bases.hpp"
 #include "core/parallel.hpp"
 #include "driver/run.hpp"
 #include "model/problem.hpp"

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "app/perf.hpp"
+#include "basis/bases.hpp"
 #include "driver/run.hpp"
 #include "scheme/variants.hpp"
 #include "setup/config.hpp"

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "../support/threads.hpp"
+#include "basis/bases.hpp"
 #include "core/parallel.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"

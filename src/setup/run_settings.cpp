@@ -1,0 +1,128 @@
+#include "setup/run_settings.hpp"
+
+#include <fmt/format.h>
+#include <cmath>
+#include <string_view>
+#include <variant>
+
+#include "setup/config.hpp"
+#include "setup/method_settings.hpp"
+#include "setup/registry.hpp"
+
+namespace mpm {
+namespace {
+
+// A basis kind matches by name and, for B-splines, by degree (method.degree).
+template <std::size_t I = 0>
+BasisKind choose_basis(std::string_view name, int degree) {
+  if constexpr (I < std::variant_size_v<BasisKind>) {
+    using Alt = std::variant_alternative_t<I, BasisKind>;
+    // B-spline kinds match by degree too (kDegree 0: not a B-spline).
+    const bool match = name == Alt::kName && (Alt::kDegree == 0 || degree == Alt::kDegree);
+    if (match) return BasisKind(std::in_place_index<I>);
+    return choose_basis<I + 1>(name, degree);
+  } else {
+    std::string choices;
+    for (const auto& e : registry::kBases)
+      choices += fmt::format("{}{}", choices.empty() ? "" : ", ", e.name);
+    throw InputError(fmt::format(
+        "method.basis = \"{}\" (method.degree = {}) is not available; choose one of: {}", name,
+        degree, choices));
+  }
+}
+
+template <class Variant>
+std::string_view name_of(const Variant& v) {
+  return std::visit([](const auto& a) { return std::decay_t<decltype(a)>::kName; }, v);
+}
+
+TimeSettings time_settings(const Config& cfg) {
+  TimeSettings t;
+  t.dt = cfg.get_real("time.dt");
+  t.end = cfg.get_real("time.end");
+  t.allow_unstable = cfg.get_bool("time.allow_unstable");
+  t.where_dt = cfg.where("time.dt");
+  t.where_end = cfg.where("time.end");
+  const double ratio = t.end / t.dt;
+  t.steps = static_cast<Index>(std::llround(ratio));
+  if (t.steps < 1 || std::abs(ratio - static_cast<double>(t.steps)) > 1e-6 * std::max(1.0, ratio))
+    throw InputError(fmt::format(
+        "{}: time.end = {} must be a positive whole multiple of time.dt = {} (it is {:.6g} "
+        "steps)",
+        t.where_end, t.end, t.dt, ratio));
+  return t;
+}
+
+// The mapping alternative with its settings from the configuration (make_mapping).
+template <int Dim>
+MappingKind configured_mapping(const MappingKind& chosen, const Config& cfg) {
+  return std::visit(
+      [&](const auto& m) -> MappingKind {
+        using M = std::decay_t<decltype(m)>;
+        if constexpr (!M::supports_dimension(Dim))
+          return m;  // refused before this (run_settings)
+        else
+          return make_mapping<Dim, M>(cfg);
+      },
+      chosen);
+}
+
+}  // namespace
+
+RunSettings run_settings(const Config& cfg, int dim) {
+  RunSettings s;
+  MethodSettings& m = s.method;
+  m.solver = cfg.get_string("method.solver") == "ulfem" ? Solver::Ulfem : Solver::Mpm;
+  if (m.solver == Solver::Ulfem && dim != 1)
+    throw InputError(fmt::format("{}: method.solver = \"ulfem\" is one-dimensional",
+                                 cfg.where("method.solver")));
+  m.where_basis = cfg.where("method.basis");
+  m.where_mapping = cfg.where("method.mapping");
+  m.where_tls_completion = cfg.where("method.tls_completion");
+  if (m.solver == Solver::Mpm) {
+    auto with_key = [&](const char* key, auto&& fn) {
+      try {
+        return fn();
+      } catch (const InputError& e) {
+        throw InputError(fmt::format("{}: {}", cfg.where(key), e.what()));
+      }
+    };
+    m.basis = with_key("method.basis", [&] {
+      return choose_basis(cfg.get_string("method.basis"),
+                          static_cast<int>(cfg.get_int("method.degree")));
+    });
+    m.mapping = with_key("method.mapping", [&] {
+      return choose_alternative<MappingKind>(cfg.get_string("method.mapping"), "method.mapping");
+    });
+    m.scheme = with_key("method.scheme", [&] {
+      return choose_alternative<Scheme>(cfg.get_string("method.scheme"), "method.scheme");
+    });
+    if (!std::visit([&](auto k) { return decltype(k)::supports_dimension(dim); }, m.basis))
+      throw InputError(fmt::format("{}: method.basis = \"{}\" is not available in {}D",
+                                   m.where_basis, name_of(m.basis), dim));
+    if (!std::visit(
+            [&](const auto& k) { return std::decay_t<decltype(k)>::supports_dimension(dim); },
+            m.mapping))
+      throw InputError(fmt::format("{}: method.mapping = \"{}\" is not available in {}D",
+                                   m.where_mapping, name_of(m.mapping), dim));
+  }
+  s.time = time_settings(cfg);
+  s.output.frames = static_cast<int>(cfg.get_int("output.frames"));
+  s.output.history_every = cfg.get_int("output.history_every");
+  s.output.checkpoint_every = cfg.get_int("output.checkpoint_every");
+  s.output.csv = cfg.get_bool("output.csv");
+  s.output.vtk = cfg.get_bool("output.vtk");
+  s.material.density = cfg.get_real("material.density");
+  s.material.youngs_modulus = cfg.get_real("material.youngs_modulus");
+  s.material.poisson_ratio = cfg.get_real("material.poisson_ratio");
+  s.reference_dofs = cfg.get_int("reference.dofs");
+  m.mass = cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
+  m.mass_tolerance = cfg.get_real("method.mass_tolerance");
+  m.sort = cfg.get_string("method.sort") == "never" ? SortMode::Never : SortMode::Auto;
+  if (m.solver == Solver::Mpm)
+    m.mapping =
+        dim == 1 ? configured_mapping<1>(m.mapping, cfg) : configured_mapping<2>(m.mapping, cfg);
+  return s;
+}
+
+}  // namespace mpm

@@ -1,0 +1,64 @@
+#pragma once
+// A run's configuration as typed settings, parsed and validated once (run_settings()): the
+// driver and the steppers read these, never Config. Keys whose values are used after set-up in
+// messages keep where they were set (Config::where: file:line:col or the --set option).
+#include <cstdint>
+#include <string>
+
+#include "material/materials.hpp"
+#include "scheme/simulation.hpp"
+#include "scheme/variants.hpp"
+
+namespace mpm {
+
+class Config;
+
+// time.dt, time.end and their whole number of steps; time.allow_unstable.
+struct TimeSettings {
+  double dt = 0.0;   // [s]
+  double end = 0.0;  // [s]
+  Index steps = 0;   // end / dt
+  bool allow_unstable = false;
+  std::string where_dt, where_end;
+};
+
+// output.*: what is written into the run's directory, and how often.
+struct OutputSettings {
+  int frames = 0;              // particle frames besides the initial one
+  Index history_every = 1;     // history.csv row every this many steps
+  Index checkpoint_every = 0;  // 0: no checkpoints
+  bool csv = true, vtk = true;
+};
+
+enum class Solver { Mpm, Ulfem };
+
+// method.*: the solver and, for MPM, the basis kind, the mapping (built with its settings from
+// method.tls_*, method.mls_*, method.gauss_points: setup/method_settings.hpp), the scheme, the
+// mass matrix and re-sorting.
+struct MethodSettings {
+  Solver solver = Solver::Mpm;
+  BasisKind basis;
+  MappingKind mapping;
+  Scheme scheme;
+  MassType mass = MassType::Lumped;
+  double mass_tolerance = 1e-10;
+  SortMode sort = SortMode::Auto;
+  std::string where_basis, where_mapping, where_tls_completion;
+};
+
+struct RunSettings {
+  TimeSettings time;
+  OutputSettings output;
+  MethodSettings method;
+  ElasticParameters material;       // material.* (the problem holds the law built from them)
+  std::int64_t reference_dofs = 0;  // reference.dofs: the ULFEM reference of benchmarks without
+                                    // an exact solution
+};
+
+// The settings of `cfg` for a problem of dimension `dim`, checked in the order a run meets them:
+// the solver (ULFEM is one-dimensional), the basis, mapping and scheme names, whether they exist
+// in `dim`, the time step, then the mapping's own settings. InputError naming the key (file,
+// line) and the valid choices.
+RunSettings run_settings(const Config& cfg, int dim);
+
+}  // namespace mpm
