@@ -73,7 +73,8 @@ class TypedStepper final : public Stepper<Dim> {
 
   bool sort_if_due() override {
     const Index sorts = sim_.sorting.sorts;
-    sort_particles_if_due(sim_);
+    // As BasisState: the sort does not depend on the mapping (one instance per basis).
+    sort_particles_if_due(static_cast<BasisState<Dim, Basis>&>(sim_));
     return sim_.sorting.sorts != sorts;
   }
 

@@ -89,24 +89,29 @@ struct DirectMapping {
     if constexpr (M) sc.has_particle_mass = true;
     if constexpr (Q) sc.has_particle_momentum = true;
     if constexpr (M) {
-      if (sim.mass_type != MassType::Consistent) return;
-      // The triplet list is one shared structure and the consistent mass is rarely used: serial.
-      const auto& P = sim.particles;
-      sim.consistent.begin(sim.nodes.size());
-      for (Index p = 0; p < P.size(); ++p) {
-        const auto& s = sim.stencils[static_cast<std::size_t>(p)];
-        const double mp = P.mass[static_cast<std::size_t>(p)];
-        for_each_entry(s, sim.dof_stride, [&](Index da, double wa, const auto&) {
-          for_each_entry(s, sim.dof_stride, [&](Index db, double wb, const auto&) {
-            sim.consistent.add(da, db, wa * mp * wb);
-          });
-        });
-      }
+      if (sim.mass_type == MassType::Consistent) consistent_mass(sim);
     }
   }
 
  private:
   struct None {};  // the slice of a sum not computed in this pass
+
+  // M_ij = sum_p phi_i m_p phi_j (D eq. 2.44). The triplet list is one shared structure and the
+  // consistent mass is rarely used: serial.
+  template <int Dim, class B>
+  static void consistent_mass(BasisState<Dim, B>& sim) {
+    const auto& P = sim.particles;
+    sim.consistent.begin(sim.nodes.size());
+    for (Index p = 0; p < P.size(); ++p) {
+      const auto& s = sim.stencils[static_cast<std::size_t>(p)];
+      const double mp = P.mass[static_cast<std::size_t>(p)];
+      for_each_entry(s, sim.dof_stride, [&](Index da, double wa, const auto&) {
+        for_each_entry(s, sim.dof_stride, [&](Index db, double wb, const auto&) {
+          sim.consistent.add(da, db, wa * mp * wb);
+        });
+      });
+    }
+  }
 
   // Particle p's contributions to the sums of What into the slices m (mass), q (momentum) and
   // f (forces), one pass over its stencil (two with kVelocityFirst).

@@ -329,4 +329,135 @@ double MovingLeastSquares<Dim>::evaluate(const Vec<Dim>& x, MlsWeight weight,
 template class MovingLeastSquares<1>;
 template class MovingLeastSquares<2>;
 
+// The mapping's reconstructions (mls.hpp, MovingLeastSquaresMapping): everything of map_mass,
+// map_momentum and map_forces but the basis evaluation and assembly at the Gauss points.
+template <bool Improved>
+template <int Dim>
+void MovingLeastSquaresMapping<Improved>::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
+  if (Improved && sim.mass_type == MassType::Consistent)
+    throw InputError("method.mapping = imls needs method.mass = lumped (003 eq. 32)");
+  dim_ = Dim;
+  auto& mls = std::get<Dim - 1>(work_).mls;
+  const auto& P = sim.particles;
+  const auto& grid = sim.grid;
+  mls.set_points(grid, P);
+  q.clear();
+  // Tensor-product Gauss rule on each element holding a particle: point k has index
+  // k_d = (k / n^d) % n in direction d (x fastest), weight prod_d (h_d / 2) w_{k_d}.
+  const int n = static_cast<int>(rule_.xi.size());
+  const int per_element = ipow(n, Dim);
+  const Vec<Dim> half = 0.5 * grid.h;
+  for (Index e = 0; e < grid.num_cells(); ++e) {
+    if (mls.bins().count(e) == 0) continue;
+    Vec<Dim> centre;
+    Index rem = e;
+    for (int d = 0; d < Dim; ++d) {
+      centre[d] = grid.origin[d] + (static_cast<double>(rem % grid.cells[d]) + 0.5) * grid.h[d];
+      rem /= grid.cells[d];
+    }
+    for (int k = 0; k < per_element; ++k) {
+      Vec<Dim> xg;
+      double wg = 1.0;
+      for (int d = 0, r = k; d < Dim; ++d, r /= n) {
+        const auto j = static_cast<std::size_t>(r % n);
+        xg[d] = centre[d] + half[d] * rule_.xi[j];
+        wg *= half[d] * rule_.w[j];
+      }
+      q.add(xg, wg, e);
+    }
+  }
+  // The shape functions at the Gauss points (the bulk of the step), rows in parallel.
+  const auto ng = static_cast<Index>(q.size());
+  mls.add_rows(
+      ng, [&](Index g) -> const Vec<Dim>& { return q.x[static_cast<std::size_t>(g)]; },
+      MlsWeight::QuadraticSpline, gauss_);
+  rho_.resize(q.size());
+  gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
+    rho_[g] = t.apply(r, [&](std::size_t p) { return P.density[p]; });
+  });
+}
+
+template <bool Improved>
+template <int Dim>
+void MovingLeastSquaresMapping<Improved>::finish_mass(RunState<Dim>& sim) {
+  auto& mls = std::get<Dim - 1>(work_).mls;
+  if constexpr (Improved) {
+    const auto& xn = std::get<Dim - 1>(work_).node_x;
+    mls.add_rows(
+        static_cast<Index>(xn.size()),
+        [&](Index r) -> const Vec<Dim>& { return xn[static_cast<std::size_t>(r)]; },
+        MlsWeight::Linear, nodes_, true);
+  }
+  const MlsReport& rep = mls.report();
+  accumulate(totals_, rep);
+  if (rep.singular > 0)
+    throw RunError(
+        exit_code::kReconstruction,
+        fmt::format("step {}, t = {:.9g} s: the MLS moment matrix is singular at {} "
+                    "point(s) (first near x = {:.6g}{}): too few distinct particles "
+                    "for method.mls_degree = {}; use method.mapping = imls",
+                    sim.step, sim.time, rep.singular, rep.worst_x,
+                    Dim == 2 ? fmt::format(", y = {:.6g}", rep.worst_y) : "", settings_.degree));
+}
+
+template <bool Improved>
+template <int Dim>
+void MovingLeastSquaresMapping<Improved>::fit_momentum(RunState<Dim>& sim,
+                                                       const GaussPoints<Dim>& q) {
+  using V = Vec<Dim>;
+  const auto& P = sim.particles;
+  if constexpr (Improved) {
+    auto& out = sim.nodes.momentum;
+    std::fill(out.begin(), out.end(), V::Zero());
+    nodes_.for_each_row([&](std::size_t r, const ShapeTable& t, std::size_t k) {
+      const auto i = static_cast<std::size_t>(node_dof_[r]);
+      out[i] = sim.nodes.mass[i] * t.apply<V>(k, [&](std::size_t p) -> const V& { return P.v[p]; });
+    });
+  } else {
+    auto& vec = std::get<Dim - 1>(work_).vec;
+    vec.resize(q.size());
+    gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
+      vec[g] = t.apply<V>(r, [&](std::size_t p) -> V { return P.density[p] * P.v[p]; });
+    });
+  }
+}
+
+template <bool Improved>
+template <int Dim>
+void MovingLeastSquaresMapping<Improved>::fit_forces(RunState<Dim>& sim,
+                                                     const GaussPoints<Dim>& q) {
+  using V = Vec<Dim>;
+  using M = Mat<Dim>;
+  const auto& P = sim.particles;
+  auto& sig = std::get<Dim - 1>(work_).sig;
+  auto& vec = std::get<Dim - 1>(work_).vec;
+  sig.resize(q.size());
+  vec.resize(q.size());
+  // Stress and body force in one pass over each row: every sum runs over the row in the same
+  // order as separate applications, so the bits are theirs.
+  gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
+    M s = M::Zero();
+    V b = V::Zero();
+    for (std::size_t k = t.start[r]; k < t.start[r + 1]; ++k) {
+      const auto p = static_cast<std::size_t>(t.point[k]);
+      s += t.phi[k] * P.stress[p];
+      b += t.phi[k] * P.body[p];
+    }
+    sig[g] = s;
+    vec[g] = rho_[g] * b;
+  });
+}
+
+#define MPM_MLS_MAPPING_DIM(I, D)                                                         \
+  template void MovingLeastSquaresMapping<I>::fit_mass<D>(RunState<D>&, GaussPoints<D>&); \
+  template void MovingLeastSquaresMapping<I>::finish_mass<D>(RunState<D>&);               \
+  template void MovingLeastSquaresMapping<I>::fit_momentum<D>(RunState<D>&,               \
+                                                              const GaussPoints<D>&);     \
+  template void MovingLeastSquaresMapping<I>::fit_forces<D>(RunState<D>&, const GaussPoints<D>&);
+MPM_MLS_MAPPING_DIM(false, 1)
+MPM_MLS_MAPPING_DIM(false, 2)
+MPM_MLS_MAPPING_DIM(true, 1)
+MPM_MLS_MAPPING_DIM(true, 2)
+#undef MPM_MLS_MAPPING_DIM
+
 }  // namespace mpm

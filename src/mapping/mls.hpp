@@ -320,130 +320,49 @@ class MovingLeastSquaresMapping {
   // Checkpoint restart: the sums continue from a saved run (io/checkpoint.hpp).
   void set_totals(const MlsReport& t) { totals_ = t; }
   template <class Sim>
-  const QuadraturePoints<Sim>* quadrature() const {
+  const QuadraturePointsOf<Sim>* quadrature() const {
     return quad_.get<Sim>();
   }
 
+  // The basis enters only through the quadrature stencils and the nodal positions (IMLS): the
+  // reconstructions are compiled once per dimension (mls.cpp), the assembly once per basis.
   template <class Sim>
   void map_mass(Sim& sim) {
     constexpr int Dim = Sim::kDim;
     static_assert(Dim == 1 || Dim == 2, "the MLS/IMLS mappings are one- and two-dimensional");
-    if (Improved && sim.mass_type == MassType::Consistent)
-      throw InputError("method.mapping = imls needs method.mass = lumped (003 eq. 32)");
-    dim_ = Dim;
-    auto& mls = std::get<Dim - 1>(work_).mls;
-    const auto& P = sim.particles;
-    const auto& grid = sim.grid;
-    mls.set_points(grid, P);
     auto& q = quad_.prepare<Sim>();
-    q.clear();
-    // Tensor-product Gauss rule on each element holding a particle: point k has index
-    // k_d = (k / n^d) % n in direction d (x fastest), weight prod_d (h_d / 2) w_{k_d}.
-    const int n = static_cast<int>(rule_.xi.size());
-    const int per_element = ipow(n, Dim);
-    const Vec<Dim> half = 0.5 * grid.h;
-    for (Index e = 0; e < grid.num_cells(); ++e) {
-      if (mls.bins().count(e) == 0) continue;
-      Vec<Dim> centre;
-      Index rem = e;
-      for (int d = 0; d < Dim; ++d) {
-        centre[d] = grid.origin[d] + (static_cast<double>(rem % grid.cells[d]) + 0.5) * grid.h[d];
-        rem /= grid.cells[d];
-      }
-      for (int k = 0; k < per_element; ++k) {
-        Vec<Dim> xg;
-        double wg = 1.0;
-        for (int d = 0, r = k; d < Dim; ++d, r /= n) {
-          const auto j = static_cast<std::size_t>(r % n);
-          xg[d] = centre[d] + half[d] * rule_.xi[j];
-          wg *= half[d] * rule_.w[j];
-        }
-        q.add(xg, wg, e);
-      }
-    }
-    // The shape functions at the Gauss points (the bulk of the step), rows in parallel.
-    const auto ng = static_cast<Index>(q.size());
-    mls.add_rows(
-        ng, [&](Index g) -> const Vec<Dim>& { return q.x[static_cast<std::size_t>(g)]; },
-        MlsWeight::QuadraticSpline, gauss_);
-    q.evaluate(sim);
-    rho_.resize(q.size());
-    gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
-      rho_[g] = t.apply(r, [&](std::size_t p) { return P.density[p]; });
-    });
+    fit_mass<Dim>(sim, q);
+    q.evaluate(sim.basis);
     assemble_mass(sim, q, rho_);
     if constexpr (Improved) {
       // Nodal rows (003 eq. 31) for the DOFs that carry mass.
       node_dof_.clear();
+      auto& xn = std::get<Dim - 1>(work_).node_x;
+      xn.clear();
       const auto& m = sim.nodes.mass;
       for (Index i = 0; i < sim.basis.num_dofs(); ++i)
-        if (m[static_cast<std::size_t>(i)] > 0.0) node_dof_.push_back(i);
-      mls.add_rows(
-          static_cast<Index>(node_dof_.size()),
-          [&](Index r) { return sim.basis.dof_position(node_dof_[static_cast<std::size_t>(r)]); },
-          MlsWeight::Linear, nodes_, true);
+        if (m[static_cast<std::size_t>(i)] > 0.0) {
+          node_dof_.push_back(i);
+          xn.push_back(sim.basis.dof_position(i));
+        }
     }
-    const MlsReport& rep = mls.report();
-    accumulate(totals_, rep);
-    if (rep.singular > 0)
-      throw RunError(
-          exit_code::kReconstruction,
-          fmt::format("step {}, t = {:.9g} s: the MLS moment matrix is singular at {} "
-                      "point(s) (first near x = {:.6g}{}): too few distinct particles "
-                      "for method.mls_degree = {}; use method.mapping = imls",
-                      sim.step, sim.time, rep.singular, rep.worst_x,
-                      Dim == 2 ? fmt::format(", y = {:.6g}", rep.worst_y) : "", settings_.degree));
+    finish_mass<Dim>(sim);
   }
 
   template <class Sim>
   void map_momentum(Sim& sim) {
     constexpr int Dim = Sim::kDim;
-    using V = Vec<Dim>;
-    const auto& P = sim.particles;
     const auto& q = quad_.prepared<Sim>();
-    if constexpr (Improved) {
-      auto& out = sim.nodes.momentum;
-      std::fill(out.begin(), out.end(), V::Zero());
-      nodes_.for_each_row([&](std::size_t r, const ShapeTable& t, std::size_t k) {
-        const auto i = static_cast<std::size_t>(node_dof_[r]);
-        out[i] =
-            sim.nodes.mass[i] * t.apply<V>(k, [&](std::size_t p) -> const V& { return P.v[p]; });
-      });
-    } else {
-      auto& vec = std::get<Dim - 1>(work_).vec;
-      vec.resize(q.size());
-      gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
-        vec[g] = t.apply<V>(r, [&](std::size_t p) -> V { return P.density[p] * P.v[p]; });
-      });
-      assemble_momentum(sim, q, vec);
-    }
+    fit_momentum<Dim>(sim, q);
+    if constexpr (!Improved) assemble_momentum(sim, q, std::get<Dim - 1>(work_).vec);
   }
 
   template <class Sim>
   void map_forces(Sim& sim) {
     constexpr int Dim = Sim::kDim;
-    using V = Vec<Dim>;
-    using M = Mat<Dim>;
-    const auto& P = sim.particles;
     const auto& q = quad_.prepared<Sim>();
-    auto& sig = std::get<Dim - 1>(work_).sig;
-    auto& vec = std::get<Dim - 1>(work_).vec;
-    sig.resize(q.size());
-    vec.resize(q.size());
-    // Stress and body force in one pass over each row: every sum runs over the row in the same
-    // order as separate applications, so the bits are theirs.
-    gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
-      M s = M::Zero();
-      V b = V::Zero();
-      for (std::size_t k = t.start[r]; k < t.start[r + 1]; ++k) {
-        const auto p = static_cast<std::size_t>(t.point[k]);
-        s += t.phi[k] * P.stress[p];
-        b += t.phi[k] * P.body[p];
-      }
-      sig[g] = s;
-      vec[g] = rho_[g] * b;
-    });
-    assemble_forces(sim, q, vec, sig);
+    fit_forces<Dim>(sim, q);
+    assemble_forces(sim, q, std::get<Dim - 1>(work_).vec, std::get<Dim - 1>(work_).sig);
   }
 
  private:
@@ -455,7 +374,22 @@ class MovingLeastSquaresMapping {
     MovingLeastSquares<Dim> mls;
     std::vector<Vec<Dim>> vec;
     std::vector<Mat<Dim>> sig;
+    std::vector<Vec<Dim>> node_x;  // IMLS: positions of the DOFs node_dof_
   };
+
+  // mls.cpp, for Dim 1 and 2. fit_mass: bins the particles, places the Gauss points in q, their
+  // shape functions and rho^ there (rho_). finish_mass: the IMLS nodal rows (node_x) and the
+  // report, stopping the run on a singular moment matrix. fit_momentum: (rho v)^ at the Gauss
+  // points (vec), or for IMLS the nodal momenta m_i v_i. fit_forces: sigma^ (sig) and (rho b)^
+  // (vec) at the Gauss points.
+  template <int Dim>
+  void fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q);
+  template <int Dim>
+  void finish_mass(RunState<Dim>& sim);
+  template <int Dim>
+  void fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q);
+  template <int Dim>
+  void fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q);
 
   Settings settings_;
   std::tuple<Work<1>, Work<2>> work_;

@@ -74,18 +74,11 @@ struct ElementBins {
 // grid buffer (the DOF range its stencils touch, recorded by evaluate()), and the slices are
 // added in chunk order. The result is bitwise the same for any thread count; up to
 // ParticleChunks::kMinSize points it is one chunk, summed exactly as a serial loop.
-template <class Sim>
-struct QuadraturePoints {
-  static constexpr int Dim = Sim::kDim;
+template <int Dim>
+struct GaussPoints {
   std::vector<Vec<Dim>> x;  // position [m]
   std::vector<double> w;    // weight [m^Dim]
   std::vector<Index> element;
-  std::vector<typename Sim::StencilT> stencil;
-  // Scatter state of the assembly: the DOF range of every chunk of points (evaluate()) and the
-  // chunk buffers. Mutable: integrating a field does not change the points.
-  ChunkDofRanges ranges;
-  mutable GridAccumulator<double> scalar;
-  mutable GridAccumulator<Vec<Dim>> vector;
 
   void clear() {
     x.clear();
@@ -98,14 +91,30 @@ struct QuadraturePoints {
     element.push_back(e);
   }
   std::size_t size() const { return x.size(); }
-  void evaluate(const Sim& sim) {
+};
+
+// The points with the basis stencils at them. Only the stencils depend on the basis: a mapping
+// places the points and reconstructs its fields there in code compiled once per dimension
+// (GaussPoints), and evaluates the basis and assembles here, once per basis.
+template <int Dim, class Basis>
+struct QuadraturePoints : GaussPoints<Dim> {
+  using GaussPoints<Dim>::x;
+  using GaussPoints<Dim>::size;
+  std::vector<typename Basis::StencilT> stencil;
+  // Scatter state of the assembly: the DOF range of every chunk of points (evaluate()) and the
+  // chunk buffers. Mutable: integrating a field does not change the points.
+  ChunkDofRanges ranges;
+  mutable GridAccumulator<double> scalar;
+  mutable GridAccumulator<Vec<Dim>> vector;
+
+  void evaluate(const Basis& basis) {
     const auto n = static_cast<Index>(x.size());
     stencil.resize(x.size());
     for_each_chunk(n, [&](int c, Index b, Index e) {
       Index lo = std::numeric_limits<Index>::max(), hi = -1;
       for (Index g = b; g < e; ++g) {
         auto& s = stencil[static_cast<std::size_t>(g)];
-        sim.basis.evaluate_point(x[static_cast<std::size_t>(g)], s);
+        basis.evaluate_point(x[static_cast<std::size_t>(g)], s);
         for (int a = 0; a < s.kSize; ++a) {
           lo = std::min(lo, s.dof[a]);
           hi = std::max(hi, s.dof[a]);
@@ -118,20 +127,24 @@ struct QuadraturePoints {
   }
 };
 
+// The quadrature points of a simulation type Sim (those of its basis).
+template <class Sim>
+using QuadraturePointsOf = QuadraturePoints<Sim::kDim, typename Sim::BasisT>;
+
 // The quadrature points of a reconstruction mapping hold basis stencils, whose type depends on
-// the simulation (which itself names the mapping), so a mapping keeps them type-erased and
-// recovers them once per call (no allocation after the first step: the vectors keep their
-// capacity). map_mass, the first mapping call of every step, prepares them.
+// the basis of the simulation, not known to the mapping class, so a mapping keeps them
+// type-erased and recovers them once per call (no allocation after the first step: the vectors keep
+// their capacity). map_mass, the first mapping call of every step, prepares them.
 class QuadratureStore {
  public:
   template <class Sim>
-  QuadraturePoints<Sim>& prepare() {
-    if (auto* q = std::any_cast<QuadraturePoints<Sim>>(&points_)) return *q;
-    return points_.emplace<QuadraturePoints<Sim>>();
+  QuadraturePointsOf<Sim>& prepare() {
+    if (auto* q = std::any_cast<QuadraturePointsOf<Sim>>(&points_)) return *q;
+    return points_.emplace<QuadraturePointsOf<Sim>>();
   }
   // The points of the current step; throws when map_mass has not run (a scheme bug).
   template <class Sim>
-  const QuadraturePoints<Sim>& prepared() const {
+  const QuadraturePointsOf<Sim>& prepared() const {
     const auto* q = get<Sim>();
     if (q == nullptr)
       throw std::logic_error("a reconstruction mapping needs map_mass first in every step");
@@ -139,8 +152,8 @@ class QuadratureStore {
   }
   // nullptr before the first map_mass for this Sim.
   template <class Sim>
-  const QuadraturePoints<Sim>* get() const {
-    return std::any_cast<QuadraturePoints<Sim>>(&points_);
+  const QuadraturePointsOf<Sim>* get() const {
+    return std::any_cast<QuadraturePointsOf<Sim>>(&points_);
   }
 
  private:
@@ -149,8 +162,9 @@ class QuadratureStore {
 
 // m_i = sum_g phi_i rho_g w_g (lumped row sums); with consistent mass also
 // M_ij = sum_g phi_i rho_g phi_j w_g (D eq. 3.9, 5.17; the triplet list stays serial).
-template <class Sim>
-void assemble_mass(Sim& sim, const QuadraturePoints<Sim>& q, const std::vector<double>& rho) {
+template <int Dim, class B>
+void assemble_mass(RunState<Dim>& sim, const QuadraturePoints<Dim, B>& q,
+                   const std::vector<double>& rho) {
   auto& m = sim.nodes.mass;
   q.scalar.scatter(m, 0.0, q.ranges, [&](Index g, const auto& slice) {
     const auto gi = static_cast<std::size_t>(g);
@@ -171,10 +185,10 @@ void assemble_mass(Sim& sim, const QuadraturePoints<Sim>& q, const std::vector<d
 }
 
 // q_i = sum_g phi_i (rho v)_g w_g (D eq. 3.8, 5.16).
-template <class Sim>
-void assemble_momentum(Sim& sim, const QuadraturePoints<Sim>& q,
-                       const std::vector<Vec<Sim::kDim>>& rhov) {
-  using V = Vec<Sim::kDim>;
+template <int Dim, class B>
+void assemble_momentum(RunState<Dim>& sim, const QuadraturePoints<Dim, B>& q,
+                       const std::vector<Vec<Dim>>& rhov) {
+  using V = Vec<Dim>;
   q.vector.scatter(sim.nodes.momentum, V::Zero(), q.ranges, [&](Index g, const auto& slice) {
     const auto gi = static_cast<std::size_t>(g);
     const auto& s = q.stencil[gi];
@@ -184,11 +198,10 @@ void assemble_momentum(Sim& sim, const QuadraturePoints<Sim>& q,
 
 // f_i = sum_g ( phi_i (rho b)_g - sigma_g grad phi_i ) w_g (D eq. 3.7 and 5.11 with the body
 // force integrated the same way).
-template <class Sim>
-void assemble_forces(Sim& sim, const QuadraturePoints<Sim>& q,
-                     const std::vector<Vec<Sim::kDim>>& rhob,
-                     const std::vector<Mat<Sim::kDim>>& sigma) {
-  using V = Vec<Sim::kDim>;
+template <int Dim, class B>
+void assemble_forces(RunState<Dim>& sim, const QuadraturePoints<Dim, B>& q,
+                     const std::vector<Vec<Dim>>& rhob, const std::vector<Mat<Dim>>& sigma) {
+  using V = Vec<Dim>;
   q.vector.scatter(sim.nodes.force, V::Zero(), q.ranges, [&](Index g, const auto& slice) {
     const auto gi = static_cast<std::size_t>(g);
     const auto& s = q.stencil[gi];

@@ -399,49 +399,17 @@ class TlsMapping {
   // Checkpoint restart: the sums continue from a saved run (io/checkpoint.hpp).
   void set_totals(const TlsReport& t) { totals_ = t; }
 
+  // The basis enters only through the quadrature stencils: the reconstructions are compiled once
+  // per dimension (tls_mapping.cpp), the assembly once per basis.
   // rho^ conservative with c_e = sum m_p and data rho_p; lumped masses and, with consistent
   // mass, M_ij = sum_g phi_i rho^ phi_j w_g (D eq. 5.14, 5.17).
   template <class Sim>
   void map_mass(Sim& sim) {
     constexpr int Dim = Sim::kDim;
-    auto& st = state<Dim>();
-    const auto& P = sim.particles;
-    const TlsReport& rep = st.recon.set_points(sim.grid, P);
-    accumulate(totals_, rep);
-    if (rep.failed > 0)
-      throw RunError(
-          exit_code::kReconstruction,
-          fmt::format("step {}, t = {:.9g} s: TLS cannot fit element {} ({} particles, condition "
-                      "number {:.3g}){}; set method.tls_completion = reduce, virtual or neighbour",
-                      sim.step, sim.time, st.recon.describe(rep.failed_element), rep.failed_points,
-                      rep.failed_condition,
-                      rep.failed > 1 ? fmt::format(" and {} more element(s)", rep.failed - 1)
-                                     : std::string()));
     auto& q = quad_.prepare<Sim>();
-    q.clear();
-    // D 6.3: the same Gauss rule in every element of the uniform grid, weights scaled by the
-    // half-widths (the Jacobian of the map from [-1, 1]^Dim).
-    const Vec<Dim> hw = st.recon.half_width_vec();
-    for (Index e = 0; e < st.recon.num_elements(); ++e) {
-      if (!st.recon.active(e)) continue;  // no particles: no reconstruction, no mass
-      const Vec<Dim> c = st.recon.centre_vec(e);
-      for (std::size_t k = 0; k < st.xi.size(); ++k) {
-        Vec<Dim> x;
-        double wg = 1.0;
-        for (int d = 0; d < Dim; ++d) {
-          x[d] = c[d] + hw[d] * st.xi[k][d];
-          wg *= hw[d] * st.w[k][d];
-        }
-        q.add(x, wg, e);
-      }
-    }
-    q.evaluate(sim);
-
-    element_sums(st.recon, [&](std::size_t i) { return P.mass[i]; });
-    st.recon.fit_conservative(P.density, integrals_, st.coef);
-    st.rho.resize(q.size());
-    at_gauss(st, q, [&](std::size_t g, double v) { st.rho[g] = v; });
-    assemble_mass(sim, q, st.rho);
+    fit_mass<Dim>(sim, q);
+    q.evaluate(sim.basis);
+    assemble_mass(sim, q, state<Dim>().rho);
   }
 
   // (rho v)^ conservative per component with c_e = sum m_p v_p and data rho_p v_p (D eq. 5.14,
@@ -449,18 +417,9 @@ class TlsMapping {
   template <class Sim>
   void map_momentum(Sim& sim) {
     constexpr int Dim = Sim::kDim;
-    auto& st = state<Dim>();
-    const auto& P = sim.particles;
     const auto& q = quad_.prepared<Sim>();
-    st.rhov.resize(q.size());
-    values_.resize(P.x.size());
-    for (int d = 0; d < Dim; ++d) {
-      fill_values([&](std::size_t i) { return P.density[i] * P.v[i][d]; });
-      element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.v[i][d]; });
-      st.recon.fit_conservative(values_, integrals_, st.coef);
-      at_gauss(st, q, [&](std::size_t g, double v) { st.rhov[g][d] = v; });
-    }
-    assemble_momentum(sim, q, st.rhov);
+    fit_momentum<Dim>(sim, q);
+    assemble_momentum(sim, q, state<Dim>().rhov);
   }
 
   // sigma^ by plain least squares per component (D eq. 5.12-5.13, 6.19-6.20); the body-force
@@ -469,25 +428,9 @@ class TlsMapping {
   template <class Sim>
   void map_forces(Sim& sim) {
     constexpr int Dim = Sim::kDim;
-    auto& st = state<Dim>();
-    const auto& P = sim.particles;
     const auto& q = quad_.prepared<Sim>();
-    values_.resize(P.x.size());
-    st.sigma.resize(q.size());
-    for (int r = 0; r < Dim; ++r)
-      for (int c = 0; c < Dim; ++c) {
-        fill_values([&](std::size_t i) { return P.stress[i](r, c); });
-        st.recon.fit_plain(values_, st.coef);
-        at_gauss(st, q, [&](std::size_t g, double v) { st.sigma[g](r, c) = v; });
-      }
-
-    st.rhob.resize(q.size());
-    for (int d = 0; d < Dim; ++d) {
-      fill_values([&](std::size_t i) { return P.density[i] * P.body[i][d]; });
-      element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.body[i][d]; });
-      st.recon.fit_conservative(values_, integrals_, st.coef);
-      at_gauss(st, q, [&](std::size_t g, double v) { st.rhob[g][d] = v; });
-    }
+    fit_forces<Dim>(sim, q);
+    const auto& st = state<Dim>();
     assemble_forces(sim, q, st.rhob, st.sigma);
   }
 
@@ -531,15 +474,23 @@ class TlsMapping {
     });
   }
   // The reconstruction st.coef at every Gauss point: element e, local point k = g mod n^Dim.
-  template <int Dim, class Sim, class Store>
-  static void at_gauss(const TlsMappingState<Dim>& st, const QuadraturePoints<Sim>& q,
-                       Store&& store) {
+  template <int Dim, class Store>
+  static void at_gauss(const TlsMappingState<Dim>& st, const GaussPoints<Dim>& q, Store&& store) {
     const std::size_t n = st.psi.size();
     parallel_for(static_cast<Index>(q.size()), [&](Index gi) {
       const auto g = static_cast<std::size_t>(gi);
       store(g, st.coef[static_cast<std::size_t>(q.element[g])].dot(st.psi[g % n]));
     });
   }
+
+  // tls_mapping.cpp, for Dim 1 and 2: the fits of map_mass (binning, element systems, Gauss
+  // points placed in q, rho^ there), map_momentum ((rho v)^) and map_forces (sigma^, (rho b)^).
+  template <int Dim>
+  void fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q);
+  template <int Dim>
+  void fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q);
+  template <int Dim>
+  void fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q);
 
   TlsSettings settings_;
   int dim_ = 1;  // dimension of the last step

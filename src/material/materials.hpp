@@ -25,10 +25,12 @@ struct ElasticParameters {
 // (004 eq. 4.15).
 struct Elastic1DSmall {
   static constexpr std::string_view kName = "elastic_1d_small";
+  static constexpr bool supports_dimension(int dim) { return dim == 1; }
   ElasticParameters p;
   template <int Dim>
   void update(Mat<Dim>& sigma, const Mat<Dim>& /*F*/, const Mat<Dim>& dtL) const {
-    // One-dimensional law: make_material() rejects it for Dim > 1.
+    // One-dimensional law: make_material() rejects it for Dim > 1, and the stress stage
+    // instantiates no update for it there.
     if constexpr (Dim == 1) sigma(0, 0) += p.youngs_modulus * dtL(0, 0);
   }
   // Stored energy [J] of a particle: sigma^2 / (2E) per current volume.
@@ -43,6 +45,7 @@ struct Elastic1DSmall {
 // whose closed form is sigma = E (1 - 1/F).
 struct Elastic1DLarge {
   static constexpr std::string_view kName = "elastic_1d_large";
+  static constexpr bool supports_dimension(int dim) { return dim == 1; }
   ElasticParameters p;
   template <int Dim>
   void update(Mat<Dim>& sigma, const Mat<Dim>& /*F*/, const Mat<Dim>& dtL) const {
@@ -61,6 +64,7 @@ struct Elastic1DLarge {
 // In 1D this is sigma = (lambda + 2 mu) (F - 1); with nu = 0 the modulus is E.
 struct LinearElastic {
   static constexpr std::string_view kName = "linear_elastic";
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   ElasticParameters p;
   explicit LinearElastic(const ElasticParameters& params = {})
       : p(params), lambda_(params.lambda()), mu_(params.mu()) {}
@@ -86,6 +90,7 @@ struct LinearElastic {
 // Compressible neo-Hookean (D eq. 2.14): sigma = lambda ln(J)/J I + mu/J (F F^T - I).
 struct NeoHookean {
   static constexpr std::string_view kName = "neo_hookean";
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   ElasticParameters p;
   explicit NeoHookean(const ElasticParameters& params = {})
       : p(params), lambda_(params.lambda()), mu_(params.mu()) {}
@@ -111,11 +116,13 @@ struct NeoHookean {
 
 // The constitutive-law concept: the per-particle stress update over a step (dtL = dt L, the
 // velocity gradient times the increment; F already updated), the strain energy of a particle
-// (history.csv), and the wave speed of the stability limit.
+// (history.csv), the wave speed of the stability limit, and the dimensions it exists in
+// (make_material refuses the others; the stages compile no update for them).
 template <class Law, int Dim>
 concept ConstitutiveLaw = requires(const Law& law, Mat<Dim>& sigma, const Mat<Dim>& F,
-                                   const Mat<Dim>& dtL, double V, double V0) {
+                                   const Mat<Dim>& dtL, double V, double V0, int dim) {
   { Law::kName } -> std::convertible_to<std::string_view>;
+  { Law::supports_dimension(dim) } -> std::convertible_to<bool>;
   law.update(sigma, F, dtL);
   { law.energy(sigma, F, V, V0) } -> std::convertible_to<double>;
   { law.wave_speed() } -> std::convertible_to<double>;

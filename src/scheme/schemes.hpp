@@ -72,9 +72,9 @@ struct Usf {
     update_stress(sim, dt);                                   // sigma^{s+1} from v_i^s
     map_forces(sim);  // f with the updated stress and volume
     solve_acceleration(sim);
-    update_particle_velocity(sim, dt);  // v_p^{s+1}
-    advance_grid_velocity(sim, dt);     // v_i^{s+1} = v_i^s + dt a_i
-    update_particle_position(sim, dt);
+    advance_grid_velocity(sim, dt);  // v_i^{s+1} = v_i^s + dt a_i
+    // v_p^{s+1} from a^s (the grid update leaves it), x_p^{s+1} from v_i^{s+1}: one pass
+    update_particles<particle_update::kVelocity | particle_update::kPosition>(sim, dt);
   }
 };
 

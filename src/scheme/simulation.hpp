@@ -1,6 +1,7 @@
 #pragma once
-// The state of one run: grid, basis, mapping, particles, material, grid quantities and the
-// cached basis stencils. Stages (scheme/stages.hpp) operate on it; schemes order the stages.
+// The state of one run in three layers: RunState (grid, particles, material, grid quantities),
+// BasisState (+ basis and cached stencils), Simulation (+ mapping). Stages (scheme/stages.hpp)
+// operate on the lowest layer they need; schemes order the stages.
 #include <algorithm>
 #include <cstdint>
 #include <functional>
@@ -83,16 +84,19 @@ struct RunState {
   Diagnostics diag;
 };
 
-template <int Dim, class Basis, class Mapping>
-struct Simulation : RunState<Dim> {
+// RunState with the basis and the cached basis stencils: everything the mapping-independent
+// per-particle stages read (basis evaluation, grid-to-particle updates, tractions, sorting).
+// Those stages take a BasisState, so each is compiled once per (dimension, basis), not once
+// per mapping as well.
+template <int Dim, class Basis>
+struct BasisState : RunState<Dim> {
   using BasisT = Basis;
-  using MappingT = Mapping;
   using StencilT = typename Basis::StencilT;
   // The per-particle cache: the compact 1D factors for tensor-product bases, else StencilT.
   using CachedT = typename CachedStencilOf<Basis>::type;
 
-  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat)
-      : RunState<Dim>(g, std::move(p), std::move(mat)), basis(std::move(b)), mapping(std::move(m)) {
+  BasisState(const Grid<Dim>& g, Basis b, Particles<Dim> p, Material mat)
+      : RunState<Dim>(g, std::move(p), std::move(mat)), basis(std::move(b)) {
     auto& particles = this->particles;
     this->nodes.resize(basis.num_dofs());
     stencils.resize(static_cast<std::size_t>(particles.size()));
@@ -107,7 +111,6 @@ struct Simulation : RunState<Dim> {
   }
 
   Basis basis;
-  Mapping mapping;
   std::vector<CachedT> stencils;  // basis at x_p^s, refreshed by evaluate_basis()
 
   // Prescribe zero velocity on a grid side (d: direction, side 0/1) in the components whose
@@ -120,6 +123,18 @@ struct Simulation : RunState<Dim> {
     this->consistent_per_component =
         std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
   }
+};
+
+// The whole state of a run: BasisState with the mapping.
+template <int Dim, class Basis, class Mapping>
+struct Simulation : BasisState<Dim, Basis> {
+  using MappingT = Mapping;
+
+  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat)
+      : BasisState<Dim, Basis>(g, std::move(b), std::move(p), std::move(mat)),
+        mapping(std::move(m)) {}
+
+  Mapping mapping;
 };
 
 }  // namespace mpm

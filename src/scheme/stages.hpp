@@ -10,7 +10,10 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "core/parallel.hpp"
@@ -57,15 +60,13 @@ std::string describe_box(const Grid<Dim>& g) {
 
 // D Alg. 2 step 3: basis values and gradients at x_p^s. Stops the run (exit code 4) when a
 // particle has left the grid, and counts grid crossings.
-template <class Sim>
-void evaluate_basis(Sim& sim) {
+template <int Dim, class B>
+void evaluate_basis(BasisState<Dim, B>& sim) {
   auto& P = sim.particles;
   auto& basis = sim.basis;
   // Bases built from the particle distribution (DDMPM node volumes, CPDI2 corners) refresh it
   // first.
-  using B = typename Sim::BasisT;
   if constexpr (B::kPrepare) basis.prepare(P);
-  constexpr int Dim = Sim::kDim;
   const auto& g = sim.grid;
   // Per chunk: flags, crossings and the DOF range of the new stencils (recorded here, while
   // the stencils are in cache, for the scatters of DirectMapping).
@@ -142,7 +143,7 @@ void evaluate_basis(Sim& sim) {
                      fmt::format("step {}, t = {:.9g} s: the domain of {} particle(s) cannot be "
                                  "represented by the {} basis (stretched beyond its stencil or "
                                  "reaching outside the grid): {}",
-                                 sim.step, sim.time, ids.size(), Sim::BasisT::kName,
+                                 sim.step, sim.time, ids.size(), B::kName,
                                  detail::describe_particles(P, ids)));
     }
   }
@@ -158,101 +159,26 @@ void evaluate_basis(Sim& sim) {
 }
 
 // Body force b_p(x, t) for this step (constant forces were filled once at set-up).
-template <class Sim>
-void refresh_body_force(Sim& sim) {
+template <int Dim>
+void refresh_body_force(RunState<Dim>& sim) {
   if (sim.body_force.time_dependent || sim.body_force.position_dependent)
     sim.body_force.fill(sim.particles, sim.time, sim.particles.body);
 }
 
 namespace detail {
 // The active set and the mass conservation check, and the consistent matrix if requested,
-// from the nodal masses of the mapping.
-template <class Sim>
-void after_mass(Sim& sim) {
-  const auto& m = sim.nodes.mass;
-  const auto& mp = sim.particles.mass;
-  const double total = deterministic_sum(static_cast<Index>(m.size()), 0.0,
-                                         [&](Index i) { return m[static_cast<std::size_t>(i)]; });
-  const double largest = m.empty() ? 0.0 : *std::max_element(m.begin(), m.end());
-  // sum m_p: taken by the mapping's scatter when it has one (the same bits), else a pass here.
-  auto& sc = sim.scatter;
-  const double particle_mass =
-      sc.has_particle_mass ? sc.particle_mass.total(static_cast<Index>(mp.size()), 0.0)
-                           : deterministic_sum(static_cast<Index>(mp.size()), 0.0, [&](Index p) {
-                               return mp[static_cast<std::size_t>(p)];
-                             });
-  sc.has_particle_mass = false;
-  if (particle_mass > 0.0) {
-    sim.diag.rel_mass_error = std::abs(total - particle_mass) / particle_mass;
-    sim.diag.max_rel_mass_error = std::max(sim.diag.max_rel_mass_error, sim.diag.rel_mass_error);
-  }
-  const double threshold = sim.mass_tolerance * largest;
-  parallel_for(static_cast<Index>(m.size()), [&](Index k) {
-    const auto i = static_cast<std::size_t>(k);
-    sim.nodes.active[i] = m[i] > threshold ? 1 : 0;
-  });
-  if (sim.mass_type == MassType::Consistent) {
-    constexpr int Dim = Sim::kDim;
-    constexpr std::uint8_t kAll = (1u << Dim) - 1u;
-    const auto& act = sim.nodes.active;
-    const auto& fixed = sim.nodes.fixed;
-    // Fixed DOFs are eliminated: the prescribed value is zero, so M y = r with identity rows.
-    // One factorisation serves every component unless some DOF is fixed in only some of them
-    // (rollers): then component d gets its own (slot d).
-    const bool per_component = sim.consistent_per_component;
-    for (int d = 0; d < (per_component ? Dim : 1); ++d) {
-      const auto bit = static_cast<std::uint8_t>(per_component ? 1u << d : kAll);
-      if (!sim.consistent.factorize(
-              [&](Index i) {
-                const auto k = static_cast<std::size_t>(i);
-                return act[k] && !(fixed[k] & bit);
-              },
-              d))
-        throw RunError(exit_code::kNonFinite,
-                       fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
-                                   "(a cell with too few particles); use method.mass = \"lumped\"",
-                                   sim.step, sim.time));
-    }
-  }
-}
+// from the nodal masses of the mapping (scheme/grid_stages.cpp).
+template <int Dim>
+void after_mass(RunState<Dim>& sim);
 
 // The momentum conservation check from the nodal momenta of the mapping.
-template <class Sim>
-void after_momentum(Sim& sim) {
-  constexpr int Dim = Sim::kDim;
-  const auto& q = sim.nodes.momentum;
-  const Vec<Dim> grid_p =
-      deterministic_sum(static_cast<Index>(q.size()), Vec<Dim>::Zero().eval(),
-                        [&](Index i) { return q[static_cast<std::size_t>(i)]; });
-  // (sum m_p v_p, sum m_p |v_p|) as one vector: taken by the mapping's scatter when it has one
-  // (the same bits), else one pass over the particles here.
-  using Sums = Eigen::Matrix<double, Dim + 1, 1>;
-  const auto& P = sim.particles;
-  auto& sc = sim.scatter;
-  const Sums sums = sc.has_particle_momentum
-                        ? sc.particle_momentum.total(P.size(), Sums::Zero().eval())
-                        : deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
-                            const auto i = static_cast<std::size_t>(p);
-                            Sums r;
-                            r.template head<Dim>() = P.mass[i] * P.v[i];
-                            r[Dim] = P.mass[i] * P.v[i].norm();
-                            return r;
-                          });
-  sc.has_particle_momentum = false;
-  const Vec<Dim> part_p = sums.template head<Dim>();
-  const double scale = sums[Dim];
-  if (scale > 0.0) {
-    sim.diag.rel_momentum_error = (grid_p - part_p).norm() / scale;
-    sim.diag.max_rel_momentum_error =
-        std::max(sim.diag.max_rel_momentum_error, sim.diag.rel_momentum_error);
-  }
-}
+template <int Dim>
+void after_momentum(RunState<Dim>& sim);
 
 // Tractions through the particles next to the loaded faces (Traction: one face point per loaded
 // particle, tau evaluated once per face), added to the forces of the mapping.
-template <class Sim>
-void after_forces(Sim& sim) {
-  constexpr int Dim = Sim::kDim;
+template <int Dim, class B>
+void after_forces(BasisState<Dim, B>& sim) {
   const auto& P = sim.particles;
   for (const auto& tr : sim.tractions) {
     const Vec<Dim> tau = tr.value(sim.time);
@@ -269,7 +195,7 @@ void after_forces(Sim& sim) {
                                    "{}, face centre at x = {}) left the grid {}",
                                    sim.step, sim.time, P.id[i], detail::describe_point(x_face),
                                    detail::describe_box(sim.grid)));
-      typename Sim::StencilT s;
+      typename BasisState<Dim, B>::StencilT s;
       sim.basis.evaluate_point(x_face, s);
       // A_p = 1 in 1D: tau * 1.0 is exact, so the 1D forces are those of the end traction.
       const Vec<Dim> f = tau * tr.area[k];
@@ -318,56 +244,17 @@ void map_forces(Sim& sim) {
   map_to_grid<grid_sum::kForces>(sim);
 }
 
-namespace detail {
-// y = M^{-1} r on the active, unconstrained DOFs; zero elsewhere (D eq. 2.46 / 2.49).
-template <class Sim, class V>
-void solve_grid(const Sim& sim, const std::vector<V>& r, std::vector<V>& y) {
-  constexpr int Dim = Sim::kDim;
-  const auto& nd = sim.nodes;
-  const auto n = r.size();
-  if (sim.mass_type == MassType::Lumped) {
-    parallel_for(static_cast<Index>(n), [&](Index k) {
-      const auto i = static_cast<std::size_t>(k);
-      y[i] = nd.active[i] ? V(r[i] / nd.mass[i]) : V::Zero();
-    });
-  } else {
-    Eigen::VectorXd rhs(static_cast<Index>(n));
-    for (int d = 0; d < Dim; ++d) {
-      const int slot = sim.consistent_per_component ? d : 0;
-      for (std::size_t i = 0; i < n; ++i)
-        rhs[static_cast<Index>(i)] = (nd.active[i] && !(nd.fixed[i] & (1u << d))) ? r[i][d] : 0.0;
-      const Eigen::VectorXd sol = sim.consistent.solve(rhs, slot);
-      for (std::size_t i = 0; i < n; ++i) y[i][d] = sol[static_cast<Index>(i)];
-    }
-  }
-  for (std::size_t i = 0; i < n; ++i)
-    if (nd.fixed[i])
-      for (int d = 0; d < Dim; ++d)
-        if (nd.fixed[i] & (1u << d)) y[i][d] = 0.0;
-}
-}  // namespace detail
-
-// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46).
-template <class Sim>
-void solve_acceleration(Sim& sim) {
-  detail::solve_grid(sim, sim.nodes.force, sim.nodes.accel);
-}
+// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46; scheme/grid_stages.cpp).
+template <int Dim>
+void solve_acceleration(RunState<Dim>& sim);
 
 // v_i = M^{-1} q_i with Dirichlet components zero (D eq. 2.35 / 2.49).
-template <class Sim>
-void solve_velocity(Sim& sim) {
-  detail::solve_grid(sim, sim.nodes.momentum, sim.nodes.velocity);
-}
+template <int Dim>
+void solve_velocity(RunState<Dim>& sim);
 
 // Euler-Cromer on the grid: v_i^{s+1} = v_i^s + dt a_i^s (D eq. 2.36; USL, USF).
-template <class Sim>
-void advance_grid_velocity(Sim& sim, double dt) {
-  auto& nd = sim.nodes;
-  parallel_for(nd.size(), [&](Index k) {
-    const auto i = static_cast<std::size_t>(k);
-    nd.velocity[i] += dt * nd.accel[i];
-  });
-}
+template <int Dim>
+void advance_grid_velocity(RunState<Dim>& sim, double dt);
 
 // The grid-to-particle updates of What (particle_update bits) in one pass over the particles
 // and their stencils at x_p^s (each particle's updates are independent of the others', so the
@@ -377,50 +264,53 @@ void advance_grid_velocity(Sim& sim, double dt) {
 //     (Euler-Cromer: positions use the new velocity; D eq. 2.38 / 2.51);
 //   stress: the velocity gradient from the current grid velocity, then F, V, rho and the stress
 //     (D eq. 2.52-2.55 and step 14) over the increment stress_dt (dt/2 in USAVG).
-template <unsigned What, class Sim>
-void update_particles(Sim& sim, double dt, double stress_dt) {
+template <unsigned What, int Dim, class B>
+void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
   using namespace particle_update;
-  constexpr int Dim = Sim::kDim;
   auto& P = sim.particles;
   const auto& a = sim.nodes.accel;
   const auto& v = sim.nodes.velocity;
   // The variant is resolved once, outside the parallel loop; `bad`: any particle failed.
+  // Laws that do not exist in Dim (make_material refuses them) get no loop.
   const bool bad = std::visit(
-      [&]([[maybe_unused]] const auto& law) {
-        return parallel_any(P.size(), [&](Index p) {
-          const auto i = static_cast<std::size_t>(p);
-          Vec<Dim> acc = Vec<Dim>::Zero(), dx = Vec<Dim>::Zero();
-          Mat<Dim> L = Mat<Dim>::Zero();  // L_ab = dv_a/dx_b
-          for_each_entry(sim.stencils[i], sim.dof_stride,
-                         [&](Index dof, double w, const Vec<Dim>& grad) {
-                           const auto k = static_cast<std::size_t>(dof);
-                           if constexpr ((What & kVelocity) != 0) acc += w * a[k];
-                           if constexpr ((What & kPosition) != 0) dx += w * v[k];
-                           if constexpr ((What & kStress) != 0)
-                             L.noalias() += v[k] * grad.transpose();
-                         });
-          if constexpr ((What & kVelocity) != 0) P.v[i] += dt * acc;
-          if constexpr ((What & kPosition) != 0) {
-            dx *= dt;
-            P.x[i] += dx;
-            P.u[i] += dx;
-          }
-          if constexpr ((What & kStress) != 0) {
-            const Mat<Dim> dtL = stress_dt * L;
-            P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
-            const double J = P.F[i].determinant();
-            P.volume[i] = J * P.volume0[i];
-            P.density[i] = P.mass[i] / P.volume[i];
-            law.update(P.stress[i], P.F[i], dtL);
-            return !(J > 0.0) || !std::isfinite(P.stress[i].sum());
-          }
-          return false;
-        });
+      [&]([[maybe_unused]] const auto& law) -> bool {
+        if constexpr (!std::decay_t<decltype(law)>::supports_dimension(Dim))
+          throw std::logic_error("update_particles: a material law outside its dimensions");
+        else
+          return parallel_any(P.size(), [&](Index p) {
+            const auto i = static_cast<std::size_t>(p);
+            Vec<Dim> acc = Vec<Dim>::Zero(), dx = Vec<Dim>::Zero();
+            Mat<Dim> L = Mat<Dim>::Zero();  // L_ab = dv_a/dx_b
+            for_each_entry(sim.stencils[i], sim.dof_stride,
+                           [&](Index dof, double w, const Vec<Dim>& grad) {
+                             const auto k = static_cast<std::size_t>(dof);
+                             if constexpr ((What & kVelocity) != 0) acc += w * a[k];
+                             if constexpr ((What & kPosition) != 0) dx += w * v[k];
+                             if constexpr ((What & kStress) != 0)
+                               L.noalias() += v[k] * grad.transpose();
+                           });
+            if constexpr ((What & kVelocity) != 0) P.v[i] += dt * acc;
+            if constexpr ((What & kPosition) != 0) {
+              dx *= dt;
+              P.x[i] += dx;
+              P.u[i] += dx;
+            }
+            if constexpr ((What & kStress) != 0) {
+              const Mat<Dim> dtL = stress_dt * L;
+              P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
+              const double J = P.F[i].determinant();
+              P.volume[i] = J * P.volume0[i];
+              P.density[i] = P.mass[i] / P.volume[i];
+              law.update(P.stress[i], P.F[i], dtL);
+              return !(J > 0.0) || !std::isfinite(P.stress[i].sum());
+            }
+            return false;
+          });
       },
       sim.material);
   // Bases that track particle-domain corners (CPDI2) move them with the same grid velocity.
   if constexpr ((What & kPosition) != 0) {
-    if constexpr (Sim::BasisT::kTrackedCorners) sim.basis.advect(sim, dt);
+    if constexpr (B::kTrackedCorners) sim.basis.advect(sim, dt);
   }
   if (bad) {
     std::vector<Index> inverted, nonfinite;
@@ -445,27 +335,27 @@ void update_particles(Sim& sim, double dt, double stress_dt) {
   }
 }
 
-template <unsigned What, class Sim>
-void update_particles(Sim& sim, double dt) {
+template <unsigned What, int Dim, class B>
+void update_particles(BasisState<Dim, B>& sim, double dt) {
   update_particles<What>(sim, dt, dt);
 }
 
 // v_p^{s+1} = v_p^s + dt sum_i phi_i(x_p^s) a_i^s (D eq. 2.39 / 2.47).
-template <class Sim>
-void update_particle_velocity(Sim& sim, double dt) {
+template <int Dim, class B>
+void update_particle_velocity(BasisState<Dim, B>& sim, double dt) {
   update_particles<particle_update::kVelocity>(sim, dt);
 }
 
 // x_p^{s+1} = x_p^s + dt sum_i phi_i(x_p^s) v_i^{s+1}, and the same increment for u_p.
-template <class Sim>
-void update_particle_position(Sim& sim, double dt) {
+template <int Dim, class B>
+void update_particle_position(BasisState<Dim, B>& sim, double dt) {
   update_particles<particle_update::kPosition>(sim, dt);
 }
 
 // F, V, rho and the stress from the current grid velocity (D eq. 2.52-2.55). dt is the
 // increment this update covers (dt/2 in USAVG).
-template <class Sim>
-void update_stress(Sim& sim, double dt) {
+template <int Dim, class B>
+void update_stress(BasisState<Dim, B>& sim, double dt) {
   update_particles<particle_update::kStress>(sim, dt);
 }
 

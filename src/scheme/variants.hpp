@@ -47,6 +47,10 @@ struct LinearKind {
 
 // One kind per B-spline degree (method.degree selects it); the degree is a template parameter so
 // the stencil size is fixed at compile time.
+// dt_crit = factor h / c of the B-splines of degree 1-5 for explicit time integration with lumped
+// mass (basis/bspline.cpp).
+double bspline_stability_factor(int degree);
+
 template <int P>
 struct BSplineKind {
   static constexpr std::string_view kName = "bspline";
