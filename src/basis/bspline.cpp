@@ -46,12 +46,18 @@ double stability_factor() {
 
 double bspline_stability_factor(int degree) {
   switch (degree) {
-    case 1: return stability_factor<1>();
-    case 2: return stability_factor<2>();
-    case 3: return stability_factor<3>();
-    case 4: return stability_factor<4>();
-    case 5: return stability_factor<5>();
-    default: throw std::invalid_argument("bspline_stability_factor: degree 1 to 5");
+    case 1:
+      return stability_factor<1>();
+    case 2:
+      return stability_factor<2>();
+    case 3:
+      return stability_factor<3>();
+    case 4:
+      return stability_factor<4>();
+    case 5:
+      return stability_factor<5>();
+    default:
+      throw std::invalid_argument("bspline_stability_factor: degree 1 to 5");
   }
 }
 
