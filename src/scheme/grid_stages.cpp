@@ -1,9 +1,11 @@
-// The stages that read and write only the grid quantities of RunState (scheme/stages.hpp):
-// compiled once per dimension here, not in every (basis, mapping) stepper unit.
+// The stages that read and write only the grid quantities of RunState (scheme/stages.hpp), and
+// the stages' failure messages: compiled once per dimension here, not in every stepper unit.
 #include <fmt/format.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/parallel.hpp"
@@ -12,6 +14,95 @@
 namespace mpm::stages {
 
 namespace detail {
+// Formats at most `limit` particles (indices) by stable id with their positions for failure
+// messages.
+template <int Dim>
+std::string describe_particles(const Particles<Dim>& P, const std::vector<Index>& ids,
+                               std::size_t limit = 8) {
+  std::string out;
+  for (std::size_t k = 0; k < ids.size() && k < limit; ++k) {
+    const auto i = static_cast<std::size_t>(ids[k]);
+    out += fmt::format("{}particle {} at x = (", k ? "; " : "", i < P.id.size() ? P.id[i] : ids[k]);
+    for (int d = 0; d < Dim; ++d) out += fmt::format("{}{:.6g}", d ? ", " : "", P.x[i][d]);
+    out += ")";
+  }
+  if (ids.size() > limit) out += fmt::format("; and {} more", ids.size() - limit);
+  return out;
+}
+
+// A point as "0.5" in 1D and "(0.5, 0.25)" in more dimensions.
+template <int Dim>
+std::string describe_point(const Vec<Dim>& x) {
+  if constexpr (Dim == 1) return fmt::format("{:.6g}", x[0]);
+  std::string out = "(";
+  for (int d = 0; d < Dim; ++d) out += fmt::format("{}{:.6g}", d ? ", " : "", x[d]);
+  return out + ")";
+}
+
+// The grid's extent as "[0, 1]" in 1D and "[0, 1] x [0, 2]" in more dimensions.
+template <int Dim>
+std::string describe_box(const Grid<Dim>& g) {
+  const Vec<Dim> hi = g.upper();
+  std::string out;
+  for (int d = 0; d < Dim; ++d)
+    out += fmt::format("{}[{:.6g}, {:.6g}]", d ? " x " : "", g.origin[d], hi[d]);
+  return out;
+}
+
+template <int Dim>
+void throw_unfit(const RunState<Dim>& sim, const std::vector<Index>& ids, std::string_view basis) {
+  throw RunError(
+      exit_code::kInvertedDeformation,
+      fmt::format("step {}, t = {:.9g} s: the domain of {} particle(s) cannot be "
+                  "represented by the {} basis (stretched beyond its stencil or "
+                  "reaching outside the grid): {}",
+                  sim.step, sim.time, ids.size(), basis, describe_particles(sim.particles, ids)));
+}
+
+template <int Dim>
+void throw_left_grid(const RunState<Dim>& sim) {
+  const auto& P = sim.particles;
+  std::vector<Index> ids;
+  for (Index p = 0; p < P.size(); ++p)
+    if (!sim.grid.inside(P.x[static_cast<std::size_t>(p)])) ids.push_back(p);
+  throw RunError(
+      exit_code::kLeftGrid,
+      fmt::format("step {}, t = {:.9g} s: {} particle(s) left the grid {}: {}", sim.step, sim.time,
+                  ids.size(), describe_box(sim.grid), describe_particles(P, ids)));
+}
+
+template <int Dim>
+void throw_face_left_grid(const RunState<Dim>& sim, std::size_t i, const Vec<Dim>& x_face) {
+  throw RunError(exit_code::kLeftGrid,
+                 fmt::format("step {}, t = {:.9g} s: the loaded face of the body (particle "
+                             "{}, face centre at x = {}) left the grid {}",
+                             sim.step, sim.time, sim.particles.id[i], describe_point(x_face),
+                             describe_box(sim.grid)));
+}
+
+template <int Dim>
+void throw_particle_failure(const RunState<Dim>& sim) {
+  const auto& P = sim.particles;
+  std::vector<Index> inverted, nonfinite;
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    if (!std::isfinite(P.stress[i].sum()) || !std::isfinite(P.F[i].sum()))
+      nonfinite.push_back(p);
+    else if (!(P.F[i].determinant() > 0.0))
+      inverted.push_back(p);
+  }
+  if (!nonfinite.empty())
+    throw RunError(
+        exit_code::kNonFinite,
+        fmt::format("step {}, t = {:.9g} s: non-finite stress or deformation "
+                    "gradient at {} particle(s): {}",
+                    sim.step, sim.time, nonfinite.size(), describe_particles(P, nonfinite)));
+  throw RunError(exit_code::kInvertedDeformation,
+                 fmt::format("step {}, t = {:.9g} s: det F <= 0 (inverted or degenerate "
+                             "deformation) at {} particle(s): {}",
+                             sim.step, sim.time, inverted.size(), describe_particles(P, inverted)));
+}
+
 // The active set and the mass conservation check, and the consistent matrix if requested,
 // from the nodal masses of the mapping.
 template <int Dim>
@@ -154,5 +245,15 @@ template void detail::after_momentum<2>(RunState<2>&);
 template void solve_acceleration<2>(RunState<2>&);
 template void solve_velocity<2>(RunState<2>&);
 template void advance_grid_velocity<2>(RunState<2>&, double);
+template void detail::throw_unfit<1>(const RunState<1>&, const std::vector<Index>&,
+                                     std::string_view);
+template void detail::throw_left_grid<1>(const RunState<1>&);
+template void detail::throw_face_left_grid<1>(const RunState<1>&, std::size_t, const Vec<1>&);
+template void detail::throw_particle_failure<1>(const RunState<1>&);
+template void detail::throw_unfit<2>(const RunState<2>&, const std::vector<Index>&,
+                                     std::string_view);
+template void detail::throw_left_grid<2>(const RunState<2>&);
+template void detail::throw_face_left_grid<2>(const RunState<2>&, std::size_t, const Vec<2>&);
+template void detail::throw_particle_failure<2>(const RunState<2>&);
 
 }  // namespace mpm::stages

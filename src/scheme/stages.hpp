@@ -4,7 +4,6 @@
 // struct-of-arrays with the basis and material resolved at compile time, run in parallel with
 // OpenMP (core/parallel.hpp); every sum across particles has the same rounding for any
 // thread count.
-#include <fmt/format.h>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,6 +11,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -22,40 +22,22 @@
 namespace mpm::stages {
 
 namespace detail {
-// Formats at most `limit` particles (indices) by stable id with their positions for failure
-// messages.
+// The failures of the stages, formatted once per dimension (scheme/grid_stages.cpp): exit code,
+// step, time and the particles (by id, with their positions; at most 8 listed) or points named.
+// ids: particle indices.
 template <int Dim>
-std::string describe_particles(const Particles<Dim>& P, const std::vector<Index>& ids,
-                               std::size_t limit = 8) {
-  std::string out;
-  for (std::size_t k = 0; k < ids.size() && k < limit; ++k) {
-    const auto i = static_cast<std::size_t>(ids[k]);
-    out += fmt::format("{}particle {} at x = (", k ? "; " : "", i < P.id.size() ? P.id[i] : ids[k]);
-    for (int d = 0; d < Dim; ++d) out += fmt::format("{}{:.6g}", d ? ", " : "", P.x[i][d]);
-    out += ")";
-  }
-  if (ids.size() > limit) out += fmt::format("; and {} more", ids.size() - limit);
-  return out;
-}
-
-// A point as "0.5" in 1D and "(0.5, 0.25)" in more dimensions.
+[[noreturn]] void throw_unfit(const RunState<Dim>& sim, const std::vector<Index>& ids,
+                              std::string_view basis);
+// Every particle outside the grid (the grid's box named).
 template <int Dim>
-std::string describe_point(const Vec<Dim>& x) {
-  if constexpr (Dim == 1) return fmt::format("{:.6g}", x[0]);
-  std::string out = "(";
-  for (int d = 0; d < Dim; ++d) out += fmt::format("{}{:.6g}", d ? ", " : "", x[d]);
-  return out + ")";
-}
-
-// The grid's extent as "[0, 1]" in 1D and "[0, 1] x [0, 2]" in more dimensions.
+[[noreturn]] void throw_left_grid(const RunState<Dim>& sim);
+// The face point x_face of particle index i's loaded face outside the grid.
 template <int Dim>
-std::string describe_box(const Grid<Dim>& g) {
-  const Vec<Dim> hi = g.upper();
-  std::string out;
-  for (int d = 0; d < Dim; ++d)
-    out += fmt::format("{}[{:.6g}, {:.6g}]", d ? " x " : "", g.origin[d], hi[d]);
-  return out;
-}
+[[noreturn]] void throw_face_left_grid(const RunState<Dim>& sim, std::size_t i,
+                                       const Vec<Dim>& x_face);
+// Non-finite stress or F, else det F <= 0, at the particles where it holds.
+template <int Dim>
+[[noreturn]] void throw_particle_failure(const RunState<Dim>& sim);
 }  // namespace detail
 
 // D Alg. 2 step 3: basis values and gradients at x_p^s. Stops the run (exit code 4) when a
@@ -139,23 +121,10 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
       std::vector<Index> ids;
       for (Index p = 0; p < P.size(); ++p)
         if (!basis.fits(P, p)) ids.push_back(p);
-      throw RunError(exit_code::kInvertedDeformation,
-                     fmt::format("step {}, t = {:.9g} s: the domain of {} particle(s) cannot be "
-                                 "represented by the {} basis (stretched beyond its stencil or "
-                                 "reaching outside the grid): {}",
-                                 sim.step, sim.time, ids.size(), B::kName,
-                                 detail::describe_particles(P, ids)));
+      detail::throw_unfit(sim, ids, B::kName);
     }
   }
-  if (outside) {
-    std::vector<Index> ids;
-    for (Index p = 0; p < P.size(); ++p)
-      if (!sim.grid.inside(P.x[static_cast<std::size_t>(p)])) ids.push_back(p);
-    throw RunError(exit_code::kLeftGrid,
-                   fmt::format("step {}, t = {:.9g} s: {} particle(s) left the grid {}: {}",
-                               sim.step, sim.time, ids.size(), detail::describe_box(sim.grid),
-                               detail::describe_particles(P, ids)));
-  }
+  if (outside) detail::throw_left_grid(sim);
 }
 
 // Body force b_p(x, t) for this step (constant forces were filled once at set-up).
@@ -189,12 +158,7 @@ void after_forces(BasisState<Dim, B>& sim) {
         x_face[0] += 0.5 * tr.side * P.volume[i];  // V_p: the current length
       else
         x_face += (tr.side * tr.half_width[k]) * P.F[i].col(tr.direction);
-      if (!sim.grid.inside(x_face))
-        throw RunError(exit_code::kLeftGrid,
-                       fmt::format("step {}, t = {:.9g} s: the loaded face of the body (particle "
-                                   "{}, face centre at x = {}) left the grid {}",
-                                   sim.step, sim.time, P.id[i], detail::describe_point(x_face),
-                                   detail::describe_box(sim.grid)));
+      if (!sim.grid.inside(x_face)) throw_face_left_grid(sim, i, x_face);
       typename BasisState<Dim, B>::StencilT s;
       sim.basis.evaluate_point(x_face, s);
       // A_p = 1 in 1D: tau * 1.0 is exact, so the 1D forces are those of the end traction.
@@ -312,27 +276,7 @@ void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
   if constexpr ((What & kPosition) != 0) {
     if constexpr (B::kTrackedCorners) sim.basis.advect(sim, dt);
   }
-  if (bad) {
-    std::vector<Index> inverted, nonfinite;
-    for (Index p = 0; p < P.size(); ++p) {
-      const auto i = static_cast<std::size_t>(p);
-      if (!std::isfinite(P.stress[i].sum()) || !std::isfinite(P.F[i].sum()))
-        nonfinite.push_back(p);
-      else if (!(P.F[i].determinant() > 0.0))
-        inverted.push_back(p);
-    }
-    if (!nonfinite.empty())
-      throw RunError(exit_code::kNonFinite,
-                     fmt::format("step {}, t = {:.9g} s: non-finite stress or deformation "
-                                 "gradient at {} particle(s): {}",
-                                 sim.step, sim.time, nonfinite.size(),
-                                 detail::describe_particles(P, nonfinite)));
-    throw RunError(
-        exit_code::kInvertedDeformation,
-        fmt::format("step {}, t = {:.9g} s: det F <= 0 (inverted or degenerate "
-                    "deformation) at {} particle(s): {}",
-                    sim.step, sim.time, inverted.size(), detail::describe_particles(P, inverted)));
-  }
+  if (bad) detail::throw_particle_failure(sim);
 }
 
 template <unsigned What, int Dim, class B>
