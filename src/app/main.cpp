@@ -199,13 +199,19 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({1, 2}))
       ->capture_default_str();
   bench->add_option("--particles", bopt.particles, "number of particles (about, in 2D)")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  bench->add_option("--per-cell", bopt.per_cell,
-                    "particles per cell per direction (default 4 in 1D, 3 in 2D)");
+  bench
+      ->add_option("--per-cell", bopt.per_cell,
+                   "particles per cell per direction (default 4 in 1D, 3 in 2D)")
+      ->check(CLI::PositiveNumber);
   bench->add_option("--threads", bopt.threads, "OpenMP threads (default: OMP_NUM_THREADS)")
       ->check(CLI::PositiveNumber);
-  bench->add_option("--steps", bopt.steps, "steps per repeat")->capture_default_str();
+  bench->add_option("--steps", bopt.steps, "steps per repeat")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   bench->add_option("--repeats", bopt.repeats, "repeats (best and median reported)")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   bench->add_option("--scheme", bopt.scheme, "usl, usf, musl or usavg")->capture_default_str();
   bench->add_option("--basis", bopt.basis, "grid basis (mpm list)")->capture_default_str();
@@ -280,7 +286,13 @@ int main(int argc, char** argv) {
                                   "default, range and description");
   auto* list = app.add_subcommand("list", "list benchmarks, bases, mappings, schemes, materials");
 
-  CLI11_PARSE(app, argc, argv);
+  // Command-line errors are invalid input (exit 2, README "Exit codes"), not CLI11's own codes
+  // (106, 109, ...); --help and --version still exit 0.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : mpm::exit_code::kInput;
+  }
   try {
     if (*run) return cmd_run(config, sets, out, quiet, restart);
     if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot);

@@ -171,6 +171,9 @@ ReconstructResult reconstruct_2d(const ReconstructOptions& opt, double a, double
     if (!g.inside(p))
       throw InputError(fmt::format("--points: ({}, {}) lies outside [{}, {}]^2", p[0], p[1], a, b));
     fx.push_back(f(p[0], p[1]));
+    if (!std::isfinite(fx.back()))
+      throw InputError(fmt::format("--function \"{}\" is not finite at the point ({}, {}): {}",
+                                   opt.function, p[0], p[1], fx.back()));
   }
 
   // Exact element integrals (20 x 20 Gauss: far below any reconstruction error here).
@@ -251,7 +254,12 @@ ReconstructResult reconstruct(const ReconstructOptions& opt) {
     if (!g.inside(Vec<1>(xp)))
       throw InputError(fmt::format("--points: {} lies outside [{}, {}]", xp, a, b));
   std::vector<double> fx;
-  for (double xp : res.x) fx.push_back(f(xp));
+  for (double xp : res.x) {
+    fx.push_back(f(xp));
+    if (!std::isfinite(fx.back()))
+      throw InputError(fmt::format("--function \"{}\" is not finite at the point x = {}: {}",
+                                   opt.function, xp, fx.back()));
+  }
 
   // Exact element integrals (20-point Gauss: far below any reconstruction error here).
   const GaussRule exact_rule = gauss_legendre(20);

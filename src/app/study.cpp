@@ -97,15 +97,23 @@ std::vector<MethodSpec> parse_methods(const std::string& text) {
           item));
     MethodSpec m;
     m.label = item;
+    // A basis name as it is (cpdi2), else a name and its degree (bspline2): only the B-splines
+    // take a degree, so "cpdi2" is never CPDI of degree 2.
     std::string basis = parts[0];
     std::string degree;
-    while (!basis.empty() && std::isdigit(static_cast<unsigned char>(basis.back()))) {
-      degree.insert(degree.begin(), basis.back());
-      basis.pop_back();
+    if (!known(registry::kBases, basis)) {
+      while (!basis.empty() && std::isdigit(static_cast<unsigned char>(basis.back()))) {
+        degree.insert(degree.begin(), basis.back());
+        basis.pop_back();
+      }
+      if (!known(registry::kBases, basis))
+        throw InputError(fmt::format("--methods item '{}': basis '{}' is not one of: {}", item,
+                                     parts[0], names(registry::kBases)));
+      if (basis != BSplineKind<1>::kName)
+        throw InputError(fmt::format(
+            "--methods item '{}': only {} takes a degree (e.g. {}2); '{}' is not one of: {}", item,
+            BSplineKind<1>::kName, BSplineKind<1>::kName, parts[0], names(registry::kBases)));
     }
-    if (!known(registry::kBases, basis))
-      throw InputError(fmt::format("--methods item '{}': basis '{}' is not one of: {}", item, basis,
-                                   names(registry::kBases)));
     if (!known(registry::kMappings, parts[1]))
       throw InputError(fmt::format("--methods item '{}': mapping '{}' is not one of: {}", item,
                                    parts[1], names(registry::kMappings)));

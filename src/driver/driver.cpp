@@ -1,5 +1,8 @@
 #include "driver/driver.hpp"
 
+#include <cstdlib>
+#include <fstream>
+
 #include "io/checkpoint.hpp"
 #include "mpm/version.hpp"
 
@@ -78,14 +81,14 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
   vtk_ = s.output.vtk;
   io::write_file_atomic(dir_ / "config.toml", config_text);
   if (vtk_) io::write_file_atomic(dir_ / "grid.vtu", io::grid_vtu(pb.grid));
-  history_ = "time,kinetic_energy,strain_energy,total_energy,mass";
-  for (int d = 0; d < Dim; ++d) history_ += fmt::format(",momentum_{}", d + 1);
+  history_header_ = "time,kinetic_energy,strain_energy,total_energy,mass";
+  for (int d = 0; d < Dim; ++d) history_header_ += fmt::format(",momentum_{}", d + 1);
   // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
   // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
   // report their maxima, which summary.json has).
   mapping_errors_ = s.method.solver == Solver::Mpm;
-  if (mapping_errors_) history_ += ",mass_error,momentum_error";
-  history_ += "\n";
+  if (mapping_errors_) history_header_ += ",mass_error,momentum_error";
+  history_header_ += "\n";
 }
 
 template <int Dim>
@@ -104,14 +107,18 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
         }
       },
       sim.material);
-  history_ += fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", sim.time, kin, strain,
-                          kin + strain, mass);
-  for (int d = 0; d < Dim; ++d) history_ += fmt::format(",{:.17g}", mom[d]);
+  std::string row = fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", sim.time, kin, strain,
+                                kin + strain, mass);
+  for (int d = 0; d < Dim; ++d) row += fmt::format(",{:.17g}", mom[d]);
   if (mapping_errors_)
-    history_ += sim.diag ? fmt::format(",{:.17g},{:.17g}", sim.diag->rel_mass_error,
-                                       sim.diag->rel_momentum_error)
-                         : ",0,0";
-  history_ += "\n";
+    row += sim.diag ? fmt::format(",{:.17g},{:.17g}", sim.diag->rel_mass_error,
+                                  sim.diag->rel_momentum_error)
+                    : ",0,0";
+  row += "\n";
+  // Appended as the run goes (io::AppendFile): constant memory, and a killed run keeps every row
+  // written so far. A fresh run starts the file with the header at its first row.
+  if (!history_.is_open()) history_.open(dir_ / "history.csv", history_header_);
+  history_.append(row);
 }
 
 template <int Dim>
@@ -154,7 +161,6 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
     pvd_.add(sim.time, stem + ".vtu");
     io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
   }
-  io::write_file_atomic(dir_ / "history.csv", history_);
   ++frames_;
 }
 
@@ -165,6 +171,25 @@ void OutputSession<Dim>::summary(const nlohmann::ordered_json& j) {
 
 template <int Dim>
 void OutputSession<Dim>::resume(const io::Checkpoint& c) {
+  // history.csv continues: the rows of the earlier run up to the checkpoint's time are kept (a
+  // run killed after its last checkpoint may have written later ones), and the restarted run
+  // appends the steps after it, so the file is that of an uninterrupted run. A file with another
+  // header (another run, another version) or none is started anew, from the checkpoint's row.
+  if (enabled()) {
+    std::string kept = history_header_;
+    std::ifstream in(dir_ / "history.csv");
+    std::string line;
+    if (in && std::getline(in, line) && line + "\n" == history_header_) {
+      while (std::getline(in, line)) {
+        if (in.eof()) break;  // a last line without its newline: cut off by a kill
+        const double t = std::strtod(line.c_str(), nullptr);
+        if (!(t <= c.time)) break;
+        kept += line + "\n";
+        history_continues_ = true;
+      }
+    }
+    history_.open(dir_ / "history.csv", kept);
+  }
   frames_ = static_cast<int>(c.frames);
   frame_times_ = c.frame_times;
   if (vtk_)

@@ -107,18 +107,24 @@ class OutputSession {
   void summary(const nlohmann::ordered_json& j);
 
   // Checkpoints: the frames written so far, and continuing after a restart (numbering goes on;
-  // particles.pvd lists the earlier frames again, history.csv starts anew).
+  // particles.pvd lists the earlier frames again, history.csv keeps its rows before the
+  // checkpoint and goes on).
   int frames() const { return frames_; }
   const std::vector<double>& frame_times() const { return frame_times_; }
   void resume(const io::Checkpoint& c);
+  // After resume(): history.csv holds the earlier run's rows up to the checkpoint, its own row
+  // included (the restart then writes no row for the step it starts from).
+  bool history_continues() const { return history_continues_; }
   void checkpoint(const io::Checkpoint& c);
 
  private:
   std::filesystem::path dir_;
   ExactSolution<Dim> exact_;
   bool csv_ = true, vtk_ = true;
-  std::string history_;
+  std::string history_header_;
+  io::AppendFile history_;       // history.csv
   bool mapping_errors_ = false;  // history.csv has mass_error, momentum_error
+  bool history_continues_ = false;
   io::PvdSeries pvd_;
   int frames_ = 0;
   std::vector<double> frame_times_;
@@ -151,7 +157,7 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
     return frames > 0 ? (k * ts.steps + frames - 1) / frames : ts.steps;
   };
   while (next_frame <= frames && start >= frame_step(next_frame)) ++next_frame;
-  out.history_row(view());
+  if (start == 0 || !out.history_continues()) out.history_row(view());
   if (start == 0) out.frame(view());
   Progress progress(!opt.quiet, ts.steps, res.particles, start);
   double step_seconds = 0.0;

@@ -11,6 +11,7 @@
 #include <set>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
 
 namespace mpm::io {
 
@@ -220,6 +221,45 @@ void cells_block(Buffer& b, const std::vector<Index>& connectivity, Index num_ce
 }
 
 }  // namespace
+
+// ---- AppendFile ----------------------------------------------------------------------------
+
+AppendFile& AppendFile::operator=(AppendFile&& o) noexcept {
+  if (this != &o) {
+    if (fd_ >= 0) ::close(fd_);
+    path_ = std::move(o.path_);
+    fd_ = std::exchange(o.fd_, -1);
+  }
+  return *this;
+}
+
+AppendFile::~AppendFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void AppendFile::open(const std::filesystem::path& path, std::string_view content) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  write_file_atomic(path, content);
+  path_ = path;
+  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd_ < 0) throw_write_error(path, "open for appending", errno);
+}
+
+void AppendFile::append(std::string_view text) {
+  if (fd_ < 0) throw std::logic_error("AppendFile::append before open");
+  const char* data = text.data();
+  std::size_t left = text.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd_, data, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw_write_error(path_, "write", errno);
+    }
+    data += n;
+    left -= static_cast<std::size_t>(n);
+  }
+}
 
 // ---- write_file_atomic ---------------------------------------------------------------------
 

@@ -25,6 +25,28 @@ namespace mpm::io {
 // file is removed in that case.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
+// A file written as a run goes (history.csv): open() replaces it with `content` atomically, then
+// every append() is one write(2) at its end, so the text appended so far survives a killed
+// process (the kernel holds it) and the run keeps none of it in memory. Throws
+// std::runtime_error naming the path and the system error on failure. Move-only.
+class AppendFile {
+ public:
+  AppendFile() = default;
+  AppendFile(const AppendFile&) = delete;
+  AppendFile& operator=(const AppendFile&) = delete;
+  AppendFile(AppendFile&& o) noexcept : path_(std::move(o.path_)), fd_(std::exchange(o.fd_, -1)) {}
+  AppendFile& operator=(AppendFile&& o) noexcept;
+  ~AppendFile();
+
+  void open(const std::filesystem::path& path, std::string_view content);
+  void append(std::string_view text);
+  bool is_open() const { return fd_ >= 0; }
+
+ private:
+  std::filesystem::path path_;
+  int fd_ = -1;
+};
+
 // An extra per-particle (or per-grid-node) scalar field to add to a frame, e.g. the exact
 // solution or the error. values must outlive the writer call and hold one value per particle
 // (or node); the writers throw std::invalid_argument otherwise.

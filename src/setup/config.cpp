@@ -187,9 +187,12 @@ std::string range_text(const KeySpec& s) {
 }
 
 // Optimal-string-alignment distance (Levenshtein plus adjacent transpositions), so that
-// "grdi" -> "grid" counts as one typo.
-std::size_t edit_distance(std::string_view a, std::string_view b) {
+// "grdi" -> "grid" counts as one typo; limit + 1 when it exceeds limit. The distance is at least
+// the difference of the lengths, so a key of a megabyte costs one comparison, not a table of
+// its length times the candidate's.
+std::size_t edit_distance(std::string_view a, std::string_view b, std::size_t limit) {
   const std::size_t n = a.size(), m = b.size();
+  if ((n > m ? n - m : m - n) > limit) return limit + 1;
   std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1));
   for (std::size_t i = 0; i <= n; ++i) d[i][0] = i;
   for (std::size_t j = 0; j <= m; ++j) d[0][j] = j;
@@ -202,7 +205,7 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
       }
     }
   }
-  return d[n][m];
+  return std::min(d[n][m], limit + 1);
 }
 
 // How many typos still count as "close": one for short words, up to three for long names.
@@ -215,7 +218,7 @@ std::optional<std::string> closest(std::string_view word, const std::vector<std:
   std::optional<std::string> best;
   std::size_t best_d = typo_budget(word) + 1;
   for (const std::string& c : cands) {
-    const std::size_t d = edit_distance(word, c);
+    const std::size_t d = edit_distance(word, c, best_d - 1);
     if (d < best_d) {
       best_d = d;
       best = c;
@@ -310,8 +313,15 @@ std::string suggestion(std::string_view name) {
   return "";
 }
 
+// At most kShown characters of a name or value in a message, and how long it was.
+constexpr std::size_t kShown = 200;
+std::string shown(std::string_view s) {
+  if (s.size() <= kShown) return std::string(s);
+  return std::string(s.substr(0, kShown)) + "... (" + std::to_string(s.size()) + " characters)";
+}
+
 std::string unknown_key_message(std::string_view name) {
-  return "unknown key '" + std::string(name) + "'" + suggestion(name) + valid_list(name);
+  return "unknown key '" + shown(name) + "'" + suggestion(name) + valid_list(name);
 }
 
 bool is_identifier(std::string_view s) {
@@ -656,8 +666,11 @@ class ConfigBuilder {
         std::string v = node.as_string()->get();
         if (!spec.choices.empty() &&
             std::find(spec.choices.begin(), spec.choices.end(), v) == spec.choices.end()) {
-          problem =
-              key + " = " + quote(v) + " is not valid; choose one of: " + join(spec.choices, ", ");
+          problem = key + " = " +
+                    (v.size() <= kShown ? quote(v)
+                                        : quote(std::string_view(v).substr(0, kShown)) + "... (" +
+                                              std::to_string(v.size()) + " characters)") +
+                    " is not valid; choose one of: " + join(spec.choices, ", ");
           if (auto best = closest(v, spec.choices))
             problem += " (did you mean " + quote(*best) + "?)";
           return std::nullopt;

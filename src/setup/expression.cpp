@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <string_view>
 #include <utility>
 
 #include "core/types.hpp"
@@ -55,6 +56,17 @@ void Expression::compile() {
     p.DefineConst("pi", std::numbers::pi);
     p.DefineConst("e", std::numbers::e);
     for (const auto& [name, value] : constants_) p.DefineConst(name, value);
+    // muparser's '=' assigns to a variable ("x = 5" evaluates to 5 and changes x): an
+    // expression is a value, so any '=' that is not part of ==, <=, >= or != is refused.
+    for (std::size_t i = 0; i < text_.size(); ++i) {
+      if (text_[i] != '=') continue;
+      const bool comparison =
+          (i > 0 && std::string_view("=<>!").find(text_[i - 1]) != std::string_view::npos) ||
+          (i + 1 < text_.size() && text_[i + 1] == '=');
+      if (!comparison)
+        throw InputError("invalid expression \"" + text_ +
+                         "\": an assignment ('=') where a value is expected (compare with ==)");
+    }
     p.SetExpr(text_);
     // Eval() parses the whole expression (syntax, unknown names); muparser accepts a
     // comma-separated list of results, which makes no sense for a scalar field.

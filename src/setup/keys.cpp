@@ -1,6 +1,7 @@
 // The configuration schema: every key `mpm` understands is declared here, once. Parsing,
 // validation, `mpm keys`, the defaults and the written-back config.toml all read this table.
 // Choices for String keys come from setup/registry.hpp, so a model/scheme name exists in one place.
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -31,6 +32,9 @@ Range closed(double lo, double hi) {
 Range open(double lo, double hi) {
   return {lo, hi, true, true};
 }
+Range closed_open(double lo, double hi) {
+  return {lo, hi, false, true};
+}
 
 // Marks a key without default that the user must give.
 constexpr std::nullopt_t kRequired = std::nullopt;
@@ -50,8 +54,12 @@ KeySpec numeric(std::string name, KeyType type, std::string unit, std::optional<
   return k;
 }
 
+// Integer keys are read in 64 bits and used as int (counts, degrees, frames) or as indices: a
+// key without an upper bound gets the largest int, so that no value is narrowed silently
+// (particles.per_cell = 4294967296 ran one particle per cell).
 KeySpec integer(std::string name, std::optional<std::int64_t> def, Range range,
                 std::string description) {
+  if (!range.max) range.max = static_cast<double>(std::numeric_limits<int>::max());
   std::optional<Value> v;
   if (def) v = Value(*def);
   return numeric(std::move(name), KeyType::Integer, "", v, range, std::move(description));
@@ -123,7 +131,8 @@ std::vector<KeySpec> declare() {
       integer("method.degree", 2, closed(1, 5), "B-spline degree (method.basis = \"bspline\")"),
       choice("method.mapping", "direct", kMappings, "particle-to-grid mapping"),
       choice("method.mass", "lumped", kMassTypes, "mass matrix"),
-      real("method.mass_tolerance", "", 1e-10, at_least(0),
+      // At 1 or above even the heaviest DOF would be inactive: nothing could move.
+      real("method.mass_tolerance", "", 1e-10, closed_open(0, 1),
            "degrees of freedom with mass below this fraction of the largest nodal mass are "
            "inactive"),
       choice("method.solver", "mpm", kSolvers, "time-stepping method"),

@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <unistd.h>
+#include <algorithm>
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -56,6 +59,21 @@ TEST(Cli, VersionListKeys) {
   auto h = sh("--help");
   EXPECT_EQ(h.code, 0);
   EXPECT_NE(h.out.find("study"), std::string::npos);
+}
+
+// Command-line errors exit 2 like every invalid input (README "Exit codes"; CLI11's own codes
+// were 106, 109, 114), and bench refuses counts below 1 (it ran 4 particles for --particles 0 or
+// -5; issue 16, 10 and 12).
+TEST(Cli, CommandLineErrorsExitTwo) {
+  for (const char* args : {"run", "run --no-such-flag x.toml", "frobnicate", "bench --dim 3",
+                           "bench --particles 0", "bench --particles -5", "bench --steps 0",
+                           "bench --repeats -1", "bench --per-cell 0", "bench --threads 0"}) {
+    const auto r = sh(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    EXPECT_FALSE(r.out.empty()) << args;
+  }
+  EXPECT_NE(sh("bench --particles 0").out.find("--particles"), std::string::npos);
+  EXPECT_EQ(sh("bench --help").code, 0);
 }
 
 TEST(Cli, UnknownKeyNamesFileLineKeyAndSuggestion) {
@@ -163,6 +181,51 @@ TEST(Cli, ParticleLeavingTheGridStopsWithStepIdsAndKeepsOutput) {
   EXPECT_EQ(j["exit_code"], 4);
   EXPECT_TRUE(std::filesystem::exists(out / "history.csv"));
   EXPECT_TRUE(std::filesystem::exists(out / "particles_00000.csv"));
+  std::filesystem::remove_all(out);
+}
+
+// history.csv is appended as the run goes (issue 16, 6: it was held in memory and written only
+// with the frames). A run with one frame at the end is killed with SIGKILL once its history has
+// 50 rows; every row written before the kill is in the file, complete, in time order. (Before,
+// the file held the first row only, and this test failed on its wait.)
+TEST(Cli, KilledRunKeepsItsHistoryRows) {
+  const auto out = temp_dir("killed");
+  const std::string cmd = std::string(MPM_BINARY) + " run " +
+                          src("examples/vibrating_bar_small.toml") +
+                          " --set time.end=100 --set output.frames=1 --quiet --out " +
+                          out.string() + " > /dev/null 2>&1 & echo $!";
+  FILE* f = popen(cmd.c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  long pid = 0;
+  ASSERT_EQ(std::fscanf(f, "%ld", &pid), 1);
+  pclose(f);
+  const auto rows = [&] {
+    std::ifstream h(out / "history.csv");
+    std::string line;
+    int n = 0;
+    while (std::getline(h, line)) ++n;
+    return n - 1;
+  };
+  // Waits for the rows, not for a time: up to 2 minutes on a loaded machine.
+  for (int k = 0; k < 1200 && rows() < 50; ++k) usleep(100000);
+  ASSERT_EQ(std::system(("kill -9 " + std::to_string(pid)).c_str()), 0);
+  usleep(200000);
+  std::ifstream h(out / "history.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(h, line));
+  EXPECT_EQ(line.rfind("time,kinetic_energy", 0), 0u) << line;
+  int n = 0;
+  double last = -1.0;
+  while (std::getline(h, line)) {
+    if (h.eof()) break;  // a row cut by the kill has no newline
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), 7) << line;
+    const double t = std::stod(line);
+    EXPECT_GT(t, last) << line;
+    last = t;
+    ++n;
+  }
+  EXPECT_GE(n, 50);
+  EXPECT_FALSE(std::filesystem::exists(out / "summary.json"));  // the run did not finish
   std::filesystem::remove_all(out);
 }
 

@@ -1,6 +1,8 @@
 // The reconstruction playground (`mpm reconstruct`, D 5.2.3, Table 5.1).
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "app/reconstruct.hpp"
 
 namespace mpm {
@@ -63,6 +65,24 @@ TEST(Reconstruct, BadOptionsAreInputErrors) {
   o = {};
   o.points = "list:100";
   EXPECT_THROW(reconstruct(o), InputError);
+}
+
+// A function with no finite value at a data point is refused with the point (issue 16, 12: "1/0"
+// exited 0 and printed nan), in 1D and 2D.
+TEST(Reconstruct, NonFiniteFunctionIsAnInputError) {
+  for (int dim : {1, 2}) {
+    ReconstructOptions o;
+    o.dim = dim;
+    o.function = "1/0";
+    try {
+      reconstruct(o);
+      ADD_FAILURE() << dim << "D: accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--function \"1/0\" is not finite at the point"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -349,9 +349,11 @@ TEST(Checkpoint, FramesContinueAfterRestart) {
   const std::string pvd = slurp(part.path() / "particles.pvd");
   EXPECT_NE(pvd.find("particles_00000.vtu"), std::string::npos);
   EXPECT_NE(pvd.find("particles_00004.vtu"), std::string::npos);
-  // history.csv: the rows from the restart on (steps 6 to 12) under the header.
+  // history.csv continues: the earlier run's rows before the checkpoint (steps 0 to 5) and the
+  // restarted run's (6 to 12) under the header, the file of the uninterrupted run bit for bit.
   const std::string hist = slurp(part.path() / "history.csv");
-  EXPECT_EQ(std::count(hist.begin(), hist.end(), '\n'), 1 + 7);
+  EXPECT_EQ(std::count(hist.begin(), hist.end(), '\n'), 1 + 13);
+  EXPECT_EQ(hist, slurp(dir.path() / "history.csv"));
   EXPECT_EQ(slurp(part.path() / "particles_00004.csv"), slurp(dir.path() / "particles_00004.csv"));
 }
 

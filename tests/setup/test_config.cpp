@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -180,6 +181,22 @@ TEST(ConfigErrors, UnknownKeySuggestsAndListsTheSection) {
   EXPECT_CONTAINS(msg, "; valid keys in [grid]: cells, cells_y, dimension, max, min");
 }
 
+// A megabyte-long unknown key (issue 16, 11: the suggestion took 43 s and the message quoted the
+// whole key): the message quotes 200 characters and says how long the key was; the suggestion
+// compares lengths first, so a typo in a normal key is still found.
+TEST(ConfigErrors, LongUnknownKeysAndValuesAreQuotedInPart) {
+  const std::string key(1 << 20, 'k');
+  const std::string msg = error_of(kBase + "[grid]\n" + key + " = 1\n");
+  EXPECT_CONTAINS(msg, "unknown key 'grid." + std::string(195, 'k') + "... (1048581 characters)'");
+  EXPECT_LT(msg.size(), 2000u) << msg.size();
+  const std::string value(5000, 'u');
+  const std::string bad = error_of(kBase + "[method]\nscheme = \"" + value + "\"\n");
+  EXPECT_CONTAINS(bad, "key 'method.scheme' = \"" + std::string(200, 'u') +
+                           "\"... (5000 characters) is not valid; choose one of: usl");
+  EXPECT_LT(bad.size(), 1000u) << bad.size();
+  EXPECT_CONTAINS(error_of(kBase + "[grid]\ncellz = 10\n"), "(did you mean 'grid.cells'?)");
+}
+
 TEST(ConfigErrors, KeyInTheWrongSectionSuggestsTheRightOne) {
   EXPECT_CONTAINS(error_of("dt = 1\n" + kBase), "test.toml:1:1: unknown key 'dt'");
   EXPECT_CONTAINS(error_of("dt = 1\n" + kBase), "(did you mean 'time.dt'?)");
@@ -225,16 +242,39 @@ TEST(ConfigErrors, WrongType) {
   EXPECT_CONTAINS(error_of(kBase + "[grid]\nmin = nan\n"), "key 'grid.min' = nan is not a finite");
 }
 
+// Integer keys are 64-bit in TOML and used as int: values past the largest int were truncated
+// (particles.per_cell = 4294967296 ran one particle per cell with status ok, output.frames =
+// 4294967297 gave one frame; issue 16, 7). Every integer key without a smaller bound is refused
+// above 2^31 - 1, from the file and from --set alike.
+TEST(ConfigErrors, IntegerKeysAreNotNarrowedSilently) {
+  EXPECT_CONTAINS(error_of(kBase + "[particles]\nper_cell = 4294967296\n"),
+                  "key 'particles.per_cell' = 4294967296 is out of range: must be in [1, "
+                  "2147483647]");
+  EXPECT_CONTAINS(error_of(kBase, {"output.frames=4294967297"}),
+                  "key 'output.frames' = 4294967297 is out of range: must be in [0, 2147483647]");
+  EXPECT_CONTAINS(error_of(kBase, {"output.history_every=9223372036854775807"}),
+                  "is out of range: must be in [1, 2147483647]");
+  for (const KeySpec& k : schema())
+    if (k.type == KeyType::Integer) {
+      ASSERT_TRUE(k.max.has_value()) << k.name;
+      EXPECT_LE(*k.max, static_cast<double>(std::numeric_limits<int>::max())) << k.name;
+    }
+  EXPECT_NO_THROW(Config::parse(kBase + "[output]\nframes = 2147483647\n", "t"));
+}
+
 TEST(ConfigErrors, OutOfRange) {
   // Replace dt = 1e-3 (line 3) with a negative value.
   std::string toml = kBase;
   toml.replace(toml.find("dt = 1e-3"), 9, "dt = -1");
   EXPECT_CONTAINS(error_of(toml), "test.toml:3:6: key 'time.dt' = -1 is out of range: must be > 0");
   EXPECT_CONTAINS(error_of(kBase + "[grid]\ncells = 0\n"),
-                  "key 'grid.cells' = 0 is out of range: must be >= 1");
+                  "key 'grid.cells' = 0 is out of range: must be in [1, 2147483647]");
   EXPECT_CONTAINS(error_of(kBase + "poisson_ratio = 0.5\n"),
                   "test.toml:8:17: key 'material.poisson_ratio' = 0.5 is out of range: must be in "
                   "(-1, 0.5)");
+  // A tolerance of 1 or more leaves no active DOF (issue 16, 9: nothing moved, status ok).
+  EXPECT_CONTAINS(error_of(kBase + "[method]\nmass_tolerance = 2\n"),
+                  "key 'method.mass_tolerance' = 2 is out of range: must be in [0, 1)");
   EXPECT_CONTAINS(error_of(kBase + "[method]\ndegree = 6\n"),
                   "key 'method.degree' = 6 is out of range: must be in [1, 5]");
   // Bounds themselves: inclusive ones are accepted.

@@ -90,6 +90,20 @@ TEST(Expression, UnknownNameAndMultipleResultsAreErrors) {
   EXPECT_THROW(Expression("", {}), InputError);
 }
 
+// "x=5" was accepted as the value 5 (and assigned x; issue 16, 12); comparisons still work.
+TEST(Expression, AssignmentsAreRefused) {
+  for (const char* text : {"x=5", "x = 5", "t=1+x", "(y=2)*3"}) {
+    try {
+      Expression(text, {});
+      ADD_FAILURE() << text << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("an assignment ('=')"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_DOUBLE_EQ(Expression("x == 2", {})(2.0, 0.0, 0.0, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(Expression("(x <= 1) + (x >= 3) + (x != 2)", {})(2.0, 0.0, 0.0, 0.0), 0.0);
+}
+
 TEST(Expression, CopyOutlivesOriginal) {
   auto original = std::make_unique<Expression>("a*x + t", std::map<std::string, double>{{"a", 2}});
   const Expression copy(*original);
