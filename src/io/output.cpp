@@ -41,6 +41,22 @@ std::string system_error_text(int err) {
       fmt::format("cannot write '{}' ({}): {}", path.string(), what, system_error_text(err)));
 }
 
+// Writes all of text to fd, retrying after signals: 0, or the errno of the write that failed.
+int write_all(int fd, std::string_view text) {
+  const char* data = text.data();
+  std::size_t left = text.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, data, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    data += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
 // Escape the five XML special characters for use in attribute values (XML 1.0, section 2.4).
 std::string xml_escape(std::string_view s) {
   std::string out;
@@ -248,17 +264,7 @@ void AppendFile::open(const std::filesystem::path& path, std::string_view conten
 
 void AppendFile::append(std::string_view text) {
   if (fd_ < 0) throw std::logic_error("AppendFile::append before open");
-  const char* data = text.data();
-  std::size_t left = text.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd_, data, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      throw_write_error(path_, "write", errno);
-    }
-    data += n;
-    left -= static_cast<std::size_t>(n);
-  }
+  if (const int err = write_all(fd_, text)) throw_write_error(path_, "write", err);
 }
 
 // ---- write_file_atomic ---------------------------------------------------------------------
@@ -277,17 +283,7 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
     throw_write_error(path, what, err);
   };
 
-  const char* data = content.data();
-  std::size_t left = content.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd, data, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail("write", errno);
-    }
-    data += n;
-    left -= static_cast<std::size_t>(n);
-  }
+  if (const int err = write_all(fd, content)) fail("write", err);
   // fsync before rename: otherwise a crash after the rename can leave an empty or partial file
   // under the final name on file systems that reorder metadata and data writes (ext4, xfs).
   if (::fsync(fd) != 0) fail("fsync", errno);
