@@ -7,14 +7,10 @@
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
 #include "scheme/sort.hpp"
+#include "setup/variant_name.hpp"
 
 namespace mpm::driver {
 namespace {
-
-template <class Variant>
-std::string_view name_of(const Variant& v) {
-  return std::visit([](const auto& a) { return std::decay_t<decltype(a)>::kName; }, v);
-}
 
 double velocity_time(const Scheme& scheme) {
   return std::visit([](auto s) { return decltype(s)::kVelocityTime; }, scheme);

@@ -315,9 +315,12 @@ std::string suggestion(std::string_view name) {
 
 // At most kShown characters of a name or value in a message, and how long it was.
 constexpr std::size_t kShown = 200;
+// "" for a text that is shown whole, else "... (N characters)" after its first kShown.
+std::string cut_note(std::string_view s) {
+  return s.size() <= kShown ? "" : "... (" + std::to_string(s.size()) + " characters)";
+}
 std::string shown(std::string_view s) {
-  if (s.size() <= kShown) return std::string(s);
-  return std::string(s.substr(0, kShown)) + "... (" + std::to_string(s.size()) + " characters)";
+  return std::string(s.substr(0, kShown)) + cut_note(s);
 }
 
 std::string unknown_key_message(std::string_view name) {
@@ -666,10 +669,7 @@ class ConfigBuilder {
         std::string v = node.as_string()->get();
         if (!spec.choices.empty() &&
             std::find(spec.choices.begin(), spec.choices.end(), v) == spec.choices.end()) {
-          problem = key + " = " +
-                    (v.size() <= kShown ? quote(v)
-                                        : quote(std::string_view(v).substr(0, kShown)) + "... (" +
-                                              std::to_string(v.size()) + " characters)") +
+          problem = key + " = " + quote(std::string_view(v).substr(0, kShown)) + cut_note(v) +
                     " is not valid; choose one of: " + join(spec.choices, ", ");
           if (auto best = closest(v, spec.choices))
             problem += " (did you mean " + quote(*best) + "?)";

@@ -8,6 +8,7 @@
 #include "setup/config.hpp"
 #include "setup/method_settings.hpp"
 #include "setup/registry.hpp"
+#include "setup/variant_name.hpp"
 
 namespace mpm {
 namespace {
@@ -29,11 +30,6 @@ BasisKind choose_basis(std::string_view name, int degree) {
         "method.basis = \"{}\" (method.degree = {}) is not available; choose one of: {}", name,
         degree, choices));
   }
-}
-
-template <class Variant>
-std::string_view name_of(const Variant& v) {
-  return std::visit([](const auto& a) { return std::decay_t<decltype(a)>::kName; }, v);
 }
 
 TimeSettings time_settings(const Config& cfg) {
