@@ -14,7 +14,7 @@ template <int Dim>
 std::unique_ptr<Stepper<Dim>> make_stepper(const BasisKind& basis, const StepperInput<Dim>& in) {
   return [&]<std::size_t... I>(std::index_sequence<I...>) {
     std::unique_ptr<Stepper<Dim>> s;
-    ((basis.index() == I ? (s = make_stepper_for<Dim, I>(in), true) : false) || ...);
+    (void)((basis.index() == I ? (s = make_stepper_for<Dim, I>(in), true) : false) || ...);
     return s;
   }
   (std::make_index_sequence<std::variant_size_v<BasisKind>>{});

@@ -49,14 +49,6 @@ void MovingLeastSquares<Dim>::set_points(const Grid<Dim>& g, std::span<const Vec
 }
 
 template <int Dim>
-void MovingLeastSquares<Dim>::set_points(const Grid<1>& g,
-                                         std::span<const double> x) requires(Dim == 1) {
-  x_.resize(x.size());
-  for (std::size_t p = 0; p < x.size(); ++p) x_[p][0] = x[p];
-  bin(g);
-}
-
-template <int Dim>
 void MovingLeastSquares<Dim>::bin(const Grid<Dim>& g) {
   grid_ = g;
   outside_ = bins_.build(g, std::span<const Vec<Dim>>(x_));

@@ -163,7 +163,15 @@ class MovingLeastSquares {
 
   // Positions of the data (standalone use); points outside the grid are ignored and counted.
   void set_points(const Grid<Dim>& g, std::span<const Vec<Dim>> x);
-  void set_points(const Grid<1>& g, std::span<const double> x) requires(Dim == 1);
+  // The 1D conveniences are member templates so that the explicit instantiation of the 2D
+  // class (mls.cpp) does not instantiate them (clang 14 instantiates constrained non-template
+  // members whose constraint fails).
+  template <int D = Dim>
+  requires(D == 1) void set_points(const Grid<1>& g, std::span<const double> x) {
+    x_.resize(x.size());
+    for (std::size_t p = 0; p < x.size(); ++p) x_[p][0] = x[p];
+    bin(g);
+  }
   // The particles of an MPM step.
   void set_points(const Grid<Dim>& g, const Particles<Dim>& P) { set_points(g, std::span(P.x)); }
 
@@ -172,7 +180,8 @@ class MovingLeastSquares {
   // (counted in widened): B-spline DOFs sit at Greville points, which may lie more than one
   // cell from the body although the DOF carries mass.
   void add_row(const Vec<Dim>& x, MlsWeight weight, ShapeTable& t, bool widen = false);
-  void add_row(double x, MlsWeight weight, ShapeTable& t, bool widen = false) requires(Dim == 1) {
+  template <int D = Dim>
+  requires(D == 1) void add_row(double x, MlsWeight weight, ShapeTable& t, bool widen = false) {
     add_row(Vec<1>(x), weight, t, widen);
   }
   // The rows of n points x_of(0) .. x_of(n - 1) (x_of(i) -> Vec<Dim>, called concurrently) into
@@ -204,7 +213,8 @@ class MovingLeastSquares {
   }
   // The reconstruction of the data f (one value per point of set_points) at x.
   double evaluate(const Vec<Dim>& x, MlsWeight weight, std::span<const double> f);
-  double evaluate(double x, MlsWeight weight, std::span<const double> f) requires(Dim == 1) {
+  template <int D = Dim>
+  requires(D == 1) double evaluate(double x, MlsWeight weight, std::span<const double> f) {
     return evaluate(Vec<1>(x), weight, f);
   }
 

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "basis/bases.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "driver/run.hpp"
+#include "driver/stepper.hpp"
 #include "model/problem.hpp"
 #include "scheme/variants.hpp"
 #include "setup/config.hpp"
@@ -28,17 +28,19 @@ namespace {
 
 void expect_input_error(const std::string& toml, const std::vector<std::string>& needles);
 
-// Steps a problem as run() does (P1 basis, direct mapping, MUSL, lumped mass).
+// Steps a problem as run() does (P1 basis, direct mapping, MUSL, lumped mass), with the
+// library's compiled stepper.
 template <int Dim>
 Particles<Dim> step_problem(Problem<Dim> pb, double dt, int steps) {
-  Simulation<Dim, LinearBasis<Dim>, DirectMapping> sim(
-      pb.grid, LinearBasis<Dim>(pb.grid), DirectMapping{}, std::move(pb.particles), pb.material);
-  for (const auto& f : pb.fixed_sides) sim.fix_side(f.direction, f.side, f.components);
-  sim.body_force = pb.body_force;
-  sim.tractions = pb.tractions;
-  if (sim.body_force.fill) sim.body_force.fill(sim.particles, 0.0, sim.particles.body);
+  MethodSettings method;
+  method.basis = LinearKind{};
+  method.mapping = DirectMapping{};
+  method.scheme = Musl{};
+  auto stepper =
+      driver::make_stepper<Dim>(method.basis, driver::StepperInput<Dim>{pb, method, false});
+  RunState<Dim>& sim = stepper->state();
   for (int s = 0; s < steps; ++s) {
-    Musl::step(sim, dt);
+    stepper->step(dt);
     sim.step = s + 1;
     sim.time = static_cast<double>(sim.step) * dt;
   }

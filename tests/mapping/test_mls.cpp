@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "../support/stepper.hpp"
 #include "app/reconstruct.hpp"
 #include "basis/bases.hpp"
 #include "basis/bspline.hpp"
@@ -237,9 +238,13 @@ void rigid_translation() {
   ElasticParameters ep{1000.0, 1e6, 0.0};
   MlsSettings s;
   s.degree = 2;
-  Simulation<1, BSplineBasis<1, 2>, Mapping> sim(g, BSplineBasis<1, 2>(g), Mapping(s), P,
-                                                 Elastic1DSmall{ep});
-  for (int k = 0; k < 100; ++k) Musl::step(sim, 1e-3);  // travels 0.05 = 0.2 cells
+  auto stepper = test::compiled_stepper<1>({.grid = g,
+                                            .particles = P,
+                                            .material = Elastic1DSmall{ep},
+                                            .basis = BSplineKind<2>{},
+                                            .mapping = Mapping(s)});
+  const RunState<1>& sim = stepper->state();
+  for (int k = 0; k < 100; ++k) stepper->step(1e-3);  // travels 0.05 = 0.2 cells
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     EXPECT_NEAR(sim.particles.v[i][0], 0.5, 1e-12);
     EXPECT_NEAR(sim.particles.x[i][0], P.x[i][0] + 0.05, 1e-12);

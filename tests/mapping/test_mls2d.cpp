@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/stepper.hpp"
 #include "basis/bases.hpp"
 #include "basis/bspline.hpp"
 #include "basis/linear.hpp"
@@ -391,17 +392,23 @@ void rigid_translation(int degree) {
   ElasticParameters ep{1000.0, 1e6, 0.3};
   MlsSettings s;
   s.degree = degree;
-  Simulation<2, Basis, Mapping> sim(g, Basis(g), Mapping(s), P, NeoHookean{ep});
+  auto stepper = test::compiled_stepper<2>({.grid = g,
+                                            .particles = P,
+                                            .material = NeoHookean{ep},
+                                            .basis = test::kind_of<2, Basis>(),
+                                            .mapping = Mapping(s),
+                                            .scheme = Scheme{}});
   const double dt = 1e-3;
   const int steps = 100;  // travels 0.03, -0.02: crosses cells (particles sit l/6 from edges)
-  for (int k = 0; k < steps; ++k) Scheme::step(sim, dt);
+  for (int k = 0; k < steps; ++k) stepper->step(dt);
+  const RunState<2>& sim = stepper->state();
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     EXPECT_LT((sim.particles.v[i] - vel).norm(), 1e-12 * vel.norm());
     EXPECT_LT((sim.particles.x[i] - (P.x[i] + vel * dt * steps)).norm(), 1e-12);
     EXPECT_LT(sim.particles.stress[i].norm(), 1e-12 * ep.youngs_modulus);
   }
   EXPECT_GT(sim.diag.grid_crossings, 0);
-  EXPECT_EQ(sim.mapping.totals().singular, 0);
+  EXPECT_EQ(test::mapping_report(*stepper)["mls"]["singular"], 0);
 }
 
 TEST(MlsMapping2d, RigidTranslationMusl) {
@@ -422,8 +429,7 @@ TEST(MlsMapping2d, RigidTranslationUslUsfUsavg) {
 }
 
 // Kinetic plus stored energy of the particles [J per unit thickness].
-template <class Sim>
-double total_energy(const Sim& sim) {
+double total_energy(const RunState<2>& sim) {
   const auto& P = sim.particles;
   double e = 0.0;
   std::visit(
@@ -456,13 +462,18 @@ void vibration_energy(int degree) {
                          std::cos(std::numbers::pi * (P.x[i][1] - a) / L));
   MlsSettings s;
   s.degree = degree;
-  Simulation<2, Basis, Mapping> sim(g, Basis(g), Mapping(s), P, law);
+  auto stepper = test::compiled_stepper<2>({.grid = g,
+                                            .particles = P,
+                                            .material = law,
+                                            .basis = test::kind_of<2, Basis>(),
+                                            .mapping = Mapping(s)});
+  const RunState<2>& sim = stepper->state();
   const double dt = 0.2 * g.h[0] / c, period = 2.0 * L / c;
   const double e0 = total_energy(sim);
   double emax = e0, emin = e0;
   const int steps = static_cast<int>(std::ceil(period / dt));
   for (int k = 0; k < steps; ++k) {
-    Musl::step(sim, dt);
+    stepper->step(dt);
     const double e = total_energy(sim);
     emax = std::max(emax, e);
     emin = std::min(emin, e);
@@ -472,7 +483,7 @@ void vibration_energy(int degree) {
               emin / e0, emax / e0);
   EXPECT_LT(emax, 1.5 * e0);
   EXPECT_GT(emin, 0.5 * e0);
-  EXPECT_EQ(sim.mapping.totals().singular, 0);
+  EXPECT_EQ(test::mapping_report(*stepper)["mls"]["singular"], 0);
 }
 
 TEST(MlsMapping2d, VibrationEnergyBounded) {

@@ -2,6 +2,7 @@
 // integrals, polynomial reproduction, conservation with deficient elements and every
 // completion, the sin(x) + 2 example of D 5.2.3 (Table 5.1, Fig. 5.5), and mass and momentum
 // conservation of the mapping inside a Simulation with several bases.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,10 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "../support/stepper.hpp"
 #include "basis/bspline.hpp"
-#include "basis/cpdi.hpp"
-#include "basis/ddmpm.hpp"
-#include "basis/gimp.hpp"
 #include "basis/linear.hpp"
 #include "mapping/tls.hpp"
 #include "model/problem.hpp"
@@ -469,39 +468,32 @@ TEST(TlsMapping, ReproducesLinearVelocityWithConsistentMassBSpline) {
 
 // Every 1D basis runs a few MUSL and USAVG steps of a vibrating body with the TLS mapping
 // (quadrature points only use evaluate_point) and conserves mass and momentum every step.
-template <class Basis>
-void run_steps() {
+TEST(TlsMapping, RunsWithEveryBasis) {
   const Grid<1> g(Vec<1>(0.0), Vec<1>(1.0), IVec<1>{10});
   auto P = seed_particles<1>(g, Vec<1>(0.2), Vec<1>(0.8), 4, 1000.0);
   for (std::size_t i = 0; i < P.x.size(); ++i)
     P.v[i][0] = 0.1 * std::sin(kPi * (P.x[i][0] - 0.2) / 0.6);
-  for (bool usavg : {false, true}) {
-    TlsSim<Basis> sim(g, Basis(g), TlsMapping{}, P, test_material());
-    for (int s = 0; s < 5; ++s) {
-      if (usavg)
-        Usavg::step(sim, 1e-5);
-      else
-        Musl::step(sim, 1e-5);
-      ++sim.step;
+  const auto kinds = test::basis_kinds<1>();
+  EXPECT_EQ(kinds.size(), 10u);  // linear, GIMP x 2, CPDI, B-splines of degree 1-5, DDMPM
+  for (const BasisKind& basis : kinds)
+    for (const Scheme scheme : {Scheme(Musl{}), Scheme(Usavg{})}) {
+      SCOPED_TRACE(fmt::format("{} {}", driver::basis_name(basis), driver::basis_degree(basis)));
+      auto stepper = test::compiled_stepper<1>({.grid = g,
+                                                .particles = P,
+                                                .material = test_material(),
+                                                .basis = basis,
+                                                .mapping = TlsMapping{},
+                                                .scheme = scheme});
+      RunState<1>& sim = stepper->state();
+      for (int s = 0; s < 5; ++s) {
+        stepper->step(1e-5);
+        ++sim.step;
+      }
+      EXPECT_LT(sim.diag.max_rel_mass_error, 1e-14);
+      EXPECT_LT(sim.diag.max_rel_momentum_error, 1e-13);
+      EXPECT_EQ(test::mapping_report(*stepper)["tls"]["element_fits"], 5 * 6);
+      for (const auto& v : sim.particles.v) EXPECT_TRUE(std::isfinite(v[0]));
     }
-    EXPECT_LT(sim.diag.max_rel_mass_error, 1e-14) << Basis::kName;
-    EXPECT_LT(sim.diag.max_rel_momentum_error, 1e-13) << Basis::kName;
-    EXPECT_EQ(sim.mapping.totals().active, 5 * 6);
-    for (const auto& v : sim.particles.v) EXPECT_TRUE(std::isfinite(v[0]));
-  }
-}
-
-TEST(TlsMapping, RunsWithEveryBasis) {
-  run_steps<LinearBasis<1>>();
-  run_steps<BSplineBasis<1, 1>>();
-  run_steps<BSplineBasis<1, 2>>();
-  run_steps<BSplineBasis<1, 3>>();
-  run_steps<BSplineBasis<1, 4>>();
-  run_steps<BSplineBasis<1, 5>>();
-  run_steps<DdmpmBasis<1>>();
-  run_steps<UGimpBasis<1>>();
-  run_steps<CpGimpBasis<1>>();
-  run_steps<CpdiBasis<1>>();
 }
 
 // In a partly filled element at a free surface the data rho_p exceed the element mean

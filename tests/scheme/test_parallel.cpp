@@ -13,8 +13,8 @@
 #include <numbers>
 #include <random>
 
+#include "../support/stepper.hpp"
 #include "../support/threads.hpp"
-#include "basis/bases.hpp"
 #include "core/parallel.hpp"
 #include "driver/run.hpp"
 #include "model/problem.hpp"
@@ -80,12 +80,9 @@ TEST(Parallel, Plate2DQuadraticBSplineEverySchemeSameForOneAndTwoThreads) {
   }
 }
 
-// The full particle state and grid after a few steps, compared byte for byte.
-using PlateSim = Simulation<2, BSplineBasis<2, 2>, DirectMapping>;
-
-// Simulation is not movable (the factorisations of the consistent mass are not): on the heap.
-template <class Scheme>
-std::unique_ptr<PlateSim> run_plate(int threads) {
+// The full particle state and grid after a few steps, compared byte for byte (quadratic
+// B-splines, direct mapping: the library's compiled stepper).
+std::unique_ptr<driver::Stepper<2>> run_plate(const Scheme& scheme, int threads) {
   const Threads t(threads);
   Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{20, 20});
   auto P = seed_particles<2>(g, Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), 3, 1000.0);
@@ -94,20 +91,21 @@ std::unique_ptr<PlateSim> run_plate(int threads) {
     P.v[i] = Vec<2>(0.5 * std::sin(2 * pi * P.x[i][0]), -0.3 * std::sin(2 * pi * P.x[i][1]));
   }
   ElasticParameters ep{1000.0, 1e7, 0.3};
-  auto sim =
-      std::make_unique<PlateSim>(g, BSplineBasis<2, 2>(g), DirectMapping{}, P, NeoHookean{ep});
-  sim->fix_side(0, 0);
-  sim->fix_side(0, 1);
-  for (int s = 0; s < 20; ++s) Scheme::step(*sim, 1e-4);
-  return sim;
+  auto stepper = test::compiled_stepper<2>({.grid = g,
+                                            .particles = std::move(P),
+                                            .material = NeoHookean{ep},
+                                            .basis = BSplineKind<2>{},
+                                            .scheme = scheme,
+                                            .fixed_sides = {FixedSide{0, 0}, FixedSide{0, 1}}});
+  for (int s = 0; s < 20; ++s) stepper->step(1e-4);
+  return stepper;
 }
 
-template <class Scheme>
-void expect_same_state() {
-  const auto pa = run_plate<Scheme>(1);
-  const auto pb = run_plate<Scheme>(2);
-  const PlateSim& a = *pa;
-  const PlateSim& b = *pb;
+void expect_same_state(const Scheme& scheme) {
+  const auto pa = run_plate(scheme, 1);
+  const auto pb = run_plate(scheme, 2);
+  const RunState<2>& a = pa->state();
+  const RunState<2>& b = pb->state();
   ASSERT_GT(a.particles.size(), 4 * ParticleChunks::kMinSize);
   EXPECT_TRUE(same_bits(a.particles.x, b.particles.x));
   EXPECT_TRUE(same_bits(a.particles.u, b.particles.u));
@@ -122,16 +120,16 @@ void expect_same_state() {
 }
 
 TEST(Parallel, BitwiseStateMusl) {
-  expect_same_state<Musl>();
+  expect_same_state(Musl{});
 }
 TEST(Parallel, BitwiseStateUsl) {
-  expect_same_state<Usl>();
+  expect_same_state(Usl{});
 }
 TEST(Parallel, BitwiseStateUsf) {
-  expect_same_state<Usf>();
+  expect_same_state(Usf{});
 }
 TEST(Parallel, BitwiseStateUsavg) {
-  expect_same_state<Usavg>();
+  expect_same_state(Usavg{});
 }
 
 // The particle sums of the conservation checks, taken inside the direct mapping's scatters
@@ -139,10 +137,9 @@ TEST(Parallel, BitwiseStateUsavg) {
 // deterministic_sum passes they replace. After a MUSL or USAVG step the latest mapping is the
 // momentum remap from the final particle velocities, so both errors can be recomputed from the
 // final state. Two threads, so the chunk sums come from both.
-template <class Scheme>
-void expect_fused_sums_as_separate_passes() {
-  const auto ps = run_plate<Scheme>(2);
-  const PlateSim& sim = *ps;
+void expect_fused_sums_as_separate_passes(const Scheme& scheme) {
+  const auto ps = run_plate(scheme, 2);
+  const RunState<2>& sim = ps->state();
   const auto& P = sim.particles;
   const auto mp = [&](Index p) { return P.mass[static_cast<std::size_t>(p)]; };
   const double particle_mass = deterministic_sum(P.size(), 0.0, mp);
@@ -168,10 +165,10 @@ void expect_fused_sums_as_separate_passes() {
 }
 
 TEST(Parallel, FusedConservationSumsMusl) {
-  expect_fused_sums_as_separate_passes<Musl>();
+  expect_fused_sums_as_separate_passes(Musl{});
 }
 TEST(Parallel, FusedConservationSumsUsavg) {
-  expect_fused_sums_as_separate_passes<Usavg>();
+  expect_fused_sums_as_separate_passes(Usavg{});
 }
 
 // A stencil of three DOFs, with the DOF bounds ChunkDofRanges::scan reads (found by ADL; the

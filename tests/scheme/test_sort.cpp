@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/stepper.hpp"
 #include "../support/threads.hpp"
 #include "basis/bases.hpp"
 #include "core/parallel.hpp"
@@ -267,19 +268,36 @@ TEST(Sort, SeededOrderIsNotSortedAndTriggerFollowsTheReference) {
   EXPECT_FALSE(sort_due(r, never));
 }
 
-std::unique_ptr<PlateSim> step_plate(int threads) {
+// The plate of make_plate, shuffled, ten MUSL steps with the library's compiled stepper,
+// re-sorted as the driver does when due.
+std::unique_ptr<driver::Stepper<2>> step_plate(int threads) {
   const Threads t(threads);
-  auto sim = make_plate(true);
-  for (int s = 0; s < 10; ++s) {
-    Musl::step(*sim, 1e-4);
-    sort_particles_if_due(*sim);
+  Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{20, 20});
+  auto P = seed_particles<2>(g, Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), 3, 1000.0);
+  for (std::size_t i = 0; i < P.v.size(); ++i) {
+    using std::numbers::pi;
+    P.v[i] = Vec<2>(0.5 * std::sin(2 * pi * P.x[i][0]), -0.3 * std::sin(2 * pi * P.x[i][1]));
   }
-  return sim;
+  std::vector<Traction<2>> none;
+  shuffle_particles(P, none, kSeed);
+  auto stepper =
+      test::compiled_stepper<2>({.grid = g,
+                                 .particles = std::move(P),
+                                 .material = NeoHookean{ElasticParameters{1000.0, 1e7, 0.3}},
+                                 .basis = BSplineKind<2>{},
+                                 .fixed_sides = {FixedSide{0, 0}, FixedSide{0, 1}}});
+  for (int s = 0; s < 10; ++s) {
+    stepper->step(1e-4);
+    stepper->sort_if_due();
+  }
+  return stepper;
 }
 
 TEST(Sort, SameBitsForOneAndTwoThreads) {
-  const auto a = step_plate(1);
-  const auto b = step_plate(2);
+  const auto sa = step_plate(1);
+  const auto sb = step_plate(2);
+  const RunState<2>* a = &sa->state();
+  const RunState<2>* b = &sb->state();
   EXPECT_EQ(a->sorting.sorts, 1);
   EXPECT_EQ(b->sorting.sorts, 1);
   EXPECT_TRUE(same_bits(a->particles.id, b->particles.id));

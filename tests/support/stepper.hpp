@@ -1,0 +1,87 @@
+#pragma once
+// Tests that take whole steps run the library's compiled steppers (driver/stepper.hpp): the code
+// `mpm run` runs, without the test unit instantiating Simulation<Dim, Basis, Mapping> and the
+// four schemes again (a scheme's step with every material law was most of a test unit's
+// compile time). Tests of single stages or of a mapping's passes still build a Simulation.
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "driver/stepper.hpp"
+
+namespace mpm::test {
+
+// The BasisKind alternative whose basis template, in Dim dimensions, is Basis.
+template <int Dim, class Basis, std::size_t I = 0>
+constexpr BasisKind kind_of() {
+  static_assert(I < std::variant_size_v<BasisKind>, "no BasisKind alternative has this basis");
+  using Kind = std::variant_alternative_t<I, BasisKind>;
+  if constexpr (std::is_same_v<typename Kind::template type<Dim>, Basis>)
+    return BasisKind(std::in_place_index<I>);
+  else
+    return kind_of<Dim, Basis, I + 1>();
+}
+
+// Every basis kind available in Dim dimensions, in BasisKind's order.
+template <int Dim>
+std::vector<BasisKind> basis_kinds() {
+  std::vector<BasisKind> kinds;
+  [&]<std::size_t... I>(std::index_sequence<I...>) {
+    ((supports_dimension<std::variant_alternative_t<I, BasisKind>>(Dim)
+          ? void(kinds.emplace_back(std::in_place_index<I>))
+          : void()),
+     ...);
+  }
+  (std::make_index_sequence<std::variant_size_v<BasisKind>>{});
+  return kinds;
+}
+
+// What a Simulation built by hand had: the grid, the particles and the law, with the defaults
+// of RunState (lumped mass, tolerance 1e-10) unless set; no boundary conditions or loads
+// unless given. The stepper re-sorts only when sort_if_due() is called.
+template <int Dim>
+struct StepperSpec {
+  Grid<Dim> grid;
+  Particles<Dim> particles;
+  Material material;
+  BasisKind basis = LinearKind{};
+  MappingKind mapping = DirectMapping{};
+  Scheme scheme = Musl{};
+  MassType mass = MassType::Lumped;
+  SortMode sort = SortMode::Auto;
+  std::vector<FixedSide> fixed_sides = {};
+  BodyForce<Dim> body_force = {};
+  std::vector<Traction<Dim>> tractions = {};
+};
+
+template <int Dim>
+std::unique_ptr<driver::Stepper<Dim>> compiled_stepper(StepperSpec<Dim> spec) {
+  Problem<Dim> pb;
+  pb.grid = spec.grid;
+  pb.particles = std::move(spec.particles);
+  pb.material = std::move(spec.material);
+  pb.fixed_sides = std::move(spec.fixed_sides);
+  pb.body_force = std::move(spec.body_force);
+  pb.tractions = std::move(spec.tractions);
+  MethodSettings method;
+  method.basis = spec.basis;
+  method.mapping = std::move(spec.mapping);
+  method.scheme = spec.scheme;
+  method.mass = spec.mass;
+  method.sort = spec.sort;
+  // As a hand-built Simulation: no reconstruction input check before the first step.
+  return driver::make_stepper<Dim>(spec.basis, driver::StepperInput<Dim>{pb, method, false});
+}
+
+// The mapping's run report (summary.json's "tls" or "mls" object; empty for the others).
+template <int Dim>
+nlohmann::ordered_json mapping_report(const driver::Stepper<Dim>& s) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  s.report(j);
+  return j;
+}
+
+}  // namespace mpm::test
