@@ -11,6 +11,7 @@
 #include "app/perf.hpp"
 #include "app/reconstruct.hpp"
 #include "app/study.hpp"
+#include "core/interrupt.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
 #include "mpm/version.hpp"
@@ -75,7 +76,10 @@ int cmd_run(const std::string& config, const std::vector<std::string>& sets, std
                              r.diag.grid_crossings);
     std::cout << fmt::format("  outputs in {}/\n", out);
   }
-  if (r.exit_code != 0) std::cerr << "mpm: run failed: " << r.failure << "\n";
+  if (r.exit_code == mpm::exit_code::kInterrupted)
+    std::cerr << "mpm: run " << r.failure << "; its outputs so far are in " << out << "/\n";
+  else if (r.exit_code != 0)
+    std::cerr << "mpm: run failed: " << r.failure << "\n";
   return r.exit_code;
 }
 
@@ -294,6 +298,9 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : mpm::exit_code::kInput;
   }
   try {
+    // A signal ends a run after its current step, with its outputs and an "interrupted"
+    // summary (core/interrupt.hpp); a second one ends the process at once.
+    if (*run || *study) mpm::install_interrupt_handlers();
     if (*run) return cmd_run(config, sets, out, quiet, restart);
     if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot);
     if (*bench) return cmd_bench(bopt);

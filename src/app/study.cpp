@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cctype>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <mutex>
@@ -12,6 +13,7 @@
 
 #include <omp.h>
 
+#include "core/interrupt.hpp"
 #include "io/output.hpp"
 #include "setup/config.hpp"
 #include "setup/registry.hpp"
@@ -175,12 +177,22 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
   const unsigned jobs = std::min<unsigned>(opt.jobs > 0 ? static_cast<unsigned>(opt.jobs) : hw,
                                            static_cast<unsigned>(configs.size()));
   std::atomic<std::size_t> next{0};
+  // Any other exception of a run (out of memory, an I/O error) stops the study: the workers take
+  // no further run, and the first one is rethrown here after every thread has joined (an
+  // exception leaving a std::thread would terminate the process with no message).
+  std::vector<std::exception_ptr> failures(configs.size());
   auto worker = [&] {
     // Runs in parallel share the cores with the OpenMP loops inside each run: split them
     // (results do not depend on the thread count). Per thread; the main thread's is restored.
     const int omp_threads = omp_get_max_threads();
     if (jobs > 1) omp_set_num_threads(std::max(1, omp_threads / static_cast<int>(jobs)));
     for (std::size_t k = next++; k < configs.size(); k = next++) {
+      if (interrupt_signal() != 0) {
+        // After SIGINT/SIGTERM/SIGHUP the runs under way end early; no new one starts.
+        res.runs[k].exit_code = exit_code::kInterrupted;
+        res.runs[k].failure = "not run: the study was interrupted";
+        continue;
+      }
       RunOptions ro;
       ro.quiet = true;
       if (!opt.out_dir.empty()) ro.out_dir = dirs[k];
@@ -188,6 +200,9 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
         res.runs[k] = run(configs[k], ro);
       } catch (const InputError& e) {
         input_errors[k] = e.what();
+      } catch (...) {
+        failures[k] = std::current_exception();
+        next = configs.size();
       }
     }
     omp_set_num_threads(omp_threads);
@@ -198,6 +213,8 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
   for (auto& t : pool) t.join();
   for (const auto& e : input_errors)
     if (!e.empty()) throw InputError(e);
+  for (const auto& f : failures)
+    if (f) std::rethrow_exception(f);
   if (!opt.out_dir.empty()) {
     io::write_file_atomic(std::filesystem::path(opt.out_dir) / "study.csv", study_csv(opt, res));
     io::write_file_atomic(std::filesystem::path(opt.out_dir) / "study.txt", study_table(opt, res));
@@ -214,7 +231,10 @@ std::string study_csv(const StudyOptions& opt, const StudyResult& r) {
     const auto& run = r.runs[k];
     const std::size_t nv = opt.values.size();
     s += fmt::format("{},{},{},{:.17g},{},{},{}", r.labels[k / nv], opt.values[k % nv], run.cells,
-                     run.h, run.particles, run.steps, run.exit_code == 0 ? "ok" : "failed");
+                     run.h, run.particles, run.steps,
+                     run.exit_code == 0                         ? "ok"
+                     : run.exit_code == exit_code::kInterrupted ? "interrupted"
+                                                                : "failed");
     for (const auto& c : kColumns) {
       const auto& v = run.errors.*(c.member);
       s += v ? fmt::format(",{:.17g}", *v) : std::string(",");

@@ -1,4 +1,6 @@
 #include <fmt/format.h>
+#include <cmath>
+#include <utility>
 
 #include "benchmarks/benchmarks.hpp"
 #include "setup/config.hpp"
@@ -169,6 +171,13 @@ Problem<1> make_custom_1d(const Config& cfg) {
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.v[i][0] = v0(P.x0[i][0]);
     P.stress[i](0, 0) = s0(P.x0[i][0]);
+    // A non-finite initial field would stop the run at its first step with a message about
+    // the stress; name the key and the first point instead.
+    for (const auto& [key, value] :
+         {std::pair{"initial.velocity", P.v[i][0]}, std::pair{"initial.stress", P.stress[i](0, 0)}})
+      if (!std::isfinite(value))
+        throw InputError(fmt::format("{}: {} = \"{}\" is not finite at x = {:.6g} (particle {})",
+                                     cfg.where(key), key, cfg.get_string(key), P.x0[i][0], i));
     if (P.stress[i](0, 0) != 0.0 && !incremental_law)
       throw InputError(
           fmt::format("{}: an initial stress needs an incremental law (elastic_1d_small or "
@@ -252,6 +261,12 @@ Problem<2> make_custom_2d(const Config& cfg) {
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.v[i] = pb.initial_velocity(P.x0[i]);
     P.stress[i] = pb.initial_stress(P.x0[i]);
+    for (const auto& [key, finite] : {std::pair{"initial.velocity", P.v[i].allFinite()},
+                                      std::pair{"initial.stress", P.stress[i].allFinite()}})
+      if (!finite)
+        throw InputError(
+            fmt::format("{}: {} is not finite at (x, y) = ({:.6g}, {:.6g}) (particle {})",
+                        cfg.where(key), key, P.x0[i][0], P.x0[i][1], i));
     if (P.stress[i] != Mat<2>::Zero() && !incremental_law)
       throw InputError(fmt::format(
           "{}: an initial stress needs an incremental law; material.model = \"{}\" computes "

@@ -1,6 +1,8 @@
 #include "model/problem.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
+
 #include <cmath>
 
 #include "benchmarks/benchmarks.hpp"
@@ -9,12 +11,33 @@
 namespace mpm {
 
 namespace {
-// Particles per direction of seed_particles: per_cell per cell width, at least one.
+// The machine's physical memory [bytes] (0 where unknown).
+double physical_memory() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
+}
+
+// Particles per direction of seed_particles: per_cell per cell width, at least one. A body
+// whose particle state alone would not fit in the machine's memory is refused here, before
+// anything is allocated, with the estimate (instead of std::bad_alloc or a machine swapping).
 template <int Dim>
 IVec<Dim> seed_counts(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi, int per_cell) {
+  Vec<Dim> per_dim;
+  double total = 1.0;
+  for (int d = 0; d < Dim; ++d) {
+    per_dim[d] = std::max(1.0, std::round((hi[d] - lo[d]) / g.h[d] * per_cell));
+    total *= per_dim[d];
+  }
+  const double bytes = total * static_cast<double>(Particles<Dim>::bytes_per_particle());
+  const double memory = physical_memory();
+  if (!(total < 1e15) || (memory > 0.0 && bytes > memory))
+    throw InputError(fmt::format(
+        "grid.cells and particles.per_cell seed the body with {:.4g} particles, whose state "
+        "alone needs about {:.3g} GB; this machine has {:.3g} GB of memory: use fewer cells "
+        "or particles per cell",
+        total, bytes / 1e9, memory / 1e9));
   IVec<Dim> n{};
-  for (int d = 0; d < Dim; ++d)
-    n[d] = std::max<Index>(1, std::llround((hi[d] - lo[d]) / g.h[d] * per_cell));
+  for (int d = 0; d < Dim; ++d) n[d] = static_cast<Index>(per_dim[d]);
   return n;
 }
 }  // namespace

@@ -77,6 +77,8 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
   if (ec)
     throw InputError(
         fmt::format("cannot create output directory '{}': {}", dir_.string(), ec.message()));
+  // What an earlier run into this directory left when it was killed in a write.
+  io::remove_stale_temporaries(dir_);
   csv_ = s.output.csv;
   vtk_ = s.output.vtk;
   io::write_file_atomic(dir_ / "config.toml", config_text);
@@ -218,7 +220,9 @@ nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& set
                                     nlohmann::ordered_json method, double velocity_time) {
   nlohmann::ordered_json j;
   j["mpmlab_version"] = kVersion;
-  j["status"] = res.exit_code == exit_code::kOk ? "ok" : "failed";
+  j["status"] = res.exit_code == exit_code::kOk            ? "ok"
+                : res.exit_code == exit_code::kInterrupted ? "interrupted"
+                                                           : "failed";
   if (res.exit_code != exit_code::kOk) {
     j["exit_code"] = res.exit_code;
     j["failure"] = res.failure;

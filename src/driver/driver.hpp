@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/interrupt.hpp"
 #include "driver/run.hpp"
 #include "io/output.hpp"
 #include "model/problem.hpp"
@@ -170,13 +171,28 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
       ++step;
       after();
       const bool last = step == ts.steps;
-      if (step % history_every == 0 || last) out.history_row(view());
-      if (last || (frames > 0 && step >= frame_step(next_frame))) {
+      const bool row = step % history_every == 0 || last;
+      const bool frame = last || (frames > 0 && step >= frame_step(next_frame));
+      const bool checkpoint = checkpoint_every > 0 && step % checkpoint_every == 0;
+      if (row) out.history_row(view());
+      if (frame) {
         while (next_frame <= frames && step >= frame_step(next_frame)) ++next_frame;
         out.frame(view());
       }
-      if (checkpoint_every > 0 && step % checkpoint_every == 0) save(step);
+      if (checkpoint) save(step);
       progress.update(step, view().time);
+      if (const int sig = interrupt_signal(); sig != 0 && !last) {
+        // A signal (core/interrupt.hpp): the state after this step, complete, ends the run: its
+        // history row, a frame and, when checkpoints are on, a checkpoint to restart from,
+        // each unless this step has written it already.
+        res.exit_code = exit_code::kInterrupted;
+        res.failure = fmt::format("interrupted by {} after step {} of {} (t = {:.6g} s)",
+                                  signal_name(sig), step, ts.steps, view().time);
+        if (!row) out.history_row(view());
+        if (!frame) out.frame(view());
+        if (checkpoint_every > 0 && !checkpoint) save(step);
+        break;
+      }
     }
   } catch (const RunError& e) {
     res.exit_code = e.exit_code();

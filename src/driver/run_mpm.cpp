@@ -1,5 +1,7 @@
 #include "driver/run_mpm.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 #include <optional>
 
@@ -44,7 +46,7 @@ io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
 
 // Puts the checkpoint's state into a freshly set-up run; returns the step it is at.
 template <int Dim>
-Index restore(const RunOptions& opt, Stepper<Dim>& stepper, std::string_view mapping,
+Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::string_view mapping,
               std::optional<Ulfem1D>& reference, OutputSession<Dim>& out) {
   const io::Checkpoint& c = *opt.restart;
   RunState<Dim>& sim = stepper.state();
@@ -62,6 +64,21 @@ Index restore(const RunOptions& opt, Stepper<Dim>& stepper, std::string_view map
                                  reference.has_value() != c.fem.has_value()
                                      ? ", FEM reference state missing or unexpected"
                                      : ""));
+  // A checkpoint's hash only proves the bytes are those written; a crafted or foreign one could
+  // still hold a state no run reaches (issue 16, 9): the step and time must be those of this
+  // run's time loop (t = step dt exactly, as the driver sets it), the counters non-negative and
+  // the cells on the grid.
+  if (c.step < 0 || c.time != static_cast<double>(c.step) * dt || c.sorts < 0 ||
+      c.sort_reference < -1 || c.diag.grid_crossings < 0 ||
+      std::any_of(c.cells.begin(), c.cells.end(),
+                  [&](auto cell) { return cell < -1 || cell >= sim.grid.num_cells(); }))
+    throw InputError(fmt::format(
+        "{} is not a state of this run: step {}, time {:.17g} (time.dt = {:.17g} gives {:.17g}), "
+        "{} sorts, {} grid crossings, cells in [{}, {}] of {}",
+        what, c.step, c.time, dt, static_cast<double>(c.step) * dt, c.sorts, c.diag.grid_crossings,
+        c.cells.empty() ? 0 : *std::min_element(c.cells.begin(), c.cells.end()),
+        c.cells.empty() ? 0 : *std::max_element(c.cells.begin(), c.cells.end()),
+        sim.grid.num_cells()));
   sim.particles = std::move(p);
   sim.cell.assign(c.cells.begin(), c.cells.end());
   sim.sorting.reference = c.sort_reference;
@@ -111,7 +128,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   res.h = sim.grid.h.maxCoeff();
   res.cell_size.assign(sim.grid.h.data(), sim.grid.h.data() + Dim);
   res.particles = sim.particles.size();
-  const Index start = opt.restart ? restore<Dim>(opt, *stepper, mapping_name, reference, out) : 0;
+  const Index start =
+      opt.restart ? restore<Dim>(opt, ts.dt, *stepper, mapping_name, reference, out) : 0;
   drive<Dim>(
       settings, opt, out, start,
       [&](Index s) {

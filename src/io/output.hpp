@@ -25,6 +25,11 @@ namespace mpm::io {
 // file is removed in that case.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
+// Removes the temporaries "<name>.tmp.<pid>" in dir (not its subdirectories) that a process no
+// longer running left behind (killed while writing); those of running processes stay. Returns
+// how many were removed.
+int remove_stale_temporaries(const std::filesystem::path& dir);
+
 // A file written as a run goes (history.csv): open() replaces it with `content` atomically, then
 // every append() is one write(2) at its end, so the text appended so far survives a killed
 // process (the kernel holds it) and the run keeps none of it in memory. Throws

@@ -340,9 +340,69 @@ std::string location(const std::string& file, const toml::source_region& r) {
   return fmt::format("{}:{}:{}", file, r.begin.line, r.begin.column);
 }
 
+// toml++ parses dotted keys, table headers, inline tables and arrays recursively: a file nesting
+// them some ten thousand levels deep overflowed the stack (a crash with no message). A
+// configuration nests a few levels, so more than kMaxNesting is refused before parsing: key
+// components (dots in a key or a header) and open brackets and braces, outside strings and
+// comments. Returns the 1-based line of the first excess, 0 if none.
+constexpr int kMaxNesting = 64;
+
+int excessive_nesting_line(std::string_view text) {
+  int line = 1, depth = 0, dots = 0;
+  std::vector<char> open;  // the open brackets and braces, innermost last
+  bool key = true;         // at a key: line start at depth 0, a header, after '{' or ',' in '{'
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      if (open.empty()) key = true, dots = 0;
+    } else if (c == '#') {
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+    } else if (c == '"' || c == '\'') {
+      // A string: basic ("..." with escapes) or literal ('...'), either possibly multi-line
+      // (three quotes).
+      const bool triple = text.substr(i, 3) == std::string(3, c);
+      const std::string_view close = triple ? text.substr(i, 3) : text.substr(i, 1);
+      i += close.size();
+      while (i < text.size() && text.substr(i, close.size()) != close) {
+        if (text[i] == '\n') ++line;
+        if (c == '"' && text[i] == '\\') ++i;
+        ++i;
+      }
+      i += close.size() - 1;
+    } else if (c == '[' || c == '{') {
+      open.push_back(c);
+      depth = static_cast<int>(open.size());
+      if (depth > kMaxNesting) return line;
+      key = c == '{' || (c == '[' && open.size() <= 2 && key);  // a header keeps the key state
+      dots = 0;
+    } else if (c == ']' || c == '}') {
+      if (!open.empty()) open.pop_back();
+      key = false;
+    } else if (c == ',' && !open.empty() && open.back() == '{') {
+      key = true;
+      dots = 0;
+    } else if (c == '=') {
+      key = false;
+    } else if (c == '.' && key) {
+      if (++dots >= kMaxNesting) return line;
+    }
+  }
+  return 0;
+}
+
+void check_nesting(std::string_view text, const std::string& where) {
+  if (const int line = excessive_nesting_line(text))
+    throw InputError(fmt::format(
+        "{}:{}: keys, tables or arrays nested more than {} levels deep; a configuration "
+        "needs a few",
+        shown(where), line, kMaxNesting));
+}
+
 // A --set value: TOML if it parses as one ("40", "1e-5", "true", "\"usl\""), else the bare text
 // ("usl", "0.1*sin(pi*x)"). Returned as the single entry "v" of a table that owns it.
-toml::table parse_value_text(const std::string& text) {
+toml::table parse_value_text(const std::string& text, const std::string& origin) {
+  check_nesting(text, origin);
   try {
     toml::table t = toml::parse("v = " + text);
     if (t.size() == 1 && t.contains("v")) return t;
@@ -524,7 +584,7 @@ class ConfigBuilder {
 
   // One value from the command line or set(): `origin` stands in for FILE:LINE:COL.
   void apply(std::string_view key, const std::string& value, const std::string& origin) {
-    const toml::table holder = parse_value_text(value);
+    const toml::table holder = parse_value_text(value, origin);
     const toml::node& node = *holder.get("v");
     if (key.starts_with(kConstants + ".")) {
       constant(key.substr(kConstants.size() + 1), node, origin, origin, kOverride);
@@ -794,6 +854,7 @@ Config Config::parse(std::string_view toml_text, const std::string& source_name,
   Config cfg;
   cfg.source_ = source_name;
   toml::table root;
+  check_nesting(toml_text, source_name);
   try {
     root = toml::parse(toml_text, source_name);
   } catch (const toml::parse_error& e) {

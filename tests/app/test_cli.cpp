@@ -6,6 +6,8 @@
 #include <unistd.h>
 #include <algorithm>
 #include <array>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -226,6 +228,74 @@ TEST(Cli, KilledRunKeepsItsHistoryRows) {
   }
   EXPECT_GE(n, 50);
   EXPECT_FALSE(std::filesystem::exists(out / "summary.json"));  // the run did not finish
+  std::filesystem::remove_all(out);
+}
+
+// SIGTERM during a run (issue 16, 5): the run ends after its current step with that step's
+// history row, a last frame, a checkpoint (checkpoints on), summary.json with "status":
+// "interrupted", exit code 7; a temporary file a dead process left in the directory is removed.
+TEST(Cli, SigtermEndsTheRunWithAnInterruptedSummary) {
+  const auto out = temp_dir("sigterm");
+  std::filesystem::create_directories(out);
+  // A pid no process has, for a planted temporary of a "killed" run.
+  pid_t dead = 4000000;
+  while (dead > 2 && (::kill(dead, 0) == 0 || errno != ESRCH)) --dead;
+  const auto stale = out / ("summary.json.tmp." + std::to_string(dead));
+  std::ofstream(stale) << "half a summary";
+  const std::string cmd =
+      "exec " + std::string(MPM_BINARY) + " run " + src("examples/vibrating_bar_small.toml") +
+      " --set time.end=100 --set output.frames=3" +
+      " --set output.checkpoint_every=7 --quiet --out " + out.string() + " > /dev/null 2>&1";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const auto rows = [&] {
+    std::ifstream h(out / "history.csv");
+    std::string line;
+    int n = 0;
+    while (std::getline(h, line)) ++n;
+    return n - 1;
+  };
+  // Waits for the rows, not for a time: up to 2 minutes on a loaded machine.
+  for (int k = 0; k < 1200 && rows() < 50; ++k) usleep(100000);
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 7);
+  std::ifstream f(out / "summary.json");
+  const auto j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["status"], "interrupted");
+  EXPECT_EQ(j["exit_code"], 7);
+  EXPECT_NE(j["failure"].get<std::string>().find("interrupted by SIGTERM after step"),
+            std::string::npos)
+      << j["failure"];
+  const long steps = j["steps"].get<long>();
+  EXPECT_GE(steps, 50);
+  // The last history row is the state of that step.
+  std::ifstream h(out / "history.csv");
+  std::string line, last;
+  std::getline(h, line);
+  int n = 0;
+  while (std::getline(h, line)) last = line, ++n;
+  EXPECT_GE(n, 50);
+  EXPECT_DOUBLE_EQ(std::stod(last), 1e-7 * static_cast<double>(steps));  // dt = 1e-7 s
+  // Frames: the initial one and the interrupted step's (the run was far from frame 1 of 3).
+  EXPECT_TRUE(std::filesystem::exists(out / "particles_00000.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "particles_00001.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "checkpoint.bin"));
+  for (const auto& e : std::filesystem::directory_iterator(out))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+  // The checkpoint holds the interrupted step (a restart continues from it; 10 steps of
+  // time.end lie before it).
+  const auto r =
+      sh("run --restart " + (out / "checkpoint.bin").string() + " --set time.end=1e-6 --quiet");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("the checkpoint is at step " + std::to_string(steps)), std::string::npos)
+      << r.out;
   std::filesystem::remove_all(out);
 }
 

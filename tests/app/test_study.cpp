@@ -1,12 +1,16 @@
 // The --methods argument of `mpm study` (app/study.cpp, parse_methods).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "app/study.hpp"
 #include "core/types.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace {
@@ -38,6 +42,33 @@ TEST(StudyMethods, OnlyBSplinesTakeADegree) {
   }
   EXPECT_THROW(parse_methods("spline2/direct"), InputError);
   EXPECT_THROW(parse_methods("bspline/direct/lumpy"), InputError);
+}
+
+// A refinement whose finest run cannot fit in memory, run in parallel (issue 16, 2: "terminate
+// called without an active exception", exit 134, a config.toml.tmp.PID left behind): an input
+// error with the estimate before anything is allocated, and no temporary file left.
+TEST(StudyRuns, ARunTooLargeForMemoryIsAnInputErrorInParallel) {
+  const Config base =
+      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/vibrating_bar_small.toml", {});
+  StudyOptions opt = parse_refine("grid.cells=5,1000000000");
+  opt.jobs = 2;
+  opt.quiet = true;
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("mpm_study_too_large_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  opt.out_dir = dir.string();
+  try {
+    run_study(base, opt);
+    ADD_FAILURE() << "the study ran";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("grid.cells and particles.per_cell seed the body with"), std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("GB of memory"), std::string::npos) << msg;
+  }
+  for (const auto& f : std::filesystem::recursive_directory_iterator(dir))
+    EXPECT_EQ(f.path().filename().string().find(".tmp."), std::string::npos) << f.path();
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -378,6 +378,21 @@ min = [0.2, 0.2]
 max = [0.8, 0.8]
 )toml";
 
+// A non-finite initial field (issue 16, 12: "1/0" stopped the run at its first step as a
+// non-finite stress) is refused at set-up, naming the key and the first bad point.
+TEST(Custom2D, NonFiniteInitialFieldsNameTheKeyAndPoint) {
+  expect_input_error(kBase2D + std::string("[initial]\nvelocity = [\"0\", \"sqrt(x-0.5)\"]\n"),
+                     {"case.toml:17:", "initial.velocity is not finite at (x, y) = (0.2"});
+  expect_input_error(
+      "benchmark = \"custom\"\n[time]\ndt = 1e-4\nend = 1e-3\n[material]\ndensity = 1000.0\n"
+      "youngs_modulus = 1e6\n[initial]\nvelocity = \"1/0\"\n",
+      {"case.toml:9:", "initial.velocity = \"1/0\" is not finite at x = ", "(particle 0)"});
+  expect_input_error(
+      "benchmark = \"custom\"\n[time]\ndt = 1e-4\nend = 1e-3\n[material]\ndensity = 1000.0\n"
+      "youngs_modulus = 1e6\nmodel = \"elastic_1d_small\"\n[initial]\nstress = \"sqrt(x-0.5)\"\n",
+      {"case.toml:10:", "initial.stress = \"sqrt(x-0.5)\" is not finite at x = "});
+}
+
 TEST(Custom2D, VectorKeyErrorsNameFileLineAndKey) {
   const std::string base = kBase2D;
   // Wrong length for the dimension (line 17: the key's line).

@@ -7,10 +7,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <memory>
 
@@ -320,6 +322,43 @@ TEST(Checkpoint, RestartConfigAllowsOnlyOutputAndEndTime) {
       run_in(io::restart_config(c, name, nullptr, {"time.end=1e-6"}), dir.path(), ck, name);
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_EQ(r.steps, 10);
+}
+
+// A checkpoint with a valid hash but a state no run of this configuration reaches (issue 16, 9:
+// step -5, or a time past time.end, ran with status ok and history.csv going backwards) is
+// refused before the first step, naming the checkpoint and what is wrong.
+TEST(Checkpoint, InconsistentStatesAreRefused) {
+  TempDir dir("inconsistent");
+  const auto file = short_checkpoint(dir.path());
+  const io::Checkpoint good = io::read_checkpoint(file);
+  ASSERT_EQ(good.step, 10);
+  const std::vector<std::function<void(io::Checkpoint&)>> crafts = {
+      [](io::Checkpoint& c) { c.step = -5; },
+      [](io::Checkpoint& c) { c.time = 1.0; },  // past time.end, step 10 unchanged
+      [](io::Checkpoint& c) { c.time = std::nextafter(c.time, 1.0); },
+      [](io::Checkpoint& c) { c.sorts = -1; },
+      [](io::Checkpoint& c) { c.diag.grid_crossings = -3; },
+      [](io::Checkpoint& c) { c.cells[7] = 1000000; }};
+  for (std::size_t k = 0; k < crafts.size(); ++k) {
+    SCOPED_TRACE(k);
+    auto c = std::make_shared<io::Checkpoint>(good);
+    crafts[k](*c);
+    TempDir out("inconsistent_run");
+    const auto cfg = io::restart_config(*c, "crafted.bin", nullptr, {"time.end=2e-6"});
+    try {
+      const RunResult r = run_in(cfg, out.path(), c, "crafted.bin");
+      ADD_FAILURE() << "ran with exit code " << r.exit_code;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("checkpoint 'crafted.bin' is not a state of this run"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // The untouched checkpoint restarts.
+  TempDir out("consistent_run");
+  const auto c = std::make_shared<const io::Checkpoint>(good);
+  const auto cfg = io::restart_config(*c, "good.bin", nullptr, {"time.end=2e-6"});
+  EXPECT_EQ(run_in(cfg, out.path(), c, "good.bin").exit_code, 0);
 }
 
 TEST(Checkpoint, FramesContinueAfterRestart) {

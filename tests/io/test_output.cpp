@@ -2,7 +2,11 @@
 #include "io/output.hpp"
 
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 
 #include <cstddef>
 #include <filesystem>
@@ -479,6 +483,33 @@ class AtomicWrite : public ::testing::Test {
 
   fs::path dir_;
 };
+
+// Temporaries of a process that no longer runs go (issue 16, 5: a killed run left them and the
+// next run into the directory kept them); those of live processes, other names and
+// subdirectories stay.
+TEST_F(AtomicWrite, StaleTemporariesOfDeadProcessesAreRemoved) {
+  pid_t dead = 4000000;
+  while (dead > 2 && (::kill(dead, 0) == 0 || errno != ESRCH)) --dead;
+  const std::string own = std::to_string(::getpid()), gone = std::to_string(dead);
+  for (const std::string& name :
+       {"summary.json.tmp." + gone, "history.csv.tmp." + gone, "config.toml.tmp." + own,
+        std::string("config.toml.tmp.1"), std::string("frame.tmp.12x"), std::string("notes.tmp."),
+        std::string("particles_00001.csv")})
+    std::ofstream(dir_ / name) << "x";
+  fs::create_directories(dir_ / "sub");
+  std::ofstream(dir_ / "sub" / ("a.tmp." + gone)) << "x";
+  EXPECT_EQ(remove_stale_temporaries(dir_), 2);
+  auto left = entries();
+  std::sort(left.begin(), left.end());
+  // pid 1 (init) is alive or not ours to probe (EPERM): kept either way.
+  std::vector<std::string> kept{"config.toml.tmp." + own, "config.toml.tmp.1",
+                                "frame.tmp.12x",          "notes.tmp.",
+                                "particles_00001.csv",    "sub"};
+  std::sort(kept.begin(), kept.end());
+  EXPECT_EQ(left, kept);
+  EXPECT_TRUE(fs::exists(dir_ / "sub" / ("a.tmp." + gone)));
+  EXPECT_EQ(remove_stale_temporaries(dir_ / "missing"), 0);
+}
 
 TEST_F(AtomicWrite, CreatesFileWithExactContent) {
   const fs::path p = dir_ / "frame.csv";

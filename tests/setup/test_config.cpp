@@ -197,6 +197,48 @@ TEST(ConfigErrors, LongUnknownKeysAndValuesAreQuotedInPart) {
   EXPECT_CONTAINS(error_of(kBase + "[grid]\ncellz = 10\n"), "(did you mean 'grid.cells'?)");
 }
 
+// Keys, headers and values nested tens of thousands of levels deep overflowed the TOML parser's
+// stack (issue 16, 1: exit 139, no message). They are refused before parsing with the line;
+// nesting a configuration really uses, strings and comments holding brackets and dots, and
+// arrays of floats still parse.
+TEST(ConfigErrors, DeepNestingIsRefusedBeforeParsing) {
+  std::string dotted = "a";
+  for (int k = 0; k < 40000; ++k) dotted += ".a";
+  const std::string deep_array = std::string(50000, '[') + std::string(50000, ']');
+  const std::string deep_table = std::string(50000, '{');
+  for (const std::string& text :
+       {kBase + dotted + " = 1\n", kBase + "[" + dotted + "]\n", kBase + "[[" + dotted + "]]\n",
+        kBase + "[grid]\n\ncells = " + deep_array + "\n", kBase + "x = " + deep_table + "\n"}) {
+    const std::string msg = error_of(text);
+    // Line 8 (the array after a header and a blank line: line 10).
+    EXPECT_TRUE(msg.starts_with("test.toml:8: ") || msg.starts_with("test.toml:10: ")) << msg;
+    EXPECT_CONTAINS(msg, ": keys, tables or arrays nested more than 64 levels deep");
+    EXPECT_LT(msg.size(), 500u);
+  }
+  const std::string set = error_of(kBase, {"grid.cells=" + deep_array});
+  EXPECT_CONTAINS(set, "--set grid.cells=[[[[");
+  EXPECT_CONTAINS(set, "nested more than 64 levels deep");
+  EXPECT_LT(set.size(), 500u);
+  // 64 levels of dotted key: an unknown key, not a nesting error; brackets and dots in strings
+  // and comments do not count; a long array of floats is no nesting.
+  std::string ok_key = "a";
+  for (int k = 1; k < 64; ++k) ok_key += ".a";
+  EXPECT_CONTAINS(error_of(kBase + ok_key + " = 1\n"), "test.toml:8:1: unknown key 'material.a'");
+  EXPECT_NO_THROW(Config::parse(
+      kBase + "[bar]\nlength = 1.0 # [[[[ a.b.c.d " + std::string(100, '.') + "\n", "test.toml"));
+  for (const std::string& value :
+       {"\"" + std::string(100, '[') + "\"", "'" + std::string(100, '.') + "'",
+        "\"\"\"\n" + std::string(100, '{') + "\n\"\"\"", "'''" + std::string(100, '[') + "'''"}) {
+    const std::string msg = error_of(kBase + "[method]\nscheme = " + value + "\n");
+    EXPECT_CONTAINS(msg, "is not valid; choose one of");
+    EXPECT_EQ(msg.find("nested"), std::string::npos) << msg;
+  }
+  std::string floats = "[1.5";
+  for (int k = 0; k < 500; ++k) floats += ", 1.5";
+  const std::string msg = error_of(kBase + "[bar]\nlength = " + floats + "]\n");
+  EXPECT_EQ(msg.find("nested"), std::string::npos) << msg;
+}
+
 TEST(ConfigErrors, KeyInTheWrongSectionSuggestsTheRightOne) {
   EXPECT_CONTAINS(error_of("dt = 1\n" + kBase), "test.toml:1:1: unknown key 'dt'");
   EXPECT_CONTAINS(error_of("dt = 1\n" + kBase), "(did you mean 'time.dt'?)");
