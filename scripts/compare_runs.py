@@ -409,7 +409,9 @@ def compare_trees(before, after, rel_root, checkpoints):
     def files(root):
         if not root.is_dir():
             return set()
-        return {p.relative_to(root) for p in root.rglob("*") if p.is_file() or p.is_symlink()}
+        # .mpm.lock: the output directory's lock (io::DirectoryLock), holding the run's pid.
+        return {p.relative_to(root) for p in root.rglob("*")
+                if (p.is_file() or p.is_symlink()) and p.name != ".mpm.lock"}
 
     fa, fb = files(before), files(after)
     for only, side in ((fa - fb, "before"), (fb - fa, "after")):

@@ -39,9 +39,10 @@ void print_list() {
 }
 
 int cmd_run(const std::string& config, const std::vector<std::string>& sets, std::string out,
-            bool quiet, const std::string& restart) {
+            bool quiet, const std::string& restart, bool overwrite) {
   mpm::RunOptions ro;
   ro.quiet = quiet;
+  ro.overwrite = overwrite;
   std::optional<mpm::Config> cfg;
   if (!config.empty()) cfg = mpm::Config::load(config, sets);
   if (restart.empty()) {
@@ -91,12 +92,14 @@ std::string shell_quote(const std::string& s) {
 }
 
 int cmd_study(const std::string& config, const std::string& refine, const std::string& methods,
-              const std::vector<std::string>& sets, std::string out, int jobs, bool plot) {
+              const std::vector<std::string>& sets, std::string out, int jobs, bool plot,
+              bool overwrite) {
   const auto cfg = mpm::Config::load(config, sets);
   auto opt = mpm::parse_refine(refine);
   if (!methods.empty()) opt.methods = mpm::parse_methods(methods);
   opt.out_dir = out.empty() ? default_out("studies", config) : out;
   opt.jobs = jobs;
+  opt.overwrite = overwrite;
   const auto r = mpm::run_study(cfg, opt);
   std::cout << mpm::study_table(opt, r);
   std::cout << fmt::format("study.csv and each run's outputs in {}/\n", opt.out_dir);
@@ -169,7 +172,7 @@ int main(int argc, char** argv) {
 
   std::string config, out, refine, methods;
   std::vector<std::string> sets;
-  bool quiet = false;
+  bool quiet = false, overwrite = false;
   int jobs = 0;
 
   auto* run = app.add_subcommand("run", "run one configuration and write its outputs");
@@ -182,6 +185,9 @@ int main(int argc, char** argv) {
   run->add_option("--set", sets, "override a key: section.key=value (repeatable)");
   run->add_option("--out", out, "output directory (default runs/<config name>)");
   run->add_flag("--quiet,-q", quiet, "no progress line or report");
+  run->add_flag("--overwrite", overwrite,
+                "replace the files of an earlier run in the output directory (otherwise the run "
+                "is refused)");
 
   auto* study = app.add_subcommand("study", "run a refinement series and print observed orders");
   study->add_option("config", config, "TOML configuration file")->required();
@@ -192,6 +198,8 @@ int main(int argc, char** argv) {
   study->add_option("--set", sets, "override a key: section.key=value (repeatable)");
   study->add_option("--out", out, "output directory (default studies/<config name>)");
   study->add_option("--jobs,-j", jobs, "parallel runs (default: hardware threads)");
+  study->add_flag("--overwrite", overwrite,
+                  "replace the files of earlier runs in the runs' output directories");
   bool plot = false;
   study->add_flag("--plot", plot,
                   "write convergence plots (PNG, SVG) of every error against h, one line per "
@@ -301,8 +309,8 @@ int main(int argc, char** argv) {
     // A signal ends a run after its current step, with its outputs and an "interrupted"
     // summary (core/interrupt.hpp); a second one ends the process at once.
     if (*run || *study) mpm::install_interrupt_handlers();
-    if (*run) return cmd_run(config, sets, out, quiet, restart);
-    if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot);
+    if (*run) return cmd_run(config, sets, out, quiet, restart, overwrite);
+    if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot, overwrite);
     if (*bench) return cmd_bench(bopt);
     if (*verify) return cmd_verify(verify_quick, verify_long, out, jobs, argv[0]);
     if (*rec) {
@@ -337,6 +345,10 @@ int main(int argc, char** argv) {
   } catch (const mpm::InputError& e) {
     std::cerr << "mpm: error: " << e.what() << "\n";
     return mpm::exit_code::kInput;
+  } catch (const mpm::RunError& e) {
+    // Outside the time loop: an output that could not be written (exit_code::kOutput).
+    std::cerr << "mpm: error: " << e.what() << "\n";
+    return e.exit_code();
   } catch (const std::exception& e) {
     std::cerr << "mpm: internal error: " << e.what() << "\n";
     return mpm::exit_code::kInternal;

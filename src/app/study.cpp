@@ -196,6 +196,7 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
       RunOptions ro;
       ro.quiet = true;
       if (!opt.out_dir.empty()) ro.out_dir = dirs[k];
+      ro.overwrite = opt.overwrite;
       try {
         res.runs[k] = run(configs[k], ro);
       } catch (const InputError& e) {

@@ -20,6 +20,7 @@ struct StudyOptions {
   std::vector<MethodSpec> methods;  // empty: the configuration's own method
   std::string out_dir;              // study.csv here, each run in out_dir/<method>/<key>_<value>
   int jobs = 0;                     // parallel runs; 0: one per hardware thread
+  bool overwrite = false;           // replace earlier runs' files (RunOptions::overwrite)
   bool quiet = false;
 };
 

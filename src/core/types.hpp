@@ -56,6 +56,7 @@ inline constexpr int kLeftGrid = 4;
 inline constexpr int kInvertedDeformation = 5;
 inline constexpr int kReconstruction = 6;  // a reconstruction mapping cannot fit an element
 inline constexpr int kInterrupted = 7;     // SIGINT, SIGTERM or SIGHUP (core/interrupt.hpp)
+inline constexpr int kOutput = 8;          // an output could not be written (disk full, ...)
 }  // namespace exit_code
 
 }  // namespace mpm

@@ -1,5 +1,7 @@
 #include "driver/driver.hpp"
 
+#include <fmt/ranges.h>
+
 #include <cstdlib>
 #include <fstream>
 
@@ -77,8 +79,29 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
   if (ec)
     throw InputError(
         fmt::format("cannot create output directory '{}': {}", dir_.string(), ec.message()));
+  lock_ = io::DirectoryLock(dir_);
   // What an earlier run into this directory left when it was killed in a write.
   io::remove_stale_temporaries(dir_);
+  // An earlier run's files would mix with this run's (frames beyond this run's last, a summary
+  // of other parameters): refused, or removed with --overwrite. A restart continues them.
+  if (!opt.restart) {
+    const std::vector<std::string> earlier = io::run_files(dir_);
+    if (!earlier.empty() && !opt.overwrite)
+      throw InputError(fmt::format(
+          "output directory '{}' holds an earlier run ({}{}); pass --overwrite to replace it, or "
+          "choose another --out",
+          dir_.string(),
+          fmt::join(earlier.begin(),
+                    earlier.begin() + std::min<std::ptrdiff_t>(4, std::ssize(earlier)), ", "),
+          earlier.size() > 4 ? fmt::format(" and {} more", earlier.size() - 4) : ""));
+    for (const std::string& name : earlier) {
+      std::error_code rm;
+      std::filesystem::remove(dir_ / name, rm);
+      if (rm)
+        throw InputError(fmt::format("--overwrite: cannot remove '{}': {}", (dir_ / name).string(),
+                                     rm.message()));
+    }
+  }
   csv_ = s.output.csv;
   vtk_ = s.output.vtk;
   io::write_file_atomic(dir_ / "config.toml", config_text);

@@ -120,6 +120,7 @@ class OutputSession {
 
  private:
   std::filesystem::path dir_;
+  io::DirectoryLock lock_;  // one run at a time in dir_
   ExactSolution<Dim> exact_;
   bool csv_ = true, vtk_ = true;
   std::string history_header_;
@@ -158,12 +159,12 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
     return frames > 0 ? (k * ts.steps + frames - 1) / frames : ts.steps;
   };
   while (next_frame <= frames && start >= frame_step(next_frame)) ++next_frame;
-  if (start == 0 || !out.history_continues()) out.history_row(view());
-  if (start == 0) out.frame(view());
   Progress progress(!opt.quiet, ts.steps, res.particles, start);
   double step_seconds = 0.0;
   Index step = start;
   try {
+    if (start == 0 || !out.history_continues()) out.history_row(view());
+    if (start == 0) out.frame(view());
     while (step < ts.steps) {
       const auto t0 = Clock::now();
       advance(step);
@@ -197,8 +198,12 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
   } catch (const RunError& e) {
     res.exit_code = e.exit_code();
     res.failure = e.what();
-    out.history_row(view());
-    out.frame(view());  // the state the failure was detected in, for diagnosis
+    try {
+      out.history_row(view());
+      out.frame(view());  // the state the failure was detected in, for diagnosis
+    } catch (const RunError&) {
+      // An output failing again (a full disk): the failure above is what the summary reports.
+    }
   }
   progress.finish();
   res.steps = step;

@@ -20,6 +20,9 @@ struct Checkpoint;
 struct RunOptions {
   std::string out_dir;  // empty: write nothing
   bool quiet = false;   // no progress line
+  // out_dir holds an earlier run's files (io::run_files): false refuses the run (InputError),
+  // true removes them before the first write. A restart keeps what it continues.
+  bool overwrite = false;
   // Continue from this checkpoint (io::read_checkpoint) instead of the initial state; the
   // configuration passed to run() must be io::restart_config()'s. restart_name (the file)
   // names it in error messages.

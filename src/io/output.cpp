@@ -3,8 +3,10 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -36,10 +38,13 @@ std::string system_error_text(int err) {
   return std::strerror(err);
 }
 
+// A RunError with its own exit code: the time loop records it like any failure of a run and
+// still tries to write the failed summary (a full disk may have room for it once the
+// temporary file is gone).
 [[noreturn]] void throw_write_error(const std::filesystem::path& path, std::string_view what,
                                     int err) {
-  throw std::runtime_error(
-      fmt::format("cannot write '{}' ({}): {}", path.string(), what, system_error_text(err)));
+  throw RunError(exit_code::kOutput, fmt::format("cannot write '{}' ({}): {}", path.string(), what,
+                                                 system_error_text(err)));
 }
 
 // Writes all of text to fd, retrying after signals: 0, or the errno of the write that failed.
@@ -266,6 +271,65 @@ void AppendFile::open(const std::filesystem::path& path, std::string_view conten
 void AppendFile::append(std::string_view text) {
   if (fd_ < 0) throw std::logic_error("AppendFile::append before open");
   if (const int err = write_all(fd_, text)) throw_write_error(path_, "write", err);
+}
+
+// ---- the output directory ------------------------------------------------------------------
+
+DirectoryLock::DirectoryLock(const std::filesystem::path& dir) {
+  const std::filesystem::path path = dir / ".mpm.lock";
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  if (fd_ < 0) throw_write_error(path, "open", errno);
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    std::string holder(32, '\0');
+    const ssize_t n = ::pread(fd_, holder.data(), holder.size(), 0);
+    holder.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+    while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+    ::close(fd_);
+    fd_ = -1;
+    if (err != EWOULDBLOCK) throw_write_error(path, "lock", err);
+    throw InputError(fmt::format(
+        "output directory '{}' is in use by another run (pid {}); wait for it to end or choose "
+        "another --out",
+        dir.string(), holder.empty() ? "unknown" : holder));
+  }
+  const std::string pid = std::to_string(static_cast<long long>(::getpid())) + "\n";
+  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
+    const int err = errno;
+    ::close(fd_);
+    fd_ = -1;
+    throw_write_error(path, "write", err);
+  }
+}
+
+DirectoryLock& DirectoryLock::operator=(DirectoryLock&& o) noexcept {
+  if (this != &o) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = std::exchange(o.fd_, -1);
+  }
+  return *this;
+}
+
+// Closing the descriptor releases the lock; the file stays (removing it could let a waiting
+// process and a new one each lock a different file).
+DirectoryLock::~DirectoryLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+std::vector<std::string> run_files(const std::filesystem::path& dir) {
+  static const std::set<std::string> kFixed = {"config.toml",    "summary.json", "history.csv",
+                                               "checkpoint.bin", "grid.vtu",     "particles.pvd"};
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    const bool frame = name.size() == 19 && name.starts_with("particles_") &&
+                       name.substr(10, 5).find_first_not_of("0123456789") == std::string::npos &&
+                       (name.ends_with(".csv") || name.ends_with(".vtu"));
+    if (kFixed.contains(name) || frame) names.push_back(name);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
 }
 
 // ---- write_file_atomic ---------------------------------------------------------------------

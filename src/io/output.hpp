@@ -21,8 +21,8 @@ namespace mpm::io {
 // Write content to path atomically: write "<path>.tmp.<pid>" in the same directory, flush and
 // fsync it, then rename it over path (rename is atomic within one file system, POSIX). Readers
 // see either the old file or the complete new one. Creates no directories. Throws
-// std::runtime_error naming the path and the system error (strerror) on failure; the temporary
-// file is removed in that case.
+// RunError (exit_code::kOutput) naming the path and the system error (strerror) on failure; the
+// temporary file is removed in that case.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
 // Removes the temporaries "<name>.tmp.<pid>" in dir (not its subdirectories) that a process no
@@ -30,10 +30,32 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 // how many were removed.
 int remove_stale_temporaries(const std::filesystem::path& dir);
 
+// The output directory of one run at a time: holds an exclusive flock(2) on dir/.mpm.lock, with
+// the holder's pid in it, for its lifetime (the kernel drops it when the process dies, so a
+// killed run leaves no stale lock). A second run into the directory is refused with InputError
+// naming the holder's pid. Move-only.
+class DirectoryLock {
+ public:
+  DirectoryLock() = default;
+  explicit DirectoryLock(const std::filesystem::path& dir);
+  DirectoryLock(const DirectoryLock&) = delete;
+  DirectoryLock& operator=(const DirectoryLock&) = delete;
+  DirectoryLock(DirectoryLock&& o) noexcept : fd_(std::exchange(o.fd_, -1)) {}
+  DirectoryLock& operator=(DirectoryLock&& o) noexcept;
+  ~DirectoryLock();
+
+ private:
+  int fd_ = -1;
+};
+
+// The files of a run in dir (config.toml, summary.json, history.csv, checkpoint.bin, grid.vtu,
+// particles.pvd, particles_NNNNN.csv/.vtu), sorted; other files are not a run's.
+std::vector<std::string> run_files(const std::filesystem::path& dir);
+
 // A file written as a run goes (history.csv): open() replaces it with `content` atomically, then
 // every append() is one write(2) at its end, so the text appended so far survives a killed
 // process (the kernel holds it) and the run keeps none of it in memory. Throws
-// std::runtime_error naming the path and the system error on failure. Move-only.
+// RunError (exit_code::kOutput) naming the path and the system error on failure. Move-only.
 class AppendFile {
  public:
   AppendFile() = default;

@@ -37,6 +37,21 @@ std::string src(const std::string& rel) {
   return std::string(MPM_SOURCE_DIR) + "/" + rel;
 }
 
+// Rows of out/history.csv below its header (-1 while it does not exist).
+int history_rows(const std::filesystem::path& out) {
+  std::ifstream h(out / "history.csv");
+  std::string line;
+  int n = 0;
+  while (std::getline(h, line)) ++n;
+  return n - 1;
+}
+
+std::string fmt_frame(int k) {
+  char name[32];
+  std::snprintf(name, sizeof name, "particles_%05d.csv", k);
+  return name;
+}
+
 std::filesystem::path temp_dir(const std::string& name) {
   auto d = std::filesystem::temp_directory_path() /
            ("mpm_cli_" + name + "_" + std::to_string(::getpid()));
@@ -201,13 +216,7 @@ TEST(Cli, KilledRunKeepsItsHistoryRows) {
   long pid = 0;
   ASSERT_EQ(std::fscanf(f, "%ld", &pid), 1);
   pclose(f);
-  const auto rows = [&] {
-    std::ifstream h(out / "history.csv");
-    std::string line;
-    int n = 0;
-    while (std::getline(h, line)) ++n;
-    return n - 1;
-  };
+  const auto rows = [&] { return history_rows(out); };
   // Waits for the rows, not for a time: up to 2 minutes on a loaded machine.
   for (int k = 0; k < 1200 && rows() < 50; ++k) usleep(100000);
   ASSERT_EQ(std::system(("kill -9 " + std::to_string(pid)).c_str()), 0);
@@ -252,15 +261,17 @@ TEST(Cli, SigtermEndsTheRunWithAnInterruptedSummary) {
     ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
-  const auto rows = [&] {
-    std::ifstream h(out / "history.csv");
-    std::string line;
-    int n = 0;
-    while (std::getline(h, line)) ++n;
-    return n - 1;
-  };
+  const auto rows = [&] { return history_rows(out); };
   // Waits for the rows, not for a time: up to 2 minutes on a loaded machine.
   for (int k = 0; k < 1200 && rows() < 50; ++k) usleep(100000);
+  // A second run into the directory while this one holds it is refused (issue 16, 4), even
+  // with --overwrite, naming the holder.
+  const auto second = sh("run " + src("examples/vibrating_bar_small.toml") +
+                         " -q --overwrite --out " + out.string());
+  EXPECT_EQ(second.code, 2) << second.out;
+  EXPECT_NE(second.out.find("is in use by another run (pid " + std::to_string(pid) + ")"),
+            std::string::npos)
+      << second.out;
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
@@ -296,6 +307,66 @@ TEST(Cli, SigtermEndsTheRunWithAnInterruptedSummary) {
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("the checkpoint is at step " + std::to_string(steps)), std::string::npos)
       << r.out;
+  std::filesystem::remove_all(out);
+}
+
+// A rerun into a directory holding an earlier run (issue 16, 3: its frames beyond the new run's
+// last and its summary stayed beside the new files) is refused; with --overwrite the earlier
+// run's files go before the first write, and files that are not a run's stay.
+TEST(Cli, RerunIntoAnEarlierRunIsRefusedOrReplaces) {
+  const auto out = temp_dir("rerun");
+  const std::string run = "run " + src("examples/vibrating_bar_small.toml") + " -q --out " +
+                          out.string() + " --set output.vtk=false";
+  ASSERT_EQ(sh(run + " --set output.frames=4").code, 0);
+  ASSERT_TRUE(std::filesystem::exists(out / "particles_00004.csv"));
+  std::ofstream(out / "notes.txt") << "mine";
+  const auto again = sh(run + " --set output.frames=1");
+  EXPECT_EQ(again.code, 2) << again.out;
+  EXPECT_NE(again.out.find("holds an earlier run (config.toml, history.csv, particles_00000.csv, "
+                           "particles_00001.csv and 4 more); pass --overwrite"),
+            std::string::npos)
+      << again.out;
+  EXPECT_TRUE(std::filesystem::exists(out / "particles_00004.csv"));  // nothing was touched
+  const auto replaced = sh(run + " --set output.frames=1 --set time.end=1e-6 --overwrite");
+  ASSERT_EQ(replaced.code, 0) << replaced.out;
+  EXPECT_TRUE(std::filesystem::exists(out / "particles_00001.csv"));
+  for (int k = 2; k <= 4; ++k) EXPECT_FALSE(std::filesystem::exists(out / fmt_frame(k))) << k;
+  EXPECT_TRUE(std::filesystem::exists(out / "notes.txt"));
+  std::ifstream f(out / "summary.json");
+  EXPECT_EQ(nlohmann::json::parse(f)["steps"], 10);
+  std::filesystem::remove_all(out);
+}
+
+// An output that cannot be written (issue 16, 6 and 10: a full disk gave "internal error",
+// exit 1, and no failed summary). Here the file size limit stops the first particle frame
+// (33 KB; config.toml is 7 KB, the summary 1 KB): ulimit -f 40 is 20 KB in dash's 512-byte
+// blocks, 40 KB in bash's, and with SIGXFSZ ignored write(2) fails with EFBIG as it fails with
+// ENOSPC on a full disk. The run stops with exit code 8 and writes its failed summary.
+TEST(Cli, AnOutputThatCannotBeWrittenFailsWithItsOwnCode) {
+  const auto out = temp_dir("efbig");
+  const std::string cmd = "trap '' XFSZ; ulimit -f 40; exec " + std::string(MPM_BINARY) + " run " +
+                          src("examples/vibrating_bar_small.toml") +
+                          " -q --set output.vtk=false --out " + out.string() + " 2>&1";
+  FILE* f = popen(cmd.c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  std::string text;
+  std::array<char, 4096> buf{};
+  while (std::size_t n = fread(buf.data(), 1, buf.size(), f)) text.append(buf.data(), n);
+  const int status = pclose(f);
+  ASSERT_TRUE(WIFEXITED(status)) << text;
+  EXPECT_EQ(WEXITSTATUS(status), 8) << text;
+  EXPECT_NE(text.find("cannot write '" + (out / "particles_00000.csv").string() + "'"),
+            std::string::npos)
+      << text;
+  std::ifstream in(out / "summary.json");
+  ASSERT_TRUE(in.good()) << text;
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["status"], "failed");
+  EXPECT_EQ(j["exit_code"], 8);
+  EXPECT_NE(j["failure"].get<std::string>().find("File too large"), std::string::npos)
+      << j["failure"];
+  for (const auto& e : std::filesystem::directory_iterator(out))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
   std::filesystem::remove_all(out);
 }
 

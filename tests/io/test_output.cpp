@@ -511,6 +511,34 @@ TEST_F(AtomicWrite, StaleTemporariesOfDeadProcessesAreRemoved) {
   EXPECT_EQ(remove_stale_temporaries(dir_ / "missing"), 0);
 }
 
+// One run at a time per output directory (issue 16, 4): a second lock, here from the same
+// process through another open file, is refused naming the holder's pid; released when the
+// first goes. The lock file stays and is not a run's file.
+TEST_F(AtomicWrite, DirectoryLockIsExclusiveAndNamesTheHolder) {
+  {
+    const DirectoryLock first(dir_);
+    try {
+      const DirectoryLock second(dir_);
+      ADD_FAILURE() << "locked twice";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("is in use by another run (pid " +
+                                           std::to_string(::getpid()) + ")"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_NO_THROW(DirectoryLock{dir_});
+  EXPECT_TRUE(fs::exists(dir_ / ".mpm.lock"));
+  EXPECT_TRUE(run_files(dir_).empty());
+  for (const char* name :
+       {"config.toml", "particles_00012.vtu", "particles_00012.csv", "particles_0001.csv",
+        "particles_00012.txt", "summary.json.tmp.5", "notes.txt", "checkpoint.bin"})
+    std::ofstream(dir_ / name) << "x";
+  EXPECT_EQ(run_files(dir_),
+            (std::vector<std::string>{"checkpoint.bin", "config.toml", "particles_00012.csv",
+                                      "particles_00012.vtu"}));
+}
+
 TEST_F(AtomicWrite, CreatesFileWithExactContent) {
   const fs::path p = dir_ / "frame.csv";
   const std::string content = std::string("a,b\n1,2\n") + std::string(1, '\0') + "tail";

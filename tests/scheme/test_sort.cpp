@@ -191,15 +191,23 @@ TEST(Sort, ShuffledCustomPlate2DWithTractionMatchesSeeded) {
 // Direct use of the stages: a plate of 3 x 3 particles per cell on 20 x 20 cells.
 using PlateSim = Simulation<2, BSplineBasis<2, 2>, DirectMapping>;
 
-std::unique_ptr<PlateSim> make_plate(bool shuffled) {
-  Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{20, 20});
-  auto P = seed_particles<2>(g, Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), 3, 1000.0);
+const Grid<2> kPlateGrid(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{20, 20});
+
+// The plate's particles with a sine velocity field, in seeded or shuffled order.
+Particles<2> plate_particles(bool shuffled) {
+  auto P = seed_particles<2>(kPlateGrid, Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), 3, 1000.0);
   for (std::size_t i = 0; i < P.v.size(); ++i) {
     using std::numbers::pi;
     P.v[i] = Vec<2>(0.5 * std::sin(2 * pi * P.x[i][0]), -0.3 * std::sin(2 * pi * P.x[i][1]));
   }
   std::vector<Traction<2>> none;
   if (shuffled) shuffle_particles(P, none, kSeed);
+  return P;
+}
+
+std::unique_ptr<PlateSim> make_plate(bool shuffled) {
+  const Grid<2>& g = kPlateGrid;
+  const auto P = plate_particles(shuffled);
   ElasticParameters ep{1000.0, 1e7, 0.3};
   auto sim =
       std::make_unique<PlateSim>(g, BSplineBasis<2, 2>(g), DirectMapping{}, P, NeoHookean{ep});
@@ -272,17 +280,9 @@ TEST(Sort, SeededOrderIsNotSortedAndTriggerFollowsTheReference) {
 // re-sorted as the driver does when due.
 std::unique_ptr<driver::Stepper<2>> step_plate(int threads) {
   const Threads t(threads);
-  Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{20, 20});
-  auto P = seed_particles<2>(g, Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), 3, 1000.0);
-  for (std::size_t i = 0; i < P.v.size(); ++i) {
-    using std::numbers::pi;
-    P.v[i] = Vec<2>(0.5 * std::sin(2 * pi * P.x[i][0]), -0.3 * std::sin(2 * pi * P.x[i][1]));
-  }
-  std::vector<Traction<2>> none;
-  shuffle_particles(P, none, kSeed);
   auto stepper =
-      test::compiled_stepper<2>({.grid = g,
-                                 .particles = std::move(P),
+      test::compiled_stepper<2>({.grid = kPlateGrid,
+                                 .particles = plate_particles(true),
                                  .material = NeoHookean{ElasticParameters{1000.0, 1e7, 0.3}},
                                  .basis = BSplineKind<2>{},
                                  .fixed_sides = {FixedSide{0, 0}, FixedSide{0, 1}}});
