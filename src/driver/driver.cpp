@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <utility>
 
 #include "io/checkpoint.hpp"
 #include "mpm/version.hpp"
@@ -282,6 +283,25 @@ nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& set
                        {"max_rel_momentum_error", res.diag.max_rel_momentum_error}};
   j["grid_crossings"] = res.diag.grid_crossings;
   return j;
+}
+
+void check_error_norms(RunResult& res) {
+  if (res.exit_code != exit_code::kOk) return;
+  const ErrorNorms& e = res.errors;
+  std::string bad;
+  for (const auto& [name, value] :
+       {std::pair{"displacement_rms", e.displacement_rms},
+        std::pair{"velocity_rms", e.velocity_rms}, std::pair{"stress_rms", e.stress_rms},
+        std::pair{"stress_rel_l2", e.stress_rel_l2},
+        std::pair{"velocity_rms_midstep", e.velocity_rms_midstep},
+        std::pair{"velocity_rms_scheme_time", e.velocity_rms_scheme_time}})
+    if (value && !std::isfinite(*value)) bad += fmt::format("{}{}", bad.empty() ? "" : ", ", name);
+  if (bad.empty()) return;
+  res.exit_code = exit_code::kNonFinite;
+  res.failure = fmt::format(
+      "the error norms {} are not finite: the exact solution is not finite at some particle at "
+      "t = T (check the exact.* expressions)",
+      bad);
 }
 
 void reference_errors(const Particles<1>& P, const Ulfem1D& ref, ErrorNorms& e) {

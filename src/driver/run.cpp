@@ -65,6 +65,7 @@ RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::stri
     Grid<1> element_grid(pb.body_min, pb.body_max, IVec<1>{elements});
     res.errors = error_norms<1>(fem.elements(), element_grid, pb.exact, fem.time(), ts.dt,
                                 /*velocity_time=*/-0.5, /*boundary_cells=*/1);
+    check_error_norms(res);
   }
   res.wall_seconds = seconds_since(t_start);
   res.summary =

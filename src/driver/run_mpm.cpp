@@ -162,6 +162,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
                                   scheme_velocity_time, boundary_cells(basis));
     if constexpr (Dim == 1)
       if (reference) reference_errors(sim.particles, *reference, res.errors);
+    check_error_norms(res);
   }
   res.diag = sim.diag;
   res.wall_seconds = seconds_since(t_start);

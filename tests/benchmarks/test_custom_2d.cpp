@@ -393,6 +393,23 @@ TEST(Custom2D, NonFiniteInitialFieldsNameTheKeyAndPoint) {
       {"case.toml:10:", "initial.stress = \"sqrt(x-0.5)\" is not finite at x = "});
 }
 
+// An exact solution that is not finite (issue 16, 9: exact.displacement = "0/0" gave null
+// errors and status ok) fails the run with exit code 3, naming the norms; a finite one is ok.
+TEST(Custom2D, NonFiniteExactSolutionFailsTheRun) {
+  const std::string bar = std::string(MPM_SOURCE_DIR) + "/examples/custom_bar.toml";
+  RunOptions ro;
+  ro.quiet = true;
+  const RunResult bad = run(Config::load(bar, {"time.end=1e-4", "exact.displacement=0/0"}), ro);
+  EXPECT_EQ(bad.exit_code, exit_code::kNonFinite);
+  EXPECT_NE(bad.failure.find("the error norms displacement_rms are not finite"), std::string::npos)
+      << bad.failure;
+  EXPECT_EQ(bad.summary["status"], "failed");
+  EXPECT_EQ(bad.summary["exit_code"], exit_code::kNonFinite);
+  const RunResult good = run(Config::load(bar, {"time.end=1e-4", "exact.displacement=0"}), ro);
+  EXPECT_EQ(good.exit_code, exit_code::kOk) << good.failure;
+  EXPECT_EQ(good.summary["status"], "ok");
+}
+
 TEST(Custom2D, VectorKeyErrorsNameFileLineAndKey) {
   const std::string base = kBase2D;
   // Wrong length for the dimension (line 17: the key's line).
