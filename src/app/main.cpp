@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <new>
 #include <optional>
 
 #include "app/perf.hpp"
@@ -349,6 +350,13 @@ int main(int argc, char** argv) {
     // Outside the time loop: an output that could not be written (exit_code::kOutput).
     std::cerr << "mpm: error: " << e.what() << "\n";
     return e.exit_code();
+  } catch (const std::bad_alloc&) {
+    // Sizes that cannot fit are refused before allocation (grid.cells, particles.per_cell);
+    // this is what is left: the machine ran out while the run was growing or was busy.
+    std::cerr << "mpm: error: out of memory (std::bad_alloc): the run needs more memory than "
+                 "this machine could give it; use fewer cells (grid.cells) or particles "
+                 "(particles.per_cell), fewer threads (OMP_NUM_THREADS), or free memory\n";
+    return mpm::exit_code::kInternal;
   } catch (const std::exception& e) {
     std::cerr << "mpm: internal error: " << e.what() << "\n";
     return mpm::exit_code::kInternal;

@@ -4,8 +4,10 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <variant>
 
 #include "benchmarks/benchmarks.hpp"
+#include "grid/grid_state.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {
@@ -105,7 +107,24 @@ template Particles<1> seed_particles<1>(const Grid<1>&, const Vec<1>&, const Vec
 template Particles<2> seed_particles<2>(const Grid<2>&, const Vec<2>&, const Vec<2>&, int, double);
 template Particles<3> seed_particles<3>(const Grid<3>&, const Vec<3>&, const Vec<3>&, int, double);
 
-AnyProblem make_problem(const Config& cfg) {
+namespace {
+// A grid whose nodal state alone would not fit in memory is refused before it is allocated
+// (issue 16, 10: std::bad_alloc was an "internal error" naming nothing). The particles are
+// checked as they are seeded (seed_counts).
+template <int Dim>
+void check_grid_memory(const Config& cfg, const Grid<Dim>& g) {
+  double nodes = 1.0;
+  for (int d = 0; d < Dim; ++d) nodes *= static_cast<double>(g.cells[d]) + 1.0;
+  const double bytes = nodes * static_cast<double>(GridState<Dim>::bytes_per_dof());
+  const double memory = physical_memory();
+  if (memory > 0.0 && bytes > memory)
+    throw InputError(fmt::format(
+        "{}: grid.cells = {} gives {:.4g} grid nodes, whose state alone needs about {:.3g} GB; "
+        "this machine has {:.3g} GB of memory: use fewer cells",
+        cfg.where("grid.cells"), cfg.get_int("grid.cells"), nodes, bytes / 1e9, memory / 1e9));
+}
+
+AnyProblem make_any_problem(const Config& cfg) {
   const std::string name = cfg.get_string("benchmark");
   if (name != "custom" && cfg.get_int("grid.dimension") != 1)
     throw InputError(
@@ -124,6 +143,13 @@ AnyProblem make_problem(const Config& cfg) {
   if (name == "plate_mms_2d") return make_plate_mms_2d(cfg);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));
+}
+}  // namespace
+
+AnyProblem make_problem(const Config& cfg) {
+  AnyProblem pb = make_any_problem(cfg);
+  std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid); }, pb);
+  return pb;
 }
 
 }  // namespace mpm

@@ -57,6 +57,9 @@ inline constexpr int kInvertedDeformation = 5;
 inline constexpr int kReconstruction = 6;  // a reconstruction mapping cannot fit an element
 inline constexpr int kInterrupted = 7;     // SIGINT, SIGTERM or SIGHUP (core/interrupt.hpp)
 inline constexpr int kOutput = 8;          // an output could not be written (disk full, ...)
+// The particle-to-grid mapping lost or created mass or momentum of order one (above
+// method.conservation_limit): the grid no longer represents the particles.
+inline constexpr int kConservation = 9;
 }  // namespace exit_code
 
 }  // namespace mpm

@@ -60,6 +60,7 @@ class TypedStepper final : public Stepper<Dim> {
       check_reconstruction_input<Dim>(method, sim_.grid, sim_.particles, sim_.mapping);
     sim_.mass_type = method.mass;
     sim_.mass_tolerance = method.mass_tolerance;
+    sim_.conservation_limit = method.conservation_limit;
     sim_.sorting.mode = method.sort;
     for (const auto& f : pb.fixed_sides) sim_.fix_side(f.direction, f.side, f.components);
     sim_.body_force = pb.body_force;
@@ -82,7 +83,7 @@ class TypedStepper final : public Stepper<Dim> {
   const RunState<Dim>& state() const override { return sim_; }
 
   void save(io::Checkpoint& c) const override {
-    if constexpr (Mapping::kRunTotals) c.mapping_totals = io::encode_totals(sim_.mapping.totals());
+    if constexpr (Mapping::kRunTotals) c.mapping_totals = sim_.mapping.save_totals();
     if constexpr (Basis::kTrackedCorners)
       for (const auto& corners : sim_.basis.corners())
         for (const auto& x : corners)
@@ -90,11 +91,7 @@ class TypedStepper final : public Stepper<Dim> {
   }
 
   void load(const io::Checkpoint& c, const std::string& what) override {
-    if constexpr (Mapping::kRunTotals) {
-      auto t = sim_.mapping.totals();
-      io::decode_totals(c.mapping_totals, t);
-      sim_.mapping.set_totals(t);
-    }
+    if constexpr (Mapping::kRunTotals) sim_.mapping.load_totals(c.mapping_totals, what);
     if constexpr (Basis::kTrackedCorners) {
       // CPDI2: the tracked corners, 2^Dim per particle.
       using Corners = typename std::decay_t<decltype(sim_.basis.corners())>::value_type;

@@ -18,6 +18,11 @@ struct GridState {
   std::vector<std::uint8_t> fixed;   // bit d set: component d is prescribed zero (Dirichlet)
 
   Index size() const { return static_cast<Index>(mass.size()); }
+  // Bytes per DOF of the arrays above: a lower bound of a run's grid memory (the stages add
+  // per-thread scatter buffers and the basis's own arrays).
+  static constexpr std::size_t bytes_per_dof() {
+    return sizeof(double) + 4 * sizeof(Vec<Dim>) + 2 * sizeof(std::uint8_t);
+  }
   void resize(Index n) {
     const auto s = static_cast<std::size_t>(n);
     mass.assign(s, 0.0);

@@ -5,147 +5,61 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <type_traits>
 
+#include "core/bytes.hpp"
 #include "io/output.hpp"
 
 namespace mpm::io {
 namespace {
 
-// Little-endian byte writer and reader of the checkpoint payload.
-class Writer {
- public:
-  void u8(std::uint8_t v) { out_.push_back(static_cast<char>(v)); }
-  void u32(std::uint32_t v) {
-    for (int k = 0; k < 4; ++k) u8(static_cast<std::uint8_t>(v >> (8 * k)));
-  }
-  void u64(std::uint64_t v) {
-    for (int k = 0; k < 8; ++k) u8(static_cast<std::uint8_t>(v >> (8 * k)));
-  }
-  void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
-  void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
-  void str(std::string_view s) {
-    u64(s.size());
-    out_.append(s);
-  }
-  void reals(const std::vector<double>& v) {
-    u64(v.size());
-    for (double x : v) f64(x);
-  }
-  void ints(const std::vector<std::int64_t>& v) {
-    u64(v.size());
-    for (auto x : v) i64(x);
-  }
-  std::string& bytes() { return out_; }
-
- private:
-  std::string out_;
-};
-
-class Reader {
- public:
-  Reader(std::string_view in, const std::string& name) : in_(in), name_(name) {}
-  std::uint8_t u8() {
-    need(1);
-    return static_cast<std::uint8_t>(in_[pos_++]);
-  }
-  std::uint32_t u32() {
-    std::uint32_t v = 0;
-    for (int k = 0; k < 4; ++k) v |= static_cast<std::uint32_t>(u8()) << (8 * k);
-    return v;
-  }
-  std::uint64_t u64() {
-    std::uint64_t v = 0;
-    for (int k = 0; k < 8; ++k) v |= static_cast<std::uint64_t>(u8()) << (8 * k);
-    return v;
-  }
-  std::int64_t i64() { return static_cast<std::int64_t>(u64()); }
-  double f64() { return std::bit_cast<double>(u64()); }
-  std::string str() {
-    const auto n = count(1);
-    std::string s(in_.substr(pos_, n));
-    pos_ += n;
-    return s;
-  }
-  std::vector<double> reals() {
-    std::vector<double> v(count(8));
-    for (double& x : v) x = f64();
-    return v;
-  }
-  std::vector<std::int64_t> ints() {
-    std::vector<std::int64_t> v(count(8));
-    for (auto& x : v) x = i64();
-    return v;
-  }
-  bool done() const { return pos_ == in_.size(); }
-
- private:
-  // A length prefix whose elements of `size` bytes must still fit into the input.
-  std::size_t count(std::size_t size) {
-    const std::uint64_t n = u64();
-    if (n > (in_.size() - pos_) / size) fail();
-    return static_cast<std::size_t>(n);
-  }
-  void need(std::size_t n) {
-    if (in_.size() - pos_ < n) fail();
-  }
-  [[noreturn]] void fail() const {
-    throw InputError(fmt::format(
-        "checkpoint '{}': the payload ends early or is malformed (at byte {} of {}); it was "
-        "written by an incompatible mpm",
-        name_, pos_, in_.size()));
-  }
-
-  std::string_view in_;
-  std::string name_;
-  std::size_t pos_ = 0;
-};
-
-void put(Writer& w, const ParticleArrays& a) {
+void put(ByteWriter& w, const ParticleArrays& a) {
   w.i64(a.dim);
   w.i64(a.count);
-  for (const auto* f : {&a.x, &a.x0, &a.u, &a.v, &a.mass, &a.volume, &a.volume0, &a.density, &a.F,
-                        &a.stress, &a.body})
-    w.reals(*f);
+  for (const auto& f : a.reals) w.reals(f);
   w.ints(a.id);
 }
 
-ParticleArrays get_particles(Reader& r) {
+ParticleArrays get_particles(ByteReader& r) {
   ParticleArrays a;
   a.dim = r.i64();
   a.count = r.i64();
-  for (auto* f : {&a.x, &a.x0, &a.u, &a.v, &a.mass, &a.volume, &a.volume0, &a.density, &a.F,
-                  &a.stress, &a.body})
-    *f = r.reals();
+  for (auto& f : a.reals) f = r.reals();
   a.id = r.ints();
   return a;
 }
 
+// A particle field as doubles: Dim or Dim^2 values per particle for vectors and tensors.
 template <class T>
 void flatten(const std::vector<T>& in, std::vector<double>& out) {
-  out.clear();
-  out.reserve(in.size() * static_cast<std::size_t>(T::SizeAtCompileTime));
-  for (const auto& e : in) out.insert(out.end(), e.data(), e.data() + e.size());
+  if constexpr (std::is_same_v<T, double>) {
+    out = in;
+  } else {
+    out.clear();
+    out.reserve(in.size() * static_cast<std::size_t>(T::SizeAtCompileTime));
+    for (const auto& e : in) out.insert(out.end(), e.data(), e.data() + e.size());
+  }
 }
 
 template <class T>
 void unflatten(const std::vector<double>& in, std::vector<T>& out, std::size_t n,
-               const std::string& what, const char* field) {
-  constexpr auto k = static_cast<std::size_t>(T::SizeAtCompileTime);
-  if (in.size() != n * k)
-    throw InputError(fmt::format("{}: particle field {} holds {} values, expected {}", what, field,
-                                 in.size(), n * k));
-  out.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    std::copy(in.begin() + static_cast<std::ptrdiff_t>(i * k),
-              in.begin() + static_cast<std::ptrdiff_t>((i + 1) * k), out[i].data());
-}
-
-void scalars(const std::vector<double>& in, std::vector<double>& out, std::size_t n,
-             const std::string& what, const char* field) {
-  if (in.size() != n)
-    throw InputError(fmt::format("{}: particle field {} holds {} values, expected {}", what, field,
-                                 in.size(), n));
-  out = in;
+               const std::string& what, const std::string& field) {
+  std::size_t k = 1;
+  if constexpr (!std::is_same_v<T, double>) k = static_cast<std::size_t>(T::SizeAtCompileTime);
+  // (Compared by division: n is read from the file, and n * k may wrap around.)
+  if (in.size() % k != 0 || in.size() / k != n)
+    throw InputError(
+        fmt::format("{}: particle field {} holds {} values, expected {} per particle "
+                    "for {} particles",
+                    what, field, in.size(), k, n));
+  if constexpr (std::is_same_v<T, double>) {
+    out = in;
+  } else {
+    out.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      std::copy(in.begin() + static_cast<std::ptrdiff_t>(i * k),
+                in.begin() + static_cast<std::ptrdiff_t>((i + 1) * k), out[i].data());
+  }
 }
 
 }  // namespace
@@ -159,23 +73,33 @@ std::uint64_t fnv1a64(std::string_view bytes) {
   return h;
 }
 
+const std::vector<std::string>& particle_field_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    const Particles<1> p;
+    p.for_each_named_field([&](const char* name, const auto& field) {
+      if constexpr (!std::is_same_v<typename std::decay_t<decltype(field)>::value_type,
+                                    CompactIndex>)
+        n.emplace_back(name);
+    });
+    return n;
+  }();
+  return names;
+}
+
 template <int Dim>
 ParticleArrays pack_particles(const Particles<Dim>& p) {
   ParticleArrays a;
   a.dim = Dim;
   a.count = p.size();
-  flatten(p.x, a.x);
-  flatten(p.x0, a.x0);
-  flatten(p.u, a.u);
-  flatten(p.v, a.v);
-  a.mass = p.mass;
-  a.volume = p.volume;
-  a.volume0 = p.volume0;
-  a.density = p.density;
-  flatten(p.F, a.F);
-  flatten(p.stress, a.stress);
-  flatten(p.body, a.body);
-  a.id.assign(p.id.begin(), p.id.end());
+  std::size_t k = 0;
+  p.for_each_named_field([&](const char*, const auto& field) {
+    using T = typename std::decay_t<decltype(field)>::value_type;
+    if constexpr (std::is_same_v<T, CompactIndex>)
+      a.id.assign(field.begin(), field.end());
+    else
+      flatten(field, a.reals[k++]);
+  });
   return a;
 }
 
@@ -183,24 +107,26 @@ template <int Dim>
 Particles<Dim> unpack_particles(const ParticleArrays& a, const std::string& what) {
   if (a.dim != Dim || a.count < 0)
     throw InputError(fmt::format("{}: particles of dimension {}, expected {}", what, a.dim, Dim));
+  const auto& names = particle_field_names();
+  if (a.reals.size() != names.size())
+    throw InputError(
+        fmt::format("{}: {} particle fields, expected {}", what, a.reals.size(), names.size()));
   const auto n = static_cast<std::size_t>(a.count);
   Particles<Dim> p;
-  unflatten(a.x, p.x, n, what, "x");
-  unflatten(a.x0, p.x0, n, what, "x0");
-  unflatten(a.u, p.u, n, what, "u");
-  unflatten(a.v, p.v, n, what, "v");
-  scalars(a.mass, p.mass, n, what, "mass");
-  scalars(a.volume, p.volume, n, what, "volume");
-  scalars(a.volume0, p.volume0, n, what, "volume0");
-  scalars(a.density, p.density, n, what, "density");
-  unflatten(a.F, p.F, n, what, "F");
-  unflatten(a.stress, p.stress, n, what, "stress");
-  unflatten(a.body, p.body, n, what, "body");
-  // The ids in the stored order: a run re-sorted before the checkpoint continues in that order.
-  if (a.id.size() != n)
-    throw InputError(
-        fmt::format("{}: particle field id holds {} values, expected {}", what, a.id.size(), n));
-  p.id.assign(a.id.begin(), a.id.end());
+  std::size_t k = 0;
+  p.for_each_named_field([&](const char* name, auto& field) {
+    using T = typename std::decay_t<decltype(field)>::value_type;
+    if constexpr (std::is_same_v<T, CompactIndex>) {
+      // The ids in the stored order: a run re-sorted before the checkpoint continues in that
+      // order.
+      if (a.id.size() != n)
+        throw InputError(fmt::format("{}: particle field {} holds {} values, expected {}", what,
+                                     name, a.id.size(), n));
+      field.assign(a.id.begin(), a.id.end());
+    } else {
+      unflatten(a.reals[k++], field, n, what, name);
+    }
+  });
   return p;
 }
 
@@ -240,7 +166,7 @@ Ulfem1D::State unpack_fem(const FemArrays& a, const std::string& what) {
 }
 
 std::string encode_checkpoint(const Checkpoint& c) {
-  Writer p;
+  ByteWriter p;
   p.str(c.config);
   p.str(c.solver);
   p.i64(c.dim);
@@ -271,7 +197,7 @@ std::string encode_checkpoint(const Checkpoint& c) {
   p.reals(c.frame_times);
   p.reals(c.basis_state);
 
-  Writer out;
+  ByteWriter out;
   out.bytes().append(kCheckpointMagic);
   out.u32(kCheckpointVersion);
   out.u64(p.bytes().size());
@@ -290,8 +216,9 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
   if (bytes.size() < kCheckpointHeaderBytes)
     throw InputError(fmt::format("checkpoint '{}' is truncated: {} bytes, the header alone is {}",
                                  name, bytes.size(), kCheckpointHeaderBytes));
-  Reader h(bytes.substr(kCheckpointMagic.size(), kCheckpointHeaderBytes - kCheckpointMagic.size()),
-           name);
+  ByteReader h(
+      bytes.substr(kCheckpointMagic.size(), kCheckpointHeaderBytes - kCheckpointMagic.size()),
+      name);
   const std::uint32_t version = h.u32();
   const std::uint64_t size = h.u64();
   const std::uint64_t hash = h.u64();
@@ -310,7 +237,7 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
         "checkpoint '{}' is corrupted: the payload checksum is {:016x}, the header says {:016x}",
         name, actual, hash));
 
-  Reader r(payload, name);
+  ByteReader r(payload, name);
   Checkpoint c;
   c.config = r.str();
   c.solver = r.str();
@@ -429,47 +356,6 @@ Config restart_config(const Checkpoint& c, const std::string& name, const Config
         name, diff.size(), lines));
   }
   return run;
-}
-
-std::string encode_totals(const TlsReport& t) {
-  Writer w;
-  for (Index v :
-       {t.elements, t.active, t.full, t.reduced, t.with_virtual, t.with_neighbours, t.failed,
-        t.outside, static_cast<Index>(t.min_terms), t.failed_element, t.failed_points})
-    w.i64(v);
-  w.f64(t.max_condition);
-  w.f64(t.failed_condition);
-  return std::move(w.bytes());
-}
-
-void decode_totals(std::string_view bytes, TlsReport& t) {
-  Reader r(bytes, "TLS totals");
-  for (Index* v : {&t.elements, &t.active, &t.full, &t.reduced, &t.with_virtual, &t.with_neighbours,
-                   &t.failed, &t.outside})
-    *v = r.i64();
-  t.min_terms = static_cast<int>(r.i64());
-  t.failed_element = r.i64();
-  t.failed_points = r.i64();
-  t.max_condition = r.f64();
-  t.failed_condition = r.f64();
-}
-
-std::string encode_totals(const MlsReport& t) {
-  Writer w;
-  for (Index v : {t.points, t.empty, t.ill_conditioned, t.singular, t.reduced, t.widened}) w.i64(v);
-  w.f64(t.max_condition);
-  w.f64(t.worst_x);
-  w.f64(t.worst_y);
-  return std::move(w.bytes());
-}
-
-void decode_totals(std::string_view bytes, MlsReport& t) {
-  Reader r(bytes, "MLS totals");
-  for (Index* v : {&t.points, &t.empty, &t.ill_conditioned, &t.singular, &t.reduced, &t.widened})
-    *v = r.i64();
-  t.max_condition = r.f64();
-  t.worst_x = r.f64();
-  t.worst_y = r.f64();
 }
 
 }  // namespace mpm::io

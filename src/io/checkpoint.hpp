@@ -11,16 +11,18 @@
 // Payload, in this order (str = u64 length + bytes; f64[] = u64 count + values; i64[] likewise):
 //   str config (Config::to_toml() of the run), str solver ("mpm" or "ulfem"), i64 dim,
 //   i64 step, f64 time,
-//   particles: i64 count, then f64[] x, x0, u, v, mass, volume, volume0, density, F, stress,
-//     body (vectors Dim values per particle, tensors Dim x Dim column-major), i64[] id (version
-//     3: the stable ids in the stored order, which re-sorting may have changed),
+//   particles: i64 dim, i64 count, then one f64[] per real field of Particles::for_each_field
+//     (x, x0, u, v, mass, volume, volume0, density, F, stress, body; vectors Dim values per
+//     particle, tensors Dim x Dim column-major), i64[] id (version 3: the stable ids in the
+//     stored order, which re-sorting may have changed),
 //   i64[] cell of each particle at the last basis evaluation,
 //   version 3: i64 re-sorting reference span (-1: none), i64 sorts so far (scheme/sort.hpp),
 //   diagnostics: f64 max_rel_mass_error, f64 max_rel_momentum_error, i64 grid_crossings,
 //   u8 FEM state present; if 1: f64[] node x, f64[] node v, f64[] node body, the element
 //     particles (as above), f64 time, f64 time_anchor, f64 last_dt, i64 steps,
 //     i64 steps_since_anchor,
-//   str mapping name, str mapping totals (TLS/MLS report counters, empty for other mappings),
+//   str mapping name, str mapping totals (the bytes the mapping writes of itself, save_totals()
+//     of TLS and MLS/IMLS; empty for the other mappings),
 //   i64 frames written, f64[] frame times,
 //   f64[] basis state (version 2: the tracked corners of CPDI2, 2^Dim x Dim values per particle;
 //     empty for the other bases).
@@ -31,10 +33,8 @@
 #include <string_view>
 #include <vector>
 
-#include "mapping/mls.hpp"
-#include "mapping/tls.hpp"
 #include "particles/particles.hpp"
-#include "scheme/simulation.hpp"
+#include "scheme/diagnostics.hpp"
 #include "setup/config.hpp"
 #include "solver/ulfem.hpp"
 
@@ -48,11 +48,18 @@ inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 // FNV-1a, 64-bit (offset basis 14695981039346656037, prime 1099511628211).
 std::uint64_t fnv1a64(std::string_view bytes);
 
-// Particle arrays of any dimension, flattened (Dim or Dim^2 doubles per particle).
+// The names of the real particle fields, in the order of Particles::for_each_named_field ("x",
+// "x0", ..., "body").
+const std::vector<std::string>& particle_field_names();
+
+// Particle arrays of any dimension, flattened (Dim or Dim^2 doubles per particle): one array per
+// real field (particle_field_names(); empty ones when there are no particles, as for the ULFEM
+// solver), then the ids.
 struct ParticleArrays {
   std::int64_t dim = 0;
   std::int64_t count = 0;
-  std::vector<double> x, x0, u, v, mass, volume, volume0, density, F, stress, body;
+  std::vector<std::vector<double>> reals =
+      std::vector<std::vector<double>>(particle_field_names().size());
   std::vector<std::int64_t> id;
 };
 
@@ -107,11 +114,5 @@ Checkpoint read_checkpoint(const std::filesystem::path& path);
 // with both values. Returns the configuration to run with.
 Config restart_config(const Checkpoint& c, const std::string& name, const Config* given,
                       const std::vector<std::string>& overrides = {});
-
-// The run-long counters of the TLS and (I)MLS mappings.
-std::string encode_totals(const TlsReport& r);
-std::string encode_totals(const MlsReport& r);
-void decode_totals(std::string_view bytes, TlsReport& r);
-void decode_totals(std::string_view bytes, MlsReport& r);
 
 }  // namespace mpm::io

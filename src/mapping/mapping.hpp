@@ -5,11 +5,13 @@
 // happens to exist; the concept checks that a declared capability has its members):
 //   kFusedScatter  map_fused<What>(sim[, dt]): several grid sums in one pass over the particles,
 //                  the bits of separate passes (DirectMapping; stages::map_to_grid)
-//   kRunTotals     totals() / set_totals(): counters over the run (TLS completions, MLS
-//                  conditioning), reported in summary.json and kept in checkpoints
+//   kRunTotals     totals() / save_totals() / load_totals(): counters over the run (TLS
+//                  completions, MLS conditioning), reported in summary.json and kept in
+//                  checkpoints as the bytes the mapping writes of itself
 // Mappings hold no per-particle state, so re-sorting the particles (scheme/sort.hpp) needs
 // nothing from them.
 #include <concepts>
+#include <string>
 #include <string_view>
 
 #include "scheme/simulation.hpp"
@@ -31,6 +33,10 @@ concept MappingFor = requires(M& m, Sim& sim, int dim) {
      m.template map_fused<grid_sum::kMass | grid_sum::kMomentum | grid_sum::kForces>(sim);
      m.template map_fused<grid_sum::kMomentum | grid_sum::kVelocityFirst>(sim, dt);
    }) &&
-    (!M::kRunTotals || requires(M & m, const M& cm) { m.set_totals(cm.totals()); });
+    (!M::kRunTotals ||
+     requires(M & m, const M& cm, std::string_view bytes, const std::string& what) {
+       { cm.save_totals() } -> std::same_as<std::string>;
+       m.load_totals(bytes, what);
+     });
 
 }  // namespace mpm

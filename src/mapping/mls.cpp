@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "core/bytes.hpp"
+
 namespace mpm {
 
 double mls_weight(MlsWeight kind, double distance, double cell, double dilation) {
@@ -451,5 +453,36 @@ MPM_MLS_MAPPING_DIM(false, 2)
 MPM_MLS_MAPPING_DIM(true, 1)
 MPM_MLS_MAPPING_DIM(true, 2)
 #undef MPM_MLS_MAPPING_DIM
+
+// The run totals in a checkpoint: six counters, then the largest condition number and where.
+template <bool Improved>
+std::string MovingLeastSquaresMapping<Improved>::save_totals() const {
+  const MlsReport& t = totals_;
+  ByteWriter w;
+  for (Index v : {t.points, t.empty, t.ill_conditioned, t.singular, t.reduced, t.widened}) w.i64(v);
+  w.f64(t.max_condition);
+  w.f64(t.worst_x);
+  w.f64(t.worst_y);
+  return std::move(w.bytes());
+}
+
+template <bool Improved>
+void MovingLeastSquaresMapping<Improved>::load_totals(std::string_view bytes,
+                                                      const std::string& what) {
+  ByteReader r(bytes, what + " (MLS totals)");
+  MlsReport t;
+  for (Index* v : {&t.points, &t.empty, &t.ill_conditioned, &t.singular, &t.reduced, &t.widened})
+    *v = r.i64();
+  t.max_condition = r.f64();
+  t.worst_x = r.f64();
+  t.worst_y = r.f64();
+  r.expect_done();
+  totals_ = t;
+}
+
+template std::string MovingLeastSquaresMapping<false>::save_totals() const;
+template std::string MovingLeastSquaresMapping<true>::save_totals() const;
+template void MovingLeastSquaresMapping<false>::load_totals(std::string_view, const std::string&);
+template void MovingLeastSquaresMapping<true>::load_totals(std::string_view, const std::string&);
 
 }  // namespace mpm

@@ -29,6 +29,7 @@
 #include <cstddef>
 #include <span>
 #include <stdexcept>
+#include <string>
 #include <string_view>
 #include <tuple>
 #include <type_traits>
@@ -327,8 +328,12 @@ class MovingLeastSquaresMapping {
     return dim_ == 2 ? reconstruction<2>().report() : reconstruction<1>().report();
   }
   const MlsReport& totals() const { return totals_; }
-  // Checkpoint restart: the sums continue from a saved run (io/checkpoint.hpp).
+  // Checkpoint restart: the sums continue from a saved run. save_totals() gives the bytes that
+  // the checkpoint stores (core/bytes.hpp); load_totals() reads them back, InputError naming
+  // `what` when they are not those of an MLS run.
   void set_totals(const MlsReport& t) { totals_ = t; }
+  std::string save_totals() const;
+  void load_totals(std::string_view bytes, const std::string& what);
   template <class Sim>
   const QuadraturePointsOf<Sim>* quadrature() const {
     return quad_.get<Sim>();

@@ -396,8 +396,12 @@ class TlsMapping {
   }
   // Counts summed over the steps so far (element-steps), largest condition number of the run.
   const TlsReport& totals() const { return totals_; }
-  // Checkpoint restart: the sums continue from a saved run (io/checkpoint.hpp).
+  // Checkpoint restart: the sums continue from a saved run. save_totals() gives the bytes that
+  // the checkpoint stores (core/bytes.hpp); load_totals() reads them back, InputError naming
+  // `what` when they are not those of a TLS run.
   void set_totals(const TlsReport& t) { totals_ = t; }
+  std::string save_totals() const;
+  void load_totals(std::string_view bytes, const std::string& what);
 
   // The basis enters only through the quadrature stencils: the reconstructions are compiled once
   // per dimension (tls_mapping.cpp), the assembly once per basis.

@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "core/bytes.hpp"
 #include "mapping/tls.hpp"
 
 namespace mpm {
@@ -89,5 +90,33 @@ template void TlsMapping::fit_momentum<1>(RunState<1>&, const GaussPoints<1>&);
 template void TlsMapping::fit_momentum<2>(RunState<2>&, const GaussPoints<2>&);
 template void TlsMapping::fit_forces<1>(RunState<1>&, const GaussPoints<1>&);
 template void TlsMapping::fit_forces<2>(RunState<2>&, const GaussPoints<2>&);
+
+// The run totals in a checkpoint: eleven counts, then the two condition numbers.
+std::string TlsMapping::save_totals() const {
+  const TlsReport& t = totals_;
+  ByteWriter w;
+  for (Index v :
+       {t.elements, t.active, t.full, t.reduced, t.with_virtual, t.with_neighbours, t.failed,
+        t.outside, static_cast<Index>(t.min_terms), t.failed_element, t.failed_points})
+    w.i64(v);
+  w.f64(t.max_condition);
+  w.f64(t.failed_condition);
+  return std::move(w.bytes());
+}
+
+void TlsMapping::load_totals(std::string_view bytes, const std::string& what) {
+  ByteReader r(bytes, what + " (TLS totals)");
+  TlsReport t;
+  for (Index* v : {&t.elements, &t.active, &t.full, &t.reduced, &t.with_virtual, &t.with_neighbours,
+                   &t.failed, &t.outside})
+    *v = r.i64();
+  t.min_terms = static_cast<int>(r.i64());
+  t.failed_element = r.i64();
+  t.failed_points = r.i64();
+  t.max_condition = r.f64();
+  t.failed_condition = r.f64();
+  r.expect_done();
+  totals_ = t;
+}
 
 }  // namespace mpm

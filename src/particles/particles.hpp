@@ -54,28 +54,45 @@ struct Particles {
     return true;
   }
 
-  // f(field) for every per-particle array, ids included: whatever reorders or copies the
-  // particles goes through this one list, so a new field cannot be forgotten.
+  // f(name, field) for every per-particle array, ids last: whatever reorders, copies or stores
+  // the particles goes through this one list (re-sorting, checkpoints), so a new field cannot be
+  // forgotten. The order is that of the checkpoint payload (io/checkpoint.hpp): a new field
+  // changes the checkpoint format.
+  template <class Fn>
+  void for_each_named_field(Fn&& f) {
+    fields(*this, f);
+  }
+  template <class Fn>
+  void for_each_named_field(Fn&& f) const {
+    fields(*this, f);
+  }
+  // f(field), the same list without the names.
   template <class Fn>
   void for_each_field(Fn&& f) {
-    f(x);
-    f(x0);
-    f(u);
-    f(v);
-    f(mass);
-    f(volume);
-    f(volume0);
-    f(density);
-    f(F);
-    f(stress);
-    f(body);
-    f(id);
+    fields(*this, [&](const char*, auto& field) { f(field); });
   }
 
   // Bytes of particle state per particle (for the benchmark's memory figure): x, x0, u, v, body;
   // mass, volume, volume0, density; F, stress; id.
   static constexpr std::size_t bytes_per_particle() {
     return 5 * sizeof(Vec<Dim>) + 4 * sizeof(double) + 2 * sizeof(Mat<Dim>) + sizeof(CompactIndex);
+  }
+
+ private:
+  template <class Self, class Fn>
+  static void fields(Self& p, Fn&& f) {
+    f("x", p.x);
+    f("x0", p.x0);
+    f("u", p.u);
+    f("v", p.v);
+    f("mass", p.mass);
+    f("volume", p.volume);
+    f("volume0", p.volume0);
+    f("density", p.density);
+    f("F", p.F);
+    f("stress", p.stress);
+    f("body", p.body);
+    f("id", p.id);
   }
 };
 

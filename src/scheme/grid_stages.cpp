@@ -123,6 +123,16 @@ void after_mass(RunState<Dim>& sim) {
   if (particle_mass > 0.0) {
     sim.diag.rel_mass_error = std::abs(total - particle_mass) / particle_mass;
     sim.diag.max_rel_mass_error = std::max(sim.diag.max_rel_mass_error, sim.diag.rel_mass_error);
+    // (Negated so that a NaN error stops the run as well.)
+    if (!(sim.diag.rel_mass_error <= sim.conservation_limit))
+      throw RunError(
+          exit_code::kConservation,
+          fmt::format("step {}, t = {:.9g} s: the particle-to-grid mapping does not conserve "
+                      "mass: the grid holds {:.9g}, the particles {:.9g} (relative error {:.3g}, "
+                      "above method.conservation_limit = {:.3g}); the mapping's support does not "
+                      "cover the particles (for MLS/IMLS, is method.mls_dilation too small?)",
+                      sim.step, sim.time, total, particle_mass, sim.diag.rel_mass_error,
+                      sim.conservation_limit));
   }
   const double threshold = sim.mass_tolerance * largest;
   parallel_for(static_cast<Index>(m.size()), [&](Index k) {
@@ -181,6 +191,14 @@ void after_momentum(RunState<Dim>& sim) {
     sim.diag.rel_momentum_error = (grid_p - part_p).norm() / scale;
     sim.diag.max_rel_momentum_error =
         std::max(sim.diag.max_rel_momentum_error, sim.diag.rel_momentum_error);
+    if (!(sim.diag.rel_momentum_error <= sim.conservation_limit))
+      throw RunError(
+          exit_code::kConservation,
+          fmt::format("step {}, t = {:.9g} s: the particle-to-grid mapping does not conserve "
+                      "momentum: |sum of nodal momenta - sum m_p v_p| = {:.9g}, {:.3g} of "
+                      "sum m_p |v_p| = {:.9g} (above method.conservation_limit = {:.3g})",
+                      sim.step, sim.time, (grid_p - part_p).norm(), sim.diag.rel_momentum_error,
+                      scale, sim.conservation_limit));
   }
 }
 }  // namespace detail

@@ -17,6 +17,7 @@
 #include "material/materials.hpp"
 #include "model/loads.hpp"
 #include "particles/particles.hpp"
+#include "scheme/diagnostics.hpp"
 #include "scheme/sort.hpp"
 #include "solver/mass_matrix.hpp"
 
@@ -40,16 +41,6 @@ inline constexpr unsigned kPosition = 2;  // x_p, u_p from the grid velocity
 inline constexpr unsigned kStress = 4;    // F, V, rho, sigma from the grid velocity gradient
 }  // namespace particle_update
 
-// Conservation and grid-crossing bookkeeping reported in summary.json (D 5.4).
-struct Diagnostics {
-  double max_rel_mass_error = 0.0;      // max over steps |sum M_ij - sum m_p| / sum m_p
-  double max_rel_momentum_error = 0.0;  // max over steps |sum q_i - sum m_p v_p| / sum m_p|v_p|
-  Index grid_crossings = 0;             // particle moves into another cell, summed over steps
-  // The same relative errors of the latest mapping (history.csv); not checkpointed.
-  double rel_mass_error = 0.0;
-  double rel_momentum_error = 0.0;
-};
-
 // The basis- and mapping-independent state of an MPM run: what the driver (driver/) reads and
 // writes between steps (outputs, checkpoints, error norms), with the grid quantities the stages
 // share. Simulation adds the basis, the mapping and the cached stencils.
@@ -65,6 +56,8 @@ struct RunState {
   Material material;
   MassType mass_type = MassType::Lumped;
   double mass_tolerance = 1e-10;  // relative to the largest nodal mass
+  // Largest relative mass or momentum error of one mapping before the run stops (exit code 9).
+  double conservation_limit = 0.5;
   BodyForce<Dim> body_force;
   std::vector<Traction<Dim>> tractions;
 

@@ -135,6 +135,13 @@ std::vector<KeySpec> declare() {
       real("method.mass_tolerance", "", 1e-10, closed_open(0, 1),
            "degrees of freedom with mass below this fraction of the largest nodal mass are "
            "inactive"),
+      // Direct mappings conserve mass and momentum to round-off; the reconstructions (MLS, IMLS,
+      // TLS, cubic spline) to their approximation error, which falls with h. An error of order
+      // one means the grid no longer holds the particles' mass (e.g. a support smaller than the
+      // particle spacing): the run stops rather than report "ok" (issue 16, 9).
+      real("method.conservation_limit", "", 0.5, greater_than(0),
+           "a step whose relative mass or momentum error on the grid (summary.json "
+           "'conservation') exceeds this stops the run (exit code 9)"),
       choice("method.solver", "mpm", kSolvers, "time-stepping method"),
       choice("method.sort", "auto", kSortModes,
              "re-sorting of the particles by cell between steps (locality of the parallel "

@@ -114,6 +114,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.reference_dofs = cfg.get_int("reference.dofs");
   m.mass = cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
   m.mass_tolerance = cfg.get_real("method.mass_tolerance");
+  m.conservation_limit = cfg.get_real("method.conservation_limit");
   m.sort = cfg.get_string("method.sort") == "never" ? SortMode::Never : SortMode::Auto;
   if (m.solver == Solver::Mpm)
     m.mapping =

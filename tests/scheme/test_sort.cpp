@@ -372,10 +372,11 @@ TEST(Sort, RestartAfterSortIsBitwise) {
     ASSERT_EQ(a.step, n);
     ASSERT_EQ(b.step, n);
     EXPECT_EQ(a.particles.id, b.particles.id);
-    EXPECT_TRUE(same_bits(a.particles.x, b.particles.x));
-    EXPECT_TRUE(same_bits(a.particles.v, b.particles.v));
-    EXPECT_TRUE(same_bits(a.particles.F, b.particles.F));
-    EXPECT_TRUE(same_bits(a.particles.stress, b.particles.stress));
+    // Every real field (x, x0, u, v, ..., stress, body), bit for bit.
+    ASSERT_EQ(a.particles.reals.size(), b.particles.reals.size());
+    for (std::size_t k = 0; k < a.particles.reals.size(); ++k)
+      EXPECT_TRUE(same_bits(a.particles.reals[k], b.particles.reals[k]))
+          << io::particle_field_names()[k];
     EXPECT_TRUE(same_bits(a.basis_state, b.basis_state));
     EXPECT_EQ(a.cells, b.cells);
     EXPECT_EQ(a.sort_reference, b.sort_reference);

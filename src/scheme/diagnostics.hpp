@@ -1,0 +1,16 @@
+#pragma once
+#include "core/types.hpp"
+
+namespace mpm {
+
+// Conservation and grid-crossing bookkeeping reported in summary.json (D 5.4).
+struct Diagnostics {
+  double max_rel_mass_error = 0.0;      // max over steps |sum M_ij - sum m_p| / sum m_p
+  double max_rel_momentum_error = 0.0;  // max over steps |sum q_i - sum m_p v_p| / sum m_p|v_p|
+  Index grid_crossings = 0;             // particle moves into another cell, summed over steps
+  // The same relative errors of the latest mapping (history.csv); not checkpointed.
+  double rel_mass_error = 0.0;
+  double rel_momentum_error = 0.0;
+};
+
+}  // namespace mpm
