@@ -6,3 +6,4 @@
 #include "basis/ddmpm.hpp"
 #include "basis/gimp.hpp"
 #include "basis/linear.hpp"
+#include "basis/maxent.hpp"

@@ -16,6 +16,9 @@
 //   kTrackedCorners  per-particle state between steps (CPDI2 corners): corners() and
 //                    set_corners() (checkpoints), permute(perm) (re-sorting) and advect(sim, dt)
 //                    (after the position update)
+//   kIterative       the evaluation is an iteration that can fail at a point (max-ent): the
+//                    point's weights are NaN and recorded, and every stage that evaluated the
+//                    basis calls throw_if_failed(step, time, where) after its loop
 #include <concepts>
 #include <string_view>
 #include <vector>
@@ -35,6 +38,7 @@ concept Basis = requires(const B& b, const Vec<Dim>& x, typename B::StencilT& s,
   { B::kParticleDomain } -> std::convertible_to<bool>;
   { B::kPrepare } -> std::convertible_to<bool>;
   { B::kTrackedCorners } -> std::convertible_to<bool>;
+  { B::kIterative } -> std::convertible_to<bool>;
   { b.num_dofs() } -> std::convertible_to<Index>;
   { b.dofs_per_dim() } -> std::convertible_to<IVec<Dim>>;
   { b.dof_position(i) } -> std::convertible_to<Vec<Dim>>;
@@ -52,9 +56,13 @@ concept Basis = requires(const B& b, const Vec<Dim>& x, typename B::StencilT& s,
        { b.fits(P, p) } -> std::convertible_to<bool>;
      }) &&
     (!B::kPrepare || requires(B & b, const Particles<Dim>& P) { b.prepare(P); }) &&
-    (!B::kTrackedCorners || requires(B & b, const B& cb, Permutation& perm) {
-      b.set_corners(cb.corners());
-      b.permute(perm);
+    (!B::kTrackedCorners ||
+     requires(B & b, const B& cb, Permutation& perm) {
+       b.set_corners(cb.corners());
+       b.permute(perm);
+     }) &&
+    (!B::kIterative || requires(const B& b, Index step, double time, std::string_view where) {
+      b.throw_if_failed(step, time, where);
     });
 
 }  // namespace mpm

@@ -60,6 +60,8 @@ inline constexpr int kOutput = 8;          // an output could not be written (di
 // The particle-to-grid mapping lost or created mass or momentum of order one (above
 // method.conservation_limit): the grid no longer represents the particles.
 inline constexpr int kConservation = 9;
+// A basis could not be evaluated at some point (the max-ent Newton iteration did not converge).
+inline constexpr int kBasis = 10;
 }  // namespace exit_code
 
 }  // namespace mpm

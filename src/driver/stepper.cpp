@@ -1,6 +1,8 @@
 #include "driver/stepper.hpp"
 
+#include <cmath>
 #include <nlohmann/json.hpp>
+#include <type_traits>
 #include <utility>
 
 namespace mpm::driver {
@@ -61,10 +63,13 @@ void report_mapping(nlohmann::ordered_json& summary, const ImlsMapping& m, int d
 
 double stability_factor(const BasisKind& basis) {
   return std::visit(
-      [](auto k) {
+      [](const auto& k) {
+        using Kind = std::decay_t<decltype(k)>;
         // GIMP, CPDI and DDMPM use the P1 bound (their gradients are averages of P1's).
-        if constexpr (decltype(k)::kDegree > 0)
-          return bspline_stability_factor(decltype(k)::kDegree);
+        if constexpr (std::is_same_v<Kind, MaxEntKind>)
+          return maxent_stability_factor(k.settings);
+        else if constexpr (Kind::kDegree > 0)
+          return bspline_stability_factor(Kind::kDegree);
         else
           return 1.0;
       },
@@ -73,7 +78,11 @@ double stability_factor(const BasisKind& basis) {
 
 // One cell for nodal bases, p cells for B-splines of degree p, whose asymmetric end functions
 // phi_0 .. phi_{p-1} of the open knot vector reach p cells into the domain (D Fig. 5.10).
+// Max-ent: the cells within d_max zeta of the boundary, where the functions differ from the
+// interior ones (weak Kronecker-delta property).
 int boundary_cells(const BasisKind& basis) {
+  if (const auto* m = std::get_if<MaxEntKind>(&basis))
+    return static_cast<int>(std::ceil(m->settings.dmax));
   const int p = basis_degree(basis);
   return p > 0 ? p : 1;
 }

@@ -49,10 +49,11 @@ class TypedStepper final : public Stepper<Dim> {
   static_assert(mpm::Basis<Basis, Dim>, "basis/basis.hpp");
   static_assert(MappingFor<Mapping, Sim>, "mapping/mapping.hpp");
 
-  // The mapping is the configured one of the settings (run_settings, make_mapping).
-  explicit TypedStepper(const StepperInput<Dim>& in)
+  // The basis is built from its kind (make_basis: with the kind's settings), the mapping is the
+  // configured one of the settings (run_settings, make_mapping).
+  TypedStepper(const StepperInput<Dim>& in, Basis basis)
       : scheme_(in.method.scheme),
-        sim_(in.problem.grid, Basis(in.problem.grid), std::get<Mapping>(in.method.mapping),
+        sim_(in.problem.grid, std::move(basis), std::get<Mapping>(in.method.mapping),
              std::move(in.problem.particles), in.problem.material) {
     const MethodSettings& method = in.method;
     const Problem<Dim>& pb = in.problem;
@@ -130,8 +131,11 @@ std::unique_ptr<Stepper<Dim>> make_stepper_for(const StepperInput<Dim>& in) {
           using Mapping = std::decay_t<decltype(m)>;
           if constexpr (!supports_dimension<Mapping>(Dim))
             throw std::logic_error("make_stepper_for: mapping not available in this dimension");
+          else if constexpr (!supports_mapping<Kind, Mapping>())
+            throw std::logic_error("make_stepper_for: basis and mapping not available together");
           else
-            return std::make_unique<TypedStepper<Dim, Basis, Mapping>>(in);
+            return std::make_unique<TypedStepper<Dim, Basis, Mapping>>(
+                in, make_basis<Dim>(std::get<I>(in.method.basis), in.problem.grid));
         },
         in.method.mapping);
   }

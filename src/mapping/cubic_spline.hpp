@@ -183,7 +183,7 @@ class CubicSplineMapping {
     static_assert(Sim::kDim == 1, "the cubic-spline mapping is one-dimensional (D 3.2)");
     auto& q = quad_.prepare<Sim>();
     fit_mass(sim, q);
-    q.evaluate(sim.basis);
+    q.evaluate(sim.basis, sim.step, sim.time);
     assemble_mass(sim, q, rho_g_);
   }
 

@@ -347,7 +347,7 @@ class MovingLeastSquaresMapping {
     static_assert(Dim == 1 || Dim == 2, "the MLS/IMLS mappings are one- and two-dimensional");
     auto& q = quad_.prepare<Sim>();
     fit_mass<Dim>(sim, q);
-    q.evaluate(sim.basis);
+    q.evaluate(sim.basis, sim.step, sim.time);
     assemble_mass(sim, q, rho_);
     if constexpr (Improved) {
       // Nodal rows (003 eq. 31) for the DOFs that carry mass.

@@ -107,7 +107,9 @@ struct QuadraturePoints : GaussPoints<Dim> {
   mutable GridAccumulator<double> scalar;
   mutable GridAccumulator<Vec<Dim>> vector;
 
-  void evaluate(const Basis& basis) {
+  // The basis at every point; step and time name the moment if an iterative basis fails at
+  // some point (basis/basis.hpp, kIterative).
+  void evaluate(const Basis& basis, Index step, double time) {
     const auto n = static_cast<Index>(x.size());
     stencil.resize(x.size());
     for_each_chunk(n, [&](int c, Index b, Index e) {
@@ -124,6 +126,7 @@ struct QuadraturePoints : GaussPoints<Dim> {
       ranges.hi[static_cast<std::size_t>(c)] = hi;
     });
     ranges.particles = n;
+    if constexpr (Basis::kIterative) basis.throw_if_failed(step, time, "Gauss points");
   }
 };
 

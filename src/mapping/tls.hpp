@@ -412,7 +412,7 @@ class TlsMapping {
     constexpr int Dim = Sim::kDim;
     auto& q = quad_.prepare<Sim>();
     fit_mass<Dim>(sim, q);
-    q.evaluate(sim.basis);
+    q.evaluate(sim.basis, sim.step, sim.time);
     assemble_mass(sim, q, state<Dim>().rho);
   }
 

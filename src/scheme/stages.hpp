@@ -125,6 +125,7 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
     }
   }
   if (outside) detail::throw_left_grid(sim);
+  if constexpr (B::kIterative) basis.throw_if_failed(sim.step, sim.time, "particles");
 }
 
 // Body force b_p(x, t) for this step (constant forces were filled once at set-up).
@@ -167,6 +168,8 @@ void after_forces(BasisState<Dim, B>& sim) {
         sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
     }
   }
+  if constexpr (B::kIterative)
+    if (!sim.tractions.empty()) sim.basis.throw_if_failed(sim.step, sim.time, "traction faces");
 }
 
 }  // namespace detail

@@ -35,6 +35,9 @@ Range open(double lo, double hi) {
 Range closed_open(double lo, double hi) {
   return {lo, hi, false, true};
 }
+Range open_closed(double lo, double hi) {
+  return {lo, hi, true, false};
+}
 
 // Marks a key without default that the user must give.
 constexpr std::nullopt_t kRequired = std::nullopt;
@@ -130,6 +133,18 @@ std::vector<KeySpec> declare() {
       choice("method.basis", "linear", kBases, "grid basis functions"),
       integer("method.degree", 2, closed(1, 5), "B-spline degree (method.basis = \"bspline\")"),
       choice("method.mapping", "direct", kMappings, "particle-to-grid mapping"),
+      // The node window of the max-ent basis holds the nodes closer than 3 cells
+      // (basis/maxent.hpp); at 1 or less a point between two nodes can see too few nodes to
+      // reproduce affine fields.
+      real("method.maxent_dmax", "", 2.0, open_closed(1, 3),
+           "support radius d_max of the max-ent prior in nearest-node distances (D eq. 4.47; D "
+           "uses 2 in 1D and 3 on the plate)"),
+      real("method.maxent_tolerance", "", 1e-12, open(0, 1e-3),
+           "the max-ent Newton iteration stops when |sum phi_i (x_i - x)| is below this times the "
+           "cell size"),
+      integer("method.maxent_max_iterations", 50, closed(1, 1000),
+              "Newton iterations of the max-ent basis before the point is reported as failed "
+              "(exit code 10)"),
       choice("method.mass", "lumped", kMassTypes, "mass matrix"),
       // At 1 or above even the heaviest DOF would be inactive: nothing could move.
       real("method.mass_tolerance", "", 1e-10, closed_open(0, 1),

@@ -87,6 +87,11 @@ RunSettings run_settings(const Config& cfg, int dim) {
       return choose_basis(cfg.get_string("method.basis"),
                           static_cast<int>(cfg.get_int("method.degree")));
     });
+    if (auto* k = std::get_if<MaxEntKind>(&m.basis)) {
+      k->settings.dmax = cfg.get_real("method.maxent_dmax");
+      k->settings.tolerance = cfg.get_real("method.maxent_tolerance");
+      k->settings.max_iterations = static_cast<int>(cfg.get_int("method.maxent_max_iterations"));
+    }
     m.mapping = with_key("method.mapping", [&] {
       return choose_alternative<MappingKind>(cfg.get_string("method.mapping"), "method.mapping");
     });
@@ -101,6 +106,16 @@ RunSettings run_settings(const Config& cfg, int dim) {
             m.mapping))
       throw InputError(fmt::format("{}: method.mapping = \"{}\" is not available in {}D",
                                    m.where_mapping, name_of(m.mapping), dim));
+    const bool together = std::visit(
+        [](const auto& k, const auto& map) {
+          return supports_mapping<std::decay_t<decltype(k)>, std::decay_t<decltype(map)>>();
+        },
+        m.basis, m.mapping);
+    if (!together)
+      throw InputError(fmt::format(
+          "{}: method.mapping = \"{}\" is not available with method.basis = \"{}\"; the {} "
+          "basis runs with the direct mapping only (scheme/variants.hpp, docs/verification.md)",
+          m.where_mapping, name_of(m.mapping), name_of(m.basis), name_of(m.basis)));
   }
   s.time = time_settings(cfg);
   s.output.frames = static_cast<int>(cfg.get_int("output.frames"));

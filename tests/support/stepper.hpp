@@ -25,12 +25,13 @@ constexpr BasisKind kind_of() {
     return kind_of<Dim, Basis, I + 1>();
 }
 
-// Every basis kind available in Dim dimensions, in BasisKind's order.
-template <int Dim>
+// Every basis kind available in Dim dimensions (and with Mapping), in BasisKind's order.
+template <int Dim, class Mapping = DirectMapping>
 std::vector<BasisKind> basis_kinds() {
   std::vector<BasisKind> kinds;
   [&]<std::size_t... I>(std::index_sequence<I...>) {
-    ((supports_dimension<std::variant_alternative_t<I, BasisKind>>(Dim)
+    ((supports_dimension<std::variant_alternative_t<I, BasisKind>>(Dim) &&
+              supports_mapping<std::variant_alternative_t<I, BasisKind>, Mapping>()
           ? void(kinds.emplace_back(std::in_place_index<I>))
           : void()),
      ...);
