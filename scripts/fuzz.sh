@@ -70,10 +70,11 @@ build-fuzz/fuzz_config "$corpus" -max_total_time="$seconds" -timeout=10 -rss_lim
   status=$?
 tail -n 20 "$work/fuzz.log"
 if [ "$status" -eq 0 ]; then
+  seeds=$(ls "$work/checkpoints" | wc -l)
   build-fuzz/fuzz_checkpoint "$work/checkpoints" -max_total_time="$checkpoint_seconds" \
     -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
     -artifact_prefix="$artifacts/" 2>"$work/fuzz_checkpoint.log" || status=$?
-  echo "-- checkpoint loader ($(ls "$work/checkpoints" | wc -l) seed payloads)"
+  echo "-- checkpoint loader ($seeds seed payloads)"
   tail -n 20 "$work/fuzz_checkpoint.log"
 fi
 if [ "$status" -ne 0 ] || [ -n "$(ls -A "$artifacts")" ]; then
