@@ -148,13 +148,13 @@ int cmd_bench(const mpm::BenchOptions& opt) {
   const std::string basis =
       opt.basis == "bspline" ? fmt::format("bspline degree {}", opt.degree) : opt.basis;
   std::cout << fmt::format(
-      "{}D {} step{}, {} basis, {} mapping, lumped mass: {} particles, {} cells{}, {} steps, "
+      "{}D {} step{}, {} basis, {} mapping, {} mass: {} particles, {} cells{}, {} steps, "
       "{} thread(s), best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes "
       "per particle (particle state, cached stencil, grid share)\n",
-      opt.dim, opt.scheme, opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis,
-      opt.mapping, r.particles, r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads,
-      opt.repeats, r.best_ns_per_particle_step, r.median_ns_per_particle_step,
-      r.bytes_per_particle);
+      opt.dim, opt.solver == "otm" ? std::string("otm") : opt.scheme,
+      opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis, opt.mapping, opt.mass,
+      r.particles, r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
+      r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
   std::cout << fmt::format(
       "  particles {}, method.sort = \"{}\": {} sort(s) per run{}; sort buffers {:.1f} bytes per "
       "particle\n",
@@ -230,6 +230,9 @@ int main(int argc, char** argv) {
   bench->add_option("--basis", bopt.basis, "grid basis (mpm list)")->capture_default_str();
   bench->add_option("--degree", bopt.degree, "B-spline degree")->capture_default_str();
   bench->add_option("--mapping", bopt.mapping, "particle-to-grid mapping")->capture_default_str();
+  bench->add_option("--solver", bopt.solver, "mpm, or otm (1D, basis linear or maxent)")
+      ->capture_default_str();
+  bench->add_option("--mass", bopt.mass, "lumped or consistent")->capture_default_str();
   bench
       ->add_option("--problem", bopt.problem,
                    "2D problem: plate (plate_mms_2d, body force b(X, t)) or refkernel (the "

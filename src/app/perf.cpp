@@ -21,7 +21,8 @@ namespace {
 int stencil_per_dim(const BenchOptions& opt) {
   if (opt.basis == "linear") return 2;
   if (opt.basis == "bspline") return opt.degree + 1;
-  return 4;  // GIMP, CPDI, DDMPM: nodes c-1 .. c+2
+  if (opt.basis == "maxent") return 6;  // the node window (basis/maxent.hpp)
+  return 4;                             // GIMP, CPDI, DDMPM: nodes c-1 .. c+2
 }
 Index extra_dofs(const BenchOptions& opt) {
   return opt.basis == "bspline" ? opt.degree : 1;
@@ -58,8 +59,9 @@ double sort_bytes_per_particle(Index cells, Index particles) {
 
 std::string method_toml(const BenchOptions& opt) {
   return fmt::format(
-      "[method]\nscheme = \"{}\"\nbasis = \"{}\"\ndegree = {}\nmapping = \"{}\"\nsort = \"{}\"\n",
-      opt.scheme, opt.basis, opt.degree, opt.mapping, opt.sort);
+      "[method]\nscheme = \"{}\"\nbasis = \"{}\"\ndegree = {}\nmapping = \"{}\"\nsort = \"{}\"\n"
+      "solver = \"{}\"\nmass = \"{}\"\n",
+      opt.scheme, opt.basis, opt.degree, opt.mapping, opt.sort, opt.solver, opt.mass);
 }
 
 void time_runs(const Config& cfg, const BenchOptions& opt, BenchResult& r) {

@@ -17,6 +17,8 @@ struct BenchOptions {
   std::string basis = "linear";
   int degree = 2;
   std::string mapping = "direct";
+  std::string solver = "mpm";   // method.solver: mpm or otm (1D)
+  std::string mass = "lumped";  // method.mass
   // 2D problem: "plate" (plate_mms_2d) or "refkernel" (the problem of the yardstick
   // ../shared/tools/refkernel.cpp through the custom benchmark).
   std::string problem = "plate";

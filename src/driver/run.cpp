@@ -83,6 +83,7 @@ RunResult run(const Config& cfg, const RunOptions& opt) {
       std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);
   const RunSettings settings = run_settings(cfg, dim);
   const std::string config_text = cfg.to_toml();
+  // MPM and OTM (which shares the driver through its Stepper; driver/otm_stepper.cpp).
   if (settings.method.solver == Solver::Ulfem)
     return run_ulfem(std::get<Problem<1>>(problem), settings, config_text, opt);
   return std::visit(

@@ -101,7 +101,9 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   const MethodSettings& method = settings.method;
   const BasisKind& basis = method.basis;
   const std::string_view mapping_name = name_of(method.mapping);
-  const double scheme_velocity_time = velocity_time(method.scheme);
+  const bool otm = method.solver == Solver::Otm;
+  // OTM's particle velocity is (x_p^{s+1} - x_p^s) / dt, a velocity at t - dt / 2.
+  const double scheme_velocity_time = otm ? -0.5 : velocity_time(method.scheme);
 
   const auto t_start = Clock::now();
   const TimeSettings& ts = settings.time;
@@ -116,7 +118,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 
   if (opt.shuffle_seed != 0 && !opt.restart)
     shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
-  const auto stepper = make_stepper<Dim>(basis, {pb, method, !opt.restart});
+  const auto stepper = otm ? make_otm_stepper<Dim>({pb, method, !opt.restart})
+                           : make_stepper<Dim>(basis, {pb, method, !opt.restart});
   RunState<Dim>& sim = stepper->state();
 
   // Outputs start once the input has passed every check above.
@@ -168,10 +171,10 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   res.wall_seconds = seconds_since(t_start);
 
   nlohmann::ordered_json method_json = {
-      {"solver", "mpm"},
+      {"solver", otm ? "otm" : "mpm"},
       {"basis", std::string(basis_name(basis))},
       {"mapping", std::string(mapping_name)},
-      {"scheme", std::string(name_of(method.scheme))},
+      {"scheme", otm ? std::string("otm (D Algorithm 3)") : std::string(name_of(method.scheme))},
       {"mass", method.mass == MassType::Consistent ? "consistent" : "lumped"}};
   if (basis_degree(basis) > 0) method_json["degree"] = basis_degree(basis);
   res.summary = make_summary(res, settings, sim.material, sim.time, std::move(method_json),

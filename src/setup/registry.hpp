@@ -84,6 +84,9 @@ inline constexpr auto kMappings = entries_of<MappingKind>();
 inline constexpr Entry kSolvers[] = {
     {"mpm", "material point method with the chosen basis, mapping and scheme"},
     {"ulfem", "1D updated-Lagrangian FEM, linear elements (reference solutions, D 5.4.1)"},
+    {"otm",
+     "optimal transportation meshfree method on nodes advected with the material, P1 or "
+     "max-ent basis (D Algorithm 3; 1D)"},
 };
 
 inline constexpr Entry kTlsCompletions[] = {

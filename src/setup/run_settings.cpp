@@ -68,14 +68,15 @@ MappingKind configured_mapping(const MappingKind& chosen, const Config& cfg) {
 RunSettings run_settings(const Config& cfg, int dim) {
   RunSettings s;
   MethodSettings& m = s.method;
-  m.solver = cfg.get_string("method.solver") == "ulfem" ? Solver::Ulfem : Solver::Mpm;
-  if (m.solver == Solver::Ulfem && dim != 1)
-    throw InputError(fmt::format("{}: method.solver = \"ulfem\" is one-dimensional",
-                                 cfg.where("method.solver")));
+  const std::string solver = cfg.get_string("method.solver");
+  m.solver = solver == "ulfem" ? Solver::Ulfem : solver == "otm" ? Solver::Otm : Solver::Mpm;
+  if (m.solver != Solver::Mpm && dim != 1)
+    throw InputError(fmt::format("{}: method.solver = \"{}\" is one-dimensional (so far)",
+                                 cfg.where("method.solver"), solver));
   m.where_basis = cfg.where("method.basis");
   m.where_mapping = cfg.where("method.mapping");
   m.where_tls_completion = cfg.where("method.tls_completion");
-  if (m.solver == Solver::Mpm) {
+  if (m.solver != Solver::Ulfem) {
     auto with_key = [&](const char* key, auto&& fn) {
       try {
         return fn();
@@ -131,9 +132,25 @@ RunSettings run_settings(const Config& cfg, int dim) {
   m.mass_tolerance = cfg.get_real("method.mass_tolerance");
   m.conservation_limit = cfg.get_real("method.conservation_limit");
   m.sort = cfg.get_string("method.sort") == "never" ? SortMode::Never : SortMode::Auto;
-  if (m.solver == Solver::Mpm)
+  if (m.solver != Solver::Ulfem)
     m.mapping =
         dim == 1 ? configured_mapping<1>(m.mapping, cfg) : configured_mapping<2>(m.mapping, cfg);
+  if (m.solver == Solver::Otm) {
+    // OTM's update x_p = sum phi_i x_i needs consistent bases (D eq. 4.14-4.16), and it
+    // integrates at the material points (D Algorithm 3).
+    if (!std::holds_alternative<LinearKind>(m.basis) &&
+        !std::holds_alternative<MaxEntKind>(m.basis))
+      throw InputError(fmt::format(
+          "{}: method.solver = \"otm\" needs a basis with partition of unity and linear "
+          "completeness on its advected nodes (D eq. 4.15-4.16): method.basis = \"linear\" or "
+          "\"maxent\", not \"{}\"",
+          m.where_basis, name_of(m.basis)));
+    if (!std::holds_alternative<DirectMapping>(m.mapping))
+      throw InputError(fmt::format(
+          "{}: method.solver = \"otm\" integrates at the material points (D Algorithm 3): "
+          "method.mapping = \"direct\", not \"{}\"",
+          m.where_mapping, name_of(m.mapping)));
+  }
   return s;
 }
 

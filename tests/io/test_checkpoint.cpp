@@ -203,6 +203,12 @@ TEST(Checkpoint, RestartIsBitwiseOtherSolversAndLoads) {
   check_bitwise_restart({"vibrating_bar_large", {"method.basis=ddmpm", "method.scheme=usavg"}, 50});
   check_bitwise_restart({"column_compaction", {"method.basis=cpgimp", "method.scheme=usl"}, 50});
   check_bitwise_restart({"traction_bar", {"method.scheme=usf", "method.basis=cpdi"}, 50});
+  // OTM: the advected nodes and the particles' velocities (x_p^s - x_p^{s-1}) / dt.
+  check_bitwise_restart(
+      {"bar_fixed_ends_otm", {"method.solver=otm", "method.mass=consistent"}, 50});
+  check_bitwise_restart({"bar_fixed_ends_otm",
+                         {"method.solver=otm", "method.basis=maxent", "method.mass=consistent"},
+                         50});
 }
 
 // A valid checkpoint of a short run, written into dir.

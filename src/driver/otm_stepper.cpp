@@ -1,0 +1,66 @@
+// The OTM solver (solver/otm.hpp) behind the driver's Stepper interface: the time loop, outputs,
+// error norms, summary and checkpoints are those of every MPM run (driver/run_mpm.cpp).
+#include <fmt/format.h>
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "driver/stepper.hpp"
+#include "io/checkpoint.hpp"
+#include "solver/otm.hpp"
+
+namespace mpm::driver {
+namespace {
+
+class OtmStepper final : public Stepper<1> {
+ public:
+  OtmStepper(Problem<1>& pb, const OtmSettings& s) : otm_(pb, s) {}
+  void step(double dt) override { otm_.step(dt); }
+  bool sort_if_due() override { return false; }  // the particles' order never changes
+  RunState<1>& state() override { return otm_.state(); }
+  const RunState<1>& state() const override { return otm_.state(); }
+  // The advected node positions (the particles, with v_p = (x_p^s - x_p^{s-1}) / dt, are in
+  // the RunState part of the checkpoint).
+  void save(io::Checkpoint& c) const override { c.basis_state = otm_.nodes(); }
+  void load(const io::Checkpoint& c, const std::string& what) override {
+    otm_.set_nodes(c.basis_state, what);
+  }
+  void report(nlohmann::ordered_json& summary) const override {
+    const auto& x = otm_.nodes();
+    summary["otm"] = {{"nodes", x.size()},
+                      {"basis", otm_.settings().basis == OtmBasis::Linear ? "linear" : "maxent"},
+                      {"first_node", x.front()},
+                      {"last_node", x.back()}};
+    if (otm_.settings().basis == OtmBasis::MaxEnt)
+      summary["otm"]["maxent_dmax"] = otm_.settings().maxent.dmax;
+  }
+
+ private:
+  Otm1D otm_;
+};
+
+}  // namespace
+
+template <int Dim>
+std::unique_ptr<Stepper<Dim>> make_otm_stepper(const StepperInput<Dim>& in) {
+  if constexpr (Dim != 1) {
+    throw std::logic_error("make_otm_stepper: OTM is one-dimensional");
+  } else {
+    const MethodSettings& m = in.method;
+    OtmSettings s;
+    if (const auto* k = std::get_if<MaxEntKind>(&m.basis)) {
+      s.basis = OtmBasis::MaxEnt;
+      s.maxent = k->settings;
+    }
+    s.mass = m.mass;
+    s.mass_tolerance = m.mass_tolerance;
+    s.conservation_limit = m.conservation_limit;
+    return std::make_unique<OtmStepper>(in.problem, s);
+  }
+}
+
+template std::unique_ptr<Stepper<1>> make_otm_stepper<1>(const StepperInput<1>&);
+template std::unique_ptr<Stepper<2>> make_otm_stepper<2>(const StepperInput<2>&);
+
+}  // namespace mpm::driver

@@ -1,0 +1,266 @@
+// OTM in 1D (solver/otm.hpp; D Algorithm 3).
+#include "solver/otm.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+#include <variant>
+
+#include "basis/maxent.hpp"
+#include "scheme/stages.hpp"
+
+namespace mpm {
+
+Otm1D::Otm1D(Problem<1>& pb, const OtmSettings& s)
+    : st_(pb.grid, std::move(pb.particles), pb.material), s_(s) {
+  const Grid<1>& g = st_.grid;
+  const double lo = g.origin[0], hi = g.upper()[0], tol = 1e-12 * (hi - lo);
+  if (std::abs(pb.body_min[0] - lo) > tol || std::abs(pb.body_max[0] - hi) > tol)
+    throw InputError(fmt::format(
+        "method.solver = \"otm\": the nodes are carried by the material, so the body [{}, {}] "
+        "must fill the grid [{}, {}] (set grid.min/grid.max to the body's ends)",
+        pb.body_min[0], pb.body_max[0], lo, hi));
+  if (!pb.tractions.empty())
+    throw InputError("method.solver = \"otm\": tractions are not implemented for OTM yet");
+  if (s.basis == OtmBasis::MaxEnt && !(s.maxent.dmax > 1.0 && s.maxent.dmax <= 3.0))
+    throw InputError(fmt::format("method.maxent_dmax = {}: must be in (1, 3]", s.maxent.dmax));
+  const Index n = g.cells[0] + 1;
+  x_.resize(static_cast<std::size_t>(n));
+  for (Index i = 0; i < n; ++i)
+    x_[static_cast<std::size_t>(i)] = lo + g.h[0] * static_cast<double>(i);
+  st_.nodes.resize(n);
+  for (const auto& f : pb.fixed_sides)
+    if (f.components & 1u) st_.nodes.fixed[f.side ? static_cast<std::size_t>(n - 1) : 0] |= 1u;
+  st_.mass_type = s.mass;
+  st_.mass_tolerance = s.mass_tolerance;
+  st_.conservation_limit = s.conservation_limit;
+  st_.body_force = pb.body_force;
+  auto& P = st_.particles;
+  if (st_.body_force.fill) st_.body_force.fill(P, 0.0, P.body);
+  element_.assign(static_cast<std::size_t>(P.size()), 0);
+  for (std::size_t p = 0; p < element_.size(); ++p)
+    element_[p] = std::clamp<Index>(g.cell_of(P.x[p][0], 0), 0, n - 2);
+}
+
+void Otm1D::set_nodes(const std::vector<double>& x, const std::string& what) {
+  if (x.size() != x_.size())
+    throw InputError(fmt::format("{} holds {} OTM node positions; this run has {} nodes", what,
+                                 x.size(), x_.size()));
+  for (std::size_t i = 1; i < x.size(); ++i)
+    if (!(x[i] > x[i - 1]))
+      throw InputError(
+          fmt::format("{}: OTM nodes {} and {} are not in increasing order", what, i - 1, i));
+  x_ = x;
+}
+
+bool Otm1D::maxent_at(double x, Index e, Index p) {
+  const auto n = static_cast<Index>(x_.size());
+  auto zeta = [&](Index i) {
+    const auto k = static_cast<std::size_t>(i);
+    double z = std::numeric_limits<double>::infinity();
+    if (i > 0) z = std::min(z, x_[k] - x_[k - 1]);
+    if (i + 1 < n) z = std::min(z, x_[k + 1] - x_[k]);
+    return z;
+  };
+  const double dmax = s_.maxent.dmax;
+  const double ell = x_[static_cast<std::size_t>(e + 1)] - x_[static_cast<std::size_t>(e)];
+  // Candidates: the nodes on either side until one lies beyond its own support and its
+  // neighbour's (supports vary smoothly with the node spacing).
+  constexpr int kMax = 32;
+  std::array<Index, kMax> ids{};
+  std::array<Vec<1>, kMax> y, dw, grad;
+  std::array<double, kMax> w{}, phi{};
+  int m = 0;
+  bool overflow = false;
+  const bool on_lo = x <= x_.front(), on_hi = x >= x_.back();
+  auto consider = [&](Index i) {
+    const double xi = x_[static_cast<std::size_t>(i)];
+    const double d = dmax * zeta(i), dist = std::abs(x - xi), r = dist / d;
+    if ((on_lo && i != 0) || (on_hi && i != n - 1)) return dist < 3.0 * d;
+    const double wi = maxent_prior(r);
+    if (wi > 0.0 && m == kMax) overflow = true;
+    if (wi > 0.0 && m < kMax) {
+      ids[static_cast<std::size_t>(m)] = i;
+      y[static_cast<std::size_t>(m)] = Vec<1>((xi - x) / ell);
+      w[static_cast<std::size_t>(m)] = wi;
+      // d w / d(x / ell) = ell dw/dr dr/dx, dr/dx = sign(x - x_i) / d
+      dw[static_cast<std::size_t>(m)] =
+          Vec<1>(dist > 0.0 ? maxent_prior_slope(r) * ell / d * (x > xi ? 1.0 : -1.0) : 0.0);
+      ++m;
+    }
+    return dist < 3.0 * d;  // keep scanning while a farther node could still reach x
+  };
+  for (Index i = e; i >= 0 && consider(i); --i) {
+  }
+  for (Index i = e + 1; i < n && consider(i); ++i) {
+  }
+  if (overflow)
+    throw RunError(
+        exit_code::kBasis,
+        fmt::format("step {}, t = {:.9g} s: more than {} advected nodes lie in the "
+                    "max-ent support at particle {} ({:.17g}): the nodes are crowded",
+                    st_.step, st_.time, kMax, st_.particles.id[static_cast<std::size_t>(p)], x));
+  const std::array<bool, 1> fixed{on_lo || on_hi};
+  const bool boundary = fixed[0];
+  const MaxEntStatus st = maxent_solve<1>(m, y.data(), w.data(), dw.data(), fixed, s_.maxent,
+                                          phi.data(), boundary ? nullptr : grad.data());
+  if (!st.converged) return false;
+  if (boundary) {
+    // On an end node phi is 1 there (weak Kronecker delta); the gradient is that of the point a
+    // millionth of the element inside (continuous up to the end).
+    const double inner = x + (on_lo ? 1e-6 : -1e-6) * ell;
+    const std::size_t before = node_.size();
+    if (!maxent_at(inner, e, p)) return false;
+    std::vector<Index> nodes(node_.begin() + static_cast<std::ptrdiff_t>(before), node_.end());
+    std::vector<double> grads(g_.begin() + static_cast<std::ptrdiff_t>(before), g_.end());
+    node_.resize(before);
+    w_.resize(before);
+    g_.resize(before);
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      double value = 0.0;
+      for (int j = 0; j < m; ++j)
+        if (ids[static_cast<std::size_t>(j)] == nodes[k]) value = phi[static_cast<std::size_t>(j)];
+      node_.push_back(nodes[k]);
+      w_.push_back(value);
+      g_.push_back(grads[k]);
+    }
+    return true;
+  }
+  for (int j = 0; j < m; ++j) {
+    const auto k = static_cast<std::size_t>(j);
+    node_.push_back(ids[k]);
+    w_.push_back(phi[k]);
+    g_.push_back(grad[k][0] / ell);
+  }
+  return true;
+}
+
+// D Algorithm 3, step 3: the basis at the material points from the advected nodes.
+void Otm1D::evaluate_basis() {
+  auto& P = st_.particles;
+  const auto n = static_cast<Index>(x_.size());
+  row_.assign(1, 0);
+  node_.clear();
+  w_.clear();
+  g_.clear();
+  Index failed = 0, first_failed = -1;
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    const double x = P.x[i][0];
+    if (!(x >= x_.front() && x <= x_.back())) stages::detail::throw_left_grid(st_);
+    Index e = element_[i];
+    while (e > 0 && x < x_[static_cast<std::size_t>(e)]) --e;
+    while (e < n - 2 && x > x_[static_cast<std::size_t>(e + 1)]) ++e;
+    element_[i] = e;
+    if (s_.basis == OtmBasis::Linear) {
+      const double a = x_[static_cast<std::size_t>(e)], b = x_[static_cast<std::size_t>(e + 1)];
+      const double len = b - a;
+      node_.insert(node_.end(), {e, e + 1});
+      w_.insert(w_.end(), {(b - x) / len, (x - a) / len});  // D eq. 2.56 on the element
+      g_.insert(g_.end(), {-1.0 / len, 1.0 / len});
+    } else if (!maxent_at(x, e, p)) {
+      if (failed++ == 0) first_failed = p;
+    }
+    row_.push_back(static_cast<Index>(node_.size()));
+  }
+  if (failed > 0) {
+    const auto i = static_cast<std::size_t>(first_failed);
+    throw RunError(
+        exit_code::kBasis,
+        fmt::format("step {}, t = {:.9g} s: the max-ent basis on the advected nodes could not "
+                    "be evaluated at {} particle(s): at the first, particle {} ({:.17g}), "
+                    "Newton's method for the Lagrange multipliers did not converge "
+                    "(method.maxent_tolerance = {:.3g}, method.maxent_max_iterations = {})",
+                    st_.step, st_.time, failed, P.id[i], P.x[i][0], s_.maxent.tolerance,
+                    s_.maxent.max_iterations));
+  }
+}
+
+void Otm1D::step(double dt) {
+  auto& P = st_.particles;
+  auto& nd = st_.nodes;
+  if (st_.body_force.time_dependent || st_.body_force.position_dependent)
+    st_.body_force.fill(P, st_.time, P.body);
+  evaluate_basis();
+
+  // Step 4: M, q and f (D eq. 4.28-4.30), in particle order (the same rounding every run).
+  const auto n = static_cast<Index>(x_.size());
+  std::fill(nd.mass.begin(), nd.mass.end(), 0.0);
+  std::fill(nd.momentum.begin(), nd.momentum.end(), Vec<1>::Zero());
+  std::fill(nd.force.begin(), nd.force.end(), Vec<1>::Zero());
+  const bool consistent = st_.mass_type == MassType::Consistent;
+  if (consistent) st_.consistent.begin(n);
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    const double m = P.mass[i];
+    for (Index k = row_[i]; k < row_[i + 1]; ++k) {
+      const auto a = static_cast<std::size_t>(node_[static_cast<std::size_t>(k)]);
+      const double w = w_[static_cast<std::size_t>(k)], g = g_[static_cast<std::size_t>(k)];
+      nd.mass[a] += w * m;
+      nd.momentum[a] += w * m * P.v[i];
+      nd.force[a][0] += -g * P.stress[i](0, 0) * P.volume[i] + w * m * P.body[i][0];
+      if (consistent)
+        for (Index l = row_[i]; l < row_[i + 1]; ++l)
+          st_.consistent.add(static_cast<Index>(a), node_[static_cast<std::size_t>(l)],
+                             w * m * w_[static_cast<std::size_t>(l)]);
+    }
+  }
+  stages::detail::after_mass(st_);  // conservation check, active nodes, factorisation
+  stages::detail::after_momentum(st_);
+
+  // Step 5: v_i = M^-1 (q + dt f), the end nodes' Dirichlet conditions; x_i += dt v_i (4.31).
+  stages::solve_velocity(st_);
+  stages::solve_acceleration(st_);
+  stages::advance_grid_velocity(st_, dt);
+
+  // Steps 6-10: x_p = sum phi_i x_i^{s+1} written as x_p + dt sum phi_i v_i (the same by linear
+  // completeness, without the Newton residual of max-ent), F, V, rho and the stress.
+  const bool bad = std::visit(
+      [&](const auto& law) -> bool {
+        if constexpr (!std::decay_t<decltype(law)>::supports_dimension(1)) {
+          throw std::logic_error("Otm1D: a material law outside its dimensions");
+        } else {
+          bool any = false;
+          for (Index p = 0; p < P.size(); ++p) {
+            const auto i = static_cast<std::size_t>(p);
+            double dx = 0.0, L = 0.0;
+            for (Index k = row_[i]; k < row_[i + 1]; ++k) {
+              const double v =
+                  nd.velocity[static_cast<std::size_t>(node_[static_cast<std::size_t>(k)])][0];
+              dx += w_[static_cast<std::size_t>(k)] * v;
+              L += v * g_[static_cast<std::size_t>(k)];
+            }
+            dx *= dt;
+            P.x[i][0] += dx;
+            P.u[i][0] += dx;
+            P.v[i][0] = dx / dt;  // the momentum of the next step (4.29)
+            Mat<1> dtL;
+            dtL(0, 0) = dt * L;
+            P.F[i] = (Mat<1>::Identity() + dtL) * P.F[i];
+            const double J = P.F[i].determinant();
+            P.volume[i] = J * P.volume0[i];
+            P.density[i] = P.mass[i] / P.volume[i];
+            law.update(P.stress[i], P.F[i], dtL);
+            any = any || !(J > 0.0) || !std::isfinite(P.stress[i].sum());
+          }
+          return any;
+        }
+      },
+      st_.material);
+  if (bad) stages::detail::throw_particle_failure(st_);
+  for (Index i = 0; i < n; ++i)
+    x_[static_cast<std::size_t>(i)] += dt * nd.velocity[static_cast<std::size_t>(i)][0];
+  for (Index i = 1; i < n; ++i)
+    if (!(x_[static_cast<std::size_t>(i)] > x_[static_cast<std::size_t>(i - 1)]))
+      throw RunError(exit_code::kInvertedDeformation,
+                     fmt::format("step {}, t = {:.9g} s: the advected OTM nodes {} and {} crossed "
+                                 "(an inverted element, x = {:.9g} and {:.9g})",
+                                 st_.step, st_.time, i - 1, i, x_[static_cast<std::size_t>(i - 1)],
+                                 x_[static_cast<std::size_t>(i)]));
+}
+
+}  // namespace mpm

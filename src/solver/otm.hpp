@@ -1,0 +1,70 @@
+#pragma once
+// The optimal transportation meshfree method (OTM, D 4.2, Algorithm 3) in 1D: nodes that move
+// with the material, material points that are the quadrature points, the basis evaluated every
+// step on the advected nodes (P1 or local max-ent, D 4.3), and per step
+//   M_ij = sum_p phi_i m_p phi_j,  q_i = sum_p phi_i m_p (x_p^s - x_p^{s-1}) / dt,
+//   f_i = sum_p (-grad phi_i sigma_p + phi_i rho_p b_p) V_p                  (D eq. 4.28-4.30)
+//   x_i^{s+1} = x_i^s + dt M^-1 (q + dt f)                                   (4.31, constant dt)
+//   x_p^{s+1} = sum_i phi_i(x_p^s) x_i^{s+1},  F_p and V_p by grad phi^{s->s+1}  (4.32-4.35).
+// D prints eq. 4.30 with +grad phi sigma; the internal force is -int grad phi sigma dV (D eq.
+// 2.33), which the test OTM-P1 = USL-MPM-P1 on the first step (D 4.4) confirms.
+//
+// The particles' velocity v_p holds (x_p^{s+1} - x_p^s) / dt, a velocity at t^{s+1/2}: the
+// momentum of the next step (4.29), with x_p^{-1} = x_p^0 - dt v_p^0 for the first (D 4.4).
+// The nodes are the grid's nodes at the start (the body must fill the grid: nodes are carried by
+// the material); the grid sides' Dirichlet conditions fix the end nodes. The nodal sums, the
+// conservation checks and the mass solves are the MPM stages' (RunState's nodes hold the
+// advected nodes' sums), lumped or consistent mass by method.mass (D: consistent).
+#include <string>
+#include <vector>
+
+#include "basis/maxent_settings.hpp"
+#include "model/problem.hpp"
+#include "scheme/simulation.hpp"
+
+namespace mpm {
+
+enum class OtmBasis { Linear, MaxEnt };
+
+struct OtmSettings {
+  OtmBasis basis = OtmBasis::Linear;
+  MaxEntSettings maxent;  // with OtmBasis::MaxEnt: d_i = d_max times node i's nearest distance
+  MassType mass = MassType::Consistent;
+  double mass_tolerance = 1e-10;
+  double conservation_limit = 0.5;
+};
+
+class Otm1D {
+ public:
+  // Takes the problem's particles. InputError when the body does not fill the grid.
+  Otm1D(Problem<1>& pb, const OtmSettings& s);
+
+  // One step of D Algorithm 3 (the driver sets the step counter and time afterwards). RunError:
+  // a particle outside the nodes' span (exit code 4), inverted elements or det <= 0 (5), a
+  // max-ent point that does not converge (10), non-finite values (3), conservation (9).
+  void step(double dt);
+
+  RunState<1>& state() { return st_; }
+  const RunState<1>& state() const { return st_; }
+  // The advected node positions x_i^s [m], for checkpoints; set_nodes throws InputError naming
+  // `what` when the count differs or the nodes are not increasing.
+  const std::vector<double>& nodes() const { return x_; }
+  void set_nodes(const std::vector<double>& x, const std::string& what);
+  const OtmSettings& settings() const { return s_; }
+
+ private:
+  void evaluate_basis();
+  // The max-ent functions of the advected nodes at x (element e holds x): appends to the
+  // particle's stencil; false when Newton did not converge.
+  bool maxent_at(double x, Index e, Index p);
+
+  RunState<1> st_;
+  OtmSettings s_;
+  std::vector<double> x_;       // advected node positions [m], increasing
+  std::vector<Index> element_;  // element of each particle (x_e <= x_p <= x_{e+1})
+  // Per-particle stencils of variable size (max-ent), compressed rows: nodes, values, gradients.
+  std::vector<Index> row_, node_;
+  std::vector<double> w_, g_;
+};
+
+}  // namespace mpm
