@@ -44,6 +44,8 @@ PUBLISHED = {
     "otm_maxent_time_512": ("D Table 4.1", 6.96),
     "otm_bsmpm_time_32": ("D Table 4.1", 1.00),
     "otm_p1_time_32": ("D Table 4.1", 1.12),
+    "otm_unified_time_32": ("D Table 4.1", 1.23),
+    "otm_unified_time_512": ("D Table 4.1", 1.15),
     "otm_p1_time_512": ("D Table 4.1", 1.04),
     "otm_otmmaxent_time_32": ("D Table 4.1", 26.04),
     "otm_otmmaxent_time_512": ("D Table 4.1", 9.07),
@@ -1195,6 +1197,10 @@ the solver. CI guards the IMLS and MLS orders between 16, 32 and 64 cells
 {fig_md(ctx, figs, "mms_1d convergence")}"""
 
 
+def err_of(rows, key):
+    return col(rows[key], "displacement_rms")
+
+
 def sec_bar_461(R, ctx):
     """D 4.6.1: Fig. 4.7 and Table 4.1 for MPM and OTM (the unified approach to come)."""
     cells = "7,15,31,63,127,255,511"
@@ -1202,7 +1208,7 @@ def sec_bar_461(R, ctx):
                "linear/direct/consistent", "maxent/direct/consistent",
                "bspline2/direct/consistent"]
     heads = ["MPM-P1", "MPM-maxent", "BSMPM", "MPM-P1 (c)", "MPM-maxent (c)", "BSMPM (c)",
-             "OTM-P1 (c)", "OTM-maxent (c)"]
+             "OTM-P1 (c)", "OTM-maxent (c)", "unified p=2 (c)"]
     out, rows = R.study("bar_fixed_ends_otm", f"grid.cells={cells}", ", ".join(methods),
                         name="bar_461")
     otm_methods = ["linear/direct/consistent", "maxent/direct/consistent"]
@@ -1210,7 +1216,11 @@ def sec_bar_461(R, ctx):
                           ["method.solver=otm"], name="bar_461_otm")
     for m in otm_methods:
         rows["otm:" + m] = otm_rows[m]
-    keys = methods + ["otm:" + m for m in otm_methods]
+    _, uni_rows = R.study("bar_fixed_ends_otm", f"grid.cells={cells}",
+                          "bspline2/direct/consistent", ["method.solver=unified"],
+                          name="bar_461_unified")
+    rows["unified"] = uni_rows["bspline2/direct/consistent"]
+    keys = methods + ["otm:" + m for m in otm_methods] + ["unified"]
     po = {m: pair_orders(col(rows[m], "h"), col(rows[m], "displacement_rms")) for m in keys}
     t = ["| nodes | " + " | ".join(heads) + " |", "|---" * (len(heads) + 1) + "|"]
     for i in range(len(rows[keys[0]])):
@@ -1231,6 +1241,10 @@ def sec_bar_461(R, ctx):
                                     f"{e(err['linear/direct/consistent'][-2])} at 256 nodes")
     bc = po["bspline2/direct/consistent"]
     v_bs = verdict_order(bc[1], "otm_bsmpm_order")
+    uo = po["unified"]
+    v_uni = verdict_order(uo[1], "otm_bsmpm_order")
+    same = max(abs(a - b) / b for a, b in zip(err_of(rows, "unified"),
+                                              err_of(rows, "bspline2/direct/consistent")))
     bl = po["bspline2/direct"]
     me = [x for x in po["maxent/direct"][1:]]
     v_me = verdict_claim(all(x is not None and 1.0 - ORDER_TOL <= x <= 2.0 + ORDER_TOL for x in me),
@@ -1244,7 +1258,9 @@ def sec_bar_461(R, ctx):
     cost_rows = [("OTM-P1", ["--solver", "otm", "--basis", "linear"], "otm_p1_time"),
                  ("MPM-maxent", ["--basis", "maxent"], "otm_maxent_time"),
                  ("OTM-maxent", ["--solver", "otm", "--basis", "maxent"], "otm_otmmaxent_time"),
-                 ("BSMPM", ["--basis", "bspline", "--degree", "2"], "otm_bsmpm_time")]
+                 ("BSMPM", ["--basis", "bspline", "--degree", "2"], "otm_bsmpm_time"),
+                 ("unified", ["--solver", "unified", "--basis", "bspline", "--degree", "2"],
+                  "otm_unified_time")]
     ratios, base = {}, {}
     for nodes in (32, 512):
         n = (nodes - 1) * 12
@@ -1264,12 +1280,13 @@ def sec_bar_461(R, ctx):
                   f"{pub(key + '_512')} |")
     figs = plot_study(out, os.path.join(ctx["figdir"], "bar_461"), "displacement_rms",
                       "bar with fixed ends (D 4.6.1), MPM", energy=False)
-    return f"""## Bar with fixed ends, D 4.6.1: MPM and OTM with P1, max-ent and B-splines (D Fig. 4.7, Table 4.1)
+    return f"""## Bar with fixed ends, D 4.6.1: MPM, OTM and the unified approach (D Fig. 4.7, Table 4.1)
 
 `examples/bar_fixed_ends_otm.toml`: L = 1 m, E = 4 kPa, rho = 1 kg/m^3, v0 = 0.6 m/s, T = 1e-3 s,
 dt = 1e-5 s, 12 particles per element, USL for MPM, max-ent with d_max = 2. OTM (`method.solver
-= "otm"`, D Algorithm 3, `src/solver/otm.hpp`) advects the nodes with the material; the unified
-approach (the rest of D's figure) is not implemented yet (issue 17). `build/mpm study
+= "otm"`, D Algorithm 3, `src/solver/otm.hpp`) advects the nodes with the material, the unified
+approach (`method.solver = "unified"`, D Algorithm 4) the degrees of freedom of B-splines (the
+same study with `--methods bspline2/direct/consistent --set method.solver=unified`). `build/mpm study
 examples/bar_fixed_ends_otm.toml --refine grid.cells={cells} --methods "{', '.join(methods)}"`,
 and for OTM the same with `--methods "{', '.join(otm_methods)}" --set method.solver=otm` (c:
 consistent mass), RMS displacement error of D eq. 4.92 (observed order):
@@ -1283,8 +1300,15 @@ consistent mass), RMS displacement error of D eq. 4.92 (observed order):
 | OTM-P1 second order until the final refinement, first order there; rule: orders >= {2.0 - ORDER_TOL:.1f}, the last below 1.5 | {", ".join(o(x) for x in op[1:])} | {v_otm} |
 | OTM-P1 "significantly improves" on MPM-P1 (Fig. 4.6); rule: lower error at 256 nodes, both consistent | {e(err['otm:linear/direct/consistent'][-2])} vs {e(err['linear/direct/consistent'][-2])} | {v_otm_mpm} |
 | BSMPM third order until a limiting value ({src('otm_bsmpm_order')}), consistent mass | {", ".join(o(x) for x in bc[1:])} | {v_bs} |
+| the unified approach (p = 2) third order until a limiting value ({src('otm_bsmpm_order')}) | {", ".join(o(x) for x in uo[1:])} | {v_uni} |
 | MPM-maxent between first and second order; rule: every order in [{1 - ORDER_TOL:.1f}, {2 + ORDER_TOL:.1f}] (lumped) | {", ".join(o(x) for x in me)} | {v_me} |
 | max-ent errors "significantly lower" than P1's; rule: lower on every grid (MPM, lumped mass) | {", ".join(e(x) for x in err["maxent/direct"])} against {", ".join(e(x) for x in err["linear/direct"])} | {v_low} |
+
+"Similar results for BSMPM and the unified approach" (D): their errors differ by at most
+{100 * same:.1f} % on these grids. The unified approach is our isoparametric reading
+of D Algorithm 4 (`src/solver/otm.hpp`): the control points of x(X) = sum B_i(X) c_i are the
+advected degrees of freedom, so the particles keep their material coordinate; with degree 1 it
+is OTM-P1's basis, and the first step of the two coincides (`tests/solver/test_otm.cpp`).
 
 D does not say which mass matrix its MPM runs of Fig. 4.7 use (OTM and the unified approach
 use the consistent one). The third order of BSMPM appears with consistent mass only: with lumped

@@ -230,7 +230,9 @@ int main(int argc, char** argv) {
   bench->add_option("--basis", bopt.basis, "grid basis (mpm list)")->capture_default_str();
   bench->add_option("--degree", bopt.degree, "B-spline degree")->capture_default_str();
   bench->add_option("--mapping", bopt.mapping, "particle-to-grid mapping")->capture_default_str();
-  bench->add_option("--solver", bopt.solver, "mpm, or otm (1D, basis linear or maxent)")
+  bench
+      ->add_option("--solver", bopt.solver,
+                   "mpm; otm (1D, basis linear or maxent); unified (1D, bspline)")
       ->capture_default_str();
   bench->add_option("--mass", bopt.mass, "lumped or consistent")->capture_default_str();
   bench

@@ -17,7 +17,7 @@ struct BenchOptions {
   std::string basis = "linear";
   int degree = 2;
   std::string mapping = "direct";
-  std::string solver = "mpm";   // method.solver: mpm or otm (1D)
+  std::string solver = "mpm";   // method.solver: mpm, otm or unified (1D)
   std::string mass = "lumped";  // method.mass
   // 2D problem: "plate" (plate_mms_2d) or "refkernel" (the problem of the yardstick
   // ../shared/tools/refkernel.cpp through the custom benchmark).

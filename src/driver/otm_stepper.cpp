@@ -28,10 +28,15 @@ class OtmStepper final : public Stepper<1> {
   }
   void report(nlohmann::ordered_json& summary) const override {
     const auto& x = otm_.nodes();
-    summary["otm"] = {{"nodes", x.size()},
-                      {"basis", otm_.settings().basis == OtmBasis::Linear ? "linear" : "maxent"},
+    const OtmSettings& s = otm_.settings();
+    summary["otm"] = {{"algorithm", s.unified ? "unified (D Algorithm 4)" : "OTM (D Algorithm 3)"},
+                      {"nodes", x.size()},
+                      {"basis", s.basis == OtmBasis::Linear   ? "linear"
+                                : s.basis == OtmBasis::MaxEnt ? "maxent"
+                                                              : "bspline"},
                       {"first_node", x.front()},
                       {"last_node", x.back()}};
+    if (s.basis == OtmBasis::BSpline) summary["otm"]["degree"] = s.degree;
     if (otm_.settings().basis == OtmBasis::MaxEnt)
       summary["otm"]["maxent_dmax"] = otm_.settings().maxent.dmax;
   }
@@ -52,6 +57,11 @@ std::unique_ptr<Stepper<Dim>> make_otm_stepper(const StepperInput<Dim>& in) {
     if (const auto* k = std::get_if<MaxEntKind>(&m.basis)) {
       s.basis = OtmBasis::MaxEnt;
       s.maxent = k->settings;
+    }
+    if (m.solver == Solver::Unified) {
+      s.unified = true;
+      s.basis = OtmBasis::BSpline;
+      s.degree = basis_degree(m.basis);
     }
     s.mass = m.mass;
     s.mass_tolerance = m.mass_tolerance;

@@ -101,9 +101,12 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   const MethodSettings& method = settings.method;
   const BasisKind& basis = method.basis;
   const std::string_view mapping_name = name_of(method.mapping);
-  const bool otm = method.solver == Solver::Otm;
-  // OTM's particle velocity is (x_p^{s+1} - x_p^s) / dt, a velocity at t - dt / 2.
-  const double scheme_velocity_time = otm ? -0.5 : velocity_time(method.scheme);
+  const bool otm = method.solver == Solver::Otm, unified = method.solver == Solver::Unified;
+  // OTM's particle velocity is (x_p^{s+1} - x_p^s) / dt, a velocity at t - dt / 2; the unified
+  // approach updates it as USL does (Usl::kVelocityTime, also t - dt / 2).
+  const double scheme_velocity_time = otm       ? -0.5
+                                      : unified ? Usl::kVelocityTime
+                                                : velocity_time(method.scheme);
 
   const auto t_start = Clock::now();
   const TimeSettings& ts = settings.time;
@@ -118,8 +121,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 
   if (opt.shuffle_seed != 0 && !opt.restart)
     shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
-  const auto stepper = otm ? make_otm_stepper<Dim>({pb, method, !opt.restart})
-                           : make_stepper<Dim>(basis, {pb, method, !opt.restart});
+  const auto stepper = otm || unified ? make_otm_stepper<Dim>({pb, method, !opt.restart})
+                                      : make_stepper<Dim>(basis, {pb, method, !opt.restart});
   RunState<Dim>& sim = stepper->state();
 
   // Outputs start once the input has passed every check above.
@@ -171,10 +174,14 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   res.wall_seconds = seconds_since(t_start);
 
   nlohmann::ordered_json method_json = {
-      {"solver", otm ? "otm" : "mpm"},
+      {"solver", otm       ? "otm"
+                 : unified ? "unified"
+                           : "mpm"},
       {"basis", std::string(basis_name(basis))},
       {"mapping", std::string(mapping_name)},
-      {"scheme", otm ? std::string("otm (D Algorithm 3)") : std::string(name_of(method.scheme))},
+      {"scheme", otm       ? std::string("otm (D Algorithm 3)")
+                 : unified ? std::string("unified (D Algorithm 4)")
+                           : std::string(name_of(method.scheme))},
       {"mass", method.mass == MassType::Consistent ? "consistent" : "lumped"}};
   if (basis_degree(basis) > 0) method_json["degree"] = basis_degree(basis);
   res.summary = make_summary(res, settings, sim.material, sim.time, std::move(method_json),

@@ -66,9 +66,9 @@ struct StepperInput {
 template <int Dim>
 std::unique_ptr<Stepper<Dim>> make_stepper(const BasisKind& basis, const StepperInput<Dim>& in);
 
-// method.solver = "otm": the OTM stepper (solver/otm.hpp) with the basis kind's functions on
-// the advected nodes (linear or max-ent; run_settings has checked). 1D only (logic_error in 2D,
-// which run_settings refuses).
+// method.solver = "otm" or "unified": the stepper of solver/otm.hpp with the basis kind's
+// functions on the advected nodes (OTM: linear or max-ent; unified: B-splines; run_settings has
+// checked). 1D only (logic_error in 2D, which run_settings refuses).
 template <int Dim>
 std::unique_ptr<Stepper<Dim>> make_otm_stepper(const StepperInput<Dim>& in);
 

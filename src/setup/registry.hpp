@@ -87,6 +87,7 @@ inline constexpr Entry kSolvers[] = {
     {"otm",
      "optimal transportation meshfree method on nodes advected with the material, P1 or "
      "max-ent basis (D Algorithm 3; 1D)"},
+    {"unified", "B-splines on advected degrees of freedom, USL updates (D Algorithm 4; 1D)"},
 };
 
 inline constexpr Entry kTlsCompletions[] = {

@@ -13,6 +13,10 @@
 namespace mpm {
 namespace {
 
+int basis_degree_of(const BasisKind& k) {
+  return std::visit([](const auto& kind) { return std::decay_t<decltype(kind)>::kDegree; }, k);
+}
+
 // A basis kind matches by name and, for B-splines, by degree (method.degree).
 template <std::size_t I = 0>
 BasisKind choose_basis(std::string_view name, int degree) {
@@ -69,7 +73,10 @@ RunSettings run_settings(const Config& cfg, int dim) {
   RunSettings s;
   MethodSettings& m = s.method;
   const std::string solver = cfg.get_string("method.solver");
-  m.solver = solver == "ulfem" ? Solver::Ulfem : solver == "otm" ? Solver::Otm : Solver::Mpm;
+  m.solver = solver == "ulfem"     ? Solver::Ulfem
+             : solver == "otm"     ? Solver::Otm
+             : solver == "unified" ? Solver::Unified
+                                   : Solver::Mpm;
   if (m.solver != Solver::Mpm && dim != 1)
     throw InputError(fmt::format("{}: method.solver = \"{}\" is one-dimensional (so far)",
                                  cfg.where("method.solver"), solver));
@@ -145,12 +152,18 @@ RunSettings run_settings(const Config& cfg, int dim) {
           "completeness on its advected nodes (D eq. 4.15-4.16): method.basis = \"linear\" or "
           "\"maxent\", not \"{}\"",
           m.where_basis, name_of(m.basis)));
-    if (!std::holds_alternative<DirectMapping>(m.mapping))
-      throw InputError(fmt::format(
-          "{}: method.solver = \"otm\" integrates at the material points (D Algorithm 3): "
-          "method.mapping = \"direct\", not \"{}\"",
-          m.where_mapping, name_of(m.mapping)));
   }
+  if (m.solver == Solver::Unified && basis_degree_of(m.basis) == 0)
+    throw InputError(fmt::format(
+        "{}: method.solver = \"unified\" runs B-splines on advected degrees of freedom (D "
+        "Algorithm 4): method.basis = \"bspline\" (method.degree 1-5), not \"{}\"",
+        m.where_basis, name_of(m.basis)));
+  if ((m.solver == Solver::Otm || m.solver == Solver::Unified) &&
+      !std::holds_alternative<DirectMapping>(m.mapping))
+    throw InputError(fmt::format(
+        "{}: method.solver = \"{}\" integrates at the material points (D Algorithms 3, 4): "
+        "method.mapping = \"direct\", not \"{}\"",
+        m.where_mapping, solver, name_of(m.mapping)));
   return s;
 }
 

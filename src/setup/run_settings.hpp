@@ -30,7 +30,7 @@ struct OutputSettings {
   bool csv = true, vtk = true;
 };
 
-enum class Solver { Mpm, Ulfem, Otm };
+enum class Solver { Mpm, Ulfem, Otm, Unified };
 
 // method.*: the solver and, for MPM, the basis kind, the mapping (built with its settings from
 // method.tls_*, method.mls_*, method.gauss_points: setup/method_settings.hpp), the scheme, the

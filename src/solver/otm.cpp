@@ -10,6 +10,7 @@
 #include <type_traits>
 #include <variant>
 
+#include "basis/bspline.hpp"
 #include "basis/maxent.hpp"
 #include "scheme/stages.hpp"
 
@@ -28,10 +29,22 @@ Otm1D::Otm1D(Problem<1>& pb, const OtmSettings& s)
     throw InputError("method.solver = \"otm\": tractions are not implemented for OTM yet");
   if (s.basis == OtmBasis::MaxEnt && !(s.maxent.dmax > 1.0 && s.maxent.dmax <= 3.0))
     throw InputError(fmt::format("method.maxent_dmax = {}: must be in (1, 3]", s.maxent.dmax));
-  const Index n = g.cells[0] + 1;
+  if (s.unified && !(s.basis == OtmBasis::BSpline && s.degree >= 1 && s.degree <= 5))
+    throw InputError("method.solver = \"unified\": B-splines of degree 1 to 5");
+  // Unified: the B-spline control points at their Greville abscissae (x(X) = X at the start).
+  const Index n = s.unified ? g.cells[0] + s.degree : g.cells[0] + 1;
   x_.resize(static_cast<std::size_t>(n));
-  for (Index i = 0; i < n; ++i)
-    x_[static_cast<std::size_t>(i)] = lo + g.h[0] * static_cast<double>(i);
+  for (Index i = 0; i < n; ++i) {
+    double xi = lo + g.h[0] * static_cast<double>(i);
+    if (s.unified) {
+      // (U_{i+1} + ... + U_{i+p}) / p of the open uniform knot vector, as BSplineBasis.
+      double sum = 0.0;
+      for (int k = 1; k <= s.degree; ++k)
+        sum += static_cast<double>(std::clamp<Index>(i + k - s.degree, 0, g.cells[0]));
+      xi = lo + g.h[0] * sum / s.degree;
+    }
+    x_[static_cast<std::size_t>(i)] = xi;
+  }
   st_.nodes.resize(n);
   for (const auto& f : pb.fixed_sides)
     if (f.components & 1u) st_.nodes.fixed[f.side ? static_cast<std::size_t>(n - 1) : 0] |= 1u;
@@ -139,7 +152,31 @@ bool Otm1D::maxent_at(double x, Index e, Index p) {
   return true;
 }
 
-// D Algorithm 3, step 3: the basis at the material points from the advected nodes.
+template <int P>
+void Otm1D::bspline_rows() {
+  const BSplineBasis<1, P> basis(st_.grid);  // B_i(X) on the material (initial) grid
+  typename BSplineBasis<1, P>::StencilT s;
+  const auto& Pt = st_.particles;
+  for (Index p = 0; p < Pt.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    basis.evaluate_point(Pt.x0[i], s);
+    double J = 0.0;  // x'(X_p) = sum_i B_i'(X_p) c_i
+    for (int a = 0; a < s.kSize; ++a) J += s.grad[a][0] * x_[static_cast<std::size_t>(s.dof[a])];
+    if (!(J > 0.0))
+      throw RunError(exit_code::kInvertedDeformation,
+                     fmt::format("step {}, t = {:.9g} s: the advected B-spline map is inverted at "
+                                 "particle {} (X = {:.9g}, dx/dX = {:.3g})",
+                                 st_.step, st_.time, Pt.id[i], Pt.x0[i][0], J));
+    for (int a = 0; a < s.kSize; ++a) {
+      node_.push_back(s.dof[a]);
+      w_.push_back(s.w[a]);
+      g_.push_back(s.grad[a][0] / J);
+    }
+    row_.push_back(static_cast<Index>(node_.size()));
+  }
+}
+
+// D Algorithm 3 / 4, step 3: the basis at the material points from the advected nodes.
 void Otm1D::evaluate_basis() {
   auto& P = st_.particles;
   const auto n = static_cast<Index>(x_.size());
@@ -147,6 +184,20 @@ void Otm1D::evaluate_basis() {
   node_.clear();
   w_.clear();
   g_.clear();
+  if (s_.unified) {
+    switch (s_.degree) {
+      case 1:
+        return bspline_rows<1>();
+      case 2:
+        return bspline_rows<2>();
+      case 3:
+        return bspline_rows<3>();
+      case 4:
+        return bspline_rows<4>();
+      default:
+        return bspline_rows<5>();
+    }
+  }
   Index failed = 0, first_failed = -1;
   for (Index p = 0; p < P.size(); ++p) {
     const auto i = static_cast<std::size_t>(p);
@@ -237,7 +288,16 @@ void Otm1D::step(double dt) {
             dx *= dt;
             P.x[i][0] += dx;
             P.u[i][0] += dx;
-            P.v[i][0] = dx / dt;  // the momentum of the next step (4.29)
+            if (s_.unified) {
+              // USL's velocity update (D eq. 4.88): v_p += dt sum phi_i a_i.
+              double acc = 0.0;
+              for (Index k = row_[i]; k < row_[i + 1]; ++k)
+                acc += w_[static_cast<std::size_t>(k)] *
+                       nd.accel[static_cast<std::size_t>(node_[static_cast<std::size_t>(k)])][0];
+              P.v[i][0] += dt * acc;
+            } else {
+              P.v[i][0] = dx / dt;  // the momentum of the next step (4.29)
+            }
             Mat<1> dtL;
             dtL(0, 0) = dt * L;
             P.F[i] = (Mat<1>::Identity() + dtL) * P.F[i];
@@ -254,7 +314,8 @@ void Otm1D::step(double dt) {
   if (bad) stages::detail::throw_particle_failure(st_);
   for (Index i = 0; i < n; ++i)
     x_[static_cast<std::size_t>(i)] += dt * nd.velocity[static_cast<std::size_t>(i)][0];
-  for (Index i = 1; i < n; ++i)
+  // (Unified: the map's slope at the particles is checked in bspline_rows instead.)
+  for (Index i = 1; i < n && !s_.unified; ++i)
     if (!(x_[static_cast<std::size_t>(i)] > x_[static_cast<std::size_t>(i - 1)]))
       throw RunError(exit_code::kInvertedDeformation,
                      fmt::format("step {}, t = {:.9g} s: the advected OTM nodes {} and {} crossed "

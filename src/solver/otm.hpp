@@ -15,6 +15,15 @@
 // the material); the grid sides' Dirichlet conditions fix the end nodes. The nodal sums, the
 // conservation checks and the mass solves are the MPM stages' (RunState's nodes hold the
 // advected nodes' sums), lumped or consistent mass by method.mass (D: consistent).
+//
+// The unified approach (D 4.5, Algorithm 4) is the same nodal update with B-splines of degree p
+// on advected degrees of freedom and USL's particle velocity, v_p += dt sum phi_i a_i (4.88):
+// the degrees of freedom are the control points c_i of the map x(X) = sum_i B_i(X) c_i from the
+// material coordinate X (the initial grid, its open uniform knot vector), which start at the
+// Greville abscissae (x(X) = X) and move by c_i += dt v_i (4.85-4.86). A material point keeps X,
+// x_p = x(X_p) (4.87 by induction), phi_i(x_p) = B_i(X_p) and grad phi_i = B_i'(X_p) / x'(X_p).
+// With p = 1 this is P1 on the advected nodes, OTM-P1's basis. D does not say how the basis
+// follows the advected degrees of freedom; this isoparametric reading is ours.
 #include <string>
 #include <vector>
 
@@ -24,10 +33,12 @@
 
 namespace mpm {
 
-enum class OtmBasis { Linear, MaxEnt };
+enum class OtmBasis { Linear, MaxEnt, BSpline };
 
 struct OtmSettings {
+  bool unified = false;  // D Algorithm 4 (B-splines, USL particle velocity) instead of OTM
   OtmBasis basis = OtmBasis::Linear;
+  int degree = 0;         // OtmBasis::BSpline: 1-5
   MaxEntSettings maxent;  // with OtmBasis::MaxEnt: d_i = d_max times node i's nearest distance
   MassType mass = MassType::Consistent;
   double mass_tolerance = 1e-10;
@@ -46,8 +57,8 @@ class Otm1D {
 
   RunState<1>& state() { return st_; }
   const RunState<1>& state() const { return st_; }
-  // The advected node positions x_i^s [m], for checkpoints; set_nodes throws InputError naming
-  // `what` when the count differs or the nodes are not increasing.
+  // The advected node positions x_i^s [m] (unified: the control points), for checkpoints; set_nodes
+  // throws InputError naming `what` when the count differs or the nodes are not increasing.
   const std::vector<double>& nodes() const { return x_; }
   void set_nodes(const std::vector<double>& x, const std::string& what);
   const OtmSettings& settings() const { return s_; }
@@ -57,6 +68,9 @@ class Otm1D {
   // The max-ent functions of the advected nodes at x (element e holds x): appends to the
   // particle's stencil; false when Newton did not converge.
   bool maxent_at(double x, Index e, Index p);
+  // Unified: B_i(X_p) and B_i'(X_p) / x'(X_p) of every particle.
+  template <int P>
+  void bspline_rows();
 
   RunState<1> st_;
   OtmSettings s_;

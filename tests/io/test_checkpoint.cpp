@@ -209,6 +209,10 @@ TEST(Checkpoint, RestartIsBitwiseOtherSolversAndLoads) {
   check_bitwise_restart({"bar_fixed_ends_otm",
                          {"method.solver=otm", "method.basis=maxent", "method.mass=consistent"},
                          50});
+  check_bitwise_restart({"bar_fixed_ends_otm",
+                         {"method.solver=unified", "method.basis=bspline", "method.degree=3",
+                          "method.mass=consistent"},
+                         50});
 }
 
 // A valid checkpoint of a short run, written into dir.

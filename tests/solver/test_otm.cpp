@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "basis/bspline.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
@@ -52,7 +53,8 @@ std::unique_ptr<Built> build(const std::string& toml, bool free_ends = false) {
   if (free_ends) b->pb.fixed_sides.clear();
   b->settings = run_settings(cfg, 1);
   const driver::StepperInput<1> in{b->pb, b->settings.method, true};
-  b->stepper = b->settings.method.solver == Solver::Otm
+  const Solver solver = b->settings.method.solver;
+  b->stepper = solver == Solver::Otm || solver == Solver::Unified
                    ? driver::make_otm_stepper<1>(in)
                    : driver::make_stepper<1>(b->settings.method.basis, in);
   return b;
@@ -175,6 +177,61 @@ TEST(Otm, P1SecondOrderOnTheBarOfD461) {
   EXPECT_LT(m2, o2 - 0.5);  // MPM-P1 loses the order first (grid crossing)
 }
 
+// The unified approach (D Algorithm 4) with degree-1 B-splines has OTM-P1's basis (P1 on the
+// advected nodes) and nodal update: the first step gives the same positions, F and stress; the
+// particle velocities differ (USL's v_p += dt sum phi a against OTM's (x^{s+1} - x^s) / dt).
+TEST(Unified, DegreeOneFirstStepEqualsOtmP1) {
+  auto otm = build(bar(15, "method.solver = \"otm\""));
+  auto uni = build(bar(15,
+                       "method.solver = \"unified\"\nmethod.basis = \"bspline\"\n"
+                       "method.degree = 1"));
+  for (auto* b : {otm.get(), uni.get()}) {
+    auto& P = b->stepper->state().particles;
+    for (std::size_t i = 0; i < P.x.size(); ++i)
+      P.stress[i](0, 0) = 50.0 * std::cos(3.0 * P.x[i][0]);
+  }
+  steps(*otm->stepper, 1, 1e-5);
+  steps(*uni->stepper, 1, 1e-5);
+  const auto& a = otm->stepper->state().particles;
+  const auto& b = uni->stepper->state().particles;
+  for (std::size_t i = 0; i < a.x.size(); ++i) {
+    EXPECT_NEAR(a.x[i][0], b.x[i][0], 1e-15) << i;
+    EXPECT_NEAR(a.F[i](0, 0), b.F[i](0, 0), 1e-14) << i;
+    EXPECT_NEAR(a.stress[i](0, 0), b.stress[i](0, 0), 1e-9) << i;
+  }
+}
+
+// Degree 2 on a free bar: momentum conserved to round-off (partition of unity of B_i and of
+// their gradients), and the particles keep their material coordinate: x_p = sum B_i(X_p) c_i.
+TEST(Unified, QuadraticConservesMomentumAndFollowsItsMap) {
+  auto b = build(bar(10,
+                     "method.solver = \"unified\"\nmethod.basis = \"bspline\"\n"
+                     "method.degree = 2"),
+                 /*free_ends=*/true);
+  auto& P = b->stepper->state().particles;
+  for (std::size_t i = 0; i < P.v.size(); ++i) P.v[i][0] = 0.3 + 0.6 * std::sin(5.0 * P.x[i][0]);
+  double m0 = 0.0, s0 = 0.0;
+  for (std::size_t i = 0; i < P.v.size(); ++i) {
+    m0 += P.mass[i] * P.v[i][0];
+    s0 += P.mass[i] * std::abs(P.v[i][0]);
+  }
+  steps(*b->stepper, 50, 1e-5);
+  double m1 = 0.0;
+  for (std::size_t i = 0; i < P.v.size(); ++i) m1 += P.mass[i] * P.v[i][0];
+  EXPECT_LT(std::abs(m1 - m0), 1e-13 * s0);
+  io::Checkpoint c;
+  b->stepper->save(c);
+  const BSplineBasis<1, 2> basis(b->stepper->state().grid);
+  BSplineBasis<1, 2>::StencilT s;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    basis.evaluate_point(P.x0[i], s);
+    double x = 0.0;
+    for (int a = 0; a < s.kSize; ++a)
+      x += s.w[a] * c.basis_state[static_cast<std::size_t>(s.dof[a])];
+    EXPECT_NEAR(P.x[i][0], x, 1e-14) << i;
+  }
+}
+
 TEST(Otm, InputsAreRefused) {
   auto error = [](const std::string& extra) {
     try {
@@ -188,6 +245,14 @@ TEST(Otm, InputsAreRefused) {
             std::string::npos);
   EXPECT_NE(error("method.mapping = \"tls\"").find("method.mapping = \"direct\""),
             std::string::npos);
+  try {
+    build(bar(7, "method.solver = \"unified\""));
+    FAIL() << "unified accepted with P1";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("method.basis = \"bspline\" (method.degree 1-5)"),
+              std::string::npos)
+        << e.what();
+  }
   try {
     (void)run_settings(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml",
                                     {"method.solver=otm"}),
