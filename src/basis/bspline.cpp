@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "basis/bspline.hpp"
-#include "mapping/quadrature.hpp"
+#include "basis/stability.hpp"
 
 namespace mpm {
 
@@ -20,26 +20,7 @@ namespace {
 template <int P>
 double stability_factor() {
   const Index n = 4 * P + 4;
-  const Grid<1> g(Vec<1>(0.0), Vec<1>(static_cast<double>(n)), IVec<1>{n});
-  const BSplineBasis<1, P> basis(g);
-  const auto nd = static_cast<std::size_t>(basis.num_dofs());
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(static_cast<Index>(nd), static_cast<Index>(nd));
-  Eigen::VectorXd m = Eigen::VectorXd::Zero(static_cast<Index>(nd));
-  const GaussRule rule = gauss_legendre(P + 1);
-  typename BSplineBasis<1, P>::StencilT st;
-  for (Index c = 0; c < n; ++c)
-    for (std::size_t k = 0; k < rule.xi.size(); ++k) {
-      basis.evaluate_point(Vec<1>(static_cast<double>(c) + 0.5 + 0.5 * rule.xi[k]), st);
-      const double w = 0.5 * rule.w[k];
-      for (int a = 0; a < st.kSize; ++a) {
-        m[st.dof[a]] += w * st.w[a];
-        for (int b = 0; b < st.kSize; ++b)
-          K(st.dof[a], st.dof[b]) += w * st.grad[a][0] * st.grad[b][0];
-      }
-    }
-  double omega2 = 0.0;
-  for (Index i = 0; i < K.rows(); ++i) omega2 = std::max(omega2, K.row(i).cwiseAbs().sum() / m[i]);
-  return 2.0 / std::sqrt(omega2);
+  return gershgorin_stability_factor(BSplineBasis<1, P>(stability_bar(n)), n, P + 1, [] {});
 }
 
 }  // namespace

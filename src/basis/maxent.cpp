@@ -11,7 +11,7 @@
 #include <cmath>
 #include <limits>
 
-#include "mapping/quadrature.hpp"
+#include "basis/stability.hpp"
 
 namespace mpm {
 
@@ -330,27 +330,9 @@ void MaxEntBasis<Dim>::throw_if_failed(Index step, double time, std::string_view
 // cell (the functions are smooth but not polynomial).
 double maxent_stability_factor(const MaxEntSettings& s) {
   constexpr Index n = 4 * MaxEntBasis<1>::kWindow + 4;
-  const Grid<1> g(Vec<1>(0.0), Vec<1>(static_cast<double>(n)), IVec<1>{n});
-  const MaxEntBasis<1> basis(g, s);
-  const Index nd = basis.num_dofs();
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(nd, nd);
-  Eigen::VectorXd m = Eigen::VectorXd::Zero(nd);
-  const GaussRule rule = gauss_legendre(8);
-  MaxEntBasis<1>::StencilT st;
-  for (Index c = 0; c < n; ++c)
-    for (std::size_t k = 0; k < rule.xi.size(); ++k) {
-      basis.evaluate_point(Vec<1>(static_cast<double>(c) + 0.5 + 0.5 * rule.xi[k]), st);
-      const double w = 0.5 * rule.w[k];
-      for (int a = 0; a < st.kSize; ++a) {
-        m[st.dof[a]] += w * st.w[a];
-        for (int b = 0; b < st.kSize; ++b)
-          K(st.dof[a], st.dof[b]) += w * st.grad[a][0] * st.grad[b][0];
-      }
-    }
-  basis.throw_if_failed(-1, 0.0, "points of the stability estimate");
-  double omega2 = 0.0;
-  for (Index i = 0; i < K.rows(); ++i) omega2 = std::max(omega2, K.row(i).cwiseAbs().sum() / m[i]);
-  return 2.0 / std::sqrt(omega2);
+  const MaxEntBasis<1> basis(stability_bar(n), s);
+  return gershgorin_stability_factor(
+      basis, n, 8, [&] { basis.throw_if_failed(-1, 0.0, "points of the stability estimate"); });
 }
 
 template class MaxEntBasis<1>;
