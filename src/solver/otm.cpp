@@ -18,36 +18,48 @@ namespace mpm {
 
 Otm1D::Otm1D(Problem<1>& pb, const OtmSettings& s)
     : st_(pb.grid, std::move(pb.particles), pb.material), s_(s) {
+  // The nodes discretise the body only (D 4.4: OTM has no empty elements): the grid's nodes
+  // from the body's first to its last, which must be nodes of the grid.
   const Grid<1>& g = st_.grid;
-  const double lo = g.origin[0], hi = g.upper()[0], tol = 1e-12 * (hi - lo);
-  if (std::abs(pb.body_min[0] - lo) > tol || std::abs(pb.body_max[0] - hi) > tol)
+  const double h = g.h[0], b0 = pb.body_min[0], b1 = pb.body_max[0];
+  const double i0 = (b0 - g.origin[0]) / h, i1 = (b1 - g.origin[0]) / h;
+  if (std::abs(i0 - std::round(i0)) > 1e-9 || std::abs(i1 - std::round(i1)) > 1e-9)
     throw InputError(fmt::format(
-        "method.solver = \"otm\": the nodes are carried by the material, so the body [{}, {}] "
-        "must fill the grid [{}, {}] (set grid.min/grid.max to the body's ends)",
-        pb.body_min[0], pb.body_max[0], lo, hi));
-  if (!pb.tractions.empty())
-    throw InputError("method.solver = \"otm\": tractions are not implemented for OTM yet");
+        "method.solver = \"{}\": the nodes are carried by the material and discretise the "
+        "body only, so its ends [{}, {}] must be grid nodes (grid [{}, {}], cell size {})",
+        s.unified ? "unified" : "otm", b0, b1, g.origin[0], g.upper()[0], h));
+  const auto cells = static_cast<Index>(std::llround(i1) - std::llround(i0));
+  body_ = Grid<1>(Vec<1>(g.origin[0] + h * std::round(i0)),
+                  Vec<1>(g.origin[0] + h * std::round(i1)), IVec<1>{cells});
   if (s.basis == OtmBasis::MaxEnt && !(s.maxent.dmax > 1.0 && s.maxent.dmax <= 3.0))
     throw InputError(fmt::format("method.maxent_dmax = {}: must be in (1, 3]", s.maxent.dmax));
   if (s.unified && !(s.basis == OtmBasis::BSpline && s.degree >= 1 && s.degree <= 5))
     throw InputError("method.solver = \"unified\": B-splines of degree 1 to 5");
   // Unified: the B-spline control points at their Greville abscissae (x(X) = X at the start).
-  const Index n = s.unified ? g.cells[0] + s.degree : g.cells[0] + 1;
+  const double lo = body_.origin[0];
+  const Index n = s.unified ? cells + s.degree : cells + 1;
   x_.resize(static_cast<std::size_t>(n));
   for (Index i = 0; i < n; ++i) {
-    double xi = lo + g.h[0] * static_cast<double>(i);
+    double xi = lo + h * static_cast<double>(i);
     if (s.unified) {
       // (U_{i+1} + ... + U_{i+p}) / p of the open uniform knot vector, as BSplineBasis.
       double sum = 0.0;
       for (int k = 1; k <= s.degree; ++k)
-        sum += static_cast<double>(std::clamp<Index>(i + k - s.degree, 0, g.cells[0]));
-      xi = lo + g.h[0] * sum / s.degree;
+        sum += static_cast<double>(std::clamp<Index>(i + k - s.degree, 0, cells));
+      xi = lo + h * sum / s.degree;
     }
     x_[static_cast<std::size_t>(i)] = xi;
   }
   st_.nodes.resize(n);
-  for (const auto& f : pb.fixed_sides)
-    if (f.components & 1u) st_.nodes.fixed[f.side ? static_cast<std::size_t>(n - 1) : 0] |= 1u;
+  // A grid side's Dirichlet condition fixes the body's end node when the body reaches that
+  // side (a condition on a side the body does not touch constrains no material node).
+  for (const auto& f : pb.fixed_sides) {
+    const bool touches =
+        f.side ? std::abs(b1 - g.upper()[0]) <= 1e-9 * h : std::abs(b0 - g.origin[0]) <= 1e-9 * h;
+    if ((f.components & 1u) && touches)
+      st_.nodes.fixed[f.side ? static_cast<std::size_t>(n - 1) : 0] |= 1u;
+  }
+  st_.tractions = pb.tractions;
   st_.mass_type = s.mass;
   st_.mass_tolerance = s.mass_tolerance;
   st_.conservation_limit = s.conservation_limit;
@@ -56,7 +68,7 @@ Otm1D::Otm1D(Problem<1>& pb, const OtmSettings& s)
   if (st_.body_force.fill) st_.body_force.fill(P, 0.0, P.body);
   element_.assign(static_cast<std::size_t>(P.size()), 0);
   for (std::size_t p = 0; p < element_.size(); ++p)
-    element_[p] = std::clamp<Index>(g.cell_of(P.x[p][0], 0), 0, n - 2);
+    element_[p] = std::clamp<Index>(body_.cell_of(P.x[p][0], 0), 0, cells - 1);
 }
 
 void Otm1D::set_nodes(const std::vector<double>& x, const std::string& what) {
@@ -152,9 +164,43 @@ bool Otm1D::maxent_at(double x, Index e, Index p) {
   return true;
 }
 
+namespace {
+// fn(std::integral_constant<int, P>) for the B-spline degree p = 1..5.
+template <class Fn>
+void with_degree(int p, Fn&& fn) {
+  switch (p) {
+    case 1:
+      return fn(std::integral_constant<int, 1>{});
+    case 2:
+      return fn(std::integral_constant<int, 2>{});
+    case 3:
+      return fn(std::integral_constant<int, 3>{});
+    case 4:
+      return fn(std::integral_constant<int, 4>{});
+    default:
+      return fn(std::integral_constant<int, 5>{});
+  }
+}
+}  // namespace
+
+// The tractions. A 1D traction loads an end of the body (model/problem.hpp, body_face_traction),
+// and the body's ends are its end nodes, carried by the material: the end node of OTM (P1 and
+// max-ent interpolate there, weak Kronecker-delta property) and the end control point of the
+// unified approach (the open knot vector's B_i interpolate at its ends). So the force tau A acts
+// on that node alone, where the MPM stage evaluates the basis at the end particle's face.
+void Otm1D::add_tractions() {
+  auto& nd = st_.nodes;
+  for (const auto& tr : st_.tractions) {
+    const Vec<1> tau = tr.value(st_.time);
+    double area = 0.0;
+    for (double a : tr.area) area += a;
+    nd.force[tr.side > 0 ? x_.size() - 1 : 0] += tau * area;
+  }
+}
+
 template <int P>
 void Otm1D::bspline_rows() {
-  const BSplineBasis<1, P> basis(st_.grid);  // B_i(X) on the material (initial) grid
+  const BSplineBasis<1, P> basis(body_);  // B_i(X) on the material (initial) body grid
   typename BSplineBasis<1, P>::StencilT s;
   const auto& Pt = st_.particles;
   for (Index p = 0; p < Pt.size(); ++p) {
@@ -184,20 +230,8 @@ void Otm1D::evaluate_basis() {
   node_.clear();
   w_.clear();
   g_.clear();
-  if (s_.unified) {
-    switch (s_.degree) {
-      case 1:
-        return bspline_rows<1>();
-      case 2:
-        return bspline_rows<2>();
-      case 3:
-        return bspline_rows<3>();
-      case 4:
-        return bspline_rows<4>();
-      default:
-        return bspline_rows<5>();
-    }
-  }
+  if (s_.unified)
+    return with_degree(s_.degree, [&](auto degree) { bspline_rows<decltype(degree)::value>(); });
   Index failed = 0, first_failed = -1;
   for (Index p = 0; p < P.size(); ++p) {
     const auto i = static_cast<std::size_t>(p);
@@ -260,6 +294,7 @@ void Otm1D::step(double dt) {
                              w * m * w_[static_cast<std::size_t>(l)]);
     }
   }
+  add_tractions();
   stages::detail::after_mass(st_);  // conservation check, active nodes, factorisation
   stages::detail::after_momentum(st_);
 

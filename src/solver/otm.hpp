@@ -11,8 +11,10 @@
 //
 // The particles' velocity v_p holds (x_p^{s+1} - x_p^s) / dt, a velocity at t^{s+1/2}: the
 // momentum of the next step (4.29), with x_p^{-1} = x_p^0 - dt v_p^0 for the first (D 4.4).
-// The nodes are the grid's nodes at the start (the body must fill the grid: nodes are carried by
-// the material); the grid sides' Dirichlet conditions fix the end nodes. The nodal sums, the
+// The nodes are the grid's nodes from the body's first to its last at the start (the body's ends
+// must be grid nodes; OTM has no empty elements); a grid side's Dirichlet condition fixes the
+// body's end node where the body touches that side; a traction acts on the body's end node
+// (unified: its end control point), where the basis interpolates. The nodal sums, the
 // conservation checks and the mass solves are the MPM stages' (RunState's nodes hold the
 // advected nodes' sums), lumped or consistent mass by method.mass (D: consistent).
 //
@@ -68,11 +70,13 @@ class Otm1D {
   // The max-ent functions of the advected nodes at x (element e holds x): appends to the
   // particle's stencil; false when Newton did not converge.
   bool maxent_at(double x, Index e, Index p);
+  void add_tractions();
   // Unified: B_i(X_p) and B_i'(X_p) / x'(X_p) of every particle.
   template <int P>
   void bspline_rows();
 
   RunState<1> st_;
+  Grid<1> body_;  // the body's part of the initial grid: the initial nodes (unified: the knots)
   OtmSettings s_;
   std::vector<double> x_;       // advected node positions [m], increasing
   std::vector<Index> element_;  // element of each particle (x_e <= x_p <= x_{e+1})
