@@ -151,7 +151,7 @@ int cmd_bench(const mpm::BenchOptions& opt) {
       "{}D {} step{}, {} basis, {} mapping, {} mass: {} particles, {} cells{}, {} steps, "
       "{} thread(s), best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes "
       "per particle (particle state, cached stencil, grid share)\n",
-      opt.dim, opt.solver == "otm" ? std::string("otm") : opt.scheme,
+      opt.dim, opt.solver != "mpm" ? opt.solver : opt.scheme,
       opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis, opt.mapping, opt.mass,
       r.particles, r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
       r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
