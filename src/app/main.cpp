@@ -194,8 +194,8 @@ int main(int argc, char** argv) {
   study->add_option("config", config, "TOML configuration file")->required();
   study->add_option("--refine", refine, "key and values, e.g. grid.cells=5,10,20,40")->required();
   study->add_option("--methods", methods,
-                    "method matrix: basis[degree]/mapping[/mass],... e.g. "
-                    "\"linear/direct, bspline2/tls/consistent\"");
+                    "method matrix: [solver:]basis[degree]/mapping[/mass],... e.g. "
+                    "\"linear/direct, bspline2/tls/consistent, otm:maxent/direct/consistent\"");
   study->add_option("--set", sets, "override a key: section.key=value (repeatable)");
   study->add_option("--out", out, "output directory (default studies/<config name>)");
   study->add_option("--jobs,-j", jobs, "parallel runs (default: hardware threads)");

@@ -86,6 +86,17 @@ std::vector<MethodSpec> parse_methods(const std::string& text) {
     item.erase(0, item.find_first_not_of(" \t"));
     item.erase(item.find_last_not_of(" \t") + 1);
     if (item.empty()) throw InputError(fmt::format("--methods '{}' has an empty item", text));
+    MethodSpec m;
+    m.label = item;
+    // An optional solver first: "otm:linear/direct/consistent".
+    if (const auto colon = item.find(':'); colon != std::string::npos) {
+      const std::string solver = item.substr(0, colon);
+      if (!known(registry::kSolvers, solver))
+        throw InputError(fmt::format("--methods item '{}': solver '{}' is not one of: {}", item,
+                                     solver, names(registry::kSolvers)));
+      m.keys.emplace_back("method.solver", solver);
+      item.erase(0, colon + 1);
+    }
     std::vector<std::string> parts;
     for (std::size_t p = 0;;) {
       const auto slash = item.find('/', p);
@@ -94,11 +105,10 @@ std::vector<MethodSpec> parse_methods(const std::string& text) {
       p = slash + 1;
     }
     if (parts.size() < 2 || parts.size() > 3)
-      throw InputError(fmt::format(
-          "--methods item '{}' must be basis[degree]/mapping[/mass], e.g. bspline2/tls/consistent",
-          item));
-    MethodSpec m;
-    m.label = item;
+      throw InputError(
+          fmt::format("--methods item '{}' must be [solver:]basis[degree]/mapping[/mass], e.g. "
+                      "bspline2/tls/consistent or otm:maxent/direct/consistent",
+                      m.label));
     // A basis name as it is (cpdi2), else a name and its degree (bspline2): only the B-splines
     // take a degree, so "cpdi2" is never CPDI of degree 2.
     std::string basis = parts[0];
@@ -109,22 +119,23 @@ std::vector<MethodSpec> parse_methods(const std::string& text) {
         basis.pop_back();
       }
       if (!known(registry::kBases, basis))
-        throw InputError(fmt::format("--methods item '{}': basis '{}' is not one of: {}", item,
+        throw InputError(fmt::format("--methods item '{}': basis '{}' is not one of: {}", m.label,
                                      parts[0], names(registry::kBases)));
       if (basis != BSplineKind<1>::kName)
         throw InputError(fmt::format(
-            "--methods item '{}': only {} takes a degree (e.g. {}2); '{}' is not one of: {}", item,
-            BSplineKind<1>::kName, BSplineKind<1>::kName, parts[0], names(registry::kBases)));
+            "--methods item '{}': only {} takes a degree (e.g. {}2); '{}' is not one of: {}",
+            m.label, BSplineKind<1>::kName, BSplineKind<1>::kName, parts[0],
+            names(registry::kBases)));
     }
     if (!known(registry::kMappings, parts[1]))
-      throw InputError(fmt::format("--methods item '{}': mapping '{}' is not one of: {}", item,
+      throw InputError(fmt::format("--methods item '{}': mapping '{}' is not one of: {}", m.label,
                                    parts[1], names(registry::kMappings)));
     m.keys.emplace_back("method.basis", basis);
     if (!degree.empty()) m.keys.emplace_back("method.degree", degree);
     m.keys.emplace_back("method.mapping", parts[1]);
     if (parts.size() == 3) {
       if (!known(registry::kMassTypes, parts[2]))
-        throw InputError(fmt::format("--methods item '{}': mass '{}' is not one of: {}", item,
+        throw InputError(fmt::format("--methods item '{}': mass '{}' is not one of: {}", m.label,
                                      parts[2], names(registry::kMassTypes)));
       m.keys.emplace_back("method.mass", parts[2]);
     }
@@ -164,6 +175,7 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
       configs.push_back(std::move(c));
       std::string method_dir = m.label;
       std::replace(method_dir.begin(), method_dir.end(), '/', '_');
+      std::replace(method_dir.begin(), method_dir.end(), ':', '_');
       dirs.push_back((std::filesystem::path(opt.out_dir) / (opt.methods.empty() ? "" : method_dir) /
                       fmt::format("{}_{}", opt.key, v))
                          .string());

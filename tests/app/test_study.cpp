@@ -30,6 +30,29 @@ TEST(StudyMethods, BasisNamesEndingInADigitAreNotDegrees) {
   EXPECT_EQ(m[2].keys, (Keys{{"method.basis", "cpdi"}, {"method.mapping", "mls"}}));
 }
 
+// A solver before a colon (issue 17: OTM and the unified approach beside MPM in one study).
+TEST(StudyMethods, ASolverPrefixSetsMethodSolver) {
+  const auto m = parse_methods("otm:maxent/direct/consistent, unified:bspline2/direct");
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_EQ(m[0].label, "otm:maxent/direct/consistent");
+  EXPECT_EQ(m[0].keys, (Keys{{"method.solver", "otm"},
+                             {"method.basis", "maxent"},
+                             {"method.mapping", "direct"},
+                             {"method.mass", "consistent"}}));
+  EXPECT_EQ(m[1].keys, (Keys{{"method.solver", "unified"},
+                             {"method.basis", "bspline"},
+                             {"method.degree", "2"},
+                             {"method.mapping", "direct"}}));
+  try {
+    parse_methods("otmm:linear/direct");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("solver 'otmm' is not one of: mpm, ulfem, otm, unified"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(StudyMethods, OnlyBSplinesTakeADegree) {
   for (const char* item : {"linear2/direct", "cpdi3/direct", "ugimp1/tls"}) {
     try {
