@@ -13,13 +13,14 @@
 namespace mpm::driver {
 namespace {
 
-class OtmStepper final : public Stepper<1> {
+template <int Dim>
+class OtmStepper final : public Stepper<Dim> {
  public:
-  OtmStepper(Problem<1>& pb, const OtmSettings& s) : otm_(pb, s) {}
+  OtmStepper(Problem<Dim>& pb, const OtmSettings& s) : otm_(pb, s) {}
   void step(double dt) override { otm_.step(dt); }
   bool sort_if_due() override { return false; }  // the particles' order never changes
-  RunState<1>& state() override { return otm_.state(); }
-  const RunState<1>& state() const override { return otm_.state(); }
+  RunState<Dim>& state() override { return otm_.state(); }
+  const RunState<Dim>& state() const override { return otm_.state(); }
   // The advected node positions (the particles, with v_p = (x_p^s - x_p^{s-1}) / dt, are in
   // the RunState part of the checkpoint).
   void save(io::Checkpoint& c) const override { c.basis_state = otm_.nodes(); }
@@ -30,28 +31,26 @@ class OtmStepper final : public Stepper<1> {
     const auto& x = otm_.nodes();
     const OtmSettings& s = otm_.settings();
     summary["otm"] = {{"algorithm", s.unified ? "unified (D Algorithm 4)" : "OTM (D Algorithm 3)"},
-                      {"nodes", x.size()},
+                      {"nodes", x.size() / Dim},
                       {"basis", s.basis == OtmBasis::Linear   ? "linear"
                                 : s.basis == OtmBasis::MaxEnt ? "maxent"
                                                               : "bspline"},
-                      {"first_node", x.front()},
-                      {"last_node", x.back()}};
+                      {"first_node", std::vector<double>(x.begin(), x.begin() + Dim)},
+                      {"last_node", std::vector<double>(x.end() - Dim, x.end())}};
     if (s.basis == OtmBasis::BSpline) summary["otm"]["degree"] = s.degree;
     if (otm_.settings().basis == OtmBasis::MaxEnt)
       summary["otm"]["maxent_dmax"] = otm_.settings().maxent.dmax;
   }
 
  private:
-  Otm1D otm_;
+  Otm<Dim> otm_;
 };
 
 }  // namespace
 
 template <int Dim>
 std::unique_ptr<Stepper<Dim>> make_otm_stepper(const StepperInput<Dim>& in) {
-  if constexpr (Dim != 1) {
-    throw std::logic_error("make_otm_stepper: OTM is one-dimensional");
-  } else {
+  {
     const MethodSettings& m = in.method;
     OtmSettings s;
     if (const auto* k = std::get_if<MaxEntKind>(&m.basis)) {
@@ -66,7 +65,7 @@ std::unique_ptr<Stepper<Dim>> make_otm_stepper(const StepperInput<Dim>& in) {
     s.mass = m.mass;
     s.mass_tolerance = m.mass_tolerance;
     s.conservation_limit = m.conservation_limit;
-    return std::make_unique<OtmStepper>(in.problem, s);
+    return std::make_unique<OtmStepper<Dim>>(in.problem, s);
   }
 }
 

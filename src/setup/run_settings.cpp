@@ -77,7 +77,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
              : solver == "otm"     ? Solver::Otm
              : solver == "unified" ? Solver::Unified
                                    : Solver::Mpm;
-  if (m.solver != Solver::Mpm && dim != 1)
+  if ((m.solver == Solver::Ulfem || m.solver == Solver::Otm) && dim != 1)
     throw InputError(fmt::format("{}: method.solver = \"{}\" is one-dimensional (so far)",
                                  cfg.where("method.solver"), solver));
   m.where_basis = cfg.where("method.basis");

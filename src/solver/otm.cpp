@@ -1,4 +1,4 @@
-// OTM in 1D (solver/otm.hpp; D Algorithm 3).
+// OTM (1D) and the unified approach (1D and 2D) (solver/otm.hpp; D Algorithms 3 and 4).
 #include "solver/otm.hpp"
 
 #include <fmt/format.h>
@@ -16,49 +16,97 @@
 
 namespace mpm {
 
-Otm1D::Otm1D(Problem<1>& pb, const OtmSettings& s)
+namespace {
+// fn(std::integral_constant<int, P>) for the B-spline degree p = 1..5.
+template <class Fn>
+void with_degree(int p, Fn&& fn) {
+  switch (p) {
+    case 1:
+      return fn(std::integral_constant<int, 1>{});
+    case 2:
+      return fn(std::integral_constant<int, 2>{});
+    case 3:
+      return fn(std::integral_constant<int, 3>{});
+    case 4:
+      return fn(std::integral_constant<int, 4>{});
+    default:
+      return fn(std::integral_constant<int, 5>{});
+  }
+}
+}  // namespace
+
+template <int Dim>
+Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
     : st_(pb.grid, std::move(pb.particles), pb.material), s_(s) {
+  const char* solver = s.unified ? "unified" : "otm";
+  if (Dim != 1 && !s.unified)
+    throw InputError("method.solver = \"otm\" is one-dimensional (so far)");
   // The nodes discretise the body only (D 4.4: OTM has no empty elements): the grid's nodes
-  // from the body's first to its last, which must be nodes of the grid.
-  const Grid<1>& g = st_.grid;
-  const double h = g.h[0], b0 = pb.body_min[0], b1 = pb.body_max[0];
-  const double i0 = (b0 - g.origin[0]) / h, i1 = (b1 - g.origin[0]) / h;
-  if (std::abs(i0 - std::round(i0)) > 1e-9 || std::abs(i1 - std::round(i1)) > 1e-9)
-    throw InputError(fmt::format(
-        "method.solver = \"{}\": the nodes are carried by the material and discretise the "
-        "body only, so its ends [{}, {}] must be grid nodes (grid [{}, {}], cell size {})",
-        s.unified ? "unified" : "otm", b0, b1, g.origin[0], g.upper()[0], h));
-  const auto cells = static_cast<Index>(std::llround(i1) - std::llround(i0));
-  body_ = Grid<1>(Vec<1>(g.origin[0] + h * std::round(i0)),
-                  Vec<1>(g.origin[0] + h * std::round(i1)), IVec<1>{cells});
+  // from the body's first to its last per direction, which must be nodes of the grid.
+  const Grid<Dim>& g = st_.grid;
+  IVec<Dim> cells;
+  Vec<Dim> lo, hi;
+  std::array<std::array<bool, 2>, Dim> touches{};
+  for (int d = 0; d < Dim; ++d) {
+    const double h = g.h[d], b0 = pb.body_min[d], b1 = pb.body_max[d];
+    const double i0 = (b0 - g.origin[d]) / h, i1 = (b1 - g.origin[d]) / h;
+    if (std::abs(i0 - std::round(i0)) > 1e-9 || std::abs(i1 - std::round(i1)) > 1e-9)
+      throw InputError(fmt::format(
+          "method.solver = \"{}\": the nodes are carried by the material and discretise the "
+          "body only, so its ends [{}, {}] must be grid nodes (grid [{}, {}], cell size {}, "
+          "direction {})",
+          solver, b0, b1, g.origin[d], g.upper()[d], h, "xyz"[d]));
+    cells[d] = static_cast<Index>(std::llround(i1) - std::llround(i0));
+    lo[d] = g.origin[d] + h * std::round(i0);
+    hi[d] = g.origin[d] + h * std::round(i1);
+    touches[static_cast<std::size_t>(d)] = {std::abs(b0 - g.origin[d]) <= 1e-9 * h,
+                                            std::abs(b1 - g.upper()[d]) <= 1e-9 * h};
+  }
+  body_ = Grid<Dim>(lo, hi, cells);
   if (s.basis == OtmBasis::MaxEnt && !(s.maxent.dmax > 1.0 && s.maxent.dmax <= 3.0))
     throw InputError(fmt::format("method.maxent_dmax = {}: must be in (1, 3]", s.maxent.dmax));
   if (s.unified && !(s.basis == OtmBasis::BSpline && s.degree >= 1 && s.degree <= 5))
     throw InputError("method.solver = \"unified\": B-splines of degree 1 to 5");
-  // Unified: the B-spline control points at their Greville abscissae (x(X) = X at the start).
-  const double lo = body_.origin[0];
-  const Index n = s.unified ? cells + s.degree : cells + 1;
-  x_.resize(static_cast<std::size_t>(n));
-  for (Index i = 0; i < n; ++i) {
-    double xi = lo + h * static_cast<double>(i);
-    if (s.unified) {
-      // (U_{i+1} + ... + U_{i+p}) / p of the open uniform knot vector, as BSplineBasis.
-      double sum = 0.0;
-      for (int k = 1; k <= s.degree; ++k)
-        sum += static_cast<double>(std::clamp<Index>(i + k - s.degree, 0, cells));
-      xi = lo + h * sum / s.degree;
-    }
-    x_[static_cast<std::size_t>(i)] = xi;
+  if (Dim != 1 && !pb.tractions.empty())
+    throw InputError(
+        fmt::format("method.solver = \"{}\": tractions in 2D are not implemented "
+                    "yet",
+                    solver));
+  // The nodes (unified: the B-spline control points at their Greville abscissae, so that
+  // x(X) = X at the start) and, per grid side the body touches, the Dirichlet conditions: a
+  // condition on a side the body does not touch constrains no material node.
+  std::vector<std::vector<Index>> side_nodes(2 * Dim);
+  Index n = 0;
+  if (s.unified) {
+    with_degree(s.degree, [&](auto degree) {
+      const BSplineBasis<Dim, decltype(degree)::value> basis(body_);
+      n = basis.num_dofs();
+      x_.resize(static_cast<std::size_t>(n * Dim));
+      for (Index i = 0; i < n; ++i)
+        for (int d = 0; d < Dim; ++d)
+          x_[static_cast<std::size_t>(i * Dim + d)] = basis.dof_position(i)[d];
+      for (int d = 0; d < Dim; ++d)
+        for (int side = 0; side < 2; ++side)
+          side_nodes[static_cast<std::size_t>(2 * d + side)] = basis.boundary_dofs(d, side);
+    });
+  } else {
+    n = cells[0] + 1;
+    x_.resize(static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i)
+      x_[static_cast<std::size_t>(i)] = lo[0] + g.h[0] * static_cast<double>(i);
+    side_nodes[0] = {0};
+    side_nodes[1] = {n - 1};
   }
   st_.nodes.resize(n);
-  // A grid side's Dirichlet condition fixes the body's end node when the body reaches that
-  // side (a condition on a side the body does not touch constrains no material node).
   for (const auto& f : pb.fixed_sides) {
-    const bool touches =
-        f.side ? std::abs(b1 - g.upper()[0]) <= 1e-9 * h : std::abs(b0 - g.origin[0]) <= 1e-9 * h;
-    if ((f.components & 1u) && touches)
-      st_.nodes.fixed[f.side ? static_cast<std::size_t>(n - 1) : 0] |= 1u;
+    if (!touches[static_cast<std::size_t>(f.direction)][static_cast<std::size_t>(f.side)]) continue;
+    const auto mask = static_cast<std::uint8_t>(f.components & ((1u << Dim) - 1u));
+    for (Index i : side_nodes[static_cast<std::size_t>(2 * f.direction + f.side)])
+      st_.nodes.fixed[static_cast<std::size_t>(i)] |= mask;
   }
+  constexpr std::uint8_t kAll = (1u << Dim) - 1u;
+  st_.consistent_per_component = std::any_of(st_.nodes.fixed.begin(), st_.nodes.fixed.end(),
+                                             [](std::uint8_t f) { return f != 0 && f != kAll; });
   st_.tractions = pb.tractions;
   st_.mass_type = s.mass;
   st_.mass_tolerance = s.mass_tolerance;
@@ -67,22 +115,25 @@ Otm1D::Otm1D(Problem<1>& pb, const OtmSettings& s)
   auto& P = st_.particles;
   if (st_.body_force.fill) st_.body_force.fill(P, 0.0, P.body);
   element_.assign(static_cast<std::size_t>(P.size()), 0);
-  for (std::size_t p = 0; p < element_.size(); ++p)
-    element_[p] = std::clamp<Index>(body_.cell_of(P.x[p][0], 0), 0, cells - 1);
+  if (!s.unified)
+    for (std::size_t p = 0; p < element_.size(); ++p)
+      element_[p] = std::clamp<Index>(body_.cell_of(P.x[p][0], 0), 0, cells[0] - 1);
 }
 
-void Otm1D::set_nodes(const std::vector<double>& x, const std::string& what) {
+template <int Dim>
+void Otm<Dim>::set_nodes(const std::vector<double>& x, const std::string& what) {
   if (x.size() != x_.size())
-    throw InputError(fmt::format("{} holds {} OTM node positions; this run has {} nodes", what,
-                                 x.size(), x_.size()));
-  for (std::size_t i = 1; i < x.size(); ++i)
+    throw InputError(fmt::format("{} holds {} OTM node coordinates; this run has {} nodes of {}",
+                                 what, x.size(), x_.size() / Dim, Dim));
+  for (std::size_t i = 1; i < x.size() && !s_.unified; ++i)
     if (!(x[i] > x[i - 1]))
       throw InputError(
           fmt::format("{}: OTM nodes {} and {} are not in increasing order", what, i - 1, i));
   x_ = x;
 }
 
-bool Otm1D::maxent_at(double x, Index e, Index p) {
+template <int Dim>
+bool Otm<Dim>::maxent_at(double x, Index e, Index p) {
   const auto n = static_cast<Index>(x_.size());
   auto zeta = [&](Index i) {
     const auto k = static_cast<std::size_t>(i);
@@ -164,66 +215,58 @@ bool Otm1D::maxent_at(double x, Index e, Index p) {
   return true;
 }
 
-namespace {
-// fn(std::integral_constant<int, P>) for the B-spline degree p = 1..5.
-template <class Fn>
-void with_degree(int p, Fn&& fn) {
-  switch (p) {
-    case 1:
-      return fn(std::integral_constant<int, 1>{});
-    case 2:
-      return fn(std::integral_constant<int, 2>{});
-    case 3:
-      return fn(std::integral_constant<int, 3>{});
-    case 4:
-      return fn(std::integral_constant<int, 4>{});
-    default:
-      return fn(std::integral_constant<int, 5>{});
-  }
-}
-}  // namespace
-
 // The tractions. A 1D traction loads an end of the body (model/problem.hpp, body_face_traction),
 // and the body's ends are its end nodes, carried by the material: the end node of OTM (P1 and
 // max-ent interpolate there, weak Kronecker-delta property) and the end control point of the
 // unified approach (the open knot vector's B_i interpolate at its ends). So the force tau A acts
 // on that node alone, where the MPM stage evaluates the basis at the end particle's face.
-void Otm1D::add_tractions() {
-  auto& nd = st_.nodes;
-  for (const auto& tr : st_.tractions) {
-    const Vec<1> tau = tr.value(st_.time);
-    double area = 0.0;
-    for (double a : tr.area) area += a;
-    nd.force[tr.side > 0 ? x_.size() - 1 : 0] += tau * area;
+template <int Dim>
+void Otm<Dim>::add_tractions() {
+  if constexpr (Dim == 1) {  // (2D tractions are refused by the constructor)
+    auto& nd = st_.nodes;
+    for (const auto& tr : st_.tractions) {
+      const Vec<1> tau = tr.value(st_.time);
+      double area = 0.0;
+      for (double a : tr.area) area += a;
+      nd.force[tr.side > 0 ? x_.size() - 1 : 0] += tau * area;
+    }
   }
 }
 
+template <int Dim>
 template <int P>
-void Otm1D::bspline_rows() {
-  const BSplineBasis<1, P> basis(body_);  // B_i(X) on the material (initial) body grid
-  typename BSplineBasis<1, P>::StencilT s;
+void Otm<Dim>::bspline_rows() {
+  const BSplineBasis<Dim, P> basis(body_);  // B_i(X) on the material (initial) body grid
+  typename BSplineBasis<Dim, P>::StencilT s;
   const auto& Pt = st_.particles;
   for (Index p = 0; p < Pt.size(); ++p) {
     const auto i = static_cast<std::size_t>(p);
     basis.evaluate_point(Pt.x0[i], s);
-    double J = 0.0;  // x'(X_p) = sum_i B_i'(X_p) c_i
-    for (int a = 0; a < s.kSize; ++a) J += s.grad[a][0] * x_[static_cast<std::size_t>(s.dof[a])];
-    if (!(J > 0.0))
+    // dx/dX at X_p: sum_i c_i grad_X B_i^T; grad_x phi_i = (dx/dX)^-T grad_X B_i.
+    Mat<Dim> J = Mat<Dim>::Zero();
+    for (int a = 0; a < s.kSize; ++a)
+      J += Eigen::Map<const Vec<Dim>>(&x_[static_cast<std::size_t>(s.dof[a] * Dim)]) *
+           s.grad[a].transpose();
+    const double det = J.determinant();
+    if (!(det > 0.0))
       throw RunError(exit_code::kInvertedDeformation,
                      fmt::format("step {}, t = {:.9g} s: the advected B-spline map is inverted at "
-                                 "particle {} (X = {:.9g}, dx/dX = {:.3g})",
-                                 st_.step, st_.time, Pt.id[i], Pt.x0[i][0], J));
+                                 "particle {} (X_1 = {:.9g}, det dx/dX = {:.3g})",
+                                 st_.step, st_.time, Pt.id[i], Pt.x0[i][0], det));
+    const Mat<Dim> JinvT = J.inverse().transpose();
     for (int a = 0; a < s.kSize; ++a) {
       node_.push_back(s.dof[a]);
       w_.push_back(s.w[a]);
-      g_.push_back(s.grad[a][0] / J);
+      const Vec<Dim> gx = JinvT * s.grad[a];
+      g_.insert(g_.end(), gx.data(), gx.data() + Dim);
     }
     row_.push_back(static_cast<Index>(node_.size()));
   }
 }
 
 // D Algorithm 3 / 4, step 3: the basis at the material points from the advected nodes.
-void Otm1D::evaluate_basis() {
+template <int Dim>
+void Otm<Dim>::evaluate_basis() {
   auto& P = st_.particles;
   const auto n = static_cast<Index>(x_.size());
   row_.assign(1, 0);
@@ -232,110 +275,116 @@ void Otm1D::evaluate_basis() {
   g_.clear();
   if (s_.unified)
     return with_degree(s_.degree, [&](auto degree) { bspline_rows<decltype(degree)::value>(); });
-  Index failed = 0, first_failed = -1;
-  for (Index p = 0; p < P.size(); ++p) {
-    const auto i = static_cast<std::size_t>(p);
-    const double x = P.x[i][0];
-    if (!(x >= x_.front() && x <= x_.back())) stages::detail::throw_left_grid(st_);
-    Index e = element_[i];
-    while (e > 0 && x < x_[static_cast<std::size_t>(e)]) --e;
-    while (e < n - 2 && x > x_[static_cast<std::size_t>(e + 1)]) ++e;
-    element_[i] = e;
-    if (s_.basis == OtmBasis::Linear) {
-      const double a = x_[static_cast<std::size_t>(e)], b = x_[static_cast<std::size_t>(e + 1)];
-      const double len = b - a;
-      node_.insert(node_.end(), {e, e + 1});
-      w_.insert(w_.end(), {(b - x) / len, (x - a) / len});  // D eq. 2.56 on the element
-      g_.insert(g_.end(), {-1.0 / len, 1.0 / len});
-    } else if (!maxent_at(x, e, p)) {
-      if (failed++ == 0) first_failed = p;
+  if constexpr (Dim != 1) {
+    throw std::logic_error("Otm: OTM is one-dimensional");
+  } else {
+    Index failed = 0, first_failed = -1;
+    for (Index p = 0; p < P.size(); ++p) {
+      const auto i = static_cast<std::size_t>(p);
+      const double x = P.x[i][0];
+      if (!(x >= x_.front() && x <= x_.back())) stages::detail::throw_left_grid(st_);
+      Index e = element_[i];
+      while (e > 0 && x < x_[static_cast<std::size_t>(e)]) --e;
+      while (e < n - 2 && x > x_[static_cast<std::size_t>(e + 1)]) ++e;
+      element_[i] = e;
+      if (s_.basis == OtmBasis::Linear) {
+        const double a = x_[static_cast<std::size_t>(e)], b = x_[static_cast<std::size_t>(e + 1)];
+        const double len = b - a;
+        node_.insert(node_.end(), {e, e + 1});
+        w_.insert(w_.end(), {(b - x) / len, (x - a) / len});  // D eq. 2.56 on the element
+        g_.insert(g_.end(), {-1.0 / len, 1.0 / len});
+      } else if (!maxent_at(x, e, p)) {
+        if (failed++ == 0) first_failed = p;
+      }
+      row_.push_back(static_cast<Index>(node_.size()));
     }
-    row_.push_back(static_cast<Index>(node_.size()));
-  }
-  if (failed > 0) {
-    const auto i = static_cast<std::size_t>(first_failed);
-    throw RunError(
-        exit_code::kBasis,
-        fmt::format("step {}, t = {:.9g} s: the max-ent basis on the advected nodes could not "
-                    "be evaluated at {} particle(s): at the first, particle {} ({:.17g}), "
-                    "Newton's method for the Lagrange multipliers did not converge "
-                    "(method.maxent_tolerance = {:.3g}, method.maxent_max_iterations = {})",
-                    st_.step, st_.time, failed, P.id[i], P.x[i][0], s_.maxent.tolerance,
-                    s_.maxent.max_iterations));
+    if (failed > 0) {
+      const auto i = static_cast<std::size_t>(first_failed);
+      throw RunError(
+          exit_code::kBasis,
+          fmt::format("step {}, t = {:.9g} s: the max-ent basis on the advected nodes could not "
+                      "be evaluated at {} particle(s): at the first, particle {} ({:.17g}), "
+                      "Newton's method for the Lagrange multipliers did not converge "
+                      "(method.maxent_tolerance = {:.3g}, method.maxent_max_iterations = {})",
+                      st_.step, st_.time, failed, P.id[i], P.x[i][0], s_.maxent.tolerance,
+                      s_.maxent.max_iterations));
+    }
   }
 }
 
-void Otm1D::step(double dt) {
+template <int Dim>
+void Otm<Dim>::step(double dt) {
   auto& P = st_.particles;
   auto& nd = st_.nodes;
   if (st_.body_force.time_dependent || st_.body_force.position_dependent)
     st_.body_force.fill(P, st_.time, P.body);
   evaluate_basis();
+  auto node = [&](Index k) { return static_cast<std::size_t>(node_[static_cast<std::size_t>(k)]); };
+  auto weight = [&](Index k) { return w_[static_cast<std::size_t>(k)]; };
+  auto grad = [&](Index k) {
+    return Eigen::Map<const Vec<Dim>>(&g_[static_cast<std::size_t>(k * Dim)]);
+  };
 
-  // Step 4: M, q and f (D eq. 4.28-4.30), in particle order (the same rounding every run).
-  const auto n = static_cast<Index>(x_.size());
+  // Step 4: M, q and f (D eq. 4.28-4.30 / 4.81-4.83), in particle order (the same rounding
+  // every run); the internal force with the sign of D eq. 2.33.
+  const auto n = static_cast<Index>(x_.size() / Dim);
   std::fill(nd.mass.begin(), nd.mass.end(), 0.0);
-  std::fill(nd.momentum.begin(), nd.momentum.end(), Vec<1>::Zero());
-  std::fill(nd.force.begin(), nd.force.end(), Vec<1>::Zero());
+  std::fill(nd.momentum.begin(), nd.momentum.end(), Vec<Dim>::Zero());
+  std::fill(nd.force.begin(), nd.force.end(), Vec<Dim>::Zero());
   const bool consistent = st_.mass_type == MassType::Consistent;
   if (consistent) st_.consistent.begin(n);
   for (Index p = 0; p < P.size(); ++p) {
     const auto i = static_cast<std::size_t>(p);
     const double m = P.mass[i];
     for (Index k = row_[i]; k < row_[i + 1]; ++k) {
-      const auto a = static_cast<std::size_t>(node_[static_cast<std::size_t>(k)]);
-      const double w = w_[static_cast<std::size_t>(k)], g = g_[static_cast<std::size_t>(k)];
+      const auto a = node(k);
+      const double w = weight(k);
       nd.mass[a] += w * m;
       nd.momentum[a] += w * m * P.v[i];
-      nd.force[a][0] += -g * P.stress[i](0, 0) * P.volume[i] + w * m * P.body[i][0];
+      nd.force[a] += -P.volume[i] * (P.stress[i] * grad(k)) + w * m * P.body[i];
       if (consistent)
         for (Index l = row_[i]; l < row_[i + 1]; ++l)
-          st_.consistent.add(static_cast<Index>(a), node_[static_cast<std::size_t>(l)],
-                             w * m * w_[static_cast<std::size_t>(l)]);
+          st_.consistent.add(static_cast<Index>(a), static_cast<Index>(node(l)), w * m * weight(l));
     }
   }
   add_tractions();
   stages::detail::after_mass(st_);  // conservation check, active nodes, factorisation
   stages::detail::after_momentum(st_);
 
-  // Step 5: v_i = M^-1 (q + dt f), the end nodes' Dirichlet conditions; x_i += dt v_i (4.31).
+  // v_i = M^-1 (q + dt f) with the Dirichlet conditions, a_i = M^-1 f; x_i += dt v_i (4.31,
+  // 4.84-4.86, constant dt).
   stages::solve_velocity(st_);
   stages::solve_acceleration(st_);
   stages::advance_grid_velocity(st_, dt);
 
-  // Steps 6-10: x_p = sum phi_i x_i^{s+1} written as x_p + dt sum phi_i v_i (the same by linear
-  // completeness, without the Newton residual of max-ent), F, V, rho and the stress.
+  // x_p = sum phi_i x_i^{s+1} written as x_p + dt sum phi_i v_i (the same by linear
+  // completeness, without the Newton residual of max-ent; D eq. 4.87 for the unified approach),
+  // F, V, rho and the stress; the particle velocity of each algorithm.
   const bool bad = std::visit(
       [&](const auto& law) -> bool {
-        if constexpr (!std::decay_t<decltype(law)>::supports_dimension(1)) {
-          throw std::logic_error("Otm1D: a material law outside its dimensions");
+        if constexpr (!std::decay_t<decltype(law)>::supports_dimension(Dim)) {
+          throw std::logic_error("Otm: a material law outside its dimensions");
         } else {
           bool any = false;
           for (Index p = 0; p < P.size(); ++p) {
             const auto i = static_cast<std::size_t>(p);
-            double dx = 0.0, L = 0.0;
+            Vec<Dim> dx = Vec<Dim>::Zero(), acc = Vec<Dim>::Zero();
+            Mat<Dim> L = Mat<Dim>::Zero();
             for (Index k = row_[i]; k < row_[i + 1]; ++k) {
-              const double v =
-                  nd.velocity[static_cast<std::size_t>(node_[static_cast<std::size_t>(k)])][0];
-              dx += w_[static_cast<std::size_t>(k)] * v;
-              L += v * g_[static_cast<std::size_t>(k)];
+              const Vec<Dim>& v = nd.velocity[node(k)];
+              dx += weight(k) * v;
+              L.noalias() += v * grad(k).transpose();
+              acc += weight(k) * nd.accel[node(k)];
             }
             dx *= dt;
-            P.x[i][0] += dx;
-            P.u[i][0] += dx;
-            if (s_.unified) {
-              // USL's velocity update (D eq. 4.88): v_p += dt sum phi_i a_i.
-              double acc = 0.0;
-              for (Index k = row_[i]; k < row_[i + 1]; ++k)
-                acc += w_[static_cast<std::size_t>(k)] *
-                       nd.accel[static_cast<std::size_t>(node_[static_cast<std::size_t>(k)])][0];
-              P.v[i][0] += dt * acc;
-            } else {
-              P.v[i][0] = dx / dt;  // the momentum of the next step (4.29)
-            }
-            Mat<1> dtL;
-            dtL(0, 0) = dt * L;
-            P.F[i] = (Mat<1>::Identity() + dtL) * P.F[i];
+            P.x[i] += dx;
+            P.u[i] += dx;
+            if (s_.unified)
+              P.v[i] += dt * acc;  // USL's velocity update (D eq. 4.88)
+            else
+              P.v[i] = dx / dt;  // OTM: the momentum of the next step (4.29)
+            const Mat<Dim> dtL = dt * L;
+            P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
             const double J = P.F[i].determinant();
             P.volume[i] = J * P.volume0[i];
             P.density[i] = P.mass[i] / P.volume[i];
@@ -348,8 +397,9 @@ void Otm1D::step(double dt) {
       st_.material);
   if (bad) stages::detail::throw_particle_failure(st_);
   for (Index i = 0; i < n; ++i)
-    x_[static_cast<std::size_t>(i)] += dt * nd.velocity[static_cast<std::size_t>(i)][0];
-  // (Unified: the map's slope at the particles is checked in bspline_rows instead.)
+    for (int d = 0; d < Dim; ++d)
+      x_[static_cast<std::size_t>(i * Dim + d)] += dt * nd.velocity[static_cast<std::size_t>(i)][d];
+  // OTM's elements must stay ordered (the unified approach checks its map at the particles).
   for (Index i = 1; i < n && !s_.unified; ++i)
     if (!(x_[static_cast<std::size_t>(i)] > x_[static_cast<std::size_t>(i - 1)]))
       throw RunError(exit_code::kInvertedDeformation,
@@ -358,5 +408,8 @@ void Otm1D::step(double dt) {
                                  st_.step, st_.time, i - 1, i, x_[static_cast<std::size_t>(i - 1)],
                                  x_[static_cast<std::size_t>(i)]));
 }
+
+template class Otm<1>;
+template class Otm<2>;
 
 }  // namespace mpm

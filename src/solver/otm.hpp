@@ -47,40 +47,45 @@ struct OtmSettings {
   double conservation_limit = 0.5;
 };
 
-class Otm1D {
+// OTM (1D) and the unified approach (1D and 2D, tensor-product B-splines).
+template <int Dim>
+class Otm {
  public:
-  // Takes the problem's particles. InputError when the body does not fill the grid.
-  Otm1D(Problem<1>& pb, const OtmSettings& s);
+  // Takes the problem's particles. InputError when the body's ends are not grid nodes, OTM in
+  // 2D, or tractions in 2D.
+  Otm(Problem<Dim>& pb, const OtmSettings& s);
 
-  // One step of D Algorithm 3 (the driver sets the step counter and time afterwards). RunError:
-  // a particle outside the nodes' span (exit code 4), inverted elements or det <= 0 (5), a
-  // max-ent point that does not converge (10), non-finite values (3), conservation (9).
+  // One step of D Algorithm 3 or 4 (the driver sets the step counter and time afterwards).
+  // RunError: a particle outside the nodes' span (exit code 4), inverted elements or det <= 0
+  // (5), a max-ent point that does not converge (10), non-finite values (3), conservation (9).
   void step(double dt);
 
-  RunState<1>& state() { return st_; }
-  const RunState<1>& state() const { return st_; }
-  // The advected node positions x_i^s [m] (unified: the control points), for checkpoints; set_nodes
-  // throws InputError naming `what` when the count differs or the nodes are not increasing.
+  RunState<Dim>& state() { return st_; }
+  const RunState<Dim>& state() const { return st_; }
+  // The advected node coordinates [m] (unified: the control points), Dim per node, for
+  // checkpoints; set_nodes throws InputError naming `what` when the count differs or OTM's nodes
+  // are not increasing.
   const std::vector<double>& nodes() const { return x_; }
   void set_nodes(const std::vector<double>& x, const std::string& what);
   const OtmSettings& settings() const { return s_; }
 
  private:
   void evaluate_basis();
-  // The max-ent functions of the advected nodes at x (element e holds x): appends to the
+  // The max-ent functions of the advected nodes at x (element e holds x; 1D): appends to the
   // particle's stencil; false when Newton did not converge.
   bool maxent_at(double x, Index e, Index p);
   void add_tractions();
-  // Unified: B_i(X_p) and B_i'(X_p) / x'(X_p) of every particle.
+  // Unified: B_i(X_p) and (dx/dX)^-T grad_X B_i(X_p) of every particle.
   template <int P>
   void bspline_rows();
 
-  RunState<1> st_;
-  Grid<1> body_;  // the body's part of the initial grid: the initial nodes (unified: the knots)
+  RunState<Dim> st_;
+  Grid<Dim> body_;  // the body's part of the initial grid: the initial nodes (unified: the knots)
   OtmSettings s_;
-  std::vector<double> x_;       // advected node positions [m], increasing
-  std::vector<Index> element_;  // element of each particle (x_e <= x_p <= x_{e+1})
-  // Per-particle stencils of variable size (max-ent), compressed rows: nodes, values, gradients.
+  std::vector<double> x_;       // advected node coordinates [m], Dim per node
+  std::vector<Index> element_;  // OTM: element of each particle (x_e <= x_p <= x_{e+1})
+  // Per-particle stencils of variable size (max-ent), compressed rows: nodes, values, gradients
+  // (Dim per entry).
   std::vector<Index> row_, node_;
   std::vector<double> w_, g_;
 };

@@ -213,6 +213,10 @@ TEST(Checkpoint, RestartIsBitwiseOtherSolversAndLoads) {
                          {"method.solver=unified", "method.basis=bspline", "method.degree=3",
                           "method.mass=consistent"},
                          50});
+  check_bitwise_restart({"plate_mms_2d",
+                         {"method.solver=unified", "method.basis=bspline", "method.degree=2",
+                          "method.mass=consistent", "grid.cells=4"},
+                         20});
 }
 
 // A valid checkpoint of a short run, written into dir.
