@@ -77,7 +77,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
              : solver == "otm"     ? Solver::Otm
              : solver == "unified" ? Solver::Unified
                                    : Solver::Mpm;
-  if ((m.solver == Solver::Ulfem || m.solver == Solver::Otm) && dim != 1)
+  if (m.solver == Solver::Ulfem && dim != 1)
     throw InputError(fmt::format("{}: method.solver = \"{}\" is one-dimensional (so far)",
                                  cfg.where("method.solver"), solver));
   m.where_basis = cfg.where("method.basis");
@@ -153,6 +153,11 @@ RunSettings run_settings(const Config& cfg, int dim) {
           "\"maxent\", not \"{}\"",
           m.where_basis, name_of(m.basis)));
   }
+  if (m.solver == Solver::Otm && dim != 1 && std::holds_alternative<MaxEntKind>(m.basis))
+    throw InputError(fmt::format(
+        "{}: method.solver = \"otm\" with method.basis = \"maxent\" is one-dimensional (so "
+        "far); in 2D OTM runs with method.basis = \"linear\"",
+        m.where_basis));
   if (m.solver == Solver::Unified && basis_degree_of(m.basis) == 0)
     throw InputError(fmt::format(
         "{}: method.solver = \"unified\" runs B-splines on advected degrees of freedom (D "

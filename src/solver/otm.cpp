@@ -39,8 +39,15 @@ template <int Dim>
 Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
     : st_(pb.grid, std::move(pb.particles), pb.material), s_(s) {
   const char* solver = s.unified ? "unified" : "otm";
-  if (Dim != 1 && !s.unified)
-    throw InputError("method.solver = \"otm\" is one-dimensional (so far)");
+  if (Dim != 1 && !s.unified && s.basis != OtmBasis::Linear)
+    throw InputError(
+        "method.solver = \"otm\" with method.basis = \"maxent\" is one-dimensional "
+        "(so far); in 2D OTM runs with \"linear\"");
+  // OTM-P1 in 2D: the bilinear functions of the advected quadrilaterals, i.e. the unified
+  // approach's isoparametric map with degree 1 (a particle keeps its material coordinate, as
+  // OTM-P1 keeps its local coordinate in 1D), with OTM's particle velocity.
+  iso_ = s.unified || Dim > 1;
+  degree_ = s.unified ? s.degree : 1;
   // The nodes discretise the body only (D 4.4: OTM has no empty elements): the grid's nodes
   // from the body's first to its last per direction, which must be nodes of the grid.
   const Grid<Dim>& g = st_.grid;
@@ -77,8 +84,8 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   // condition on a side the body does not touch constrains no material node.
   std::vector<std::vector<Index>> side_nodes(2 * Dim);
   Index n = 0;
-  if (s.unified) {
-    with_degree(s.degree, [&](auto degree) {
+  if (iso_) {
+    with_degree(degree_, [&](auto degree) {
       const BSplineBasis<Dim, decltype(degree)::value> basis(body_);
       n = basis.num_dofs();
       x_.resize(static_cast<std::size_t>(n * Dim));
@@ -115,7 +122,7 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   auto& P = st_.particles;
   if (st_.body_force.fill) st_.body_force.fill(P, 0.0, P.body);
   element_.assign(static_cast<std::size_t>(P.size()), 0);
-  if (!s.unified)
+  if (!iso_)
     for (std::size_t p = 0; p < element_.size(); ++p)
       element_[p] = std::clamp<Index>(body_.cell_of(P.x[p][0], 0), 0, cells[0] - 1);
 }
@@ -125,7 +132,7 @@ void Otm<Dim>::set_nodes(const std::vector<double>& x, const std::string& what) 
   if (x.size() != x_.size())
     throw InputError(fmt::format("{} holds {} OTM node coordinates; this run has {} nodes of {}",
                                  what, x.size(), x_.size() / Dim, Dim));
-  for (std::size_t i = 1; i < x.size() && !s_.unified; ++i)
+  for (std::size_t i = 1; i < x.size() && !iso_; ++i)
     if (!(x[i] > x[i - 1]))
       throw InputError(
           fmt::format("{}: OTM nodes {} and {} are not in increasing order", what, i - 1, i));
@@ -273,8 +280,8 @@ void Otm<Dim>::evaluate_basis() {
   node_.clear();
   w_.clear();
   g_.clear();
-  if (s_.unified)
-    return with_degree(s_.degree, [&](auto degree) { bspline_rows<decltype(degree)::value>(); });
+  if (iso_)
+    return with_degree(degree_, [&](auto degree) { bspline_rows<decltype(degree)::value>(); });
   if constexpr (Dim != 1) {
     throw std::logic_error("Otm: OTM is one-dimensional");
   } else {
@@ -400,7 +407,7 @@ void Otm<Dim>::step(double dt) {
     for (int d = 0; d < Dim; ++d)
       x_[static_cast<std::size_t>(i * Dim + d)] += dt * nd.velocity[static_cast<std::size_t>(i)][d];
   // OTM's elements must stay ordered (the unified approach checks its map at the particles).
-  for (Index i = 1; i < n && !s_.unified; ++i)
+  for (Index i = 1; i < n && !iso_; ++i)
     if (!(x_[static_cast<std::size_t>(i)] > x_[static_cast<std::size_t>(i - 1)]))
       throw RunError(exit_code::kInvertedDeformation,
                      fmt::format("step {}, t = {:.9g} s: the advected OTM nodes {} and {} crossed "

@@ -82,6 +82,8 @@ class Otm {
   RunState<Dim> st_;
   Grid<Dim> body_;  // the body's part of the initial grid: the initial nodes (unified: the knots)
   OtmSettings s_;
+  bool iso_ = false;  // the isoparametric B-spline map (unified; OTM-P1 in 2D), of degree degree_
+  int degree_ = 1;
   std::vector<double> x_;       // advected node coordinates [m], Dim per node
   std::vector<Index> element_;  // OTM: element of each particle (x_e <= x_p <= x_{e+1})
   // Per-particle stencils of variable size (max-ent), compressed rows: nodes, values, gradients

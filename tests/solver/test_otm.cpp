@@ -286,7 +286,8 @@ std::unique_ptr<Built2> build2(const std::vector<std::string>& sets, bool free_e
   if (free_edges) b->pb.fixed_sides.clear();
   b->settings = run_settings(cfg, 2);
   const driver::StepperInput<2> in{b->pb, b->settings.method, true};
-  b->stepper = b->settings.method.solver == Solver::Unified
+  const Solver solver = b->settings.method.solver;
+  b->stepper = solver == Solver::Unified || solver == Solver::Otm
                    ? driver::make_otm_stepper<2>(in)
                    : driver::make_stepper<2>(b->settings.method.basis, in);
   return b;
@@ -325,6 +326,33 @@ TEST(Unified, TwoDimensionalFirstStepEqualsUslBsmpm) {
 // A free 2D plate (no rollers; a zero amplitude switches the manufactured body force off) with a
 // non-uniform velocity: the total momentum is conserved to round-off, and the particles stay on
 // the map x = sum B_i(X) c_i.
+// OTM-P1 in 2D (bilinear on the advected quadrilaterals): its first step is USL-MPM-P1's with
+// consistent mass in positions, F and stress (D 4.4), as in 1D.
+TEST(Otm, TwoDimensionalP1FirstStepEqualsUslMpm) {
+  const std::vector<std::string> common = {"grid.cells=6", "method.basis=linear",
+                                           "method.mass=consistent", "method.scheme=usl"};
+  auto otm_sets = common;
+  otm_sets.push_back("method.solver=otm");
+  auto otm = build2(otm_sets);
+  auto mpm = build2(common);
+  for (auto* sp : {&otm->stepper, &mpm->stepper}) {
+    auto& P = (*sp)->state().particles;
+    for (std::size_t i = 0; i < P.x.size(); ++i) {
+      P.stress[i] << 30.0 * std::cos(2.0 * P.x[i][0]), 5.0, 5.0, -20.0 * std::sin(3.0 * P.x[i][1]);
+      P.v[i] << 0.1 * std::sin(P.x[i][1]), -0.2 * P.x[i][0];
+    }
+  }
+  otm->stepper->step(1e-5);
+  mpm->stepper->step(1e-5);
+  const auto& a = otm->stepper->state().particles;
+  const auto& b = mpm->stepper->state().particles;
+  for (std::size_t i = 0; i < a.x.size(); ++i) {
+    EXPECT_LT((a.x[i] - b.x[i]).norm(), 1e-15) << i;
+    EXPECT_LT((a.F[i] - b.F[i]).norm(), 1e-13) << i;
+    EXPECT_LT((a.stress[i] - b.stress[i]).norm(), 1e-6) << i;
+  }
+}
+
 TEST(Unified, TwoDimensionalFreePlateConservesMomentum) {
   auto b = build2({"grid.cells=5", "method.solver=unified", "method.basis=bspline",
                    "method.degree=2", "method.mass=consistent", "mms.amplitude=0"},
@@ -387,11 +415,12 @@ TEST(Otm, InputsAreRefused) {
   }
   try {
     (void)run_settings(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml",
-                                    {"method.solver=otm"}),
+                                    {"method.solver=otm", "method.basis=maxent"}),
                        2);
-    FAIL() << "OTM accepted in 2D";
+    FAIL() << "OTM-maxent accepted in 2D";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("method.solver = \"otm\" is one-dimensional"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "method.solver = \"otm\" with method.basis = \"maxent\" is one-dimensional"),
               std::string::npos)
         << e.what();
   }
