@@ -142,14 +142,6 @@ void Otm<Dim>::set_nodes(const std::vector<double>& x, const std::string& what) 
 template <int Dim>
 bool Otm<Dim>::maxent_at(double x, Index e, Index p) {
   const auto n = static_cast<Index>(x_.size());
-  auto zeta = [&](Index i) {
-    const auto k = static_cast<std::size_t>(i);
-    double z = std::numeric_limits<double>::infinity();
-    if (i > 0) z = std::min(z, x_[k] - x_[k - 1]);
-    if (i + 1 < n) z = std::min(z, x_[k + 1] - x_[k]);
-    return z;
-  };
-  const double dmax = s_.maxent.dmax;
   const double ell = x_[static_cast<std::size_t>(e + 1)] - x_[static_cast<std::size_t>(e)];
   // Candidates: the nodes on either side until one lies beyond its own support and its
   // neighbour's (supports vary smoothly with the node spacing).
@@ -162,7 +154,7 @@ bool Otm<Dim>::maxent_at(double x, Index e, Index p) {
   const bool on_lo = x <= x_.front(), on_hi = x >= x_.back();
   auto consider = [&](Index i) {
     const double xi = x_[static_cast<std::size_t>(i)];
-    const double d = dmax * zeta(i), dist = std::abs(x - xi), r = dist / d;
+    const double d = support_[static_cast<std::size_t>(i)], dist = std::abs(x - xi), r = dist / d;
     if ((on_lo && i != 0) || (on_hi && i != n - 1)) return dist < 3.0 * d;
     const double wi = maxent_prior(r);
     if (wi > 0.0 && m == kMax) overflow = true;
@@ -285,6 +277,18 @@ void Otm<Dim>::evaluate_basis() {
   if constexpr (Dim != 1) {
     throw std::logic_error("Otm: OTM is one-dimensional");
   } else {
+    if (s_.basis == OtmBasis::MaxEnt) {
+      // d_i = d_max zeta_i (D eq. 4.47), zeta_i the distance to node i's nearest neighbour: once
+      // per step, not per particle.
+      support_.resize(x_.size());
+      for (Index i = 0; i < n; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        double z = std::numeric_limits<double>::infinity();
+        if (i > 0) z = std::min(z, x_[k] - x_[k - 1]);
+        if (i + 1 < n) z = std::min(z, x_[k + 1] - x_[k]);
+        support_[k] = s_.maxent.dmax * z;
+      }
+    }
     Index failed = 0, first_failed = -1;
     for (Index p = 0; p < P.size(); ++p) {
       const auto i = static_cast<std::size_t>(p);
@@ -375,28 +379,25 @@ void Otm<Dim>::step(double dt) {
           bool any = false;
           for (Index p = 0; p < P.size(); ++p) {
             const auto i = static_cast<std::size_t>(p);
-            Vec<Dim> dx = Vec<Dim>::Zero(), acc = Vec<Dim>::Zero();
+            Vec<Dim> dx = Vec<Dim>::Zero();
             Mat<Dim> L = Mat<Dim>::Zero();
             for (Index k = row_[i]; k < row_[i + 1]; ++k) {
               const Vec<Dim>& v = nd.velocity[node(k)];
               dx += weight(k) * v;
               L.noalias() += v * grad(k).transpose();
-              acc += weight(k) * nd.accel[node(k)];
             }
             dx *= dt;
             P.x[i] += dx;
             P.u[i] += dx;
-            if (s_.unified)
-              P.v[i] += dt * acc;  // USL's velocity update (D eq. 4.88)
-            else
+            if (s_.unified) {
+              // USL's velocity update (D eq. 4.88).
+              Vec<Dim> acc = Vec<Dim>::Zero();
+              for (Index k = row_[i]; k < row_[i + 1]; ++k) acc += weight(k) * nd.accel[node(k)];
+              P.v[i] += dt * acc;
+            } else {
               P.v[i] = dx / dt;  // OTM: the momentum of the next step (4.29)
-            const Mat<Dim> dtL = dt * L;
-            P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
-            const double J = P.F[i].determinant();
-            P.volume[i] = J * P.volume0[i];
-            P.density[i] = P.mass[i] / P.volume[i];
-            law.update(P.stress[i], P.F[i], dtL);
-            any = any || !(J > 0.0) || !std::isfinite(P.stress[i].sum());
+            }
+            any = stages::detail::deform_particle(P, i, Mat<Dim>(dt * L), law) || any;
           }
           return any;
         }

@@ -84,8 +84,9 @@ class Otm {
   OtmSettings s_;
   bool iso_ = false;  // the isoparametric B-spline map (unified; OTM-P1 in 2D), of degree degree_
   int degree_ = 1;
-  std::vector<double> x_;       // advected node coordinates [m], Dim per node
-  std::vector<Index> element_;  // OTM: element of each particle (x_e <= x_p <= x_{e+1})
+  std::vector<double> x_;        // advected node coordinates [m], Dim per node
+  std::vector<Index> element_;   // OTM: element of each particle (x_e <= x_p <= x_{e+1})
+  std::vector<double> support_;  // OTM max-ent: the support radius d_i of each node this step
   // Per-particle stencils of variable size (max-ent), compressed rows: nodes, values, gradients
   // (Dim per entry).
   std::vector<Index> row_, node_;
