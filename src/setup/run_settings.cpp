@@ -153,11 +153,6 @@ RunSettings run_settings(const Config& cfg, int dim) {
           "\"maxent\", not \"{}\"",
           m.where_basis, name_of(m.basis)));
   }
-  if (m.solver == Solver::Otm && dim != 1 && std::holds_alternative<MaxEntKind>(m.basis))
-    throw InputError(fmt::format(
-        "{}: method.solver = \"otm\" with method.basis = \"maxent\" is one-dimensional (so "
-        "far); in 2D OTM runs with method.basis = \"linear\"",
-        m.where_basis));
   if (m.solver == Solver::Unified && basis_degree_of(m.basis) == 0)
     throw InputError(fmt::format(
         "{}: method.solver = \"unified\" runs B-splines on advected degrees of freedom (D "

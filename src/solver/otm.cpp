@@ -1,4 +1,4 @@
-// OTM (1D) and the unified approach (1D and 2D) (solver/otm.hpp; D Algorithms 3 and 4).
+// OTM and the unified approach, 1D and 2D (solver/otm.hpp; D Algorithms 3 and 4).
 #include "solver/otm.hpp"
 
 #include <fmt/format.h>
@@ -39,14 +39,11 @@ template <int Dim>
 Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
     : st_(pb.grid, std::move(pb.particles), pb.material), s_(s) {
   const char* solver = s.unified ? "unified" : "otm";
-  if (Dim != 1 && !s.unified && s.basis != OtmBasis::Linear)
-    throw InputError(
-        "method.solver = \"otm\" with method.basis = \"maxent\" is one-dimensional "
-        "(so far); in 2D OTM runs with \"linear\"");
   // OTM-P1 in 2D: the bilinear functions of the advected quadrilaterals, i.e. the unified
   // approach's isoparametric map with degree 1 (a particle keeps its material coordinate, as
-  // OTM-P1 keeps its local coordinate in 1D), with OTM's particle velocity.
-  iso_ = s.unified || Dim > 1;
+  // OTM-P1 keeps its local coordinate in 1D), with OTM's particle velocity. OTM-maxent in 2D:
+  // max-ent on the advected lattice of nodes, found through bins of the current positions.
+  iso_ = s.unified || (Dim > 1 && s.basis == OtmBasis::Linear);
   degree_ = s.unified ? s.degree : 1;
   // The nodes discretise the body only (D 4.4: OTM has no empty elements): the grid's nodes
   // from the body's first to its last per direction, which must be nodes of the grid.
@@ -84,7 +81,7 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   // condition on a side the body does not touch constrains no material node.
   std::vector<std::vector<Index>> side_nodes(2 * Dim);
   Index n = 0;
-  if (iso_) {
+  if (iso_ || Dim > 1) {  // (2D max-ent: the nodes of degree 1, the lattice x fastest)
     with_degree(degree_, [&](auto degree) {
       const BSplineBasis<Dim, decltype(degree)::value> basis(body_);
       n = basis.num_dofs();
@@ -122,7 +119,7 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   auto& P = st_.particles;
   if (st_.body_force.fill) st_.body_force.fill(P, 0.0, P.body);
   element_.assign(static_cast<std::size_t>(P.size()), 0);
-  if (!iso_)
+  if (!iso_ && Dim == 1)
     for (std::size_t p = 0; p < element_.size(); ++p)
       element_[p] = std::clamp<Index>(body_.cell_of(P.x[p][0], 0), 0, cells[0] - 1);
 }
@@ -132,7 +129,7 @@ void Otm<Dim>::set_nodes(const std::vector<double>& x, const std::string& what) 
   if (x.size() != x_.size())
     throw InputError(fmt::format("{} holds {} OTM node coordinates; this run has {} nodes of {}",
                                  what, x.size(), x_.size() / Dim, Dim));
-  for (std::size_t i = 1; i < x.size() && !iso_; ++i)
+  for (std::size_t i = 1; i < x.size() && !iso_ && Dim == 1; ++i)
     if (!(x[i] > x[i - 1]))
       throw InputError(
           fmt::format("{}: OTM nodes {} and {} are not in increasing order", what, i - 1, i));
@@ -263,6 +260,149 @@ void Otm<Dim>::bspline_rows() {
   }
 }
 
+// OTM-maxent in 2D (D 4.3 on the advected nodes): d_i = d_max zeta_i with zeta_i the distance
+// from node i to its nearest lattice neighbour (the eight around it; the nearest node of a
+// lattice that has not folded), and the nodes within d_i of a particle found through square bins
+// of side max_i d_i over the nodes' bounding box (the 3^Dim bins around the particle's hold them
+// all), never an all-pairs search. The particles lie inside the nodes' convex hull (the body),
+// so no multiplier is fixed; a particle outside it, or any point where Newton's method does not
+// converge, stops the run (exit code 10) with the particle and its nodes.
+template <int Dim>
+void Otm<Dim>::maxent_rows() {
+  auto& P = st_.particles;
+  const auto n = static_cast<Index>(x_.size() / Dim);
+  IVec<Dim> lat;
+  for (int d = 0; d < Dim; ++d) lat[d] = body_.cells[d] + 1;
+  auto pos = [&](Index i) {
+    return Eigen::Map<const Vec<Dim>>(&x_[static_cast<std::size_t>(i * Dim)]);
+  };
+  support_.resize(static_cast<std::size_t>(n));
+  Vec<Dim> lo = pos(0), hi = pos(0);
+  double dmax_all = 0.0;
+  for (Index i = 0; i < n; ++i) {
+    IVec<Dim> c;
+    Index rem = i;
+    for (int d = 0; d < Dim; ++d) {
+      c[d] = rem % lat[d];
+      rem /= lat[d];
+    }
+    double z = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < ipow(3, Dim); ++k) {
+      Index j = 0, stride = 1, kk = k;
+      bool ok = k != (ipow(3, Dim) - 1) / 2;  // not i itself
+      for (int d = 0; d < Dim; ++d) {
+        const Index cd = c[d] + kk % 3 - 1;
+        kk /= 3;
+        ok = ok && cd >= 0 && cd < lat[d];
+        j += cd * stride;
+        stride *= lat[d];
+      }
+      if (ok) z = std::min(z, (pos(j) - pos(i)).norm());
+    }
+    support_[static_cast<std::size_t>(i)] = s_.maxent.dmax * z;
+    dmax_all = std::max(dmax_all, s_.maxent.dmax * z);
+    lo = lo.cwiseMin(pos(i));
+    hi = hi.cwiseMax(pos(i));
+  }
+  // The bins (counting sort of the nodes by bin).
+  IVec<Dim> nb;
+  for (int d = 0; d < Dim; ++d)
+    nb[d] = std::max<Index>(1, static_cast<Index>(std::floor((hi[d] - lo[d]) / dmax_all)) + 1);
+  auto bin_of = [&](const Vec<Dim>& x, int d) {
+    return std::clamp<Index>(static_cast<Index>(std::floor((x[d] - lo[d]) / dmax_all)), 0,
+                             nb[d] - 1);
+  };
+  const Index nbins = dof_count<Dim>(nb);
+  std::vector<Index> start(static_cast<std::size_t>(nbins + 1), 0),
+      order(static_cast<std::size_t>(n));
+  auto flat = [&](const Vec<Dim>& x) {
+    Index b = 0, stride = 1;
+    for (int d = 0; d < Dim; ++d) {
+      b += bin_of(x, d) * stride;
+      stride *= nb[d];
+    }
+    return b;
+  };
+  for (Index i = 0; i < n; ++i) ++start[static_cast<std::size_t>(flat(pos(i)) + 1)];
+  for (Index b = 0; b < nbins; ++b)
+    start[static_cast<std::size_t>(b + 1)] += start[static_cast<std::size_t>(b)];
+  {
+    std::vector<Index> fill(start.begin(), start.end() - 1);
+    for (Index i = 0; i < n; ++i)
+      order[static_cast<std::size_t>(fill[static_cast<std::size_t>(flat(pos(i)))]++)] = i;
+  }
+  const double ell = body_.h.minCoeff();  // the length unit of the Newton iteration
+  constexpr int kMax = 216;               // maxent_solve's largest node set
+  std::array<Index, kMax> ids{};
+  std::array<Vec<Dim>, kMax> y, dw, grad;
+  std::array<double, kMax> w{}, phi{};
+  const std::array<bool, Dim> fixed{};
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    const Vec<Dim> x = P.x[i];
+    if (!st_.grid.inside(x)) stages::detail::throw_left_grid(st_);
+    int m = 0;
+    IVec<Dim> b0;
+    for (int d = 0; d < Dim; ++d) b0[d] = bin_of(x, d);
+    for (int k = 0; k < ipow(3, Dim); ++k) {
+      Index b = 0, stride = 1, kk = k;
+      bool ok = true;
+      for (int d = 0; d < Dim; ++d) {
+        const Index bd = b0[d] + kk % 3 - 1;
+        kk /= 3;
+        ok = ok && bd >= 0 && bd < nb[d];
+        b += bd * stride;
+        stride *= nb[d];
+      }
+      if (!ok) continue;
+      for (Index t = start[static_cast<std::size_t>(b)]; t < start[static_cast<std::size_t>(b + 1)];
+           ++t) {
+        const Index j = order[static_cast<std::size_t>(t)];
+        const Vec<Dim> r_vec = x - pos(j);
+        const double dj = support_[static_cast<std::size_t>(j)], dist = r_vec.norm();
+        const double wj = maxent_prior(dist / dj);
+        if (!(wj > 0.0)) continue;
+        if (m == kMax)
+          throw RunError(exit_code::kBasis,
+                         fmt::format("step {}, t = {:.9g} s: more than {} advected nodes lie in "
+                                     "the max-ent support at particle {}: the nodes are crowded",
+                                     st_.step, st_.time, kMax, P.id[i]));
+        const auto q = static_cast<std::size_t>(m++);
+        ids[q] = j;
+        y[q] = -r_vec / ell;
+        w[q] = wj;
+        // zeta grad w = ell dw/dr (x - x_j) / (|x - x_j| d_j)
+        dw[q] = dist > 0.0 ? Vec<Dim>(maxent_prior_slope(dist / dj) * ell / (dist * dj) * r_vec)
+                           : Vec<Dim>::Zero();
+      }
+    }
+    const MaxEntStatus status = maxent_solve<Dim>(m, y.data(), w.data(), dw.data(), fixed,
+                                                  s_.maxent, phi.data(), grad.data());
+    if (!status.converged) {
+      std::string where;
+      for (int d = 0; d < Dim; ++d) where += fmt::format("{}{:.9g}", d ? ", " : "", x[d]);
+      throw RunError(
+          exit_code::kBasis,
+          fmt::format("step {}, t = {:.9g} s: the max-ent basis on the advected nodes could not "
+                      "be evaluated at particle {} ({}; {} nodes in its support): Newton's method "
+                      "for the Lagrange multipliers stopped after {} iterations at residual "
+                      "{:.3g} (method.maxent_tolerance = {:.3g}, method.maxent_max_iterations = "
+                      "{}); a particle outside the advected nodes' convex hull has no max-ent "
+                      "functions",
+                      st_.step, st_.time, P.id[i], where, m, status.iterations, status.residual,
+                      s_.maxent.tolerance, s_.maxent.max_iterations));
+    }
+    for (int j = 0; j < m; ++j) {
+      const auto q = static_cast<std::size_t>(j);
+      node_.push_back(ids[q]);
+      w_.push_back(phi[q]);
+      const Vec<Dim> gx = grad[q] / ell;
+      g_.insert(g_.end(), gx.data(), gx.data() + Dim);
+    }
+    row_.push_back(static_cast<Index>(node_.size()));
+  }
+}
+
 // D Algorithm 3 / 4, step 3: the basis at the material points from the advected nodes.
 template <int Dim>
 void Otm<Dim>::evaluate_basis() {
@@ -275,7 +415,7 @@ void Otm<Dim>::evaluate_basis() {
   if (iso_)
     return with_degree(degree_, [&](auto degree) { bspline_rows<decltype(degree)::value>(); });
   if constexpr (Dim != 1) {
-    throw std::logic_error("Otm: OTM is one-dimensional");
+    maxent_rows();
   } else {
     if (s_.basis == OtmBasis::MaxEnt) {
       // d_i = d_max zeta_i (D eq. 4.47), zeta_i the distance to node i's nearest neighbour: once
@@ -408,7 +548,7 @@ void Otm<Dim>::step(double dt) {
     for (int d = 0; d < Dim; ++d)
       x_[static_cast<std::size_t>(i * Dim + d)] += dt * nd.velocity[static_cast<std::size_t>(i)][d];
   // OTM's elements must stay ordered (the unified approach checks its map at the particles).
-  for (Index i = 1; i < n && !iso_; ++i)
+  for (Index i = 1; i < n && !iso_ && Dim == 1; ++i)
     if (!(x_[static_cast<std::size_t>(i)] > x_[static_cast<std::size_t>(i - 1)]))
       throw RunError(exit_code::kInvertedDeformation,
                      fmt::format("step {}, t = {:.9g} s: the advected OTM nodes {} and {} crossed "

@@ -1,6 +1,6 @@
 #pragma once
-// The optimal transportation meshfree method (OTM, D 4.2, Algorithm 3) in 1D: nodes that move
-// with the material, material points that are the quadrature points, the basis evaluated every
+// The optimal transportation meshfree method (OTM, D 4.2, Algorithm 3) in 1D and 2D: nodes that
+// move with the material, material points that are the quadrature points, the basis evaluated every
 // step on the advected nodes (P1 or local max-ent, D 4.3), and per step
 //   M_ij = sum_p phi_i m_p phi_j,  q_i = sum_p phi_i m_p (x_p^s - x_p^{s-1}) / dt,
 //   f_i = sum_p (-grad phi_i sigma_p + phi_i rho_p b_p) V_p                  (D eq. 4.28-4.30)
@@ -47,12 +47,12 @@ struct OtmSettings {
   double conservation_limit = 0.5;
 };
 
-// OTM (1D) and the unified approach (1D and 2D, tensor-product B-splines).
+// OTM (1D and 2D: P1, max-ent) and the unified approach (1D and 2D, tensor-product B-splines).
 template <int Dim>
 class Otm {
  public:
-  // Takes the problem's particles. InputError when the body's ends are not grid nodes, OTM in
-  // 2D, or tractions in 2D.
+  // Takes the problem's particles. InputError when the body's ends are not grid nodes or
+  // tractions in 2D.
   Otm(Problem<Dim>& pb, const OtmSettings& s);
 
   // One step of D Algorithm 3 or 4 (the driver sets the step counter and time afterwards).
@@ -74,6 +74,8 @@ class Otm {
   // The max-ent functions of the advected nodes at x (element e holds x; 1D): appends to the
   // particle's stencil; false when Newton did not converge.
   bool maxent_at(double x, Index e, Index p);
+  // OTM-maxent in 2D: the rows of every particle (nodes found through bins).
+  void maxent_rows();
   void add_tractions();
   // Unified: B_i(X_p) and (dx/dX)^-T grad_X B_i(X_p) of every particle.
   template <int P>
