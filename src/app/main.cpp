@@ -1,4 +1,5 @@
-// mpm: the mpmlab command line. Subcommands: run, study, bench, reconstruct, verify, keys, list.
+// mpm: the mpmlab command line. Subcommands: run, study, bench, reconstruct, massmatrix, verify,
+// keys, list.
 #include <fmt/format.h>
 #include <sys/wait.h>
 #include <CLI/CLI.hpp>
@@ -9,6 +10,7 @@
 #include <new>
 #include <optional>
 
+#include "app/massmatrix.hpp"
 #include "app/perf.hpp"
 #include "app/reconstruct.hpp"
 #include "app/study.hpp"
@@ -288,6 +290,38 @@ int main(int argc, char** argv) {
                   "Gauss points per element (2D: per direction) for the integral")
       ->capture_default_str();
 
+  mpm::MassMatrixOptions mopt;
+  std::string m_smoother = "gauss-seidel", m_restriction = "transpose";
+  auto* mass = app.add_subcommand(
+      "massmatrix",
+      "condition numbers, CG iterations and p-multigrid V-cycles of B-spline mass matrices "
+      "(004 Tables 4.2-4.4)");
+  mass->add_option("--dim", mopt.dim, "1 or 2 (004: 2)")->capture_default_str();
+  mass->add_option("--degrees", mopt.degrees, "B-spline degrees (1-5)")
+      ->delimiter(',')
+      ->capture_default_str();
+  mass->add_option("--cells", mopt.cells, "cells per direction of the unit box (h^-1)")
+      ->delimiter(',')
+      ->capture_default_str();
+  mass->add_option("--boundary", mopt.boundary,
+                   "dirichlet (boundary functions eliminated) or free (all functions)")
+      ->check(CLI::IsMember({"dirichlet", "free"}))
+      ->capture_default_str();
+  mass->add_option("--tolerance", mopt.tolerance, "relative residual (004 eq. 4.53)")
+      ->capture_default_str();
+  mass->add_option("--smoother", m_smoother, "p-multigrid smoother: gauss-seidel or jacobi")
+      ->check(CLI::IsMember({"gauss-seidel", "jacobi"}))
+      ->capture_default_str();
+  mass->add_option("--restriction", m_restriction,
+                   "p-multigrid residual restriction: transpose (of the prolongation) or "
+                   "projection (lumped L2)")
+      ->check(CLI::IsMember({"transpose", "projection"}))
+      ->capture_default_str();
+  mass->add_option("--smoothing-steps", mopt.pmg.pre, "nu1 = nu2 (004: 8)")->capture_default_str();
+  mass->add_flag("!--no-coarse-correction", mopt.pmg.coarse_correction,
+                 "p-multigrid cycles of smoothing only (what the coarse levels contribute)");
+  mass->add_option("--csv", mopt.csv, "also write the rows to this CSV file");
+
   auto* verify = app.add_subcommand(
       "verify",
       "regenerate docs/verification.md and docs/figures/ from fresh runs (scripts/verify.py)");
@@ -319,6 +353,17 @@ int main(int argc, char** argv) {
     if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot, overwrite);
     if (*bench) return cmd_bench(bopt);
     if (*verify) return cmd_verify(verify_quick, verify_long, out, jobs, argv[0]);
+    if (*mass) {
+      mopt.pmg.post = mopt.pmg.pre;
+      mopt.pmg.smoother =
+          m_smoother == "jacobi" ? mpm::Smoother::Jacobi : mpm::Smoother::GaussSeidel;
+      mopt.pmg.restriction = m_restriction == "projection" ? mpm::Restriction::Projection
+                                                           : mpm::Restriction::Transpose;
+      const auto rows = mpm::massmatrix_study(mopt);
+      mpm::print_massmatrix(std::cout, mopt, rows);
+      if (!mopt.csv.empty()) mpm::write_massmatrix_csv(mopt.csv, rows);
+      return 0;
+    }
     if (*rec) {
       const auto r = mpm::reconstruct(ropt);
       if (ropt.dim == 2)

@@ -1,0 +1,187 @@
+// `mpm massmatrix` (app/massmatrix.hpp; 004 Tables 4.2-4.4).
+#include "app/massmatrix.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <ostream>
+
+#include "solver/spline_matrices.hpp"
+
+namespace mpm {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// 004 Table 4.2 (kappa, h^-1 = 8, 16, 32, 64), Table 4.3 (CG iterations, h^-1 = 16, 32, 64,
+// 128) and Table 4.4 (V-cycles, h^-1 = 8, 16, 32, 64); rows p = 1..5.
+constexpr Index kKappaCells[] = {8, 16, 32, 64};
+constexpr double kKappa[5][4] = {{7.38, 8.55, 8.89, 8.97},
+                                 {52.1, 55.1, 56.0, 56.2},
+                                 {440, 424, 420, 422},
+                                 {3770, 3360, 3290, 3300},
+                                 {33000, 26100, 25200, 25200}};
+constexpr Index kCgCells[] = {16, 32, 64, 128};
+constexpr double kCg[5][4] = {{18, 18, 18, 17},
+                              {34, 46, 46, 44},
+                              {68, 93, 95, 91},
+                              {93, 178, 196, 187},
+                              {156, 242, 252, 227}};
+constexpr Index kPmgCells[] = {8, 16, 32, 64};
+constexpr double kPmg[5][4] = {
+    {1, 1, 1, 1}, {4, 4, 4, 3}, {15, 12, 10, 9}, {22, 17, 13, 11}, {58, 38, 27, 20}};
+
+double published(const double (&table)[5][4], const Index (&cells)[4], int p, Index n) {
+  if (p < 1 || p > 5) return kNaN;
+  for (int k = 0; k < 4; ++k)
+    if (cells[k] == n) return table[p - 1][k];
+  return kNaN;
+}
+
+// The kept functions: all, or all but those on the boundary (dirichlet).
+template <int Dim>
+std::vector<unsigned char> kept(const Grid<Dim>& g, int p, bool dirichlet) {
+  std::vector<unsigned char> keep(static_cast<std::size_t>(spline_count(g, p)), 1);
+  if (dirichlet)
+    for (Index i : spline_boundary_functions(g, p)) keep[static_cast<std::size_t>(i)] = 0;
+  return keep;
+}
+
+// lambda_max / lambda_min of the 1D matrix (dense; at most a few hundred functions). The 2D
+// matrix of the unit square with rho = 1 is the Kronecker product M_1D (x) M_1D (tensor-product
+// functions, a separable integrand; tests/solver/test_iterative.cpp checks it on the assembled
+// matrices), with the eliminated set the product of the 1D ones, so its eigenvalues are the
+// products of the 1D ones and kappa_2D = kappa_1D^2.
+double kappa_1d(Index cells, int p, bool dirichlet) {
+  const Grid<1> g(Vec<1>(0.0), Vec<1>(1.0), IVec<1>{cells});
+  const auto keep = kept(g, p, dirichlet);
+  const Eigen::MatrixXd M = Eigen::MatrixXd(kept_submatrix(spline_mass_exact(g, p, p), keep, keep));
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M, Eigen::EigenvaluesOnly);
+  return es.eigenvalues().maxCoeff() / es.eigenvalues().minCoeff();
+}
+
+template <int Dim>
+MassMatrixRow one(const MassMatrixOptions& opt, int p, Index n) {
+  MassMatrixRow row;
+  row.degree = p;
+  row.cells = n;
+  const bool dirichlet = opt.boundary == "dirichlet";
+  IVec<Dim> nc;
+  nc.fill(n);
+  const Grid<Dim> g(Vec<Dim>::Zero(), Vec<Dim>::Ones(), nc);
+  const auto keep = kept(g, p, dirichlet);
+  const SparseMatrixD M = kept_submatrix(spline_mass_exact(g, p, p), keep, keep);
+  const Eigen::VectorXd f_all = spline_load_exact(g, p, -9.81);
+  Eigen::VectorXd f(M.rows());
+  for (Index i = 0, k = 0; i < f_all.size(); ++i)
+    if (keep[static_cast<std::size_t>(i)]) f[k++] = f_all[i];
+  row.unknowns = M.rows();
+  row.kappa = std::pow(kappa_1d(n, p, dirichlet), Dim);
+  row.cg_bound = std::ceil(std::log(opt.tolerance / 2.0) /
+                           std::log((std::sqrt(row.kappa) - 1.0) / (std::sqrt(row.kappa) + 1.0)));
+  const Eigen::SimplicialLDLT<SparseMatrixD> direct(M);
+  const Eigen::VectorXd exact = direct.solve(f);
+  const double scale = exact.norm();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(M.rows());
+  const IterationReport cg = conjugate_gradient(M, f, x, opt.tolerance, opt.max_iterations);
+  row.cg_iterations = cg.iterations;
+  row.cg_converged = cg.converged;
+  row.cg_error = (x - exact).norm() / scale;
+  std::vector<std::pair<int, int>> sides;
+  if (dirichlet)
+    for (int d = 0; d < Dim; ++d)
+      for (int side = 0; side < 2; ++side) sides.emplace_back(d, side);
+  const PMultigrid mg = spline_pmg(g, p, gauss_points(g, p + 1), keep, sides, opt.pmg);
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(M.rows());
+  const IterationReport v = mg.solve(f, y, opt.tolerance, opt.max_cycles);
+  row.pmg_cycles = v.iterations;
+  row.pmg_converged = v.converged;
+  row.pmg_error = (y - exact).norm() / scale;
+  if (Dim == 2) {
+    row.kappa_published = published(kKappa, kKappaCells, p, n);
+    row.cg_published = published(kCg, kCgCells, p, n);
+    row.pmg_published = published(kPmg, kPmgCells, p, n);
+  } else {
+    row.kappa_published = row.cg_published = row.pmg_published = kNaN;
+  }
+  return row;
+}
+
+std::string cell(double ours, bool converged, double pub, const char* fmt_ours) {
+  std::string s = converged ? fmt::format(fmt::runtime(fmt_ours), ours) : "failed";
+  if (!std::isnan(pub)) s += fmt::format(" ({:g})", pub);
+  return s;
+}
+
+}  // namespace
+
+std::vector<MassMatrixRow> massmatrix_study(const MassMatrixOptions& opt) {
+  if (opt.dim != 1 && opt.dim != 2) throw InputError(fmt::format("--dim {}: 1 or 2", opt.dim));
+  if (opt.boundary != "dirichlet" && opt.boundary != "free")
+    throw InputError(fmt::format("--boundary \"{}\": \"dirichlet\" or \"free\"", opt.boundary));
+  for (int p : opt.degrees)
+    if (p < 1 || p > 5) throw InputError(fmt::format("--degrees: {} (the degrees are 1 to 5)", p));
+  for (Index n : opt.cells)
+    if (n < 1 || n > 4096) throw InputError(fmt::format("--cells: {} (1 to 4096)", n));
+  if (!(opt.tolerance > 0.0 && opt.tolerance < 1.0))
+    throw InputError(fmt::format("--tolerance {}: in (0, 1)", opt.tolerance));
+  std::vector<MassMatrixRow> rows;
+  for (int p : opt.degrees)
+    for (Index n : opt.cells) rows.push_back(opt.dim == 1 ? one<1>(opt, p, n) : one<2>(opt, p, n));
+  return rows;
+}
+
+void print_massmatrix(std::ostream& os, const MassMatrixOptions& opt,
+                      const std::vector<MassMatrixRow>& rows) {
+  os << fmt::format(
+      "B-spline mass matrices on the unit {} (rho = 1, force 9.81 in -x{}), {} boundary, "
+      "tolerance {:g} from zero (004 eq. 4.53); p-multigrid: nu1 = nu2 = {}, {} smoother, {}. "
+      "004's values in brackets.\n",
+      opt.dim == 2 ? "square" : "interval", opt.dim == 2 ? " and -y" : "", opt.boundary,
+      opt.tolerance, opt.pmg.pre, name_of(opt.pmg.smoother),
+      opt.pmg.coarse_correction
+          ? fmt::format("{} restriction, CG to {:g} at p = 1", name_of(opt.pmg.restriction),
+                        opt.pmg.coarse_tolerance)
+          : std::string("no coarse correction (smoothing only)"));
+  auto table = [&](const char* title, auto value) {
+    os << "\n" << title << "\n" << fmt::format("{:>3}", "p");
+    for (Index n : opt.cells) os << fmt::format(" {:>18}", fmt::format("h^-1 = {}", n));
+    os << "\n";
+    for (int p : opt.degrees) {
+      os << fmt::format("{:>3}", p);
+      for (Index n : opt.cells)
+        for (const auto& r : rows)
+          if (r.degree == p && r.cells == n) os << fmt::format(" {:>18}", value(r));
+      os << "\n";
+    }
+  };
+  table("condition number kappa (004 Table 4.2)",
+        [](const MassMatrixRow& r) { return cell(r.kappa, true, r.kappa_published, "{:.3g}"); });
+  table("CG iterations (004 Table 4.3)", [](const MassMatrixRow& r) {
+    return cell(r.cg_iterations, r.cg_converged, r.cg_published, "{:.0f}");
+  });
+  table("p-multigrid V-cycles (004 Table 4.4)", [](const MassMatrixRow& r) {
+    return cell(r.pmg_cycles, r.pmg_converged, r.pmg_published, "{:.0f}");
+  });
+}
+
+void write_massmatrix_csv(const std::string& path, const std::vector<MassMatrixRow>& rows) {
+  std::ofstream f(path);
+  if (!f) throw InputError(fmt::format("--csv {}: cannot be written", path));
+  f << "degree,cells,unknowns,kappa,kappa_published,cg_iterations,cg_converged,cg_published,"
+       "cg_bound,cg_error,pmg_cycles,pmg_converged,pmg_published,pmg_error\n";
+  auto v = [](double x) { return std::isnan(x) ? std::string() : fmt::format("{:.17g}", x); };
+  for (const auto& r : rows)
+    f << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.degree, r.cells, r.unknowns,
+                     v(r.kappa), v(r.kappa_published), r.cg_iterations, r.cg_converged ? 1 : 0,
+                     v(r.cg_published), v(r.cg_bound), v(r.cg_error), r.pmg_cycles,
+                     r.pmg_converged ? 1 : 0, v(r.pmg_published), v(r.pmg_error));
+  if (!f) throw RunError(exit_code::kOutput, fmt::format("{}: write failed", path));
+}
+
+}  // namespace mpm

@@ -1,0 +1,152 @@
+// B-spline mass matrices by quadrature (solver/spline_matrices.hpp).
+#include "solver/spline_matrices.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <type_traits>
+
+#include "basis/bspline.hpp"
+#include "mapping/quadrature.hpp"
+
+namespace mpm {
+
+namespace {
+template <class Fn>
+decltype(auto) with_spline_degree(int p, Fn&& fn) {
+  switch (p) {
+    case 1:
+      return fn(std::integral_constant<int, 1>{});
+    case 2:
+      return fn(std::integral_constant<int, 2>{});
+    case 3:
+      return fn(std::integral_constant<int, 3>{});
+    case 4:
+      return fn(std::integral_constant<int, 4>{});
+    case 5:
+      return fn(std::integral_constant<int, 5>{});
+    default:
+      throw InputError(fmt::format("B-spline degree {}: the degrees are 1 to 5", p));
+  }
+}
+}  // namespace
+
+template <int Dim>
+PointSet<Dim> gauss_points(const Grid<Dim>& g, int n, double rho) {
+  const GaussRule r = gauss_legendre(n);
+  PointSet<Dim> out;
+  const Index nc = g.num_cells();
+  const auto per_cell = static_cast<std::size_t>(ipow(n, Dim));
+  out.x.reserve(static_cast<std::size_t>(nc) * per_cell);
+  out.w.reserve(static_cast<std::size_t>(nc) * per_cell);
+  for (Index c = 0; c < nc; ++c) {
+    Index rem = c;
+    IVec<Dim> cell;
+    for (int d = 0; d < Dim; ++d) {
+      cell[d] = rem % g.cells[d];
+      rem /= g.cells[d];
+    }
+    for (std::size_t k = 0; k < per_cell; ++k) {
+      std::size_t kk = k;
+      Vec<Dim> x;
+      double w = rho;
+      for (int d = 0; d < Dim; ++d) {
+        const std::size_t a = kk % static_cast<std::size_t>(n);
+        kk /= static_cast<std::size_t>(n);
+        x[d] = g.origin[d] + g.h[d] * (static_cast<double>(cell[d]) + 0.5 * (r.xi[a] + 1.0));
+        w *= 0.5 * g.h[d] * r.w[a];
+      }
+      out.x.push_back(x);
+      out.w.push_back(w);
+    }
+  }
+  return out;
+}
+
+template <int Dim>
+SparseMatrixD spline_values(const Grid<Dim>& g, int p, const std::vector<Vec<Dim>>& x) {
+  return with_spline_degree(p, [&](auto degree) {
+    constexpr int P = decltype(degree)::value;
+    const BSplineBasis<Dim, P> basis(g);
+    typename BSplineBasis<Dim, P>::StencilT s;
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(x.size() * static_cast<std::size_t>(s.kSize));
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      if (!g.inside(x[k]))
+        throw InputError(fmt::format("spline_values: point {} lies outside the grid", k));
+      basis.evaluate_point(x[k], s);
+      for (int a = 0; a < s.kSize; ++a)
+        if (s.w[a] != 0.0) t.emplace_back(static_cast<Index>(k), s.dof[a], s.w[a]);
+    }
+    SparseMatrixD B(static_cast<Index>(x.size()), basis.num_dofs());
+    B.setFromTriplets(t.begin(), t.end());
+    return B;
+  });
+}
+
+template <int Dim>
+SparseMatrixD spline_mass(const Grid<Dim>& g, int p, int q, const PointSet<Dim>& pts) {
+  const SparseMatrixD Bp = spline_values(g, p, pts.x);
+  const SparseMatrixD Bq = p == q ? Bp : spline_values(g, q, pts.x);
+  const Eigen::Map<const Eigen::VectorXd> w(pts.w.data(), static_cast<Index>(pts.w.size()));
+  SparseMatrixD M = Bp.transpose() * (w.asDiagonal() * Bq);
+  M.makeCompressed();
+  return M;
+}
+
+template <int Dim>
+SparseMatrixD spline_mass_exact(const Grid<Dim>& g, int p, int q, double rho) {
+  return spline_mass(g, p, q, gauss_points(g, std::max(p, q) + 1, rho));
+}
+
+template <int Dim>
+Eigen::VectorXd spline_load_exact(const Grid<Dim>& g, int p, double f) {
+  const PointSet<Dim> pts = gauss_points(g, p + 1, f);
+  const SparseMatrixD B = spline_values(g, p, pts.x);
+  const Eigen::Map<const Eigen::VectorXd> w(pts.w.data(), static_cast<Index>(pts.w.size()));
+  return B.transpose() * w;
+}
+
+template <int Dim>
+Index spline_count(const Grid<Dim>& g, int p) {
+  Index n = 1;
+  for (int d = 0; d < Dim; ++d) n *= g.cells[d] + p;
+  return n;
+}
+
+template <int Dim>
+std::vector<Index> spline_boundary_functions(const Grid<Dim>& g, int p) {
+  IVec<Dim> n;
+  for (int d = 0; d < Dim; ++d) n[d] = g.cells[d] + p;
+  std::vector<Index> out;
+  for (Index i = 0; i < spline_count(g, p); ++i) {
+    Index rem = i;
+    bool boundary = false;
+    for (int d = 0; d < Dim; ++d) {
+      const Index c = rem % n[d];
+      rem /= n[d];
+      // Open knot vectors: only the first and last function of a direction are nonzero on the
+      // box's sides (they interpolate there).
+      boundary = boundary || c == 0 || c == n[d] - 1;
+    }
+    if (boundary) out.push_back(i);
+  }
+  return out;
+}
+
+template PointSet<1> gauss_points<1>(const Grid<1>&, int, double);
+template PointSet<2> gauss_points<2>(const Grid<2>&, int, double);
+template SparseMatrixD spline_values<1>(const Grid<1>&, int, const std::vector<Vec<1>>&);
+template SparseMatrixD spline_values<2>(const Grid<2>&, int, const std::vector<Vec<2>>&);
+template SparseMatrixD spline_mass<1>(const Grid<1>&, int, int, const PointSet<1>&);
+template SparseMatrixD spline_mass<2>(const Grid<2>&, int, int, const PointSet<2>&);
+template SparseMatrixD spline_mass_exact<1>(const Grid<1>&, int, int, double);
+template SparseMatrixD spline_mass_exact<2>(const Grid<2>&, int, int, double);
+template Eigen::VectorXd spline_load_exact<1>(const Grid<1>&, int, double);
+template Eigen::VectorXd spline_load_exact<2>(const Grid<2>&, int, double);
+template Index spline_count<1>(const Grid<1>&, int);
+template Index spline_count<2>(const Grid<2>&, int);
+template std::vector<Index> spline_boundary_functions<1>(const Grid<1>&, int);
+template std::vector<Index> spline_boundary_functions<2>(const Grid<2>&, int);
+
+}  // namespace mpm
