@@ -62,6 +62,8 @@ inline constexpr int kOutput = 8;          // an output could not be written (di
 inline constexpr int kConservation = 9;
 // A basis could not be evaluated at some point (the max-ent Newton iteration did not converge).
 inline constexpr int kBasis = 10;
+// An iterative mass solver (method.mass_solver = "cg" or "pmg") did not reach its tolerance.
+inline constexpr int kSolver = 11;
 }  // namespace exit_code
 
 }  // namespace mpm

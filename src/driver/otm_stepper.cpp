@@ -64,6 +64,7 @@ std::unique_ptr<Stepper<Dim>> make_otm_stepper(const StepperInput<Dim>& in) {
     }
     s.mass = m.mass;
     s.mass_tolerance = m.mass_tolerance;
+    s.mass_solver = m.mass_solver;
     s.conservation_limit = m.conservation_limit;
     return std::make_unique<OtmStepper<Dim>>(in.problem, s);
   }

@@ -184,6 +184,19 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
                            : std::string(name_of(method.scheme))},
       {"mass", method.mass == MassType::Consistent ? "consistent" : "lumped"}};
   if (basis_degree(basis) > 0) method_json["degree"] = basis_degree(basis);
+  if (method.mass == MassType::Consistent) {
+    const MassSolverSettings& ms = method.mass_solver;
+    method_json["mass_solver"] = ms.kind == MassSolver::Direct ? "direct"
+                                 : ms.kind == MassSolver::Cg   ? "cg"
+                                                               : "pmg";
+    if (ms.kind != MassSolver::Direct) {
+      method_json["mass_solver_tolerance"] = ms.tolerance;
+      // CG iterations or V-cycles over the run and the most of one solve (a restart counts
+      // from the restart).
+      method_json["mass_solver_iterations"] = res.diag.mass_solver_iterations;
+      method_json["mass_solver_max_iterations_per_solve"] = res.diag.max_mass_solver_iterations;
+    }
+  }
   res.summary = make_summary(res, settings, sim.material, sim.time, std::move(method_json),
                              scheme_velocity_time);
   stepper->report(res.summary);

@@ -61,6 +61,8 @@ class TypedStepper final : public Stepper<Dim> {
       check_reconstruction_input<Dim>(method, sim_.grid, sim_.particles, sim_.mapping);
     sim_.mass_type = method.mass;
     sim_.mass_tolerance = method.mass_tolerance;
+    sim_.consistent.configure(method.mass_solver);
+    sim_.spline_degree = basis_degree(method.basis);
     sim_.conservation_limit = method.conservation_limit;
     sim_.sorting.mode = method.sort;
     for (const auto& f : pb.fixed_sides) sim_.fix_side(f.direction, f.side, f.components);

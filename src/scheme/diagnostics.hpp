@@ -11,6 +11,10 @@ struct Diagnostics {
   // The same relative errors of the latest mapping (history.csv); not checkpointed.
   double rel_mass_error = 0.0;
   double rel_momentum_error = 0.0;
+  // Iterative mass solves (method.mass_solver = "cg" or "pmg"): CG iterations or V-cycles, in
+  // all and the most of one solve; not checkpointed (a restart counts from there).
+  Index mass_solver_iterations = 0;
+  int max_mass_solver_iterations = 0;
 };
 
 }  // namespace mpm

@@ -147,6 +147,36 @@ void after_mass(RunState<Dim>& sim) {
     // One factorisation serves every component unless some DOF is fixed in only some of them
     // (rollers): then component d gets its own (slot d).
     const bool per_component = sim.consistent_per_component;
+    if (sim.consistent.settings().kind == MassSolver::Pmg)
+      sim.consistent.pmg_builder = [&sim, per_component](const std::vector<unsigned char>& keep,
+                                                         int slot, const SparseMatrixD& fine) {
+        // The coarse levels by rediscretisation at the particles (their masses as weights),
+        // without the functions of the sides whose DOFs this slot fixes.
+        const auto& P = sim.particles;
+        PointSet<Dim> pts;
+        pts.x.assign(P.x.begin(), P.x.end());
+        pts.w.assign(P.mass.begin(), P.mass.end());
+        const auto bit = static_cast<std::uint8_t>(per_component ? 1u << slot : kAll);
+        const int p = sim.spline_degree;
+        IVec<Dim> n;
+        for (int d = 0; d < Dim; ++d) n[d] = sim.grid.cells[d] + p;
+        std::vector<std::pair<int, int>> sides;
+        for (int d = 0; d < Dim; ++d)
+          for (int side = 0; side < 2; ++side) {
+            bool all = true;
+            for (Index i = 0; i < static_cast<Index>(sim.nodes.fixed.size()) && all; ++i) {
+              Index rem = i, c = 0;
+              for (int e = 0; e <= d; ++e) {
+                c = rem % n[e];
+                rem /= n[e];
+              }
+              if (c == (side == 0 ? 0 : n[d] - 1))
+                all = (sim.nodes.fixed[static_cast<std::size_t>(i)] & bit) == bit;
+            }
+            if (all) sides.emplace_back(d, side);
+          }
+        return spline_pmg(sim.grid, p, pts, keep, sides, sim.consistent.settings().pmg, &fine);
+      };
     for (int d = 0; d < (per_component ? Dim : 1); ++d) {
       const auto bit = static_cast<std::uint8_t>(per_component ? 1u << d : kAll);
       if (!sim.consistent.factorize(
@@ -204,9 +234,34 @@ void after_momentum(RunState<Dim>& sim) {
 }  // namespace detail
 
 namespace {
+// An iterative mass solve that did not reach its tolerance: the step, the component, the
+// residual and its history (every iteration up to 12, then a sample).
+template <int Dim>
+[[noreturn]] void throw_mass_solver_failure(const RunState<Dim>& sim, int component,
+                                            const IterationReport& rep) {
+  const MassSolverSettings& s = sim.consistent.settings();
+  std::string hist;
+  const std::size_t n = rep.history.size();
+  const std::size_t stride = n <= 12 ? 1 : n / 12;
+  for (std::size_t k = 0; k < n; k += stride)
+    hist += fmt::format("{}{}: {:.3g}", hist.empty() ? "" : ", ", k, rep.history[k]);
+  if (n > 0 && (n - 1) % stride != 0)
+    hist += fmt::format(", {}: {:.3g}", n - 1, rep.history.back());
+  throw RunError(
+      exit_code::kSolver,
+      fmt::format("step {}, t = {:.9g} s: the {} mass solver did not converge for velocity "
+                  "component {}: relative residual {:.3g} after {} {} (method.mass_solver_"
+                  "tolerance = {:.3g}, method.mass_solver_max_iterations = {}); residual "
+                  "history (iteration: relative residual): {}",
+                  sim.step, sim.time, s.kind == MassSolver::Cg ? "cg" : "pmg", "xyz"[component],
+                  rep.relative_residual, rep.iterations,
+                  s.kind == MassSolver::Cg ? "iterations" : "V-cycles", s.tolerance,
+                  s.max_iterations, hist));
+}
+
 // y = M^{-1} r on the active, unconstrained DOFs; zero elsewhere (D eq. 2.46 / 2.49).
 template <int Dim, class V>
-void solve_grid(const RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) {
+void solve_grid(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) {
   const auto& nd = sim.nodes;
   const auto n = r.size();
   if (sim.mass_type == MassType::Lumped) {
@@ -220,7 +275,14 @@ void solve_grid(const RunState<Dim>& sim, const std::vector<V>& r, std::vector<V
       const int slot = sim.consistent_per_component ? d : 0;
       for (std::size_t i = 0; i < n; ++i)
         rhs[static_cast<Index>(i)] = (nd.active[i] && !(nd.fixed[i] & (1u << d))) ? r[i][d] : 0.0;
-      const Eigen::VectorXd sol = sim.consistent.solve(rhs, slot);
+      IterationReport rep;
+      const Eigen::VectorXd sol = sim.consistent.solve(rhs, slot, &rep);
+      if (sim.consistent.settings().kind != MassSolver::Direct) {
+        sim.diag.mass_solver_iterations += rep.iterations;
+        sim.diag.max_mass_solver_iterations =
+            std::max(sim.diag.max_mass_solver_iterations, rep.iterations);
+        if (!rep.converged) throw_mass_solver_failure(sim, d, rep);
+      }
       for (std::size_t i = 0; i < n; ++i) y[i][d] = sol[static_cast<Index>(i)];
     }
   }

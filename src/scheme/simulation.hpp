@@ -67,6 +67,9 @@ struct RunState {
   // per velocity component. Set by Simulation::fix_side, the only place that changes
   // nodes.fixed.
   bool consistent_per_component = false;
+  // The degree of a B-spline basis on the grid (0 for the others): method.mass_solver = "pmg"
+  // builds its hierarchy over the degrees below it.
+  int spline_degree = 0;
   IVec<Dim> dof_stride{};          // DOF strides of a tensor-product basis (CachedT)
   std::vector<CompactIndex> cell;  // cell of each particle at the last evaluation
   ScatterBuffers<Dim> scatter;     // per-chunk grid buffers of the parallel scatters

@@ -150,6 +150,16 @@ std::vector<KeySpec> declare() {
       real("method.mass_tolerance", "", 1e-10, closed_open(0, 1),
            "degrees of freedom with mass below this fraction of the largest nodal mass are "
            "inactive"),
+      choice("method.mass_solver", "direct", kMassSolvers,
+             "solver of the consistent mass matrix (method.mass = \"consistent\")"),
+      real("method.mass_solver_tolerance", "", 1e-12, open(0, 1e-2),
+           "relative residual at which cg and pmg stop (004 eq. 4.53)"),
+      integer("method.mass_solver_max_iterations", 5000, closed(1, 1000000),
+              "CG iterations or V-cycles of one solve before the run stops (exit code 11)"),
+      choice("method.pmg_smoother", "gauss-seidel", kPmgSmoothers,
+             "smoother of method.mass_solver = \"pmg\""),
+      integer("method.pmg_smoothing_steps", 8, closed(1, 100),
+              "pre- and post-smoothing steps nu_1 = nu_2 of a V-cycle (004: 8)"),
       // Direct mappings conserve mass and momentum to round-off; the reconstructions (MLS, IMLS,
       // TLS, cubic spline) to their approximation error, which falls with h. An error of order
       // one means the grid no longer holds the particles' mass (e.g. a support smaller than the

@@ -104,6 +104,20 @@ inline constexpr Entry kMassTypes[] = {
     {"consistent", "consistent mass matrix, solved exactly each step (D eq. 2.31/2.44)"},
 };
 
+// method.mass_solver: how the consistent mass matrix is solved (solver/mass_matrix.hpp).
+inline constexpr Entry kMassSolvers[] = {
+    {"direct", "sparse LDL^T factorisation each step: exact to round-off"},
+    {"cg", "conjugate gradients from zero to method.mass_solver_tolerance (004 eq. 4.53)"},
+    {"pmg",
+     "p-multigrid V-cycles over the B-spline degrees p .. 1 (004 4.7; method.basis = "
+     "\"bspline\")"},
+};
+
+inline constexpr Entry kPmgSmoothers[] = {
+    {"gauss-seidel", "forward sweeps before the coarse correction, backward after (004)"},
+    {"jacobi", "damped Jacobi, omega = 1 / lambda_max(D^-1 M) (parallel)"},
+};
+
 // method.sort: re-sorting the particles by cell between steps (scheme/sort.hpp).
 inline constexpr Entry kSortModes[] = {
     {"auto", "sort by cell when the order has degraded (chunk DOF spans twice the sorted ones)"},

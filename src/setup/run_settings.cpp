@@ -137,6 +137,30 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.reference_dofs = cfg.get_int("reference.dofs");
   m.mass = cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
   m.mass_tolerance = cfg.get_real("method.mass_tolerance");
+  {
+    const std::string solver = cfg.get_string("method.mass_solver");
+    MassSolverSettings& ms = m.mass_solver;
+    ms.kind = solver == "cg"    ? MassSolver::Cg
+              : solver == "pmg" ? MassSolver::Pmg
+                                : MassSolver::Direct;
+    ms.tolerance = cfg.get_real("method.mass_solver_tolerance");
+    ms.max_iterations = static_cast<int>(cfg.get_int("method.mass_solver_max_iterations"));
+    ms.pmg.smoother = cfg.get_string("method.pmg_smoother") == "jacobi" ? Smoother::Jacobi
+                                                                        : Smoother::GaussSeidel;
+    ms.pmg.pre = ms.pmg.post = static_cast<int>(cfg.get_int("method.pmg_smoothing_steps"));
+    if (ms.kind != MassSolver::Direct && m.mass != MassType::Consistent)
+      throw InputError(fmt::format(
+          "{}: method.mass_solver = \"{}\" solves the consistent mass matrix, and this run uses "
+          "method.mass = \"lumped\" (a diagonal: nothing to solve): set method.mass = "
+          "\"consistent\" or remove method.mass_solver",
+          cfg.where("method.mass_solver"), solver));
+    if (ms.kind == MassSolver::Pmg && (m.solver != Solver::Mpm || basis_degree_of(m.basis) == 0))
+      throw InputError(fmt::format(
+          "{}: method.mass_solver = \"pmg\" runs over the degrees of a B-spline basis on the "
+          "grid: method.solver = \"mpm\" with method.basis = \"bspline\" (this run: solver "
+          "\"{}\", basis \"{}\"); \"cg\" works with every basis",
+          cfg.where("method.mass_solver"), cfg.get_string("method.solver"), name_of(m.basis)));
+  }
   m.conservation_limit = cfg.get_real("method.conservation_limit");
   m.sort = cfg.get_string("method.sort") == "never" ? SortMode::Never : SortMode::Auto;
   if (m.solver != Solver::Ulfem)

@@ -42,6 +42,7 @@ struct MethodSettings {
   Scheme scheme;
   MassType mass = MassType::Lumped;
   double mass_tolerance = 1e-10;
+  MassSolverSettings mass_solver;  // method.mass_solver and its keys (consistent mass)
   double conservation_limit = 0.5;
   SortMode sort = SortMode::Auto;
   std::string where_basis, where_mapping, where_tls_completion;

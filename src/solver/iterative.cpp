@@ -168,7 +168,8 @@ SparseMatrixD kept_submatrix(const SparseMatrixD& A, const std::vector<unsigned 
 template <int Dim>
 PMultigrid spline_pmg(const Grid<Dim>& g, int p, const PointSet<Dim>& pts,
                       const std::vector<unsigned char>& keep_fine,
-                      const std::vector<std::pair<int, int>>& fixed_sides, const PmgSettings& s) {
+                      const std::vector<std::pair<int, int>>& fixed_sides, const PmgSettings& s,
+                      const SparseMatrixD* fine) {
   if (p < 1 || p > 5) throw InputError(fmt::format("p-multigrid: degree {} (1 to 5)", p));
   // Per degree q = p .. 1: the full mass matrix, its lumped diagonal and the kept functions.
   const int nlev = p;
@@ -178,7 +179,7 @@ PMultigrid spline_pmg(const Grid<Dim>& g, int p, const PointSet<Dim>& pts,
   for (int k = 0; k < nlev; ++k) {
     const int q = p - k;
     const auto K = static_cast<std::size_t>(k);
-    M[K] = spline_mass(g, q, q, pts);
+    M[K] = k == 0 && fine ? *fine : spline_mass(g, q, q, pts);
     lumped[K] = M[K] * Eigen::VectorXd::Ones(M[K].cols());
     if (k == 0) {
       if (static_cast<Index>(keep_fine.size()) != M[K].rows())
@@ -228,9 +229,11 @@ PMultigrid spline_pmg(const Grid<Dim>& g, int p, const PointSet<Dim>& pts,
 
 template PMultigrid spline_pmg<1>(const Grid<1>&, int, const PointSet<1>&,
                                   const std::vector<unsigned char>&,
-                                  const std::vector<std::pair<int, int>>&, const PmgSettings&);
+                                  const std::vector<std::pair<int, int>>&, const PmgSettings&,
+                                  const SparseMatrixD*);
 template PMultigrid spline_pmg<2>(const Grid<2>&, int, const PointSet<2>&,
                                   const std::vector<unsigned char>&,
-                                  const std::vector<std::pair<int, int>>&, const PmgSettings&);
+                                  const std::vector<std::pair<int, int>>&, const PmgSettings&,
+                                  const SparseMatrixD*);
 
 }  // namespace mpm

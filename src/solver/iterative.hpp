@@ -95,11 +95,13 @@ class PMultigrid {
 // their masses: MPM). keep_fine[i] != 0 keeps function i of degree p; on the coarser levels a
 // function is kept when it has mass and is not on a side of `fixed_sides` ((direction, side)
 // pairs; the functions that do not vanish there). The solution vectors are over the kept
-// functions of degree p, in increasing order.
+// functions of degree p, in increasing order. `fine`, when given, replaces the degree-p matrix
+// of the point set (all functions; an MPM run's assembled matrix, whatever its mapping).
 template <int Dim>
 PMultigrid spline_pmg(const Grid<Dim>& g, int p, const PointSet<Dim>& pts,
                       const std::vector<unsigned char>& keep_fine,
-                      const std::vector<std::pair<int, int>>& fixed_sides, const PmgSettings& s);
+                      const std::vector<std::pair<int, int>>& fixed_sides, const PmgSettings& s,
+                      const SparseMatrixD* fine = nullptr);
 
 // The kept rows and columns of A (keep[i] != 0), in increasing order.
 SparseMatrixD kept_submatrix(const SparseMatrixD& A, const std::vector<unsigned char>& keep_rows,

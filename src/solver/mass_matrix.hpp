@@ -1,22 +1,43 @@
 #pragma once
 // Grid solves M y = r for one right-hand side per direction (D eq. 2.34-2.35, 2.46, 2.49).
 // Lumped: y_i = r_i / m_i on active DOFs. Consistent: the sparse symmetric matrix assembled by
-// the mapping, factorised once per step (Eigen's simplicial LDL^T; the matrix is banded with
-// bandwidth given by the basis support), Dirichlet DOFs and inactive DOFs eliminated. Where the
-// Dirichlet conditions differ between velocity components (a roller fixes only the normal one),
-// each component has its own elimination and factorisation (slot = component).
+// the mapping, with Dirichlet DOFs and inactive DOFs eliminated, solved by method.mass_solver:
+//   direct  Eigen's simplicial LDL^T, factorised once per step (the matrix is banded with
+//           bandwidth given by the basis support): exact to round-off;
+//   cg      conjugate gradients from zero to a relative residual (004 eq. 4.53);
+//   pmg     p-multigrid V-cycles over the B-spline degrees p .. 1 (solver/iterative.hpp), the
+//           coarse matrices rediscretised at the particles.
+// Where the Dirichlet conditions differ between velocity components (a roller fixes only the
+// normal one), each component has its own elimination (slot = component).
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <array>
+#include <functional>
+#include <memory>
 #include <vector>
 
 #include "grid/grid_state.hpp"
+#include "solver/iterative.hpp"
 
 namespace mpm {
+
+enum class MassSolver { Direct, Cg, Pmg };
+
+struct MassSolverSettings {
+  MassSolver kind = MassSolver::Direct;
+  double tolerance = 1e-12;   // relative residual of cg and pmg
+  int max_iterations = 5000;  // CG iterations or V-cycles before the run stops
+  PmgSettings pmg;
+};
 
 class ConsistentMass {
  public:
   using Triplet = Eigen::Triplet<double>;
+  // The p-multigrid hierarchy for the kept DOFs of a slot (keep[i] != 0) and the fine matrix
+  // (all DOFs): set by the stage that knows the grid, the basis degree and the particles
+  // (scheme/grid_stages.cpp).
+  using PmgBuilder = std::function<PMultigrid(const std::vector<unsigned char>& keep, int slot,
+                                              const SparseMatrixD& fine)>;
 
   void begin(Index ndofs) {
     n_ = ndofs;
@@ -26,9 +47,14 @@ class ConsistentMass {
 
   static constexpr int kSlots = 3;
 
-  // Assemble with DOF `i` kept when keep(i), eliminated (identity row) otherwise; factorise into
-  // `slot` (0 .. kSlots - 1). Returns false when the matrix is not positive definite (a singular
-  // particle distribution).
+  void configure(const MassSolverSettings& s) { settings_ = s; }
+  const MassSolverSettings& settings() const { return settings_; }
+  PmgBuilder pmg_builder;
+
+  // Assemble with DOF `i` kept when keep(i), eliminated (identity row) otherwise; factorise
+  // (direct) or prepare (cg: the matrix; pmg: the hierarchy) into `slot` (0 .. kSlots - 1).
+  // Returns false when the matrix is not positive definite (a singular particle distribution;
+  // for cg and pmg: a non-positive diagonal entry).
   template <class Keep>
   bool factorize(Keep&& keep, int slot = 0) {
     kept_.resize(static_cast<std::size_t>(n_));
@@ -36,8 +62,10 @@ class ConsistentMass {
     return factorize_kept(slot);
   }
 
-  // y = M^-1 rhs with the factorisation of `slot`.
-  Eigen::VectorXd solve(const Eigen::VectorXd& rhs, int slot = 0) const;
+  // y = M^-1 rhs with the factorisation (or hierarchy) of `slot`. For cg and pmg `report`, when
+  // given, receives the iterations and residuals (converged false: the caller stops the run).
+  Eigen::VectorXd solve(const Eigen::VectorXd& rhs, int slot = 0,
+                        IterationReport* report = nullptr) const;
   const Eigen::SparseMatrix<double>& matrix(int slot = 0) const {
     return M_[static_cast<std::size_t>(slot)];
   }
@@ -48,10 +76,14 @@ class ConsistentMass {
   bool factorize_kept(int slot);
 
   Index n_ = 0;
+  MassSolverSettings settings_;
   std::vector<Triplet> triplets_;
   std::vector<unsigned char> kept_;  // keep(i) of the latest factorize
   std::array<Eigen::SparseMatrix<double>, kSlots> M_;
   std::array<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>, kSlots> solver_;
+  // pmg: per slot the kept DOFs (increasing) and the hierarchy over them.
+  std::array<std::vector<Index>, kSlots> kept_index_;
+  std::array<std::unique_ptr<PMultigrid>, kSlots> pmg_;
 };
 
 }  // namespace mpm

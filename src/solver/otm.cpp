@@ -114,6 +114,7 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   st_.tractions = pb.tractions;
   st_.mass_type = s.mass;
   st_.mass_tolerance = s.mass_tolerance;
+  st_.consistent.configure(s.mass_solver);
   st_.conservation_limit = s.conservation_limit;
   st_.body_force = pb.body_force;
   auto& P = st_.particles;

@@ -44,6 +44,7 @@ struct OtmSettings {
   MaxEntSettings maxent;  // with OtmBasis::MaxEnt: d_i = d_max times node i's nearest distance
   MassType mass = MassType::Consistent;
   double mass_tolerance = 1e-10;
+  MassSolverSettings mass_solver;  // direct or cg (pmg needs a B-spline basis on the grid)
   double conservation_limit = 0.5;
 };
 

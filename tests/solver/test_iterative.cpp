@@ -12,6 +12,8 @@
 #include <unsupported/Eigen/KroneckerProduct>
 
 #include "app/massmatrix.hpp"
+#include "driver/run.hpp"
+#include "setup/config.hpp"
 #include "solver/iterative.hpp"
 #include "solver/spline_matrices.hpp"
 
@@ -172,6 +174,69 @@ TEST(Iterative, CoarseCorrectionRemovesASmoothError) {
   (void)mg.solve(b, x, 0.0, 1);  // one V-cycle
   const double before = std::sqrt(err.dot(L0.A * err)), after = std::sqrt(x.dot(L0.A * x));
   EXPECT_LT(after, 0.1 * before) << "energy norm " << before << " -> " << after;
+}
+
+// method.mass_solver in MPM runs: CG and p-multigrid give the direct solve's results to their
+// tolerance (1D bar with cubic B-splines, 2D plate with quadratic ones and rollers, which solve
+// per component), and count their iterations; the run stops with exit code 11 and the residual
+// history when a solve does not converge; the combinations that cannot work are refused.
+RunResult run_with(const std::string& example, std::vector<std::string> sets) {
+  return run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + example + ".toml", sets),
+             RunOptions{});
+}
+
+TEST(MassSolver, IterativeSolvesGiveTheDirectResults) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"vibrating_bar_small",
+       {"method.basis=bspline", "method.degree=3", "method.mass=consistent", "grid.cells=12"}},
+      {"plate_mms_2d",
+       {"method.basis=bspline", "method.degree=2", "method.mass=consistent", "grid.cells=8",
+        "mms.amplitude=1e-4", "time.end=2e-4"}}};
+  for (const auto& [example, sets] : cases) {
+    const RunResult direct = run_with(example, sets);
+    ASSERT_EQ(direct.exit_code, 0) << direct.failure;
+    for (const char* solver : {"cg", "pmg"}) {
+      auto s = sets;
+      s.push_back(std::string("method.mass_solver=") + solver);
+      const RunResult r = run_with(example, s);
+      ASSERT_EQ(r.exit_code, 0) << solver << ": " << r.failure;
+      EXPECT_GT(r.diag.mass_solver_iterations, 0) << solver;
+      EXPECT_GT(r.diag.max_mass_solver_iterations, 0) << solver;
+      EXPECT_NEAR(*r.errors.displacement_rms / *direct.errors.displacement_rms, 1.0, 1e-8)
+          << example << " " << solver;
+      EXPECT_NEAR(*r.errors.stress_rms / *direct.errors.stress_rms, 1.0, 1e-8)
+          << example << " " << solver;
+    }
+  }
+}
+
+TEST(MassSolver, NonConvergenceStopsTheRun) {
+  for (const char* solver : {"cg", "pmg"}) {
+    const RunResult r = run_with(
+        "vibrating_bar_small",
+        {"method.basis=bspline", "method.degree=3", "method.mass=consistent",
+         std::string("method.mass_solver=") + solver, "method.mass_solver_max_iterations=1"});
+    EXPECT_EQ(r.exit_code, exit_code::kSolver) << solver << ": " << r.failure;
+    EXPECT_NE(r.failure.find("did not converge"), std::string::npos) << r.failure;
+    EXPECT_NE(r.failure.find("residual history"), std::string::npos) << r.failure;
+    EXPECT_NE(r.failure.find("step 0,"), std::string::npos) << r.failure;  // the first step
+  }
+}
+
+TEST(MassSolver, InputsAreRefused) {
+  auto error = [](std::vector<std::string> sets) {
+    try {
+      (void)run_with("vibrating_bar_small", std::move(sets));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error({"method.mass_solver=cg"}).find("method.mass = \"lumped\""), std::string::npos);
+  EXPECT_NE(error({"method.mass=consistent", "method.mass_solver=pmg"})
+                .find("method.basis = \"bspline\""),
+            std::string::npos);
+  EXPECT_NE(error({"method.mass_solver=multigrid"}).find("direct, cg, pmg"), std::string::npos);
 }
 
 }  // namespace
