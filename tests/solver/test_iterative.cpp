@@ -176,6 +176,43 @@ TEST(Iterative, CoarseCorrectionRemovesASmoothError) {
   EXPECT_LT(after, 0.1 * before) << "energy norm " << before << " -> " << after;
 }
 
+// Why the V-cycle count is the smoother's (docs/verification.md): after the 16 Gauss-Seidel
+// sweeps of a cycle, the error left from a random start lies at the bottom of the spectrum of
+// the mass matrix (its Rayleigh quotient falls below 2 % of lambda_max; p = 3, kappa = 420: a
+// few lambda_min), and a coarse correction with an exact
+// coarse solve removes little of that error, where it removes most of a smooth one (above).
+TEST(Iterative, SmoothedErrorIsWhatTheCoarseLevelsCannotReach) {
+  const int p = 3;
+  const Grid<2> g = unit2(16);
+  const auto keep = interior(g, p);
+  const std::vector<std::pair<int, int>> sides = {{0, 0}, {0, 1}, {1, 0}, {1, 1}};
+  PmgSettings smooth_only;
+  smooth_only.coarse_correction = false;
+  const PMultigrid s = spline_pmg(g, p, gauss_points(g, p + 1), keep, sides, smooth_only);
+  const SparseMatrixD& A = s.levels()[0].A;
+  std::srand(7);
+  Eigen::VectorXd e = Eigen::VectorXd::Random(A.rows());  // b = 0: x is the error
+  const double rq0 = e.dot(A * e) / e.squaredNorm();
+  const Eigen::VectorXd b = Eigen::VectorXd::Zero(A.rows());
+  (void)s.solve(b, e, 0.0, 1);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Eigen::MatrixXd(A),
+                                                          Eigen::EigenvaluesOnly);
+  const double lmin = es.eigenvalues().minCoeff(), lmax = es.eigenvalues().maxCoeff();
+  const double rq = e.dot(A * e) / e.squaredNorm();
+  // From the middle of the spectrum to its bottom: lambda_max / 420 = lambda_min here.
+  EXPECT_LT(rq, 0.1 * rq0);
+  EXPECT_LT(rq, 0.02 * lmax) << "Rayleigh quotient " << rq << ", lambda in [" << lmin << ", "
+                             << lmax << "]";
+  PmgSettings coarse_only;
+  coarse_only.pre = coarse_only.post = 0;
+  coarse_only.coarse_tolerance = 1e-12;
+  const PMultigrid c = spline_pmg(g, p, gauss_points(g, p + 1), keep, sides, coarse_only);
+  Eigen::VectorXd x = e;
+  (void)c.solve(b, x, 0.0, 1);
+  const double before = std::sqrt(e.dot(A * e)), after = std::sqrt(x.dot(A * x));
+  EXPECT_GT(after, 0.8 * before) << "energy norm " << before << " -> " << after;
+}
+
 // method.mass_solver in MPM runs: CG and p-multigrid give the direct solve's results to their
 // tolerance (1D bar with cubic B-splines, 2D plate with quadratic ones and rollers, which solve
 // per component), and count their iterations; the run stops with exit code 11 and the residual
