@@ -154,7 +154,8 @@ int cmd_bench(const mpm::BenchOptions& opt) {
       "{} thread(s), best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes "
       "per particle (particle state, cached stencil, grid share)\n",
       opt.dim, opt.solver != "mpm" ? opt.solver : opt.scheme,
-      opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis, opt.mapping, opt.mass,
+      opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis, opt.mapping,
+      opt.mass == "consistent" ? fmt::format("consistent ({} solve)", opt.mass_solver) : opt.mass,
       r.particles, r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
       r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
   std::cout << fmt::format(
@@ -238,6 +239,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench->add_option("--mass", bopt.mass, "lumped or consistent")->capture_default_str();
   bench
+      ->add_option("--mass-solver", bopt.mass_solver,
+                   "method.mass_solver with --mass consistent: direct, cg or pmg")
+      ->check(CLI::IsMember({"direct", "cg", "pmg"}))
+      ->capture_default_str();
+  bench
       ->add_option("--problem", bopt.problem,
                    "2D problem: plate (plate_mms_2d, body force b(X, t)) or refkernel (the "
                    "problem of ../shared/tools/refkernel.cpp: padded unit square, no body "
@@ -318,6 +324,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"transpose", "projection"}))
       ->capture_default_str();
   mass->add_option("--smoothing-steps", mopt.pmg.pre, "nu1 = nu2 (004: 8)")->capture_default_str();
+  mass->add_option("--particles", mopt.particles,
+                   "0: exact Gauss quadrature (004); N: the MPM matrix of N regular particles "
+                   "per cell and direction")
+      ->capture_default_str();
+  mass->add_option("--max-iterations", mopt.max_iterations, "CG iterations before giving up")
+      ->capture_default_str();
+  mass->add_option("--max-cycles", mopt.max_cycles, "V-cycles before giving up")
+      ->capture_default_str();
   mass->add_flag("!--no-coarse-correction", mopt.pmg.coarse_correction,
                  "p-multigrid cycles of smoothing only (what the coarse levels contribute)");
   mass->add_option("--csv", mopt.csv, "also write the rows to this CSV file");

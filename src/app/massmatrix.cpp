@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -52,17 +53,56 @@ std::vector<unsigned char> kept(const Grid<Dim>& g, int p, bool dirichlet) {
   return keep;
 }
 
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The quadrature points: p + 1 Gauss points per direction and cell (exact, 004), or N regular
+// particles per direction and cell of mass rho h^d / N^d (rho = 1).
+template <int Dim>
+PointSet<Dim> points(const Grid<Dim>& g, int p, int particles) {
+  if (particles == 0) return gauss_points(g, p + 1);
+  PointSet<Dim> out;
+  const Index nc = g.num_cells();
+  const auto per = static_cast<std::size_t>(ipow(particles, Dim));
+  double m = 1.0;
+  for (int d = 0; d < Dim; ++d) m *= g.h[d] / particles;
+  for (Index c = 0; c < nc; ++c) {
+    Index rem = c;
+    IVec<Dim> cell;
+    for (int d = 0; d < Dim; ++d) {
+      cell[d] = rem % g.cells[d];
+      rem /= g.cells[d];
+    }
+    for (std::size_t k = 0; k < per; ++k) {
+      std::size_t kk = k;
+      Vec<Dim> x;
+      for (int d = 0; d < Dim; ++d) {
+        const auto a = static_cast<double>(kk % static_cast<std::size_t>(particles));
+        kk /= static_cast<std::size_t>(particles);
+        x[d] = g.origin[d] + g.h[d] * (static_cast<double>(cell[d]) + (a + 0.5) / particles);
+      }
+      out.x.push_back(x);
+      out.w.push_back(m);
+    }
+  }
+  return out;
+}
+
 // lambda_max / lambda_min of the 1D matrix (dense; at most a few hundred functions). The 2D
 // matrix of the unit square with rho = 1 is the Kronecker product M_1D (x) M_1D (tensor-product
-// functions, a separable integrand; tests/solver/test_iterative.cpp checks it on the assembled
-// matrices), with the eliminated set the product of the 1D ones, so its eigenvalues are the
-// products of the 1D ones and kappa_2D = kappa_1D^2.
-double kappa_1d(Index cells, int p, bool dirichlet) {
+// functions, a tensor-product point set with product weights: Gauss points or the regular
+// particles; tests/solver/test_iterative.cpp checks it on the assembled matrices), with the
+// eliminated set the product of the 1D ones, so its eigenvalues are the products of the 1D ones
+// and kappa_2D = kappa_1D^2. Infinity when lambda_min <= 1e-13 lambda_max (singular).
+double kappa_1d(Index cells, int p, bool dirichlet, int particles) {
   const Grid<1> g(Vec<1>(0.0), Vec<1>(1.0), IVec<1>{cells});
   const auto keep = kept(g, p, dirichlet);
-  const Eigen::MatrixXd M = Eigen::MatrixXd(kept_submatrix(spline_mass_exact(g, p, p), keep, keep));
+  const Eigen::MatrixXd M =
+      Eigen::MatrixXd(kept_submatrix(spline_mass(g, p, p, points(g, p, particles)), keep, keep));
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M, Eigen::EigenvaluesOnly);
-  return es.eigenvalues().maxCoeff() / es.eigenvalues().minCoeff();
+  const double lmax = es.eigenvalues().maxCoeff(), lmin = es.eigenvalues().minCoeff();
+  return lmin <= 1e-13 * lmax ? std::numeric_limits<double>::infinity() : lmax / lmin;
 }
 
 template <int Dim>
@@ -75,20 +115,28 @@ MassMatrixRow one(const MassMatrixOptions& opt, int p, Index n) {
   nc.fill(n);
   const Grid<Dim> g(Vec<Dim>::Zero(), Vec<Dim>::Ones(), nc);
   const auto keep = kept(g, p, dirichlet);
-  const SparseMatrixD M = kept_submatrix(spline_mass_exact(g, p, p), keep, keep);
+  const PointSet<Dim> pts = points(g, p, opt.particles);
+  const SparseMatrixD M = kept_submatrix(spline_mass(g, p, p, pts), keep, keep);
   const Eigen::VectorXd f_all = spline_load_exact(g, p, -9.81);
   Eigen::VectorXd f(M.rows());
   for (Index i = 0, k = 0; i < f_all.size(); ++i)
     if (keep[static_cast<std::size_t>(i)]) f[k++] = f_all[i];
   row.unknowns = M.rows();
-  row.kappa = std::pow(kappa_1d(n, p, dirichlet), Dim);
+  row.kappa = std::pow(kappa_1d(n, p, dirichlet, opt.particles), Dim);
   row.cg_bound = std::ceil(std::log(opt.tolerance / 2.0) /
                            std::log((std::sqrt(row.kappa) - 1.0) / (std::sqrt(row.kappa) + 1.0)));
+  auto t0 = std::chrono::steady_clock::now();
   const Eigen::SimplicialLDLT<SparseMatrixD> direct(M);
-  const Eigen::VectorXd exact = direct.solve(f);
+  const bool factorised = direct.info() == Eigen::Success && (direct.vectorD().array() > 0.0).all();
+  const Eigen::VectorXd exact =
+      factorised ? Eigen::VectorXd(direct.solve(f)) : Eigen::VectorXd::Constant(M.rows(), kNaN);
+  row.direct_seconds = seconds_since(t0);
+  row.singular = !factorised || std::isinf(row.kappa);
   const double scale = exact.norm();
   Eigen::VectorXd x = Eigen::VectorXd::Zero(M.rows());
+  t0 = std::chrono::steady_clock::now();
   const IterationReport cg = conjugate_gradient(M, f, x, opt.tolerance, opt.max_iterations);
+  row.cg_seconds = seconds_since(t0);
   row.cg_iterations = cg.iterations;
   row.cg_converged = cg.converged;
   row.cg_error = (x - exact).norm() / scale;
@@ -96,13 +144,15 @@ MassMatrixRow one(const MassMatrixOptions& opt, int p, Index n) {
   if (dirichlet)
     for (int d = 0; d < Dim; ++d)
       for (int side = 0; side < 2; ++side) sides.emplace_back(d, side);
-  const PMultigrid mg = spline_pmg(g, p, gauss_points(g, p + 1), keep, sides, opt.pmg);
+  t0 = std::chrono::steady_clock::now();
+  const PMultigrid mg = spline_pmg(g, p, pts, keep, sides, opt.pmg);
   Eigen::VectorXd y = Eigen::VectorXd::Zero(M.rows());
   const IterationReport v = mg.solve(f, y, opt.tolerance, opt.max_cycles);
+  row.pmg_seconds = seconds_since(t0);
   row.pmg_cycles = v.iterations;
   row.pmg_converged = v.converged;
   row.pmg_error = (y - exact).norm() / scale;
-  if (Dim == 2) {
+  if (Dim == 2 && opt.particles == 0) {
     row.kappa_published = published(kKappa, kKappaCells, p, n);
     row.cg_published = published(kCg, kCgCells, p, n);
     row.pmg_published = published(kPmg, kPmgCells, p, n);
@@ -128,6 +178,9 @@ std::vector<MassMatrixRow> massmatrix_study(const MassMatrixOptions& opt) {
     if (p < 1 || p > 5) throw InputError(fmt::format("--degrees: {} (the degrees are 1 to 5)", p));
   for (Index n : opt.cells)
     if (n < 1 || n > 4096) throw InputError(fmt::format("--cells: {} (1 to 4096)", n));
+  if (opt.particles < 0 || opt.particles > 25)
+    throw InputError(fmt::format("--particles {}: 0 (Gauss points) to 25 per direction and cell",
+                                 opt.particles));
   if (!(opt.tolerance > 0.0 && opt.tolerance < 1.0))
     throw InputError(fmt::format("--tolerance {}: in (0, 1)", opt.tolerance));
   std::vector<MassMatrixRow> rows;
@@ -160,27 +213,37 @@ void print_massmatrix(std::ostream& os, const MassMatrixOptions& opt,
       os << "\n";
     }
   };
-  table("condition number kappa (004 Table 4.2)",
-        [](const MassMatrixRow& r) { return cell(r.kappa, true, r.kappa_published, "{:.3g}"); });
+  table("condition number kappa (004 Table 4.2)", [](const MassMatrixRow& r) {
+    return r.singular ? std::string("singular") : cell(r.kappa, true, r.kappa_published, "{:.3g}");
+  });
   table("CG iterations (004 Table 4.3)", [](const MassMatrixRow& r) {
     return cell(r.cg_iterations, r.cg_converged, r.cg_published, "{:.0f}");
   });
   table("p-multigrid V-cycles (004 Table 4.4)", [](const MassMatrixRow& r) {
     return cell(r.pmg_cycles, r.pmg_converged, r.pmg_published, "{:.0f}");
   });
+  table(
+      "time to solution [ms]: direct (factorisation and solve) / CG / p-multigrid (set-up "
+      "and cycles)",
+      [](const MassMatrixRow& r) {
+        return fmt::format("{:.3g}/{:.3g}/{:.3g}", 1e3 * r.direct_seconds, 1e3 * r.cg_seconds,
+                           1e3 * r.pmg_seconds);
+      });
 }
 
 void write_massmatrix_csv(const std::string& path, const std::vector<MassMatrixRow>& rows) {
   std::ofstream f(path);
   if (!f) throw InputError(fmt::format("--csv {}: cannot be written", path));
   f << "degree,cells,unknowns,kappa,kappa_published,cg_iterations,cg_converged,cg_published,"
-       "cg_bound,cg_error,pmg_cycles,pmg_converged,pmg_published,pmg_error\n";
+       "cg_bound,cg_error,pmg_cycles,pmg_converged,pmg_published,pmg_error,singular,"
+       "direct_seconds,cg_seconds,pmg_seconds\n";
   auto v = [](double x) { return std::isnan(x) ? std::string() : fmt::format("{:.17g}", x); };
   for (const auto& r : rows)
-    f << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.degree, r.cells, r.unknowns,
-                     v(r.kappa), v(r.kappa_published), r.cg_iterations, r.cg_converged ? 1 : 0,
-                     v(r.cg_published), v(r.cg_bound), v(r.cg_error), r.pmg_cycles,
-                     r.pmg_converged ? 1 : 0, v(r.pmg_published), v(r.pmg_error));
+    f << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.degree, r.cells,
+                     r.unknowns, v(r.kappa), v(r.kappa_published), r.cg_iterations,
+                     r.cg_converged ? 1 : 0, v(r.cg_published), v(r.cg_bound), v(r.cg_error),
+                     r.pmg_cycles, r.pmg_converged ? 1 : 0, v(r.pmg_published), v(r.pmg_error),
+                     r.singular ? 1 : 0, v(r.direct_seconds), v(r.cg_seconds), v(r.pmg_seconds));
   if (!f) throw RunError(exit_code::kOutput, fmt::format("{}: write failed", path));
 }
 

@@ -19,6 +19,10 @@ struct MassMatrixOptions {
   // "dirichlet": the functions on the boundary are eliminated (fixed); "free": all functions.
   // 004 does not say; the table prints both readings' kappa when asked (--boundary).
   std::string boundary = "dirichlet";
+  // 0: exact Gauss quadrature (004). N > 0: the MPM mass matrix sum_p m_p phi_i phi_j of N
+  // particles per cell and direction at (k + 1/2) / N of the cell, each of mass rho h^d / N^d
+  // (the initial particles of the vibrating bar and the plate, D eq. 2.34).
+  int particles = 0;
   double tolerance = 1e-8;  // 004 eq. 4.53
   int max_iterations = 100000;
   int max_cycles = 1000;
@@ -29,8 +33,11 @@ struct MassMatrixOptions {
 struct MassMatrixRow {
   int degree = 0;
   Index cells = 0;
-  Index unknowns = 0;  // per component
-  double kappa = 0.0;  // lambda_max / lambda_min (004 eq. 4.56)
+  Index unknowns = 0;     // per component
+  double kappa = 0.0;     // lambda_max / lambda_min (004 eq. 4.56); inf: singular
+  bool singular = false;  // lambda_min <= 1e-13 lambda_max, or the factorisation failed
+  // Wall times [s]: the direct factorisation and solve, CG, p-multigrid set-up and solve.
+  double direct_seconds = 0.0, cg_seconds = 0.0, pmg_seconds = 0.0;
   int cg_iterations = 0;
   bool cg_converged = false;
   int pmg_cycles = 0;
@@ -38,7 +45,7 @@ struct MassMatrixRow {
   // ||x - x_direct||_2 / ||x_direct||_2 (at most kappa times the relative residual)
   double pmg_error = 0.0;
   double cg_error = 0.0;
-  double cg_bound = 0.0;   // iterations for 2 ((sqrt k - 1)/(sqrt k + 1))^n <= tolerance (eq. 4.57)
+  double cg_bound = 0.0;  // iterations for 2 ((sqrt k - 1)/(sqrt k + 1))^n <= tolerance (eq. 4.57)
   // 004's values (NaN where it has none).
   double kappa_published = 0.0, cg_published = 0.0, pmg_published = 0.0;
 };

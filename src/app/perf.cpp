@@ -60,8 +60,9 @@ double sort_bytes_per_particle(Index cells, Index particles) {
 std::string method_toml(const BenchOptions& opt) {
   return fmt::format(
       "[method]\nscheme = \"{}\"\nbasis = \"{}\"\ndegree = {}\nmapping = \"{}\"\nsort = \"{}\"\n"
-      "solver = \"{}\"\nmass = \"{}\"\n",
-      opt.scheme, opt.basis, opt.degree, opt.mapping, opt.sort, opt.solver, opt.mass);
+      "solver = \"{}\"\nmass = \"{}\"\n{}",
+      opt.scheme, opt.basis, opt.degree, opt.mapping, opt.sort, opt.solver, opt.mass,
+      opt.mass == "consistent" ? fmt::format("mass_solver = \"{}\"\n", opt.mass_solver) : "");
 }
 
 void time_runs(const Config& cfg, const BenchOptions& opt, BenchResult& r) {

@@ -17,8 +17,9 @@ struct BenchOptions {
   std::string basis = "linear";
   int degree = 2;
   std::string mapping = "direct";
-  std::string solver = "mpm";   // method.solver: mpm, otm or unified (1D)
-  std::string mass = "lumped";  // method.mass
+  std::string solver = "mpm";          // method.solver: mpm, otm or unified (1D)
+  std::string mass = "lumped";         // method.mass
+  std::string mass_solver = "direct";  // method.mass_solver (consistent mass)
   // 2D problem: "plate" (plate_mms_2d) or "refkernel" (the problem of the yardstick
   // ../shared/tools/refkernel.cpp through the custom benchmark).
   std::string problem = "plate";

@@ -260,6 +260,21 @@ TEST(MassSolver, NonConvergenceStopsTheRun) {
   }
 }
 
+// One particle per cell with cubic B-splines: the particle mass matrix is singular (fewer
+// particles than functions); every solver stops the run rather than report a result
+// (docs/verification.md).
+TEST(MassSolver, SingularParticleMatrixStopsEverySolver) {
+  for (const auto& [solver, code] :
+       {std::pair{"direct", exit_code::kNonFinite}, std::pair{"cg", exit_code::kSolver},
+        std::pair{"pmg", exit_code::kSolver}}) {
+    const RunResult r =
+        run_with("vibrating_bar_small",
+                 {"particles.per_cell=1", "method.basis=bspline", "method.degree=3",
+                  "method.mass=consistent", std::string("method.mass_solver=") + solver});
+    EXPECT_EQ(r.exit_code, code) << solver << ": " << r.failure;
+  }
+}
+
 TEST(MassSolver, InputsAreRefused) {
   auto error = [](std::vector<std::string> sets) {
     try {
