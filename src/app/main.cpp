@@ -328,6 +328,8 @@ int main(int argc, char** argv) {
                    "0: exact Gauss quadrature (004); N: the MPM matrix of N regular particles "
                    "per cell and direction")
       ->capture_default_str();
+  mass->add_flag("--matrix-free", mopt.matrix_free,
+                 "also run CG with the matrix-free application (no assembled matrix)");
   mass->add_option("--max-iterations", mopt.max_iterations, "CG iterations before giving up")
       ->capture_default_str();
   mass->add_option("--max-cycles", mopt.max_cycles, "V-cycles before giving up")

@@ -140,6 +140,18 @@ MassMatrixRow one(const MassMatrixOptions& opt, int p, Index n) {
   row.cg_iterations = cg.iterations;
   row.cg_converged = cg.converged;
   row.cg_error = (x - exact).norm() / scale;
+  if (opt.matrix_free) {
+    t0 = std::chrono::steady_clock::now();
+    const SplineMassOperator<Dim> op(g, p, pts, keep);
+    Eigen::VectorXd z = Eigen::VectorXd::Zero(M.rows());
+    const IterationReport cf =
+        conjugate_gradient([&op](const Eigen::VectorXd& v, Eigen::VectorXd& w) { op.apply(v, w); },
+                           f, z, opt.tolerance, opt.max_iterations);
+    row.cg_free_seconds = seconds_since(t0);
+    row.cg_free_iterations = cf.iterations;
+    row.cg_free_converged = cf.converged;
+    row.cg_free_difference = (z - x).norm() / x.norm();
+  }
   std::vector<std::pair<int, int>> sides;
   if (dirichlet)
     for (int d = 0; d < Dim; ++d)
@@ -194,13 +206,18 @@ void print_massmatrix(std::ostream& os, const MassMatrixOptions& opt,
   os << fmt::format(
       "B-spline mass matrices on the unit {} (rho = 1, force 9.81 in -x{}), {} boundary, "
       "tolerance {:g} from zero (004 eq. 4.53); p-multigrid: nu1 = nu2 = {}, {} smoother, {}. "
-      "004's values in brackets.\n",
+      "{}\n",
       opt.dim == 2 ? "square" : "interval", opt.dim == 2 ? " and -y" : "", opt.boundary,
       opt.tolerance, opt.pmg.pre, name_of(opt.pmg.smoother),
       opt.pmg.coarse_correction
           ? fmt::format("{} restriction, CG to {:g} at p = 1", name_of(opt.pmg.restriction),
                         opt.pmg.coarse_tolerance)
-          : std::string("no coarse correction (smoothing only)"));
+          : std::string("no coarse correction (smoothing only)"),
+      opt.particles > 0
+          ? fmt::format("Matrices from {} regular particles per cell and direction (D eq. 2.34).",
+                        opt.particles)
+      : opt.dim == 2 ? "004's values in brackets (Gauss quadrature, as 004)."
+                     : "Gauss quadrature (004 gives 2D values only).");
   auto table = [&](const char* title, auto value) {
     os << "\n" << title << "\n" << fmt::format("{:>3}", "p");
     for (Index n : opt.cells) os << fmt::format(" {:>18}", fmt::format("h^-1 = {}", n));
@@ -222,6 +239,14 @@ void print_massmatrix(std::ostream& os, const MassMatrixOptions& opt,
   table("p-multigrid V-cycles (004 Table 4.4)", [](const MassMatrixRow& r) {
     return cell(r.pmg_cycles, r.pmg_converged, r.pmg_published, "{:.0f}");
   });
+  if (opt.matrix_free) {
+    table("CG with the matrix-free application: iterations, ms (assembled CG's ms)",
+          [](const MassMatrixRow& r) {
+            return r.cg_free_converged ? fmt::format("{}, {:.3g} ({:.3g})", r.cg_free_iterations,
+                                                     1e3 * r.cg_free_seconds, 1e3 * r.cg_seconds)
+                                       : std::string("failed");
+          });
+  }
   table(
       "time to solution [ms]: direct (factorisation and solve) / CG / p-multigrid (set-up "
       "and cycles)",
@@ -236,14 +261,16 @@ void write_massmatrix_csv(const std::string& path, const std::vector<MassMatrixR
   if (!f) throw InputError(fmt::format("--csv {}: cannot be written", path));
   f << "degree,cells,unknowns,kappa,kappa_published,cg_iterations,cg_converged,cg_published,"
        "cg_bound,cg_error,pmg_cycles,pmg_converged,pmg_published,pmg_error,singular,"
-       "direct_seconds,cg_seconds,pmg_seconds\n";
+       "direct_seconds,cg_seconds,pmg_seconds,cg_free_iterations,cg_free_seconds,"
+       "cg_free_difference\n";
   auto v = [](double x) { return std::isnan(x) ? std::string() : fmt::format("{:.17g}", x); };
   for (const auto& r : rows)
-    f << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.degree, r.cells,
-                     r.unknowns, v(r.kappa), v(r.kappa_published), r.cg_iterations,
+    f << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.degree,
+                     r.cells, r.unknowns, v(r.kappa), v(r.kappa_published), r.cg_iterations,
                      r.cg_converged ? 1 : 0, v(r.cg_published), v(r.cg_bound), v(r.cg_error),
                      r.pmg_cycles, r.pmg_converged ? 1 : 0, v(r.pmg_published), v(r.pmg_error),
-                     r.singular ? 1 : 0, v(r.direct_seconds), v(r.cg_seconds), v(r.pmg_seconds));
+                     r.singular ? 1 : 0, v(r.direct_seconds), v(r.cg_seconds), v(r.pmg_seconds),
+                     r.cg_free_iterations, v(r.cg_free_seconds), v(r.cg_free_difference));
   if (!f) throw RunError(exit_code::kOutput, fmt::format("{}: write failed", path));
 }
 

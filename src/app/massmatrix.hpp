@@ -23,6 +23,9 @@ struct MassMatrixOptions {
   // particles per cell and direction at (k + 1/2) / N of the cell, each of mass rho h^d / N^d
   // (the initial particles of the vibrating bar and the plate, D eq. 2.34).
   int particles = 0;
+  // Also run CG with the matrix-free application (SplineMassOperator: the functions evaluated
+  // at the points in every application) and time it.
+  bool matrix_free = false;
   double tolerance = 1e-8;  // 004 eq. 4.53
   int max_iterations = 100000;
   int max_cycles = 1000;
@@ -38,6 +41,9 @@ struct MassMatrixRow {
   bool singular = false;  // lambda_min <= 1e-13 lambda_max, or the factorisation failed
   // Wall times [s]: the direct factorisation and solve, CG, p-multigrid set-up and solve.
   double direct_seconds = 0.0, cg_seconds = 0.0, pmg_seconds = 0.0;
+  int cg_free_iterations = 0;  // matrix-free CG (matrix_free)
+  bool cg_free_converged = false;
+  double cg_free_seconds = 0.0, cg_free_difference = 0.0;  // ||x_free - x_cg|| / ||x_cg||
   int cg_iterations = 0;
   bool cg_converged = false;
   int pmg_cycles = 0;

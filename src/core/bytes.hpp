@@ -54,6 +54,15 @@ class ByteReader {
     need(1);
     return static_cast<std::uint8_t>(in_[pos_++]);
   }
+  // A flag that ByteWriter wrote as 0 or 1; any other byte is malformed (decoding it as true
+  // would not encode back to the same bytes: found by fuzz/fuzz_checkpoint.cpp).
+  bool flag() {
+    need(1);
+    const auto b = static_cast<std::uint8_t>(in_[pos_]);
+    if (b > 1) fail();
+    ++pos_;
+    return b == 1;
+  }
   std::uint32_t u32() {
     std::uint32_t v = 0;
     for (int k = 0; k < 4; ++k) v |= static_cast<std::uint32_t>(u8()) << (8 * k);

@@ -251,7 +251,7 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
   c.diag.max_rel_mass_error = r.f64();
   c.diag.max_rel_momentum_error = r.f64();
   c.diag.grid_crossings = r.i64();
-  if (r.u8()) {
+  if (r.flag()) {
     FemArrays f;
     f.x = r.reals();
     f.v = r.reals();

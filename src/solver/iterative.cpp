@@ -18,9 +18,18 @@ std::string_view name_of(Restriction r) {
 
 IterationReport conjugate_gradient(const SparseMatrixD& A, const Eigen::VectorXd& b,
                                    Eigen::VectorXd& x, double tolerance, int max_iterations) {
+  return conjugate_gradient(
+      [&A](const Eigen::VectorXd& v, Eigen::VectorXd& y) { y.noalias() = A * v; }, b, x, tolerance,
+      max_iterations);
+}
+
+IterationReport conjugate_gradient(const LinearOperator& A, const Eigen::VectorXd& b,
+                                   Eigen::VectorXd& x, double tolerance, int max_iterations) {
   IterationReport rep;
   if (x.size() != b.size()) x = Eigen::VectorXd::Zero(b.size());
-  Eigen::VectorXd r = b - A * x;
+  Eigen::VectorXd Ax(b.size());
+  A(x, Ax);
+  Eigen::VectorXd r = b - Ax;
   const double r0 = r.norm();
   rep.history.push_back(1.0);
   if (r0 == 0.0) {
@@ -30,7 +39,7 @@ IterationReport conjugate_gradient(const SparseMatrixD& A, const Eigen::VectorXd
   Eigen::VectorXd d = r, Ad(b.size());
   double rr = r.squaredNorm();
   while (rep.iterations < max_iterations) {
-    Ad.noalias() = A * d;
+    A(d, Ad);
     const double dAd = d.dot(Ad);
     if (!(dAd > 0.0)) break;  // not positive definite (or a breakdown): not converged
     const double alpha = rr / dAd;

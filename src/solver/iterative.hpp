@@ -20,6 +20,7 @@
 // it keeps the coarse correction an energy-norm projection up to the rediscretised coarse
 // matrix), or, as an option, the lumped L2 projection the other way (M_{p-1}^L)^{-1} M_{p-1,p}.
 #include <Eigen/Sparse>
+#include <functional>
 #include <string_view>
 #include <vector>
 
@@ -37,6 +38,10 @@ struct IterationReport {
 
 // CG from the given x (004 uses x = 0) until ||r|| / ||r_0|| < tolerance or max_iterations.
 IterationReport conjugate_gradient(const SparseMatrixD& A, const Eigen::VectorXd& b,
+                                   Eigen::VectorXd& x, double tolerance, int max_iterations);
+// The same with the matrix given by its application y = A x (a matrix-free operator).
+using LinearOperator = std::function<void(const Eigen::VectorXd& x, Eigen::VectorXd& y)>;
+IterationReport conjugate_gradient(const LinearOperator& A, const Eigen::VectorXd& b,
                                    Eigen::VectorXd& x, double tolerance, int max_iterations);
 
 enum class Smoother { GaussSeidel, Jacobi };

@@ -108,6 +108,47 @@ Eigen::VectorXd spline_load_exact(const Grid<Dim>& g, int p, double f) {
 }
 
 template <int Dim>
+SplineMassOperator<Dim>::SplineMassOperator(const Grid<Dim>& g, int p, PointSet<Dim> pts,
+                                            const std::vector<unsigned char>& keep)
+    : g_(g), p_(p), pts_(std::move(pts)) {
+  to_kept_.assign(keep.size(), -1);
+  for (std::size_t i = 0; i < keep.size(); ++i)
+    if (keep[i]) {
+      to_kept_[i] = static_cast<Index>(kept_.size());
+      kept_.push_back(static_cast<Index>(i));
+    }
+  for (std::size_t k = 0; k < pts_.x.size(); ++k)
+    if (!g_.inside(pts_.x[k]))
+      throw InputError(fmt::format("SplineMassOperator: point {} lies outside the grid", k));
+}
+
+template <int Dim>
+void SplineMassOperator<Dim>::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  y.setZero(size());
+  with_spline_degree(p_, [&](auto degree) {
+    constexpr int P = decltype(degree)::value;
+    const BSplineBasis<Dim, P> basis(g_);
+    typename BSplineBasis<Dim, P>::StencilT s;
+    for (std::size_t k = 0; k < pts_.x.size(); ++k) {
+      basis.evaluate_point(pts_.x[k], s);
+      double v = 0.0;
+      for (int a = 0; a < s.kSize; ++a) {
+        const Index i = to_kept_[static_cast<std::size_t>(s.dof[a])];
+        if (i >= 0) v += s.w[a] * x[i];
+      }
+      v *= pts_.w[k];
+      for (int a = 0; a < s.kSize; ++a) {
+        const Index i = to_kept_[static_cast<std::size_t>(s.dof[a])];
+        if (i >= 0) y[i] += s.w[a] * v;
+      }
+    }
+  });
+}
+
+template class SplineMassOperator<1>;
+template class SplineMassOperator<2>;
+
+template <int Dim>
 Index spline_count(const Grid<Dim>& g, int p) {
   Index n = 1;
   for (int d = 0; d < Dim; ++d) n *= g.cells[d] + p;

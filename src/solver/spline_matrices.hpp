@@ -55,6 +55,26 @@ Eigen::VectorXd spline_load_exact(const Grid<Dim>& g, int p, double f);
 template <int Dim>
 std::vector<Index> spline_boundary_functions(const Grid<Dim>& g, int p);
 
+// y = M x for the kept functions (keep[i] != 0) of the degree-p B-splines, M = sum_k w_k phi
+// phi^T over the point set, without assembling M: per application every point's functions are
+// evaluated again, gather x and scatter back (the matrix-free form; memory: the points only).
+// Serial, in point order (the same rounding every application).
+template <int Dim>
+class SplineMassOperator {
+ public:
+  SplineMassOperator(const Grid<Dim>& g, int p, PointSet<Dim> pts,
+                     const std::vector<unsigned char>& keep);
+  Index size() const { return static_cast<Index>(kept_.size()); }
+  void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+
+ private:
+  Grid<Dim> g_;
+  int p_;
+  PointSet<Dim> pts_;
+  std::vector<Index> to_kept_;  // function -> kept index, -1 when eliminated
+  std::vector<Index> kept_;
+};
+
 // Number of functions of degree p on g.
 template <int Dim>
 Index spline_count(const Grid<Dim>& g, int p);

@@ -16,6 +16,7 @@
 #include <iterator>
 #include <memory>
 
+#include "core/bytes.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
 #include "setup/config.hpp"
@@ -293,6 +294,39 @@ TEST(Checkpoint, CorruptionTruncationAndOtherVersionsAreRefused) {
   expect_error("# not a checkpoint\n" + good, "not an mpmlab checkpoint");
   EXPECT_NE(read_error(dir.path() / "missing.bin").find("cannot open"), std::string::npos);
   EXPECT_EQ(read_error(file), "");
+}
+
+// The flag before the FEM state is 0 or 1; another byte with a valid checksum is malformed (it
+// decoded as "present" and encoded back as 1: a fuzzer finding).
+TEST(Checkpoint, AFlagByteOtherThanZeroOrOneIsRefused) {
+  TempDir dir("flag");
+  const auto file = short_checkpoint(dir.path());
+  io::Checkpoint c = io::read_checkpoint(file);
+  ASSERT_FALSE(c.fem);
+  const std::string good = io::encode_checkpoint(c);
+  // The flag follows the diagnostics; find it as the byte that an FEM-less encoding has where
+  // one with an (empty) FEM state has 1.
+  io::Checkpoint with_fem = c;
+  with_fem.fem = io::FemArrays{};
+  const std::string other = io::encode_checkpoint(with_fem);
+  std::size_t at = io::kCheckpointHeaderBytes;
+  while (at < good.size() && good[at] == other[at]) ++at;
+  ASSERT_LT(at, good.size());
+  ASSERT_EQ(good[at], 0);
+  std::string payload = good.substr(io::kCheckpointHeaderBytes);
+  payload[at - io::kCheckpointHeaderBytes] = 0x60;
+  mpm::ByteWriter w;
+  w.bytes().append(io::kCheckpointMagic);
+  w.u32(io::kCheckpointVersion);
+  w.u64(payload.size());
+  w.u64(io::fnv1a64(payload));
+  w.bytes().append(payload);
+  try {
+    (void)io::decode_checkpoint(w.bytes(), "flagged.bin");
+    FAIL() << "a flag byte of 0x60 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("malformed"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Checkpoint, RestartConfigAllowsOnlyOutputAndEndTime) {
