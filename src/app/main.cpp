@@ -2,6 +2,7 @@
 // keys, list.
 #include <fmt/format.h>
 #include <sys/wait.h>
+#include <unistd.h>
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <filesystem>
@@ -41,11 +42,18 @@ void print_list() {
   section("materials (material.model)", mpm::registry::kMaterials);
 }
 
+// --threads N, else OMP_NUM_THREADS as set, else OpenMP's count capped by the problem size.
+int run_threads_option(int threads) {
+  if (threads > 0) return threads;
+  return std::getenv("OMP_NUM_THREADS") ? -1 : 0;
+}
+
 int cmd_run(const std::string& config, const std::vector<std::string>& sets, std::string out,
-            bool quiet, const std::string& restart, bool overwrite) {
+            bool quiet, const std::string& restart, bool overwrite, int threads) {
   mpm::RunOptions ro;
   ro.quiet = quiet;
   ro.overwrite = overwrite;
+  ro.threads = run_threads_option(threads);
   std::optional<mpm::Config> cfg;
   if (!config.empty()) cfg = mpm::Config::load(config, sets);
   if (restart.empty()) {
@@ -169,7 +177,19 @@ int cmd_bench(const mpm::BenchOptions& opt) {
 
 }  // namespace
 
+// OpenMP's default wait policy lets idle threads spin: on a busy or shared machine a run with
+// nproc threads then waits for spinning threads that have no core (a 50x slowdown measured on 2
+// cores with one busy, issue 23). libgomp reads OMP_WAIT_POLICY when it is loaded, before main,
+// so when the user has not set it the program sets "passive" and executes itself again, once
+// (the variable is set the second time). If that fails it goes on with the default.
+void prefer_passive_waiting(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+  if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+}
+
 int main(int argc, char** argv) {
+  prefer_passive_waiting(argv);
   CLI::App app{"mpmlab: material point methods, verified side by side"};
   app.set_version_flag("--version", fmt::format("mpm (mpmlab) {}", mpm::kVersion));
   app.require_subcommand(1);
@@ -189,6 +209,11 @@ int main(int argc, char** argv) {
   run->add_option("--set", sets, "override a key: section.key=value (repeatable)");
   run->add_option("--out", out, "output directory (default runs/<config name>)");
   run->add_flag("--quiet,-q", quiet, "no progress line or report");
+  int threads = 0;
+  run->add_option("--threads", threads,
+                  "OpenMP threads (default: OMP_NUM_THREADS if set, else the cores, at most one "
+                  "per 5000 particles in 2D and 50000 in 1D)")
+      ->check(CLI::Range(1, 4096));
   run->add_flag("--overwrite", overwrite,
                 "replace the files of an earlier run in the output directory (otherwise the run "
                 "is refused)");
@@ -365,7 +390,7 @@ int main(int argc, char** argv) {
     // A signal ends a run after its current step, with its outputs and an "interrupted"
     // summary (core/interrupt.hpp); a second one ends the process at once.
     if (*run || *study) mpm::install_interrupt_handlers();
-    if (*run) return cmd_run(config, sets, out, quiet, restart, overwrite);
+    if (*run) return cmd_run(config, sets, out, quiet, restart, overwrite, threads);
     if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot, overwrite);
     if (*bench) return cmd_bench(bopt);
     if (*verify) return cmd_verify(verify_quick, verify_long, out, jobs, argv[0]);

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <limits>
@@ -207,6 +208,9 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
       }
       RunOptions ro;
       ro.quiet = true;
+      // This worker's share of the cores, capped by the run's size (unless OMP_NUM_THREADS
+      // was set: then the share of that).
+      ro.threads = std::getenv("OMP_NUM_THREADS") ? -1 : 0;
       if (!opt.out_dir.empty()) ro.out_dir = dirs[k];
       ro.overwrite = opt.overwrite;
       try {

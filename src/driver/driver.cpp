@@ -1,6 +1,7 @@
 #include "driver/driver.hpp"
 
 #include <fmt/ranges.h>
+#include <omp.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -267,6 +268,11 @@ nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& set
   j["steps"] = res.steps;
   j["velocity_time_offset_dt"] = velocity_time;
   j["wall_seconds"] = res.wall_seconds;
+  // The threads the run used and OpenMP's wait policy (passive unless the user chose otherwise:
+  // app/main.cpp): what the timings were taken with.
+  const char* policy = std::getenv("OMP_WAIT_POLICY");
+  j["openmp"] = {{"threads", omp_get_max_threads()},
+                 {"wait_policy", policy ? std::string(policy) : std::string("(default)")}};
   j["ns_per_particle_step"] = res.ns_per_particle_step;
   j["sorts"] = res.sorts;
   j["errors"] = {

@@ -1,6 +1,9 @@
 #include "driver/run.hpp"
 
 #include <fmt/format.h>
+#include <omp.h>
+
+#include <algorithm>
 
 #include "benchmarks/benchmarks.hpp"
 #include "driver/driver.hpp"
@@ -77,10 +80,33 @@ RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::stri
 
 }  // namespace
 
+int run_threads(int requested, Index particles, int dim, int available) {
+  if (requested > 0) return requested;
+  if (requested < 0) return available;
+  const Index per = kMinParticlesPerThread[std::clamp(dim, 1, 3)];
+  return static_cast<int>(std::clamp<Index>(particles / per, 1, std::max(1, available)));
+}
+
+namespace {
+// Sets the OpenMP thread count of this thread for the run and restores it afterwards.
+class ScopedThreads {
+ public:
+  explicit ScopedThreads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
+  ~ScopedThreads() { omp_set_num_threads(saved_); }
+  ScopedThreads(const ScopedThreads&) = delete;
+  ScopedThreads& operator=(const ScopedThreads&) = delete;
+
+ private:
+  int saved_;
+};
+}  // namespace
+
 RunResult run(const Config& cfg, const RunOptions& opt) {
   AnyProblem problem = make_problem(cfg);
   const int dim =
       std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);
+  const Index particles = std::visit([](const auto& pb) { return pb.particles.size(); }, problem);
+  const ScopedThreads threads(run_threads(opt.threads, particles, dim, omp_get_max_threads()));
   const RunSettings settings = run_settings(cfg, dim);
   const std::string config_text = cfg.to_toml();
   // MPM and OTM (which shares the driver through its Stepper; driver/otm_stepper.cpp).

@@ -31,7 +31,23 @@ struct RunOptions {
   // Non-zero: start from the particles in a random order drawn with this seed
   // (shuffle_particles; tests and `mpm bench --shuffle` of the re-sorting). Ignored on restart.
   std::uint64_t shuffle_seed = 0;
+  // OpenMP threads of the run: -1 leaves OpenMP's setting as it is (the library's default:
+  // tests and `mpm bench` set it themselves); 0 takes OpenMP's count capped by the problem size,
+  // one thread per kMinParticlesPerThread particles (`mpm run` and `mpm study` unless
+  // --threads or OMP_NUM_THREADS says otherwise); n > 0 runs n threads. The results do not
+  // depend on it (core/parallel.hpp).
+  int threads = -1;
 };
+
+// Below this many particles per thread a second thread costs more than it saves: measured with
+// `mpm bench --threads 1|2`, passive waiting, on 2 cores (BENCHMARKS.md, "Threads sized to the
+// problem"): 2D quadratic B-splines gain 1.2x at 8000 particles and lose at 4000; 1D P1 breaks
+// even at 64000 and gains 1.35x at 128000.
+inline constexpr Index kMinParticlesPerThread[4] = {0, 50000, 5000, 5000};
+
+// The thread count RunOptions::threads asks for, for a problem of `particles` in `dim`
+// dimensions, given OpenMP's current maximum.
+int run_threads(int requested, Index particles, int dim, int available);
 
 // Particle error norms at the final time (D eq. 4.92); empty when there is no exact solution.
 struct ErrorNorms {

@@ -13,8 +13,10 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+
 #include <sstream>
 #include <string>
+#include "driver/run.hpp"
 
 namespace {
 
@@ -81,6 +83,47 @@ TEST(Cli, VersionListKeys) {
 // Command-line errors exit 2 like every invalid input (README "Exit codes"; CLI11's own codes
 // were 106, 109, 114), and bench refuses counts below 1 (it ran 4 particles for --particles 0 or
 // -5; issue 16, 10 and 12).
+// Issue 23: `mpm run` waits passively unless the user set OMP_WAIT_POLICY (it sets the policy
+// and executes itself again, since the OpenMP runtime reads it before main), takes at most one
+// thread per kMinParticlesPerThread particles, and --threads overrides that; summary.json says
+// what the run used.
+TEST(Cli, ThreadsSizedToTheProblemAndPassiveWaiting) {
+  const auto out = temp_dir("threads");
+  // The child runs without the test's OMP_WAIT_POLICY and OMP_NUM_THREADS, plus `env`.
+  auto with_env = [&](const std::string& env, const std::string& extra) {
+    const std::string cmd = "env -u OMP_WAIT_POLICY -u OMP_NUM_THREADS " + env + " " +
+                            std::string(MPM_BINARY) + " run " +
+                            src("examples/vibrating_bar_small.toml") + " -q --overwrite --out " +
+                            out.string() + " --set output.vtk=false " + extra + " 2>&1";
+    FILE* f = popen(cmd.c_str(), "r");
+    std::array<char, 4096> buf{};
+    std::string text;
+    while (std::size_t n = fread(buf.data(), 1, buf.size(), f)) text.append(buf.data(), n);
+    EXPECT_EQ(pclose(f), 0) << text;
+    std::ifstream s(out / "summary.json");
+    return nlohmann::json::parse(s);
+  };
+  nlohmann::json j = with_env("", "");
+  EXPECT_EQ(j["openmp"]["wait_policy"], "passive");
+  EXPECT_EQ(j["openmp"]["threads"], 1);  // 240 particles
+  j = with_env("OMP_WAIT_POLICY=active", "--threads 2");
+  EXPECT_EQ(j["openmp"]["wait_policy"], "active");
+  EXPECT_EQ(j["openmp"]["threads"], 2);
+  j = with_env("OMP_NUM_THREADS=2", "");
+  EXPECT_EQ(j["openmp"]["threads"], 2);  // the user's choice
+  std::filesystem::remove_all(out);
+}
+
+TEST(Cli, RunThreadsFollowTheProblemSize) {
+  EXPECT_EQ(mpm::run_threads(3, 10, 2, 2), 3);    // --threads
+  EXPECT_EQ(mpm::run_threads(-1, 10, 2, 4), 4);   // OpenMP as set
+  EXPECT_EQ(mpm::run_threads(0, 2304, 2, 2), 1);  // issue 23's example
+  EXPECT_EQ(mpm::run_threads(0, 16384, 2, 2), 2);
+  EXPECT_EQ(mpm::run_threads(0, 16384, 2, 16), 3);  // 5000 particles per thread
+  EXPECT_EQ(mpm::run_threads(0, 60000, 1, 4), 1);   // 1D: 50000 per thread
+  EXPECT_EQ(mpm::run_threads(0, 1000000, 1, 4), 4);
+}
+
 TEST(Cli, CommandLineErrorsExitTwo) {
   for (const char* args : {"run", "run --no-such-flag x.toml", "frobnicate", "bench --dim 3",
                            "bench --particles 0", "bench --particles -5", "bench --steps 0",
