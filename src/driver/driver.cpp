@@ -106,8 +106,9 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
   }
   csv_ = s.output.csv;
   vtk_ = s.output.vtk;
+  vtk_binary_ = s.output.vtk_binary;
   io::write_file_atomic(dir_ / "config.toml", config_text);
-  if (vtk_) io::write_file_atomic(dir_ / "grid.vtu", io::grid_vtu(pb.grid));
+  if (vtk_) io::write_file_atomic(dir_ / "grid.vtu", io::grid_vtu(pb.grid, {}, vtk_binary_));
   history_header_ = "time,kinetic_energy,strain_energy,total_energy,mass";
   for (int d = 0; d < Dim; ++d) history_header_ += fmt::format(",momentum_{}", d + 1);
   // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
@@ -184,7 +185,8 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
   const std::string stem = fmt::format("particles_{:05d}", frames_);
   if (csv_) io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(P, extra));
   if (vtk_) {
-    io::write_file_atomic(dir_ / (stem + ".vtu"), io::particles_vtu(P, sim.time, extra));
+    io::write_file_atomic(dir_ / (stem + ".vtu"),
+                          io::particles_vtu(P, sim.time, extra, vtk_binary_));
     pvd_.add(sim.time, stem + ".vtu");
     io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
   }

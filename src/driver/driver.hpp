@@ -122,7 +122,7 @@ class OutputSession {
   std::filesystem::path dir_;
   io::DirectoryLock lock_;  // one run at a time in dir_
   ExactSolution<Dim> exact_;
-  bool csv_ = true, vtk_ = true;
+  bool csv_ = true, vtk_ = true, vtk_binary_ = true;
   std::string history_header_;
   io::AppendFile history_;       // history.csv
   bool mapping_errors_ = false;  // history.csv has mass_error, momentum_error

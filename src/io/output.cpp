@@ -8,12 +8,15 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <iterator>
 #include <set>
 #include <stdexcept>
 #include <system_error>
+#include <type_traits>
 #include <utility>
 
 namespace mpm::io {
@@ -147,98 +150,114 @@ constexpr int kVtkLine = 3;
 constexpr int kVtkQuad = 9;
 constexpr int kVtkHexahedron = 12;
 
-void open_array(Buffer& b, std::string_view type, std::string_view name, int components) {
-  fmt::format_to(std::back_inserter(b), "        <DataArray type=\"{}\" Name=\"{}\"", type,
+// Where a DataArray's values go: inline as ASCII (17 significant digits, a tuple per line), or
+// as raw little-endian bytes in the file's <AppendedData> block, each array a UInt64 byte count
+// followed by its values (VTK XML format 1.0, header_type="UInt64"), referenced by its offset.
+// A 2D frame of 1e6 particles is then 289 MB instead of 466 MB and built 4x faster (issue 23:
+// BENCHMARKS.md).
+struct VtuData {
+  bool binary = false;
+  std::string appended;
+};
+
+template <class T>
+constexpr std::string_view vtk_type() {
+  if constexpr (std::is_same_v<T, double>) return "Float64";
+  if constexpr (std::is_same_v<T, std::int64_t>) return "Int64";
+  if constexpr (std::is_same_v<T, std::uint8_t>) return "UInt8";
+}
+
+// values: `components` per tuple, tuples one after the other.
+template <class T>
+void data_array(Buffer& b, VtuData& d, std::string_view name, int components,
+                const std::vector<T>& values) {
+  static_assert(std::endian::native == std::endian::little, "VTK raw data: little endian");
+  fmt::format_to(std::back_inserter(b), "        <DataArray type=\"{}\" Name=\"{}\"", vtk_type<T>(),
                  xml_escape(name));
   if (components != 1)
     fmt::format_to(std::back_inserter(b), " NumberOfComponents=\"{}\"", components);
+  if (d.binary) {
+    fmt::format_to(std::back_inserter(b), " format=\"appended\" offset=\"{}\"/>\n",
+                   d.appended.size());
+    const std::uint64_t bytes = values.size() * sizeof(T);
+    d.appended.append(reinterpret_cast<const char*>(&bytes), sizeof bytes);
+    d.appended.append(reinterpret_cast<const char*>(values.data()), bytes);
+    return;
+  }
   put(b, " format=\"ascii\">\n");
-}
-void close_array(Buffer& b) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) put(b, (i % static_cast<std::size_t>(components) == 0) ? "\n" : " ");
+    if constexpr (std::is_same_v<T, double>)
+      put_num(b, values[i]);
+    else
+      put_int(b, static_cast<Index>(values[i]));
+  }
   put(b, "\n        </DataArray>\n");
 }
 
-void scalar_array(Buffer& b, std::string_view name, const std::vector<double>& values) {
-  open_array(b, "Float64", name, 1);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (i > 0) put(b, "\n");
-    put_num(b, values[i]);
-  }
-  close_array(b);
+void scalar_array(Buffer& b, VtuData& d, std::string_view name, const std::vector<double>& values) {
+  data_array(b, d, name, 1, values);
 }
 
 // A vector field padded with zeros to 3 components (VTK vectors are always 3D).
 template <int Dim>
-void vector_array(Buffer& b, std::string_view name, const std::vector<Vec<Dim>>& values) {
-  open_array(b, "Float64", name, 3);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (i > 0) put(b, "\n");
-    for (int d = 0; d < 3; ++d) {
-      if (d > 0) put(b, " ");
-      put_num(b, d < Dim ? values[i][d] : 0.0);
-    }
-  }
-  close_array(b);
+void vector_array(Buffer& b, VtuData& d, std::string_view name,
+                  const std::vector<Vec<Dim>>& values) {
+  std::vector<double> flat;
+  flat.reserve(3 * values.size());
+  for (const auto& v : values)
+    for (int k = 0; k < 3; ++k) flat.push_back(k < Dim ? v[k] : 0.0);
+  data_array(b, d, name, 3, flat);
 }
 
 // A Dim x Dim tensor embedded in 3x3 (row-major, 9 components); pad is the value on the
 // padded diagonal (1 for F: no deformation out of plane; 0 for stress).
 template <int Dim>
-void tensor_array(Buffer& b, std::string_view name, const std::vector<Mat<Dim>>& values,
+void tensor_array(Buffer& b, VtuData& d, std::string_view name, const std::vector<Mat<Dim>>& values,
                   double pad) {
-  open_array(b, "Float64", name, 9);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (i > 0) put(b, "\n");
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) {
-        if (r + c > 0) put(b, " ");
-        if (r < Dim && c < Dim) {
-          put_num(b, values[i](r, c));
-        } else {
-          put_num(b, r == c ? pad : 0.0);
-        }
-      }
-    }
-  }
-  close_array(b);
+  std::vector<double> flat;
+  flat.reserve(9 * values.size());
+  for (const auto& m : values)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        flat.push_back(r < Dim && c < Dim ? m(r, c) : (r == c ? pad : 0.0));
+  data_array(b, d, name, 9, flat);
 }
 
-void vtu_header(Buffer& b) {
-  put(b,
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      "  <UnstructuredGrid>\n");
+void vtu_header(Buffer& b, const VtuData& d) {
+  put(b, "<?xml version=\"1.0\"?>\n");
+  put(b, d.binary ? "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+                    "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+                  : "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+                    "byte_order=\"LittleEndian\">\n");
+  put(b, "  <UnstructuredGrid>\n");
 }
-void vtu_footer(Buffer& b) {
+void vtu_footer(Buffer& b, const VtuData& d) {
   put(b,
       "    </Piece>\n"
-      "  </UnstructuredGrid>\n"
-      "</VTKFile>\n");
+      "  </UnstructuredGrid>\n");
+  if (d.binary) {
+    put(b, "  <AppendedData encoding=\"raw\">\n   _");
+    put(b, d.appended);
+    put(b, "\n  </AppendedData>\n");
+  }
+  put(b, "</VTKFile>\n");
 }
 
 // <Cells>: connectivity (nodes_per_cell node ids per cell), offsets (end of each cell's
 // connectivity, VTK convention), types.
-void cells_block(Buffer& b, const std::vector<Index>& connectivity, Index num_cells,
+void cells_block(Buffer& b, VtuData& d, const std::vector<Index>& connectivity, Index num_cells,
                  int nodes_per_cell, int cell_type) {
   put(b, "      <Cells>\n");
-  open_array(b, "Int64", "connectivity", 1);
-  for (std::size_t i = 0; i < connectivity.size(); ++i) {
-    if (i > 0) put(b, (i % static_cast<std::size_t>(nodes_per_cell) == 0) ? "\n" : " ");
-    put_int(b, connectivity[i]);
-  }
-  close_array(b);
-  open_array(b, "Int64", "offsets", 1);
-  for (Index c = 0; c < num_cells; ++c) {
-    if (c > 0) put(b, "\n");
-    put_int(b, (c + 1) * nodes_per_cell);
-  }
-  close_array(b);
-  open_array(b, "UInt8", "types", 1);
-  for (Index c = 0; c < num_cells; ++c) {
-    if (c > 0) put(b, "\n");
-    put_int(b, cell_type);
-  }
-  close_array(b);
+  data_array(b, d, "connectivity", nodes_per_cell,
+             std::vector<std::int64_t>(connectivity.begin(), connectivity.end()));
+  std::vector<std::int64_t> offsets(static_cast<std::size_t>(num_cells));
+  for (Index c = 0; c < num_cells; ++c)
+    offsets[static_cast<std::size_t>(c)] = (c + 1) * nodes_per_cell;
+  data_array(b, d, "offsets", 1, offsets);
+  data_array(b, d, "types", 1,
+             std::vector<std::uint8_t>(static_cast<std::size_t>(num_cells),
+                                       static_cast<std::uint8_t>(cell_type)));
   put(b, "      </Cells>\n");
 }
 
@@ -461,7 +480,7 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
 
 template <int Dim>
 std::string particles_vtu(const Particles<Dim>& p, double time,
-                          const std::vector<ScalarField>& extra) {
+                          const std::vector<ScalarField>& extra, bool binary) {
   static_assert(Dim >= 1 && Dim <= 3);
   check_particles(p);
   const auto n = static_cast<std::size_t>(p.size());
@@ -469,8 +488,10 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
                "particle");
 
   Buffer b;
-  vtu_header(b);
-  // TimeValue in FieldData is what ParaView reads as the data set's time.
+  VtuData d;
+  d.binary = binary;
+  vtu_header(b, d);
+  // TimeValue in FieldData is what ParaView reads as the data set's time (ASCII in either form).
   put(b, "    <FieldData>\n");
   put(b,
       "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
@@ -481,38 +502,35 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
                  n, n);
 
   put(b, "      <PointData>\n");
-  open_array(b, "Int64", "id", 1);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i > 0) put(b, "\n");
-    put_int(b, particle_id(p, i));
-  }
-  close_array(b);
-  vector_array<Dim>(b, "x0", p.x0);
-  vector_array<Dim>(b, "u", p.u);
-  vector_array<Dim>(b, "v", p.v);
-  scalar_array(b, "mass", p.mass);
-  scalar_array(b, "volume", p.volume);
-  scalar_array(b, "density", p.density);
-  tensor_array<Dim>(b, "F", p.F, 1.0);
-  tensor_array<Dim>(b, "stress", p.stress, 0.0);
-  for (const auto& f : extra) scalar_array(b, f.name, *f.values);
+  std::vector<std::int64_t> ids(n);
+  for (std::size_t i = 0; i < n; ++i) ids[i] = particle_id(p, i);
+  data_array(b, d, "id", 1, ids);
+  vector_array<Dim>(b, d, "x0", p.x0);
+  vector_array<Dim>(b, d, "u", p.u);
+  vector_array<Dim>(b, d, "v", p.v);
+  scalar_array(b, d, "mass", p.mass);
+  scalar_array(b, d, "volume", p.volume);
+  scalar_array(b, d, "density", p.density);
+  tensor_array<Dim>(b, d, "F", p.F, 1.0);
+  tensor_array<Dim>(b, d, "stress", p.stress, 0.0);
+  for (const auto& f : extra) scalar_array(b, d, f.name, *f.values);
   put(b, "      </PointData>\n");
 
   put(b, "      <Points>\n");
-  vector_array<Dim>(b, "Points", p.x);
+  vector_array<Dim>(b, d, "Points", p.x);
   put(b, "      </Points>\n");
 
   std::vector<Index> conn(n);
   for (std::size_t i = 0; i < n; ++i) conn[i] = static_cast<Index>(i);
-  cells_block(b, conn, static_cast<Index>(n), 1, kVtkVertex);
-  vtu_footer(b);
+  cells_block(b, d, conn, static_cast<Index>(n), 1, kVtkVertex);
+  vtu_footer(b, d);
   return fmt::to_string(b);
 }
 
 // ---- grid ----------------------------------------------------------------------------------
 
 template <int Dim>
-std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fields) {
+std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fields, bool binary) {
   static_assert(Dim >= 1 && Dim <= 3);
   std::array<Index, 3> nodes{1, 1, 1};  // corner nodes per direction, 1 in unused directions
   std::array<Index, 3> cells{1, 1, 1};
@@ -526,31 +544,29 @@ std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fi
   check_fields(node_fields, static_cast<std::size_t>(num_nodes), {}, "grid node");
 
   Buffer b;
-  vtu_header(b);
+  VtuData d;
+  d.binary = binary;
+  vtu_header(b, d);
   fmt::format_to(std::back_inserter(b), "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
                  num_nodes, num_cells);
   if (!node_fields.empty()) {
     put(b, "      <PointData>\n");
-    for (const auto& f : node_fields) scalar_array(b, f.name, *f.values);
+    for (const auto& f : node_fields) scalar_array(b, d, f.name, *f.values);
     put(b, "      </PointData>\n");
   }
 
   put(b, "      <Points>\n");
-  open_array(b, "Float64", "Points", 3);
-  for (Index k = 0; k < nodes[2]; ++k) {
-    for (Index j = 0; j < nodes[1]; ++j) {
+  std::vector<double> pts;
+  pts.reserve(static_cast<std::size_t>(3 * num_nodes));
+  for (Index k = 0; k < nodes[2]; ++k)
+    for (Index j = 0; j < nodes[1]; ++j)
       for (Index i = 0; i < nodes[0]; ++i) {
-        if (i + j + k > 0) put(b, "\n");
         const std::array<Index, 3> ijk{i, j, k};
-        for (int d = 0; d < 3; ++d) {
-          if (d > 0) put(b, " ");
-          // origin + i h rather than accumulating h, so rounding does not grow along the grid.
-          put_num(b, d < Dim ? g.origin[d] + g.h[d] * static_cast<double>(ijk[d]) : 0.0);
-        }
+        // origin + i h rather than accumulating h, so rounding does not grow along the grid.
+        for (int dd = 0; dd < 3; ++dd)
+          pts.push_back(dd < Dim ? g.origin[dd] + g.h[dd] * static_cast<double>(ijk[dd]) : 0.0);
       }
-    }
-  }
-  close_array(b);
+  data_array(b, d, "Points", 3, pts);
   put(b, "      </Points>\n");
 
   // VTK corner order (vtkCellType.h / VTK file format figures): counter-clockwise around the
@@ -572,8 +588,8 @@ std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fi
       }
     }
   }
-  cells_block(b, conn, num_cells, kNodesPerCell, kType);
-  vtu_footer(b);
+  cells_block(b, d, conn, num_cells, kNodesPerCell, kType);
+  vtu_footer(b, d);
   return fmt::to_string(b);
 }
 
@@ -605,8 +621,8 @@ std::string PvdSeries::str() const {
 #define MPM_IO_INSTANTIATE(D)                                                                  \
   template std::string particles_csv<D>(const Particles<D>&, const std::vector<ScalarField>&); \
   template std::string particles_vtu<D>(const Particles<D>&, double,                           \
-                                        const std::vector<ScalarField>&);                      \
-  template std::string grid_vtu<D>(const Grid<D>&, const std::vector<ScalarField>&);
+                                        const std::vector<ScalarField>&, bool);                \
+  template std::string grid_vtu<D>(const Grid<D>&, const std::vector<ScalarField>&, bool);
 MPM_IO_INSTANTIATE(1)
 MPM_IO_INSTANTIATE(2)
 MPM_IO_INSTANTIATE(3)

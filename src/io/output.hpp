@@ -90,20 +90,23 @@ struct ScalarField {
 template <int Dim>
 std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField>& extra = {});
 
-// VTK XML UnstructuredGrid (.vtu, ASCII) with one VTK_VERTEX cell per particle at its current
+// VTK XML UnstructuredGrid (.vtu; ASCII, or with binary = true the arrays as raw little-endian
+// bytes in an <AppendedData> block, VTK format 1.0 with UInt64 headers, which ParaView and
+// meshio read) with one VTK_VERTEX cell per particle at its current
 // position (padded to 3 components). PointData: id (Int64, Particles::id), x0, u, v (3 components,
 // zero padded), mass, volume, density, F and stress (9 components, row-major: the Dim x Dim tensor
 // embedded in 3x3 with identity padding for F and zero padding for stress), then the extra
 // scalars. The time [s] is stored in FieldData as "TimeValue", which ParaView reads.
 template <int Dim>
 std::string particles_vtu(const Particles<Dim>& p, double time,
-                          const std::vector<ScalarField>& extra = {});
+                          const std::vector<ScalarField>& extra = {}, bool binary = false);
 
 // The background grid as a .vtu: points at the cell corners (x fastest, then y, then z), cells
 // VTK_LINE in 1D, VTK_QUAD in 2D, VTK_HEXAHEDRON in 3D (linear cell index x fastest, like
 // Grid::cell_index). node_fields are PointData scalars with one value per corner node.
 template <int Dim>
-std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fields = {});
+std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fields = {},
+                     bool binary = false);
 
 // A ParaView .pvd collection: one DataSet entry per frame, in the order added.
 class PvdSeries {

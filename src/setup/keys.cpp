@@ -268,6 +268,7 @@ std::vector<KeySpec> declare() {
               "written (0: initial and final only)"),
       boolean("output.csv", true, "write particle frames as CSV"),
       boolean("output.vtk", true, "write particle and grid frames as VTK XML (.vtu + .pvd)"),
+      choice("output.vtk_format", "binary", kVtkFormats, "encoding of the .vtu arrays"),
       integer("output.history_every", 1, at_least(1), "write a history.csv row every N steps"),
       integer("output.checkpoint_every", 0, at_least(0),
               "write the complete state to checkpoint.bin every N steps, replacing the previous "

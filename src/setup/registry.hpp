@@ -118,6 +118,12 @@ inline constexpr Entry kPmgSmoothers[] = {
     {"jacobi", "damped Jacobi, omega = 1 / lambda_max(D^-1 M) (parallel)"},
 };
 
+// output.vtk_format: how the .vtu frames hold their arrays (io/output.hpp).
+inline constexpr Entry kVtkFormats[] = {
+    {"binary", "raw little-endian bytes in an appended block (VTK XML 1.0; compact, fast)"},
+    {"ascii", "text, 17 significant digits (readable, about 3x larger)"},
+};
+
 // method.sort: re-sorting the particles by cell between steps (scheme/sort.hpp).
 inline constexpr Entry kSortModes[] = {
     {"auto", "sort by cell when the order has degraded (chunk DOF spans twice the sorted ones)"},

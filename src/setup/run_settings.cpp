@@ -131,6 +131,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.output.checkpoint_every = cfg.get_int("output.checkpoint_every");
   s.output.csv = cfg.get_bool("output.csv");
   s.output.vtk = cfg.get_bool("output.vtk");
+  s.output.vtk_binary = cfg.get_string("output.vtk_format") == "binary";
   s.material.density = cfg.get_real("material.density");
   s.material.youngs_modulus = cfg.get_real("material.youngs_modulus");
   s.material.poisson_ratio = cfg.get_real("material.poisson_ratio");

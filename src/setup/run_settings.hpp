@@ -28,6 +28,7 @@ struct OutputSettings {
   Index history_every = 1;     // history.csv row every this many steps
   Index checkpoint_every = 0;  // 0: no checkpoints
   bool csv = true, vtk = true;
+  bool vtk_binary = true;  // output.vtk_format
 };
 
 enum class Solver { Mpm, Ulfem, Otm, Unified };
