@@ -519,15 +519,35 @@ of a uniform bar by 8-point Gauss quadrature per cell.
 """
 
 
-def plot_profiles(ctx, name, runs, title, ylabel="stress [Pa]", xkey="x_1", key="stress_11"):
-    """Final-time particle stress of several runs against the exact column of the first."""
+def pyplot():
+    """matplotlib.pyplot set up for reproducible figures, or None without matplotlib."""
     try:
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
         plt.rcParams["svg.fonttype"] = "none"
         plt.rcParams["svg.hashsalt"] = "mpmlab"  # reproducible SVG ids
+        return plt
     except ImportError:
+        return None
+
+
+def save_figure(plt, fig, ctx, name):
+    """Writes figures/NAME.png and .svg (no date in the SVG); returns their paths."""
+    paths = []
+    os.makedirs(ctx["figdir"], exist_ok=True)
+    for ext in ("png", "svg"):
+        p = os.path.join(ctx["figdir"], f"{name}.{ext}")
+        fig.savefig(p, dpi=120, metadata={"Date": None} if p.endswith(".svg") else None)
+        paths.append(os.path.relpath(p, ROOT))
+    plt.close(fig)
+    return paths
+
+
+def plot_profiles(ctx, name, runs, title, ylabel="stress [Pa]", xkey="x_1", key="stress_11"):
+    """Final-time particle stress of several runs against the exact column of the first."""
+    plt = pyplot()
+    if plt is None:
         return []
     fig, ax = plt.subplots(figsize=(7.0, 4.5))
     exact_done = False
@@ -548,25 +568,13 @@ def plot_profiles(ctx, name, runs, title, ylabel="stress [Pa]", xkey="x_1", key=
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    paths = []
-    os.makedirs(ctx["figdir"], exist_ok=True)
-    for ext in ("png", "svg"):
-        p = os.path.join(ctx["figdir"], f"{name}.{ext}")
-        fig.savefig(p, dpi=120, metadata={"Date": None} if p.endswith(".svg") else None)
-        paths.append(os.path.relpath(p, ROOT))
-    plt.close(fig)
-    return paths
+    return save_figure(plt, fig, ctx, name)
 
 
 def plot_convergence(ctx, name, series, title, ylabel):
     """Error against the number of nodes, several series {label: [(nodes, error), ...]}."""
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        plt.rcParams["svg.fonttype"] = "none"
-        plt.rcParams["svg.hashsalt"] = "mpmlab"  # reproducible SVG ids
-    except ImportError:
+    plt = pyplot()
+    if plt is None:
         return []
     fig, ax = plt.subplots(figsize=(7.0, 4.8))
     markers = "osd^v<>ph*"
@@ -586,25 +594,13 @@ def plot_convergence(ctx, name, series, title, ylabel):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    paths = []
-    os.makedirs(ctx["figdir"], exist_ok=True)
-    for ext in ("png", "svg"):
-        p = os.path.join(ctx["figdir"], f"{name}.{ext}")
-        fig.savefig(p, dpi=120, metadata={"Date": None} if p.endswith(".svg") else None)
-        paths.append(os.path.relpath(p, ROOT))
-    plt.close(fig)
-    return paths
+    return save_figure(plt, fig, ctx, name)
 
 
 def plot_history(ctx, name, runs, title):
     """Relative change of total energy over time (history.csv) of several runs."""
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        plt.rcParams["svg.fonttype"] = "none"
-        plt.rcParams["svg.hashsalt"] = "mpmlab"  # reproducible SVG ids
-    except ImportError:
+    plt = pyplot()
+    if plt is None:
         return []
     # Energy, and where history.csv has them the mapping's mass and momentum errors per step
     # (grid sums against particle sums; row 0 is the state before the first mapping).
@@ -636,13 +632,7 @@ def plot_history(ctx, name, runs, title):
         ax.legend(fontsize=8)
     axes[0].set_title(title)
     fig.tight_layout()
-    paths = []
-    for ext in ("png", "svg"):
-        p = os.path.join(ctx["figdir"], f"{name}.{ext}")
-        fig.savefig(p, dpi=120, metadata={"Date": None} if p.endswith(".svg") else None)
-        paths.append(os.path.relpath(p, ROOT))
-    plt.close(fig)
-    return paths
+    return save_figure(plt, fig, ctx, name)
 
 
 def sec_crossing(R, ctx):
@@ -1647,13 +1637,8 @@ not than OTM-maxent.
 
 def plot_plate_row(ctx, name, rows, title):
     """sigma_11 along one row of particles for several runs, with the exact stress."""
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        plt.rcParams["svg.fonttype"] = "none"
-        plt.rcParams["svg.hashsalt"] = "mpmlab"  # reproducible SVG ids
-    except ImportError:
+    plt = pyplot()
+    if plt is None:
         return []
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13.0, 4.8))
     for k, (label, row) in enumerate(rows):
@@ -1675,14 +1660,7 @@ def plot_plate_row(ctx, name, rows, title):
         a.grid(True, alpha=0.3)
         a.legend(fontsize=8)
     fig.tight_layout()
-    paths = []
-    os.makedirs(ctx["figdir"], exist_ok=True)
-    for ext in ("png", "svg"):
-        p = os.path.join(ctx["figdir"], f"{name}.{ext}")
-        fig.savefig(p, dpi=120, metadata={"Date": None} if p.endswith(".svg") else None)
-        paths.append(os.path.relpath(p, ROOT))
-    plt.close(fig)
-    return paths
+    return save_figure(plt, fig, ctx, name)
 
 
 def sec_massmatrix(R, ctx):

@@ -61,32 +61,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 // particles per direction and cell of mass rho h^d / N^d (rho = 1).
 template <int Dim>
 PointSet<Dim> points(const Grid<Dim>& g, int p, int particles) {
-  if (particles == 0) return gauss_points(g, p + 1);
-  PointSet<Dim> out;
-  const Index nc = g.num_cells();
-  const auto per = static_cast<std::size_t>(ipow(particles, Dim));
-  double m = 1.0;
-  for (int d = 0; d < Dim; ++d) m *= g.h[d] / particles;
-  for (Index c = 0; c < nc; ++c) {
-    Index rem = c;
-    IVec<Dim> cell;
-    for (int d = 0; d < Dim; ++d) {
-      cell[d] = rem % g.cells[d];
-      rem /= g.cells[d];
-    }
-    for (std::size_t k = 0; k < per; ++k) {
-      std::size_t kk = k;
-      Vec<Dim> x;
-      for (int d = 0; d < Dim; ++d) {
-        const auto a = static_cast<double>(kk % static_cast<std::size_t>(particles));
-        kk /= static_cast<std::size_t>(particles);
-        x[d] = g.origin[d] + g.h[d] * (static_cast<double>(cell[d]) + (a + 0.5) / particles);
-      }
-      out.x.push_back(x);
-      out.w.push_back(m);
-    }
-  }
-  return out;
+  return particles == 0 ? gauss_points(g, p + 1) : regular_points(g, particles);
 }
 
 // lambda_max / lambda_min of the 1D matrix (dense; at most a few hundred functions). The 2D

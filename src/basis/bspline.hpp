@@ -7,7 +7,9 @@
 // x fastest; degree 1 reproduces LinearBasis (D 3.1: linear B-splines are the P1 functions).
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "basis/basis.hpp"
@@ -213,5 +215,26 @@ class BSplineBasis {
 
 // The basis concept (basis/basis.hpp).
 static_assert(Basis<BSplineBasis<1, 2>, 1> && Basis<BSplineBasis<2, 3>, 2>);
+
+// fn(std::integral_constant<int, P>{}) for a B-spline degree p = 1..5 chosen at run time
+// (solver/spline_matrices.cpp, solver/otm.cpp); std::invalid_argument for another degree (the
+// callers validate the degree of their input first).
+template <class Fn>
+decltype(auto) with_bspline_degree(int p, Fn&& fn) {
+  switch (p) {
+    case 1:
+      return fn(std::integral_constant<int, 1>{});
+    case 2:
+      return fn(std::integral_constant<int, 2>{});
+    case 3:
+      return fn(std::integral_constant<int, 3>{});
+    case 4:
+      return fn(std::integral_constant<int, 4>{});
+    case 5:
+      return fn(std::integral_constant<int, 5>{});
+    default:
+      throw std::invalid_argument("with_bspline_degree: the degrees are 1 to 5");
+  }
+}
 
 }  // namespace mpm

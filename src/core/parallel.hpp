@@ -9,6 +9,7 @@
 // chunk touches a narrow band of the grid), then add the slices into the grid in chunk order.
 // No locks or atomics; the extra work is zeroing and adding the slices, about one grid's worth
 // plus the stencil overlap between chunks per scatter.
+#include <omp.h>
 #include <algorithm>
 #include <array>
 #include <limits>
@@ -18,6 +19,19 @@
 #include "core/types.hpp"
 
 namespace mpm {
+
+// Sets this thread's OpenMP thread count for a scope and restores the previous count when it
+// ends (driver/run.cpp sizes a run's threads with it; the thread-count tests use it too).
+class ScopedThreads {
+ public:
+  explicit ScopedThreads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
+  ~ScopedThreads() { omp_set_num_threads(saved_); }
+  ScopedThreads(const ScopedThreads&) = delete;
+  ScopedThreads& operator=(const ScopedThreads&) = delete;
+
+ private:
+  int saved_;
+};
 
 struct ParticleChunks {
   // ceil(n / kMinSize) chunks, at most kMax: problems of up to kMinSize particles are one

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "benchmarks/benchmarks.hpp"
+#include "core/parallel.hpp"
 #include "driver/driver.hpp"
 #include "driver/run_mpm.hpp"
 #include "io/checkpoint.hpp"
@@ -86,20 +87,6 @@ int run_threads(int requested, Index particles, int dim, int available) {
   const Index per = kMinParticlesPerThread[std::clamp(dim, 1, 3)];
   return static_cast<int>(std::clamp<Index>(particles / per, 1, std::max(1, available)));
 }
-
-namespace {
-// Sets the OpenMP thread count of this thread for the run and restores it afterwards.
-class ScopedThreads {
- public:
-  explicit ScopedThreads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
-  ~ScopedThreads() { omp_set_num_threads(saved_); }
-  ScopedThreads(const ScopedThreads&) = delete;
-  ScopedThreads& operator=(const ScopedThreads&) = delete;
-
- private:
-  int saved_;
-};
-}  // namespace
 
 RunResult run(const Config& cfg, const RunOptions& opt) {
   AnyProblem problem = make_problem(cfg);

@@ -16,25 +16,6 @@
 
 namespace mpm {
 
-namespace {
-// fn(std::integral_constant<int, P>) for the B-spline degree p = 1..5.
-template <class Fn>
-void with_degree(int p, Fn&& fn) {
-  switch (p) {
-    case 1:
-      return fn(std::integral_constant<int, 1>{});
-    case 2:
-      return fn(std::integral_constant<int, 2>{});
-    case 3:
-      return fn(std::integral_constant<int, 3>{});
-    case 4:
-      return fn(std::integral_constant<int, 4>{});
-    default:
-      return fn(std::integral_constant<int, 5>{});
-  }
-}
-}  // namespace
-
 template <int Dim>
 Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
     : st_(pb.grid, std::move(pb.particles), pb.material), s_(s) {
@@ -82,7 +63,7 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   std::vector<std::vector<Index>> side_nodes(2 * Dim);
   Index n = 0;
   if (iso_ || Dim > 1) {  // (2D max-ent: the nodes of degree 1, the lattice x fastest)
-    with_degree(degree_, [&](auto degree) {
+    with_bspline_degree(degree_, [&](auto degree) {
       const BSplineBasis<Dim, decltype(degree)::value> basis(body_);
       n = basis.num_dofs();
       x_.resize(static_cast<std::size_t>(n * Dim));
@@ -414,7 +395,8 @@ void Otm<Dim>::evaluate_basis() {
   w_.clear();
   g_.clear();
   if (iso_)
-    return with_degree(degree_, [&](auto degree) { bspline_rows<decltype(degree)::value>(); });
+    return with_bspline_degree(degree_,
+                               [&](auto degree) { bspline_rows<decltype(degree)::value>(); });
   if constexpr (Dim != 1) {
     maxent_rows();
   } else {

@@ -12,31 +12,15 @@
 namespace mpm {
 
 namespace {
-template <class Fn>
-decltype(auto) with_spline_degree(int p, Fn&& fn) {
-  switch (p) {
-    case 1:
-      return fn(std::integral_constant<int, 1>{});
-    case 2:
-      return fn(std::integral_constant<int, 2>{});
-    case 3:
-      return fn(std::integral_constant<int, 3>{});
-    case 4:
-      return fn(std::integral_constant<int, 4>{});
-    case 5:
-      return fn(std::integral_constant<int, 5>{});
-    default:
-      throw InputError(fmt::format("B-spline degree {}: the degrees are 1 to 5", p));
-  }
-}
-}  // namespace
-
+// The tensor product, in every cell of g, of the 1D points t[a] in [0, 1] (cell units) with
+// weights w[a] (fractions of the cell), weights times rho and the cell's volume.
 template <int Dim>
-PointSet<Dim> gauss_points(const Grid<Dim>& g, int n, double rho) {
-  const GaussRule r = gauss_legendre(n);
+PointSet<Dim> tensor_points(const Grid<Dim>& g, const std::vector<double>& t,
+                            const std::vector<double>& w, double rho) {
   PointSet<Dim> out;
   const Index nc = g.num_cells();
-  const auto per_cell = static_cast<std::size_t>(ipow(n, Dim));
+  const std::size_t n = t.size();
+  const auto per_cell = static_cast<std::size_t>(ipow(static_cast<int>(n), Dim));
   out.x.reserve(static_cast<std::size_t>(nc) * per_cell);
   out.w.reserve(static_cast<std::size_t>(nc) * per_cell);
   for (Index c = 0; c < nc; ++c) {
@@ -49,23 +33,45 @@ PointSet<Dim> gauss_points(const Grid<Dim>& g, int n, double rho) {
     for (std::size_t k = 0; k < per_cell; ++k) {
       std::size_t kk = k;
       Vec<Dim> x;
-      double w = rho;
+      double weight = rho;
       for (int d = 0; d < Dim; ++d) {
-        const std::size_t a = kk % static_cast<std::size_t>(n);
-        kk /= static_cast<std::size_t>(n);
-        x[d] = g.origin[d] + g.h[d] * (static_cast<double>(cell[d]) + 0.5 * (r.xi[a] + 1.0));
-        w *= 0.5 * g.h[d] * r.w[a];
+        const std::size_t a = kk % n;
+        kk /= n;
+        x[d] = g.origin[d] + g.h[d] * (static_cast<double>(cell[d]) + t[a]);
+        weight *= g.h[d] * w[a];
       }
       out.x.push_back(x);
-      out.w.push_back(w);
+      out.w.push_back(weight);
     }
   }
   return out;
 }
+}  // namespace
+
+template <int Dim>
+PointSet<Dim> gauss_points(const Grid<Dim>& g, int n, double rho) {
+  const GaussRule r = gauss_legendre(n);
+  std::vector<double> t(r.xi.size()), w(r.w.size());
+  for (std::size_t a = 0; a < t.size(); ++a) {
+    t[a] = 0.5 * (r.xi[a] + 1.0);
+    w[a] = 0.5 * r.w[a];
+  }
+  return tensor_points(g, t, w, rho);
+}
+
+template <int Dim>
+PointSet<Dim> regular_points(const Grid<Dim>& g, int n, double rho) {
+  if (n < 1) throw InputError(fmt::format("regular_points: {} points per direction", n));
+  std::vector<double> t(static_cast<std::size_t>(n)), w(static_cast<std::size_t>(n), 1.0 / n);
+  for (int a = 0; a < n; ++a) t[static_cast<std::size_t>(a)] = (a + 0.5) / n;
+  return tensor_points(g, t, w, rho);
+}
 
 template <int Dim>
 SparseMatrixD spline_values(const Grid<Dim>& g, int p, const std::vector<Vec<Dim>>& x) {
-  return with_spline_degree(p, [&](auto degree) {
+  if (p < 1 || p > 5)
+    throw InputError(fmt::format("B-spline degree {}: the degrees are 1 to 5", p));
+  return with_bspline_degree(p, [&](auto degree) {
     constexpr int P = decltype(degree)::value;
     const BSplineBasis<Dim, P> basis(g);
     typename BSplineBasis<Dim, P>::StencilT s;
@@ -125,7 +131,7 @@ SplineMassOperator<Dim>::SplineMassOperator(const Grid<Dim>& g, int p, PointSet<
 template <int Dim>
 void SplineMassOperator<Dim>::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   y.setZero(size());
-  with_spline_degree(p_, [&](auto degree) {
+  with_bspline_degree(p_, [&](auto degree) {
     constexpr int P = decltype(degree)::value;
     const BSplineBasis<Dim, P> basis(g_);
     typename BSplineBasis<Dim, P>::StencilT s;
@@ -177,6 +183,8 @@ std::vector<Index> spline_boundary_functions(const Grid<Dim>& g, int p) {
 
 template PointSet<1> gauss_points<1>(const Grid<1>&, int, double);
 template PointSet<2> gauss_points<2>(const Grid<2>&, int, double);
+template PointSet<1> regular_points<1>(const Grid<1>&, int, double);
+template PointSet<2> regular_points<2>(const Grid<2>&, int, double);
 template SparseMatrixD spline_values<1>(const Grid<1>&, int, const std::vector<Vec<1>>&);
 template SparseMatrixD spline_values<2>(const Grid<2>&, int, const std::vector<Vec<2>>&);
 template SparseMatrixD spline_mass<1>(const Grid<1>&, int, int, const PointSet<1>&);

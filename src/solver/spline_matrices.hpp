@@ -31,6 +31,12 @@ struct PointSet {
 template <int Dim>
 PointSet<Dim> gauss_points(const Grid<Dim>& g, int n, double rho = 1.0);
 
+// n regular points per direction in every cell, at (k + 1/2) / n of the cell, each weighted by
+// rho times the cell volume / n^Dim: the particles of a body seeded n per direction and cell
+// with their masses (D eq. 2.34).
+template <int Dim>
+PointSet<Dim> regular_points(const Grid<Dim>& g, int n, double rho = 1.0);
+
 // phi^p_j(x_k) for every point (row k) and function (column j) of the B-splines of degree p
 // (1-5) on g. Points must lie in g (InputError otherwise, naming the point).
 template <int Dim>

@@ -293,6 +293,31 @@ std::unique_ptr<Built2> build2(const std::vector<std::string>& sets, bool free_e
   return b;
 }
 
+// A non-uniform stress and velocity, so that the internal force (and its sign) and the momentum
+// enter the first step of the 2D comparisons.
+void load_plate(driver::Stepper<2>& s) {
+  auto& P = s.state().particles;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    P.stress[i] << 30.0 * std::cos(2.0 * P.x[i][0]), 5.0, 5.0, -20.0 * std::sin(3.0 * P.x[i][1]);
+    P.v[i] << 0.1 * std::sin(P.x[i][1]), -0.2 * P.x[i][0];
+  }
+}
+
+// OTM (method.solver = "otm") and MPM with the same `sets`, loaded by load_plate, after one
+// step of 1e-5 s.
+std::pair<std::unique_ptr<Built2>, std::unique_ptr<Built2>> first_steps(
+    const std::vector<std::string>& sets) {
+  auto otm_sets = sets;
+  otm_sets.push_back("method.solver=otm");
+  auto otm = build2(otm_sets);
+  auto mpm = build2(sets);
+  for (auto* b : {otm.get(), mpm.get()}) {
+    load_plate(*b->stepper);
+    b->stepper->step(1e-5);
+  }
+  return {std::move(otm), std::move(mpm)};
+}
+
 TEST(Unified, TwoDimensionalFirstStepEqualsUslBsmpm) {
   const std::vector<std::string> common = {"grid.cells=6", "method.basis=bspline",
                                            "method.degree=2", "method.mass=consistent",
@@ -304,13 +329,7 @@ TEST(Unified, TwoDimensionalFirstStepEqualsUslBsmpm) {
   };
   auto uni = build2(with("method.solver=unified"));
   auto mpm = build2(with(""));
-  for (auto* sp : {&uni->stepper, &mpm->stepper}) {
-    auto& P = (*sp)->state().particles;
-    for (std::size_t i = 0; i < P.x.size(); ++i) {
-      P.stress[i] << 30.0 * std::cos(2.0 * P.x[i][0]), 5.0, 5.0, -20.0 * std::sin(3.0 * P.x[i][1]);
-      P.v[i] << 0.1 * std::sin(P.x[i][1]), -0.2 * P.x[i][0];
-    }
-  }
+  for (auto* sp : {&uni->stepper, &mpm->stepper}) load_plate(**sp);
   uni->stepper->step(1e-5);
   mpm->stepper->step(1e-5);
   const auto& a = uni->stepper->state().particles;
@@ -323,27 +342,12 @@ TEST(Unified, TwoDimensionalFirstStepEqualsUslBsmpm) {
   }
 }
 
-// A free 2D plate (no rollers; a zero amplitude switches the manufactured body force off) with a
-// non-uniform velocity: the total momentum is conserved to round-off, and the particles stay on
-// the map x = sum B_i(X) c_i.
 // OTM-P1 in 2D (bilinear on the advected quadrilaterals): its first step is USL-MPM-P1's with
 // consistent mass in positions, F and stress (D 4.4), as in 1D.
 TEST(Otm, TwoDimensionalP1FirstStepEqualsUslMpm) {
   const std::vector<std::string> common = {"grid.cells=6", "method.basis=linear",
                                            "method.mass=consistent", "method.scheme=usl"};
-  auto otm_sets = common;
-  otm_sets.push_back("method.solver=otm");
-  auto otm = build2(otm_sets);
-  auto mpm = build2(common);
-  for (auto* sp : {&otm->stepper, &mpm->stepper}) {
-    auto& P = (*sp)->state().particles;
-    for (std::size_t i = 0; i < P.x.size(); ++i) {
-      P.stress[i] << 30.0 * std::cos(2.0 * P.x[i][0]), 5.0, 5.0, -20.0 * std::sin(3.0 * P.x[i][1]);
-      P.v[i] << 0.1 * std::sin(P.x[i][1]), -0.2 * P.x[i][0];
-    }
-  }
-  otm->stepper->step(1e-5);
-  mpm->stepper->step(1e-5);
+  const auto [otm, mpm] = first_steps(common);
   const auto& a = otm->stepper->state().particles;
   const auto& b = mpm->stepper->state().particles;
   for (std::size_t i = 0; i < a.x.size(); ++i) {
@@ -361,20 +365,7 @@ TEST(Otm, TwoDimensionalMaxEntFirstStepEqualsUslMpm) {
   for (const char* dmax : {"method.maxent_dmax=2", "method.maxent_dmax=3"}) {
     const std::vector<std::string> common = {"grid.cells=6", "method.basis=maxent", dmax,
                                              "method.mass=consistent", "method.scheme=usl"};
-    auto otm_sets = common;
-    otm_sets.push_back("method.solver=otm");
-    auto otm = build2(otm_sets);
-    auto mpm = build2(common);
-    for (auto* sp : {&otm->stepper, &mpm->stepper}) {
-      auto& P = (*sp)->state().particles;
-      for (std::size_t i = 0; i < P.x.size(); ++i) {
-        P.stress[i] << 30.0 * std::cos(2.0 * P.x[i][0]), 5.0, 5.0,
-            -20.0 * std::sin(3.0 * P.x[i][1]);
-        P.v[i] << 0.1 * std::sin(P.x[i][1]), -0.2 * P.x[i][0];
-      }
-    }
-    otm->stepper->step(1e-5);
-    mpm->stepper->step(1e-5);
+    const auto [otm, mpm] = first_steps(common);
     const auto& a = otm->stepper->state().particles;
     const auto& b = mpm->stepper->state().particles;
     double dx = 0.0, dF = 0.0, ds = 0.0, moved = 0.0;
@@ -440,6 +431,9 @@ TEST(Otm, TwoDimensionalMaxEntFreePlateConservesMomentum) {
   }
 }
 
+// A free 2D plate (no rollers; a zero amplitude switches the manufactured body force off) with a
+// non-uniform velocity: the total momentum is conserved to round-off, and the particles stay on
+// the map x = sum B_i(X) c_i.
 TEST(Unified, TwoDimensionalFreePlateConservesMomentum) {
   auto b = build2({"grid.cells=5", "method.solver=unified", "method.basis=bspline",
                    "method.degree=2", "method.mass=consistent", "mms.amplitude=0"},

@@ -1,24 +1,15 @@
 #pragma once
 // Helpers of the tests that compare runs on different thread counts (tests/scheme/test_parallel,
 // tests/scheme/test_sort, tests/mapping/test_mapping_parallel).
-#include <omp.h>
-
 #include <cstring>
 #include <vector>
 
+#include "core/parallel.hpp"
+
 namespace mpm::test {
 
-// Sets the OpenMP thread count for a scope and restores the process's count when it ends.
-class Threads {
- public:
-  explicit Threads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
-  ~Threads() { omp_set_num_threads(saved_); }
-  Threads(const Threads&) = delete;
-  Threads& operator=(const Threads&) = delete;
-
- private:
-  int saved_;
-};
+// Sets the OpenMP thread count for a scope and restores the previous count when it ends.
+using Threads = ScopedThreads;
 
 // Byte-for-byte equality of two arrays (the thread-count tests demand the same bits, not
 // closeness; NaNs with equal payloads compare equal, as they should here). Empty arrays may
