@@ -86,7 +86,7 @@ inline constexpr Entry kSolvers[] = {
     {"ulfem", "1D updated-Lagrangian FEM, linear elements (reference solutions, D 5.4.1)"},
     {"otm",
      "optimal transportation meshfree method on nodes advected with the material: P1 (1D, 2D) "
-     "or max-ent (1D) (D Algorithm 3)"},
+     "or max-ent (1D, 2D) (D Algorithm 3)"},
     {"unified", "B-splines on advected degrees of freedom, USL updates (D Algorithm 4; 1D, 2D)"},
 };
 
