@@ -97,7 +97,11 @@ struct DirectMapping {
   struct None {};  // the slice of a sum not computed in this pass
 
   // M_ij = sum_p phi_i m_p phi_j (D eq. 2.44). The triplet list is one shared structure and the
-  // consistent mass is rarely used: serial.
+  // consistent mass is rarely used: serial. Entries of weight zero are left out (as the
+  // quadrature mappings do): max-ent's window holds 36 entries in 2D of which about 13 are
+  // nonzero at d_max = 2, and its 36^2 triplets per particle made the assembly 8x the rest of
+  // the step (docs: BENCHMARKS.md). The matrix is the same; its stored pattern loses the
+  // explicit zeros, which can change the factorisation's ordering and so the last bits.
   template <int Dim, class B>
   static void consistent_mass(BasisState<Dim, B>& sim) {
     const auto& P = sim.particles;
@@ -106,8 +110,9 @@ struct DirectMapping {
       const auto& s = sim.stencils[static_cast<std::size_t>(p)];
       const double mp = P.mass[static_cast<std::size_t>(p)];
       for_each_entry(s, sim.dof_stride, [&](Index da, double wa, const auto&) {
+        if (wa == 0.0) return;
         for_each_entry(s, sim.dof_stride, [&](Index db, double wb, const auto&) {
-          sim.consistent.add(da, db, wa * mp * wb);
+          if (wb != 0.0) sim.consistent.add(da, db, wa * mp * wb);
         });
       });
     }
