@@ -16,6 +16,28 @@
 
 namespace mpm {
 
+namespace {
+// fn(flat index) for the 3^Dim cells of a lattice of n cells per direction (x fastest) around
+// cell c, c included, those outside the lattice left out; in the order of the offsets (-1, 0, 1)
+// with x fastest (the order fixes the rounding of what fn sums).
+template <int Dim, class Fn>
+void for_each_neighbour(const IVec<Dim>& c, const IVec<Dim>& n, Fn&& fn) {
+  for (int k = 0; k < ipow(3, Dim); ++k) {
+    Index flat = 0, stride = 1;
+    int kk = k;
+    bool inside = true;
+    for (int d = 0; d < Dim; ++d) {
+      const Index cd = c[d] + kk % 3 - 1;
+      kk /= 3;
+      inside = inside && cd >= 0 && cd < n[d];
+      flat += cd * stride;
+      stride *= n[d];
+    }
+    if (inside) fn(flat);
+  }
+}
+}  // namespace
+
 template <int Dim>
 Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
     : st_(pb.grid, std::move(pb.particles), pb.material), s_(s) {
@@ -269,18 +291,9 @@ void Otm<Dim>::maxent_rows() {
       rem /= lat[d];
     }
     double z = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < ipow(3, Dim); ++k) {
-      Index j = 0, stride = 1, kk = k;
-      bool ok = k != (ipow(3, Dim) - 1) / 2;  // not i itself
-      for (int d = 0; d < Dim; ++d) {
-        const Index cd = c[d] + kk % 3 - 1;
-        kk /= 3;
-        ok = ok && cd >= 0 && cd < lat[d];
-        j += cd * stride;
-        stride *= lat[d];
-      }
-      if (ok) z = std::min(z, (pos(j) - pos(i)).norm());
-    }
+    for_each_neighbour<Dim>(c, lat, [&](Index j) {
+      if (j != i) z = std::min(z, (pos(j) - pos(i)).norm());
+    });
     support_[static_cast<std::size_t>(i)] = s_.maxent.dmax * z;
     dmax_all = std::max(dmax_all, s_.maxent.dmax * z);
     lo = lo.cwiseMin(pos(i));
@@ -326,17 +339,7 @@ void Otm<Dim>::maxent_rows() {
     int m = 0;
     IVec<Dim> b0;
     for (int d = 0; d < Dim; ++d) b0[d] = bin_of(x, d);
-    for (int k = 0; k < ipow(3, Dim); ++k) {
-      Index b = 0, stride = 1, kk = k;
-      bool ok = true;
-      for (int d = 0; d < Dim; ++d) {
-        const Index bd = b0[d] + kk % 3 - 1;
-        kk /= 3;
-        ok = ok && bd >= 0 && bd < nb[d];
-        b += bd * stride;
-        stride *= nb[d];
-      }
-      if (!ok) continue;
+    for_each_neighbour<Dim>(b0, nb, [&](Index b) {
       for (Index t = start[static_cast<std::size_t>(b)]; t < start[static_cast<std::size_t>(b + 1)];
            ++t) {
         const Index j = order[static_cast<std::size_t>(t)];
@@ -357,7 +360,7 @@ void Otm<Dim>::maxent_rows() {
         dw[q] = dist > 0.0 ? Vec<Dim>(maxent_prior_slope(dist / dj) * ell / (dist * dj) * r_vec)
                            : Vec<Dim>::Zero();
       }
-    }
+    });
     const MaxEntStatus status = maxent_solve<Dim>(m, y.data(), w.data(), dw.data(), fixed,
                                                   s_.maxent, phi.data(), grad.data());
     if (!status.converged) {
