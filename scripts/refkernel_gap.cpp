@@ -8,8 +8,9 @@
 // piece pays nothing for it), so that the gap can be attributed by measurement rather than
 // assumed. Every variant, mask 0 included, fuses MUSL's particle velocity update with the second
 // momentum scatter per particle, as mpm does (the same sums in the same order as the yardstick's
-// two passes: mask 0 prints the yardstick's checksum). It is a measuring instrument, not part of mpm: scripts/refkernel_gap.sh builds it
-// with the yardstick's flags and runs every variant alternating with the yardstick.
+// two passes: mask 0 prints the yardstick's checksum). It is a measuring instrument, not part of
+// mpm: scripts/refkernel_gap.sh builds it with the yardstick's flags and runs every variant
+// alternating with the yardstick.
 //
 // Pieces (bits of the variant mask, argv[4]):
 //   1  state:  u_p += dx (displacement, an output), rho_p = m_p / V_p (an output), V_p from V0_p
@@ -111,8 +112,8 @@ double run(int n, int ppc, int steps, double& checksum) {
       W wx = weights(x[q] * inv_h), wy = weights(y[q] * inv_h);
       for (int b = 0; b < 3; ++b)
         for (int a = 0; a < 3; ++a)
-          f(size_t(wy.base + b) * G + (wx.base + a), wx.w[a] * wy.w[b],
-            wx.dw[a] * wy.w[b] * inv_h, wx.w[a] * wy.dw[b] * inv_h);
+          f(size_t(wy.base + b) * G + (wx.base + a), wx.w[a] * wy.w[b], wx.dw[a] * wy.w[b] * inv_h,
+            wx.w[a] * wy.dw[b] * inv_h);
     }
   };
   // The slices of chunk c start at DOF lo[c]; with slices off the grid arrays themselves.
@@ -285,7 +286,8 @@ double dispatch(unsigned mask, int n, int ppc, int steps, double& chk) {
 
 int main(int argc, char** argv) {
   if (argc != 5) {
-    std::fprintf(stderr, "usage: refkernel_gap CELLS PPC STEPS MASK (MASK 0..31, see the source)\n");
+    std::fprintf(stderr,
+                 "usage: refkernel_gap CELLS PPC STEPS MASK (MASK 0..31, see the source)\n");
     return 2;
   }
   const int n = std::atoi(argv[1]), ppc = std::atoi(argv[2]), steps = std::atoi(argv[3]);
