@@ -4,7 +4,7 @@
 # (scripts/fuzz.sh asks for clang and the compiler-rt libraries that hold libFuzzer).
 set -euo pipefail
 PACKAGES=(g++ cmake make ninja-build pkg-config libeigen3-dev libtomlplusplus-dev libcli11-dev
-  libfmt-dev libmuparser-dev nlohmann-json3-dev libgtest-dev python3-matplotlib python3-meshio
+  libfmt-dev libmuparser-dev nlohmann-json3-dev libgtest-dev libgmsh-dev python3-matplotlib python3-meshio
   "$@")
 missing=()
 for p in "${PACKAGES[@]}"; do

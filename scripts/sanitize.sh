@@ -16,6 +16,8 @@ cd "$(dirname "$0")/.."
 bash scripts/deps.sh clang libclang-rt-14-dev libomp-dev
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+# Leaks inside third-party libraries (Gmsh) are not ours: scripts/lsan_suppressions.txt.
+export LSAN_OPTIONS=suppressions=$PWD/scripts/lsan_suppressions.txt
 # Idle OpenMP threads sleep instead of spinning (see scripts/test.sh).
 export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 # A build-asan/ configured with another compiler (g++ before) is configured afresh.
