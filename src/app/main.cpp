@@ -1,5 +1,5 @@
-// mpm: the mpmlab command line. Subcommands: run, study, bench, reconstruct, massmatrix, verify,
-// keys, list.
+// mpm: the mpmlab command line. Subcommands: run, study, bench, reconstruct, massmatrix, mesh,
+// verify, keys, list.
 #include <fmt/format.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "app/massmatrix.hpp"
+#include "app/mesh_info.hpp"
 #include "app/perf.hpp"
 #include "app/reconstruct.hpp"
 #include "app/study.hpp"
@@ -20,6 +21,7 @@
 #include "io/checkpoint.hpp"
 #include "mpm/version.hpp"
 #include "setup/config.hpp"
+#include "setup/gmsh_mesh.hpp"
 #include "setup/registry.hpp"
 
 namespace {
@@ -374,6 +376,27 @@ int main(int argc, char** argv) {
   verify->add_option("--out", out, "report directory (default: docs/ of the source tree)");
   verify->add_option("--jobs,-j", jobs, "parallel runs (default 2)");
 
+  std::string mesh_file, mesh_vtu, mesh_pattern = "right";
+  std::vector<double> mesh_box;
+  std::vector<mpm::Index> mesh_cells;
+  auto* mesh = app.add_subcommand(
+      "mesh",
+      "read a Gmsh mesh (or generate a triangulation) and print its vertices, triangles, "
+      "quality and named boundaries");
+  mesh->add_option("file", mesh_file, "Gmsh .msh file (MSH 4.1 or 2.2, linear triangles)");
+  mesh->add_option("--rectangle", mesh_box, "generate instead: x0,y0,x1,y1 [m]")
+      ->delimiter(',')
+      ->expected(4);
+  mesh->add_option("--cells", mesh_cells, "with --rectangle: cells nx,ny")
+      ->delimiter(',')
+      ->expected(2);
+  mesh->add_option("--pattern", mesh_pattern, "with --rectangle: right or criss-cross")
+      ->check(CLI::IsMember({"right", "criss-cross"}))
+      ->capture_default_str();
+  mesh->add_option("--vtu", mesh_vtu,
+                   "also write the mesh with each triangle's area and smallest "
+                   "angle as a .vtu (ParaView)");
+
   auto* keys = app.add_subcommand("keys",
                                   "print every configuration key with type, unit, "
                                   "default, range and description");
@@ -403,6 +426,25 @@ int main(int argc, char** argv) {
       const auto rows = mpm::massmatrix_study(mopt);
       mpm::print_massmatrix(std::cout, mopt, rows);
       if (!mopt.csv.empty()) mpm::write_massmatrix_csv(mopt.csv, rows);
+      return 0;
+    }
+    if (*mesh) {
+      if (mesh_file.empty() == mesh_box.empty())
+        throw mpm::InputError(
+            "mpm mesh: give a Gmsh file or --rectangle x0,y0,x1,y1 with --cells "
+            "nx,ny (one of the two)");
+      if (!mesh_box.empty() && mesh_cells.empty())
+        throw mpm::InputError("mpm mesh: --rectangle needs --cells nx,ny");
+      const auto m = mesh_file.empty()
+                         ? mpm::structured_triangles(
+                               {mesh_box[0], mesh_box[1]}, {mesh_box[2], mesh_box[3]},
+                               {mesh_cells[0], mesh_cells[1]},
+                               mesh_pattern == "right" ? mpm::TrianglePattern::right
+                                                       : mpm::TrianglePattern::criss_cross)
+                         : mpm::read_gmsh_mesh(mesh_file);
+      const auto q = mpm::mesh_quality(m);
+      mpm::print_mesh_summary(std::cout, m, q);
+      if (!mesh_vtu.empty()) mpm::write_mesh_vtu(mesh_vtu, m, q);
       return 0;
     }
     if (*rec) {

@@ -147,6 +147,7 @@ Index particle_id(const Particles<Dim>& p, std::size_t i) {
 // VTK cell type ids (vtkCellType.h).
 constexpr int kVtkVertex = 1;
 constexpr int kVtkLine = 3;
+constexpr int kVtkTriangle = 5;
 constexpr int kVtkQuad = 9;
 constexpr int kVtkHexahedron = 12;
 
@@ -617,6 +618,46 @@ std::string PvdSeries::str() const {
 }
 
 // ---- explicit instantiations -----------------------------------------------------------------
+
+std::string triangle_mesh_vtu(const TriangleMesh& m, const std::vector<ScalarField>& node_fields,
+                              const std::vector<ScalarField>& cell_fields, bool binary) {
+  const Index nv = m.num_vertices(), nc = m.num_cells();
+  check_fields(node_fields, static_cast<std::size_t>(nv), {}, "mesh vertex");
+  check_fields(cell_fields, static_cast<std::size_t>(nc), {}, "mesh cell");
+  Buffer b;
+  VtuData d;
+  d.binary = binary;
+  vtu_header(b, d);
+  fmt::format_to(std::back_inserter(b), "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
+                 nv, nc);
+  if (!node_fields.empty()) {
+    put(b, "      <PointData>\n");
+    for (const auto& f : node_fields) scalar_array(b, d, f.name, *f.values);
+    put(b, "      </PointData>\n");
+  }
+  if (!cell_fields.empty()) {
+    put(b, "      <CellData>\n");
+    for (const auto& f : cell_fields) scalar_array(b, d, f.name, *f.values);
+    put(b, "      </CellData>\n");
+  }
+  put(b, "      <Points>\n");
+  std::vector<double> pts;
+  pts.reserve(static_cast<std::size_t>(3 * nv));
+  for (Index v = 0; v < nv; ++v) {
+    pts.push_back(m.vertex(v)[0]);
+    pts.push_back(m.vertex(v)[1]);
+    pts.push_back(0.0);
+  }
+  data_array(b, d, "Points", 3, pts);
+  put(b, "      </Points>\n");
+  std::vector<Index> conn;
+  conn.reserve(static_cast<std::size_t>(3 * nc));
+  for (Index c = 0; c < nc; ++c)
+    for (Index v : m.cell_vertices(c)) conn.push_back(v);  // counter-clockwise, as VTK expects
+  cells_block(b, d, conn, nc, 3, kVtkTriangle);
+  vtu_footer(b, d);
+  return fmt::to_string(b);
+}
 
 #define MPM_IO_INSTANTIATE(D)                                                                  \
   template std::string particles_csv<D>(const Particles<D>&, const std::vector<ScalarField>&); \

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "grid/grid.hpp"
+#include "grid/triangle_mesh.hpp"
 #include "particles/particles.hpp"
 
 namespace mpm::io {
@@ -107,6 +108,13 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
 template <int Dim>
 std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fields = {},
                      bool binary = false);
+
+// A triangular mesh as a .vtu: its vertices (z = 0) and VTK_TRIANGLE cells in the mesh's
+// order; node_fields one value per vertex, cell_fields one per triangle.
+std::string triangle_mesh_vtu(const TriangleMesh& m,
+                              const std::vector<ScalarField>& node_fields = {},
+                              const std::vector<ScalarField>& cell_fields = {},
+                              bool binary = false);
 
 // A ParaView .pvd collection: one DataSet entry per frame, in the order added.
 class PvdSeries {

@@ -2,6 +2,7 @@
 // codes, the files a run and a study write.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <sstream>
 #include <string>
 #include "driver/run.hpp"
+#include "setup/gmsh_mesh.hpp"
 
 namespace {
 
@@ -25,14 +27,19 @@ struct Result {
   std::string out;  // stdout and stderr together
 };
 
-Result sh(const std::string& args) {
-  const std::string cmd = std::string(MPM_BINARY) + " " + args + " 2>&1";
+// A shell command's exit code and output (stdout and stderr together).
+Result shell(const std::string& command) {
+  const std::string cmd = command + " 2>&1";
   FILE* f = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf{};
   while (std::size_t n = fread(buf.data(), 1, buf.size(), f)) out.append(buf.data(), n);
   const int status = pclose(f);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+Result sh(const std::string& args) {
+  return shell(std::string(MPM_BINARY) + " " + args);
 }
 
 std::string src(const std::string& rel) {
@@ -610,6 +617,41 @@ TEST(Cli, BenchRunsAShortCaseIn1DAnd2D) {
   ASSERT_EQ(two.code, 0) << two.out;
   EXPECT_NE(two.out.find("2D musl step"), std::string::npos) << two.out;
   EXPECT_NE(two.out.find("bytes per particle"), std::string::npos) << two.out;
+}
+
+// `mpm mesh`: the Gmsh square's summary (counts and boundaries computed here from the mesh read
+// by the library), the binary .vtu read back by meshio, a generated mesh, and the refusals.
+TEST(Cli, MeshCommandSummarisesAndWritesTheMesh) {
+  const auto mesh = mpm::read_gmsh_mesh(src("tests/data/meshes/square_v41.msh"));
+  const auto dir = temp_dir("mesh");
+  std::filesystem::create_directories(dir);
+  const auto vtu = (dir / "mesh.vtu").string();
+  const auto r = sh("mesh " + src("tests/data/meshes/square_v41.msh") + " --vtu " + vtu);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find(fmt::format("  {} vertices, {} triangles, area 1 m^2", mesh.num_vertices(),
+                                   mesh.num_cells())),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("\"bottom\": 4 edges, 5 vertices, length 1 m"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"top_left\": 8 edges, 9 vertices, length 2 m"), std::string::npos)
+      << r.out;
+  const std::string py =
+      "import meshio, sys; m = meshio.read(sys.argv[1]); "
+      "print(len(m.points), len(m.cells_dict['triangle']), '%.12f' % m.cell_data['area'][0].sum())";
+  const auto read = shell("/usr/bin/python3 -c \"" + py + "\" " + vtu);
+  EXPECT_EQ(read.code, 0) << read.out;
+  EXPECT_EQ(read.out, fmt::format("{} {} 1.000000000000\n", mesh.num_vertices(), mesh.num_cells()));
+  const auto g = sh("mesh --rectangle 0,0,1,0.5 --cells 8,4 --pattern criss-cross");
+  EXPECT_EQ(g.code, 0) << g.out;
+  EXPECT_NE(g.out.find("77 vertices, 128 triangles, area 0.5 m^2"), std::string::npos) << g.out;
+  EXPECT_NE(g.out.find("smallest angle 45 degrees"), std::string::npos) << g.out;
+  const auto missing = sh("mesh " + src("tests/data/meshes/none.msh"));
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.out.find("none.msh\": cannot be opened for reading"), std::string::npos)
+      << missing.out;
+  EXPECT_EQ(sh("mesh").code, 2);
+  EXPECT_EQ(sh("mesh --rectangle 0,0,1,1").code, 2);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

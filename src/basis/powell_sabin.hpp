@@ -1,0 +1,128 @@
+#pragma once
+// Quadratic Powell-Sabin splines on a triangular mesh (D 3.3: PS-MPM, the B-spline basis of
+// unstructured triangulations): C1, piecewise quadratic on the Powell-Sabin 6-split of every
+// triangle, three normalized B-splines per mesh vertex (Dierckx, "On calculating normalized
+// Powell-Sabin B-splines", CAGD 15 (1997) 61-78; Speleers, Manni, Pelosi, Sampoli, CMAME 221
+// (2012) 132-148). The functions are nonnegative, form a partition of unity, reproduce
+// quadratics and vanish outside the triangles around their vertex
+// (tests/basis/test_powell_sabin.cpp).
+//
+// Construction (all at construction time):
+//  * PS-6 refinement. Z_c, the split point of triangle c, is its incenter. The split point R_e
+//    of an interior edge is where the segment between the incenters of its two triangles
+//    crosses it (it does: it lies between the points where the two incircles touch the edge),
+//    which keeps the split lines Z_c R_e Z_c' straight, as C1 needs; a boundary edge is split
+//    at its midpoint. Each triangle splits into six mini-triangles (V_k, R_k, Z), (R_k, V_k+1,
+//    Z), k = 0, 1, 2, where R_k splits the edge (V_k, V_k+1).
+//  * PS points of vertex V_i: V_i and the midpoints of the refinement's edges at V_i, i.e. of
+//    V_i R_e for its edges e and of V_i Z_c for its triangles c.
+//  * PS triangle of V_i, Q_i0 Q_i1 Q_i2 (counter-clockwise): any triangle containing the PS
+//    points gives a nonnegative basis (Dierckx 1997); a small one gives a well conditioned
+//    one. The choice here: the convex hull of the PS points, and as candidate sides
+//    its supporting lines along each hull edge and, at each hull vertex, the supporting line
+//    whose outward normal bisects those of the vertex's two edges; the PS triangle is the
+//    smallest-area triangle bounded by three candidates (on ties the first found: edge lines
+//    before vertex lines, each in counter-clockwise hull order from the leftmost, then lowest,
+//    point). Every candidate supports the hull, so the triangle contains every PS point and
+//    each side touches one. Edge lines alone are not enough (a rectangular hull bounds no
+//    triangle with them); with the vertex lines consecutive candidate normals are less than 90
+//    degrees apart, so some three bound a triangle. Dierckx computes the minimal-area triangle
+//    with small linear or quadratic programs; this search approximates it without an optimizer
+//    (for a square hull it finds the minimum, twice the square's area).
+//  * The B-splines of V_i: the tangent plane of N_ij at V_i is L_ij, the barycentric coordinate
+//    of Q_ij in the PS triangle, and N_ij has value and gradient 0 at every other vertex
+//    (Dierckx 1997: the triplets alpha_ij = L_ij(V_i), (beta_ij, gamma_ij) = grad L_ij; they
+//    sum to (1, 0, 0) over j, hence the partition of unity). On each triangle the Bezier
+//    ordinates of the 19 domain points of its 6-split follow from these Hermite data and the
+//    C1 conditions (Dierckx 1997; Speleers et al. 2012), see powell_sabin.cpp.
+//
+// DOF 3 i + j is N_ij. A quadratic f has the coefficients c_ij = f(V_i) + grad f(V_i) . (Q_ij -
+// V_i), the tangent plane of f at V_i evaluated at Q_ij (x = sum_ij Q_ij N_ij for f = x).
+#include <array>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "basis/stencil.hpp"
+#include "core/types.hpp"
+#include "grid/triangle_mesh.hpp"
+
+namespace mpm {
+
+class PowellSabinBasis {
+ public:
+  static constexpr std::string_view kName = "powell_sabin";
+  using StencilT = Stencil<2, 9>;
+  // The 19 domain points of the quadratic Bezier nets on a triangle's 6-split, in this order:
+  // the vertices V_a (0-2); per edge k = (V_k, V_k+1) the midpoints of V_k R_k and V_k+1 R_k
+  // (3 + 2k, 4 + 2k); the midpoints of V_a Z (9-11); R_k (12-14); the midpoints of R_k Z
+  // (15-17); Z (18).
+  static constexpr int kDomainPoints = 19;
+
+  explicit PowellSabinBasis(const TriangleMesh& mesh);
+
+  Index num_dofs() const { return 3 * mesh_->num_vertices(); }
+  // Q_ij for DOF 3 i + j: the control point, since x = sum_ij Q_ij N_ij(x).
+  Vec<2> dof_position(Index dof) const {
+    return ps_triangle(dof / 3)[static_cast<std::size_t>(dof % 3)];
+  }
+  const TriangleMesh& mesh() const { return *mesh_; }
+
+  // Values and gradients [1/m] at x in triangle `cell`: the polynomial piece of the
+  // mini-triangle containing x (on an edge between two, either: they agree to first order; for
+  // x outside the triangle, the piece whose smallest barycentric coordinate at x is largest,
+  // extrapolated). Entry 3 a + j is N_ij of i = cell_vertices(cell)[a].
+  void evaluate_in(Index cell, const Vec<2>& x, StencilT& s) const;
+  // The same at any point of the mesh; false (s untouched) when x lies outside it.
+  bool evaluate_point(const Vec<2>& x, StencilT& s) const {
+    const Index c = mesh_->cell_index(x);
+    if (c < 0) return false;
+    evaluate_in(c, x, s);
+    return true;
+  }
+  // The quadratic piece of mini-triangle `mini` (0-5) of `cell` at x, wherever x lies: both
+  // sides of an edge of the refinement (continuity checks).
+  void evaluate_piece(Index cell, int mini, const Vec<2>& x, StencilT& s) const;
+
+  // The refinement and the PS triangles.
+  const Vec<2>& split_point(Index cell) const { return cells_[static_cast<std::size_t>(cell)].z; }
+  // R_k of edge (V_k, V_k+1), k = 0, 1, 2, V_k = cell_vertices(cell)[k].
+  const Vec<2>& edge_split_point(Index cell, int k) const {
+    return cells_[static_cast<std::size_t>(cell)].r[static_cast<std::size_t>(k)];
+  }
+  // Mini-triangle m (0-5) of `cell`, counter-clockwise: (V_k, R_k, Z) for m = 2k, (R_k, V_k+1, Z)
+  // for m = 2k + 1.
+  std::array<Vec<2>, 3> mini_triangle(Index cell, int mini) const;
+  // The PS points of vertex v: v itself, then one per edge at v and one per triangle at v.
+  std::span<const Vec<2>> ps_points(Index v) const {
+    const auto b = static_cast<std::size_t>(ps_start_[static_cast<std::size_t>(v)]);
+    const auto e = static_cast<std::size_t>(ps_start_[static_cast<std::size_t>(v) + 1]);
+    return {ps_points_.data() + b, e - b};
+  }
+  // Q_v0, Q_v1, Q_v2, counter-clockwise.
+  const std::array<Vec<2>, 3>& ps_triangle(Index v) const {
+    return ps_triangle_[static_cast<std::size_t>(v)];
+  }
+  // The Bezier ordinates of entry f = 3 a + j of the cell's stencil at its 19 domain points.
+  const std::array<double, kDomainPoints>& bezier_ordinates(Index cell, int f) const {
+    return cells_[static_cast<std::size_t>(cell)].ordinate[static_cast<std::size_t>(f)];
+  }
+
+ private:
+  struct Cell {
+    Vec<2> z;
+    std::array<Vec<2>, 3> r;
+    // Per mini-triangle: its first vertex and the gradients [1/m] of its barycentric
+    // coordinates.
+    std::array<Vec<2>, 6> origin;
+    std::array<std::array<Vec<2>, 3>, 6> gradient;
+    std::array<std::array<double, kDomainPoints>, 9> ordinate;
+  };
+  const TriangleMesh* mesh_;
+  std::vector<Cell> cells_;
+  std::vector<Index> ps_start_;
+  std::vector<Vec<2>> ps_points_;
+  std::vector<std::array<Vec<2>, 3>> ps_triangle_;
+};
+
+}  // namespace mpm
