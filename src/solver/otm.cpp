@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <type_traits>
 #include <variant>
 
@@ -366,16 +367,42 @@ void Otm<Dim>::maxent_rows() {
     if (!status.converged) {
       std::string where;
       for (int d = 0; d < Dim; ++d) where += fmt::format("{}{:.9g}", d ? ", " : "", x[d]);
+      // Which of the two causes: max-ent functions exist at x iff x lies inside the convex hull
+      // of the nodes whose supports reach it (D 4.3), i.e. seen from x no half-plane holds
+      // them all: the largest angle between consecutive node directions is below 180 degrees.
+      std::vector<double> angle;
+      for (int j = 0; j < m; ++j) {
+        const Vec<Dim>& r = y[static_cast<std::size_t>(j)];
+        angle.push_back(Dim == 1 ? (r[0] > 0.0 ? 0.0 : 180.0)
+                                 : std::atan2(r[Dim - 1], r[0]) * 180.0 / std::numbers::pi);
+      }
+      std::sort(angle.begin(), angle.end());
+      double gap = angle.empty() ? 360.0 : angle.front() + 360.0 - angle.back();
+      for (std::size_t k = 1; k < angle.size(); ++k) gap = std::max(gap, angle[k] - angle[k - 1]);
+      const std::string cause =
+          gap >= 180.0
+              ? fmt::format(
+                    "the particle lies outside the convex hull of those nodes (seen from it they "
+                    "leave a gap of {:.1f} degrees), so it has no max-ent functions: each node's "
+                    "support is method.maxent_dmax = {:.3g} times its distance to its nearest "
+                    "lattice neighbour, and where the lattice is compressed the supports shrink "
+                    "and no longer surround every particle (a larger method.maxent_dmax widens "
+                    "them)",
+                    gap, s_.maxent.dmax)
+              : fmt::format(
+                    "the particle lies inside the convex hull of those nodes (largest "
+                    "gap between them seen from it {:.1f} degrees): the iteration itself "
+                    "failed",
+                    gap);
       throw RunError(
           exit_code::kBasis,
           fmt::format("step {}, t = {:.9g} s: the max-ent basis on the advected nodes could not "
                       "be evaluated at particle {} ({}; {} nodes in its support): Newton's method "
                       "for the Lagrange multipliers stopped after {} iterations at residual "
                       "{:.3g} (method.maxent_tolerance = {:.3g}, method.maxent_max_iterations = "
-                      "{}); a particle outside the advected nodes' convex hull has no max-ent "
-                      "functions",
+                      "{}); {}",
                       st_.step, st_.time, P.id[i], where, m, status.iterations, status.residual,
-                      s_.maxent.tolerance, s_.maxent.max_iterations));
+                      s_.maxent.tolerance, s_.maxent.max_iterations, cause));
     }
     for (int j = 0; j < m; ++j) {
       const auto q = static_cast<std::size_t>(j);

@@ -112,7 +112,7 @@ TEST(TriangleMesh, PointLocationMatchesBruteForceOnADistortedMesh) {
   EXPECT_NEAR(total_area(m), 2.0, 1e-13);
   std::uniform_real_distribution<double> ux(-0.1, 2.1), uy(-0.1, 1.1);
   int inside = 0;
-  for (int k = 0; k < 20000; ++k) {
+  for (int k = 0; k < 5000; ++k) {
     // Every fifth point is a vertex or an edge midpoint (shared by several triangles).
     Vec<2> x(ux(rng), uy(rng));
     if (k % 5 == 0) {
@@ -129,7 +129,7 @@ TEST(TriangleMesh, PointLocationMatchesBruteForceOnADistortedMesh) {
       EXPECT_EQ(c, all.front()) << x.transpose();  // the lowest-numbered containing triangle
     }
   }
-  EXPECT_GT(inside, 15000);
+  EXPECT_GT(inside, 3750);
   EXPECT_EQ(m.cell_index(Vec<2>(std::nan(""), 0.5)), -1);
 }
 

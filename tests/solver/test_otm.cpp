@@ -423,7 +423,7 @@ TEST(Otm, TwoDimensionalMaxEntFreePlateConservesMomentum) {
       FAIL() << "a particle outside the advected nodes' hull was evaluated";
     } catch (const RunError& e) {
       EXPECT_EQ(e.exit_code(), exit_code::kBasis);
-      EXPECT_NE(std::string(e.what()).find("outside the advected nodes' convex hull"),
+      EXPECT_NE(std::string(e.what()).find("lies outside the convex hull of those nodes"),
                 std::string::npos)
           << e.what();
       EXPECT_NE(std::string(e.what()).find("at particle "), std::string::npos) << e.what();
