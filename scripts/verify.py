@@ -86,6 +86,7 @@ PUBLISHED = {
     "column_cs_momentum_MPM": ("D Table 5.7", 3.5e-6),
     "tls2d_rms": ("D 6.2.1", 6.17e-3),
     "tls2d_integral": ("D 6.2.1", 6.66e-16),
+    "tlstri_rms": ("D 6.2.2", 1.80e-3),
     "tls2d_order_1": ("D Fig. 6.6", 1.0),
     "tls2d_order_3": ("D Fig. 6.6", 2.0),
     "tls2d_order_6": ("D Fig. 6.6", 3.0),
@@ -828,6 +829,25 @@ def sec_reconstruction_intro(R, ctx):
             fig66[(terms, gp)] = ls_order([1 / 4, 1 / 8, 1 / 16, 1 / 32], errs)
     v_rms = verdict_value(rms, "tls2d_rms")
     v_int = verdict_value(integ, "tls2d_integral", roundoff=True)
+    # D 6.2.2 on triangles: D gives neither its 30-triangle mesh nor its point layout (300 points
+    # in the text, 6 per element in Fig. 6.7's caption), so several readings, 5 seeds each.
+    tri = {}
+    for mesh, cells in (("right", 4), ("criss-cross", 3)):
+        for pts in ("domain:300", "random:10"):
+            runs = [R.reconstruct(["--dim", "2", "--function", "sin(x)*cos(y)", "--upper", "5",
+                                   "--mesh", mesh, "--cells", str(cells), "--points", pts,
+                                   "--terms", "6", "--seed", str(seed)]) for seed in range(1, 6)]
+            tri[(mesh, pts)] = ([r[0] for r in runs], max(r[1] for r in runs))
+    tri_best = min(min(v[0]) for v in tri.values())
+    tri_int = max(v[1] for v in tri.values())
+    tri_spread = max(max(v[0]) / min(v[0]) for v in tri.values())
+    v_tri = verdict_value(tri_best, "tlstri_rms")
+    v_tri_int = ("reproduced (round-off; D: \"machine precision\", no number)"
+                 if tri_int < ROUNDOFF else f"differs: {e(tri_int, 1)}")
+    tri_rows = "\n".join(
+        f"| {mesh} {('4 x 4 squares, 32' if mesh == 'right' else '3 x 3 squares, 36')} "
+        f"triangles | `{pts}` | {min(v[0]):.2e} - {max(v[0]):.2e} | {e(v[1], 1)} |"
+        for (mesh, pts), v in tri.items())
     v66 = [verdict_order(fig66[(n, 5)], f"tls2d_order_{n}") for n in (1, 3, 6)]
     ctx["tls2d"] = (rms, integ, v_rms, v_int, fig66, v66)
     return f"""## Reconstruction mappings and the FEM reference (D ch. 3.2, 5; 000; 004 4.4)
@@ -871,6 +891,34 @@ when those have nothing left (at most `max_borrowed`, default 6 in 2D).
 | Fig. 6.6, sin(x/10) cos(y/10), 3 x 3 points, 4-32 cells, order with 1 term | {pub('tls2d_order_1'):.0f} | {o(fig66[(1, 5)])} | {v66[0]} |
 | order with 3 terms | {pub('tls2d_order_3'):.0f} | {o(fig66[(3, 5)])} | {v66[1]} |
 | order with 6 terms | {pub('tls2d_order_6'):.0f} | {o(fig66[(6, 5)])} | {v66[2]} |
+| D 6.2.2, sin(x) cos(y) on about 30 triangles, 300 points, RMS ({src('tlstri_rms')}; best of the readings below) | {pub('tlstri_rms')} | {tri_best:.3e} | {v_tri} |
+| the same, relative integral error (largest of the readings) | machine precision | {e(tri_int, 1)} | {v_tri_int} |
+
+TLS on triangles (D 6.1.2, 6.2.2; `TlsTriangleReconstruction`, `mpm reconstruct --dim 2
+--mesh right|criss-cross|FILE.msh`, not yet an MPM mapping): the Taylor basis on the reference
+triangle with every term but psi_1 of zero mean (D eq. 6.18 prints + 1/18 for psi_6, whose
+integral is then |Omega_e| / 18; the zero-mean constant is + 1/9, tested), the conservative fit
+with a_1 fixed, QR and SVD solves. D 6.2.2 gives neither its 30-triangle mesh nor where its 300
+points lie (its Fig. 6.7 caption says 6 per element), so the rows above take the best of these
+readings (`--function "sin(x)*cos(y)" --upper 5 --terms 6`, seeds 1-5, RMS at the 6 points of
+the degree-4 rule per triangle):
+
+| mesh | points | RMS over the seeds | largest relative integral error |
+|---|---|---|---|
+{tri_rows}
+
+Every reading is {tri_best / pub('tlstri_rms'):.1f}x or more above D's 1.80e-3, and the
+error moves by up to {tri_spread:.1f}x between seeds of one reading: it is set by the mesh and
+the layout of the few points per triangle, which D does not give, so this row **differs** and
+its cause is not determined. That the implementation is not the cause is tested: a quadratic is reproduced
+to round-off by both fits on right, criss-cross and Gmsh meshes
+(`tests/app/test_reconstruct.cpp`, `tests/mapping/test_tls_triangle.cpp`). The integral is kept
+to round-off in every reading. D 6.3.1's 12 and 16 particles per triangle: the layouts that
+come to mind (sub-triangle centroids, rows, lattices per square of a 23 x 23 right mesh, 1058
+triangles as in D) all start regular; under the plate's motion a 4 x 6 or 4 x 8 lattice per
+square puts some triangles' points on two lattice lines, where the plain normal matrix is
+exactly singular (cond 1e69 after one more step), while 6 x 8 (24 per triangle) never loses
+rank: D's report reproduced for this reading (`TlsTriangle.PlateMotionLosesRankWith12And16ParticlesPerTriangleNot24`).
 
 Command for the first rows: `mpm reconstruct --dim 2 --function "sin(x)*cos(y)" --upper 5
 --cells 5 --points inner:2x3 --terms 6 --error-points 2`; Fig. 6.6: `--function

@@ -314,6 +314,12 @@ int main(int argc, char** argv) {
                   "inner:NXxNY (k/(n+1), D 6.2.1: inner:2x3), list:X1;Y1,X2;Y2,...")
       ->capture_default_str();
   rec->add_option("--seed", ropt.seed, "seed of random:N")->capture_default_str();
+  rec->add_option("--mesh", ropt.mesh,
+                  "2D on triangles (tls, D 6.2.2): right or criss-cross (--cells squares, "
+                  "triangulated) or a Gmsh .msh file; points random:N per triangle or domain:N");
+  rec->add_option("--strategy", ropt.strategy,
+                  "with --mesh: deficient triangles none, reduce, min-norm or graded")
+      ->capture_default_str();
   rec->add_flag("--share-faces", ropt.share_faces,
                 "a point on an interior face belongs to both elements");
   rec->add_option("--error-points", ropt.error_points,
@@ -449,6 +455,18 @@ int main(int argc, char** argv) {
     }
     if (*rec) {
       const auto r = mpm::reconstruct(ropt);
+      if (!ropt.mesh.empty()) {  // triangles (D 6.2.2): the details end with the mesh's size
+        std::cout << fmt::format("f(x, y) = {} on [{}, {}]^2, triangles: {}, tls ({})\n",
+                                 ropt.function, ropt.lower, ropt.upper, ropt.mesh, ropt.strategy);
+        std::cout << r.details;
+        std::cout << fmt::format(
+            "RMS error (6 points of the degree-4 rule per triangle)   {:.6e}\n", r.rms_error);
+        std::cout << fmt::format(
+            "integral: exact {:.15g}, reconstructed {:.15g} (a_1 |triangle|)\nrelative integral "
+            "error               {:.6e}\n",
+            r.integral_exact, r.integral_reconstructed, r.relative_integral_error);
+        return 0;
+      }
       if (ropt.dim == 2)
         std::cout << fmt::format("f(x, y) = {} on [{}, {}]^2, {} x {} elements, {} points, {}\n",
                                  ropt.function, ropt.lower, ropt.upper, ropt.cells, ropt.cells,

@@ -10,7 +10,9 @@
 #include "mapping/mls.hpp"
 #include "mapping/quadrature.hpp"
 #include "mapping/tls.hpp"
+#include "mapping/tls_triangle.hpp"
 #include "setup/expression.hpp"
+#include "setup/gmsh_mesh.hpp"
 
 namespace mpm {
 namespace {
@@ -234,6 +236,145 @@ ReconstructResult reconstruct_2d(const ReconstructOptions& opt, double a, double
   return res;
 }
 
+// The degree-4 rule on a triangle with 6 points (Dunavant 1985): barycentric points and weights
+// as fractions of the area.
+struct TrianglePoint {
+  double l0, l1, w;
+};
+constexpr std::array<TrianglePoint, 6> kDegree4 = {{
+    {0.445948490915965, 0.445948490915965, 0.223381589678011},
+    {0.445948490915965, 0.108103018168070, 0.223381589678011},
+    {0.108103018168070, 0.445948490915965, 0.223381589678011},
+    {0.091576213509771, 0.091576213509771, 0.109951743655322},
+    {0.091576213509771, 0.816847572980459, 0.109951743655322},
+    {0.816847572980459, 0.091576213509771, 0.109951743655322},
+}};
+
+// fn(x, w) at the degree-4 points of the k x k sub-triangles of triangle c (the uniform
+// subdivision; weights include the area).
+template <class Fn>
+void for_each_triangle_point(const TriangleMesh& m, Index c, int k, Fn&& fn) {
+  const auto& t = m.cell_vertices(c);
+  const Vec<2> a = m.vertex(t[0]), e1 = (m.vertex(t[1]) - a) / k, e2 = (m.vertex(t[2]) - a) / k;
+  const double w = m.cell_volume(c) / (k * k);
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; i + j < k; ++j) {
+      // The upright sub-triangle (i, j), (i + 1, j), (i, j + 1) and, unless at the edge, the
+      // inverted one (i + 1, j), (i + 1, j + 1), (i, j + 1).
+      const Vec<2> p = a + i * e1 + j * e2;
+      for (const auto& q : kDegree4) fn(Vec<2>(p + q.l0 * e1 + q.l1 * e2), w * q.w);
+      if (i + j + 1 < k) {
+        const Vec<2> r = a + (i + 1) * e1 + (j + 1) * e2;
+        for (const auto& q : kDegree4) fn(Vec<2>(r - q.l0 * e1 - q.l1 * e2), w * q.w);
+      }
+    }
+}
+
+// D 6.2.2: f(x, y) reconstructed by TLS on a triangular mesh.
+ReconstructResult reconstruct_triangles(const ReconstructOptions& opt, double a, double b) {
+  if (opt.mapping != "tls")
+    throw InputError(
+        fmt::format("--mesh reconstructs with tls (D 6.2.2), not --mapping {}", opt.mapping));
+  const TriangleMesh mesh = [&] {
+    if (opt.mesh == "right" || opt.mesh == "criss-cross")
+      return structured_triangles(
+          Vec<2>(a, a), Vec<2>(b, b), IVec<2>{opt.cells, opt.cells},
+          opt.mesh == "right" ? TrianglePattern::right : TrianglePattern::criss_cross);
+    return read_gmsh_mesh(opt.mesh);
+  }();
+  const Expression f(opt.function, {});
+  ReconstructResult res;
+  const auto colon = opt.points.find(':');
+  const std::string kind = opt.points.substr(0, colon);
+  const int n = parse_count(colon == std::string::npos ? "" : opt.points.substr(colon + 1));
+  if ((kind != "random" && kind != "domain") || n < 1)
+    throw InputError(
+        fmt::format("--points {}: on triangles choose random:N (N per triangle) or "
+                    "domain:N (N over the domain), N >= 1",
+                    opt.points));
+  std::mt19937 rng(opt.seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  if (kind == "random") {
+    for (Index c = 0; c < mesh.num_cells(); ++c) {
+      const auto& t = mesh.cell_vertices(c);
+      for (int k = 0; k < n; ++k) {
+        double r1 = u(rng), r2 = u(rng);
+        if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;  // uniform in the triangle
+        res.xy.push_back(mesh.vertex(t[0]) + r1 * (mesh.vertex(t[1]) - mesh.vertex(t[0])) +
+                         r2 * (mesh.vertex(t[2]) - mesh.vertex(t[0])));
+      }
+    }
+  } else {
+    const Vec<2> lo = mesh.lower(), span = mesh.upper() - mesh.lower();
+    while (static_cast<int>(res.xy.size()) < n) {
+      const Vec<2> p(lo[0] + u(rng) * span[0], lo[1] + u(rng) * span[1]);
+      if (mesh.inside(p)) res.xy.push_back(p);
+    }
+  }
+  std::vector<double> fx;
+  for (const Vec<2>& p : res.xy) {
+    fx.push_back(f(p[0], p[1]));
+    if (!std::isfinite(fx.back()))
+      throw InputError(fmt::format("--function \"{}\" is not finite at the point ({}, {}): {}",
+                                   opt.function, p[0], p[1], fx.back()));
+  }
+  const auto ne = static_cast<std::size_t>(mesh.num_cells());
+  // Element integrals with the degree-4 rule on 8 x 8 sub-triangles (far below any
+  // reconstruction error here).
+  std::vector<double> element_integral(ne, 0.0);
+  for (Index c = 0; c < mesh.num_cells(); ++c)
+    for_each_triangle_point(mesh, c, 8, [&](const Vec<2>& x, double w) {
+      element_integral[static_cast<std::size_t>(c)] += w * f(x[0], x[1]);
+    });
+  for (double c : element_integral) res.integral_exact += c;
+
+  TlsTriangleSettings s;
+  s.terms = opt.terms;
+  s.strategy = parse_tls_triangle_strategy(opt.strategy);
+  s.max_condition = opt.max_condition;
+  TlsTriangleReconstruction tls(mesh, s);  // validates the settings
+  const auto& report = tls.set_points(res.xy);
+  TlsTriangleCoefficients coeffs;
+  const auto& fit = opt.conservative ? report.conservative : report.plain;
+  if (fit.failed > 0)
+    throw InputError(fmt::format(
+        "TLS cannot fit triangle {} ({} points, condition number {:.3g}) with --strategy none; "
+        "use reduce, min-norm or graded",
+        fit.first_deficient, tls.element(fit.first_deficient).points,
+        (opt.conservative ? tls.element(fit.first_deficient).conservative
+                          : tls.element(fit.first_deficient).plain)
+            .condition));
+  if (opt.conservative)
+    tls.fit_conservative(fx, element_integral, coeffs);
+  else
+    tls.fit_plain(fx, coeffs);
+  res.details += fmt::format("{:>8} {:>7} {:>6} {:>5} {:>12}\n", "triangle", "points", "terms",
+                             "rank", "cond(D)");
+  for (Index c = 0; c < mesh.num_cells(); ++c) {
+    const auto& info = tls.element(c);
+    const auto& sys = opt.conservative ? info.conservative : info.plain;
+    res.details += fmt::format("{:>8} {:>7} {:>6} {:>5} {:>12.4g}\n", c, info.points, sys.terms,
+                               sys.rank, sys.condition);
+  }
+  double sq = 0.0, weight = 0.0;
+  std::size_t count = 0;
+  for (Index c = 0; c < mesh.num_cells(); ++c) {
+    for_each_triangle_point(mesh, c, 1, [&](const Vec<2>& x, double w) {
+      const double d = tls.evaluate(coeffs, c, x) - f(x[0], x[1]);
+      sq += d * d;
+      ++count;
+      weight += w;
+    });
+    res.integral_reconstructed += tls.integral(coeffs, c);
+  }
+  res.rms_error = std::sqrt(sq / static_cast<double>(count));
+  res.relative_integral_error =
+      std::abs(res.integral_reconstructed - res.integral_exact) / std::abs(res.integral_exact);
+  res.details += fmt::format("{} triangles, {} points, area {:.10g}\n", mesh.num_cells(),
+                             res.xy.size(), weight);
+  return res;
+}
+
 }  // namespace
 
 ReconstructResult reconstruct(const ReconstructOptions& opt) {
@@ -243,6 +384,10 @@ ReconstructResult reconstruct(const ReconstructOptions& opt) {
   if (opt.cells < 1) throw InputError("--cells must be at least 1");
   if (opt.error_points < 1 || opt.integration_points < 1)
     throw InputError("--error-points and --integration-points must be at least 1");
+  if (!opt.mesh.empty()) {
+    if (opt.dim != 2) throw InputError("--mesh needs --dim 2");
+    return reconstruct_triangles(opt, a, b);
+  }
   if (opt.dim == 2) return reconstruct_2d(opt, a, b);
   if (opt.dim != 1) throw InputError(fmt::format("--dim {}: choose 1 or 2", opt.dim));
   const Expression f(opt.function, {});

@@ -1,5 +1,6 @@
 #pragma once
-// `mpm reconstruct`: the reconstruction playground (D 5.2.3, Table 5.1; D 6.2.1 in 2D). A function
+// `mpm reconstruct`: the reconstruction playground (D 5.2.3, Table 5.1; D 6.2.1 in 2D, D 6.2.2
+// on triangles). A function
 // given as an expression of x (and y) is sampled at points of a 1D grid (or a square 2D grid of
 // rectangles) and reconstructed with a mapping's reconstruction; the RMS error over Gauss points
 // per element and the relative error of the integral (by the mapping's own quadrature) are
@@ -36,6 +37,14 @@ struct ReconstructOptions {
   // and for the integral (D: 2).
   int error_points = 100;
   int integration_points = 2;
+  // 2D on triangles (TLS only, D 6.2.2): "right" or "criss-cross" (cells x cells squares of
+  // [lower, upper]^2, triangulated), or a Gmsh file; empty: rectangles. Points random:N (N
+  // uniformly distributed per triangle) or domain:N (N uniformly distributed over the domain's
+  // bounding box, kept where they fall inside the mesh), and the strategy for deficient
+  // elements (none, reduce, min-norm, graded). The error is taken at the 6 points of the
+  // degree-4 rule per triangle (--error-points and --integration-points do not apply).
+  std::string mesh;
+  std::string strategy = "graded";
 };
 
 struct ReconstructResult {
