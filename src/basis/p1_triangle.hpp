@@ -4,12 +4,30 @@
 // triangle that contains the point, with the triangle's constant gradients. Partition of unity,
 // linear reproduction and C0 continuity across edges hold exactly
 // (tests/basis/test_p1_triangle.cpp).
+#include <string>
 #include <string_view>
+#include <vector>
 
+#include "basis/basis.hpp"
 #include "basis/stencil.hpp"
+#include "grid/grid.hpp"
 #include "grid/triangle_mesh.hpp"
 
 namespace mpm {
+
+// The P1 functions of triangle `cell` at x: the barycentric coordinates of its vertices and
+// their constant gradients.
+inline void p1_triangle_stencil(const TriangleMesh& m, Index cell, const Vec<2>& x,
+                                Stencil<2, 3>& s) {
+  const auto& t = m.cell_vertices(cell);
+  const auto l = m.barycentric(cell, x);
+  const auto& g = m.barycentric_gradients(cell);
+  for (std::size_t a = 0; a < 3; ++a) {
+    s.dof[a] = t[a];
+    s.w[a] = l[a];
+    s.grad[a] = g[a];
+  }
+}
 
 class P1TriangleBasis {
  public:
@@ -25,14 +43,7 @@ class P1TriangleBasis {
   // Values and gradients at x in triangle `cell` (which must contain x: barycentric
   // coordinates outside [0, 1] extrapolate).
   void evaluate_in(Index cell, const Vec<2>& x, StencilT& s) const {
-    const auto& t = mesh_->cell_vertices(cell);
-    const auto l = mesh_->barycentric(cell, x);
-    const auto& g = mesh_->barycentric_gradients(cell);
-    for (std::size_t a = 0; a < 3; ++a) {
-      s.dof[a] = t[a];
-      s.w[a] = l[a];
-      s.grad[a] = g[a];
-    }
+    p1_triangle_stencil(*mesh_, cell, x, s);
   }
   // The same at any point of the mesh; false (s untouched) when x lies outside it.
   bool evaluate_point(const Vec<2>& x, StencilT& s) const {
@@ -45,5 +56,50 @@ class P1TriangleBasis {
  private:
   const TriangleMesh* mesh_;
 };
+
+// P1 on a structured triangulation of the run's grid (method.basis = "p1_triangles",
+// method.triangles = "right" | "criss_cross"; D 3.3's P1 background on triangles): the grid
+// keeps what it does for the other bases (particle seeding, the named sides, the stability
+// length, the check that particles stay inside), and the functions live on its triangles.
+// Vertex numbering: the grid's corners as Grid<2>::vertex (x fastest), then the criss-cross
+// centres, so the fixed sides are the grid's. A full stencil of the 3 vertices of the triangle
+// holding the particle (kTensorProduct = false).
+template <int Dim>
+class TriangleP1Basis {
+  static_assert(Dim == 2, "P1 on triangles is two-dimensional");
+
+ public:
+  static constexpr std::string_view kName = "p1_triangles";
+  static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = false,
+                        kTrackedCorners = false, kIterative = false;
+  using StencilT = Stencil<Dim, 3>;
+
+  TriangleP1Basis(const Grid<Dim>& g, TrianglePattern pattern)
+      : mesh_(structured_triangles(g.origin, g.upper(), g.cells, pattern)) {}
+
+  Index num_dofs() const { return mesh_.num_vertices(); }
+  // Not a tensor-product layout: one row of all DOFs (dof_strides of it is unused, the stencils
+  // hold their DOFs).
+  IVec<Dim> dofs_per_dim() const { return {num_dofs(), 1}; }
+  Vec<Dim> dof_position(Index i) const { return mesh_.vertex(i); }
+  std::vector<Index> boundary_dofs(int d, int side) const {
+    return mesh_.boundary_vertices(std::string(1, "xy"[d]) + (side == 0 ? "-" : "+"));
+  }
+  // Zero weights outside the mesh (callers check that points are inside the grid first).
+  void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
+    const Index c = mesh_.cell_index(x);
+    if (c >= 0) return p1_triangle_stencil(mesh_, c, x, s);
+    for (std::size_t a = 0; a < 3; ++a) s.dof[a] = 0, s.w[a] = 0.0, s.grad[a].setZero();
+  }
+  void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
+    evaluate_point(P.x[static_cast<std::size_t>(p)], s);
+  }
+  const TriangleMesh& mesh() const { return mesh_; }
+
+ private:
+  TriangleMesh mesh_;
+};
+
+static_assert(Basis<TriangleP1Basis<2>, 2>);
 
 }  // namespace mpm

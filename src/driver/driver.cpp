@@ -108,7 +108,16 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
   vtk_ = s.output.vtk;
   vtk_binary_ = s.output.vtk_binary;
   io::write_file_atomic(dir_ / "config.toml", config_text);
-  if (vtk_) io::write_file_atomic(dir_ / "grid.vtu", io::grid_vtu(pb.grid, {}, vtk_binary_));
+  if (vtk_) {
+    // The background the basis lives on: the grid's cells, or their triangles.
+    std::string grid = io::grid_vtu(pb.grid, {}, vtk_binary_);
+    if constexpr (Dim == 2)
+      if (const auto* tri = std::get_if<TriangleP1Kind>(&s.method.basis))
+        grid = io::triangle_mesh_vtu(
+            structured_triangles(pb.grid.origin, pb.grid.upper(), pb.grid.cells, tri->pattern), {},
+            {}, vtk_binary_);
+    io::write_file_atomic(dir_ / "grid.vtu", grid);
+  }
   history_header_ = "time,kinetic_energy,strain_energy,total_energy,mass";
   for (int d = 0; d < Dim; ++d) history_header_ += fmt::format(",momentum_{}", d + 1);
   // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums

@@ -68,6 +68,8 @@ double stability_factor(const BasisKind& basis) {
         // GIMP, CPDI and DDMPM use the P1 bound (their gradients are averages of P1's).
         if constexpr (std::is_same_v<Kind, MaxEntKind>)
           return maxent_stability_factor(k.settings);
+        else if constexpr (std::is_same_v<Kind, TriangleP1Kind>)
+          return triangle_stability_factor(k.pattern);
         else if constexpr (Kind::kDegree > 0)
           return bspline_stability_factor(Kind::kDegree);
         else

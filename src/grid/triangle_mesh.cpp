@@ -235,4 +235,8 @@ TriangleMesh structured_triangles(const Vec<2>& lo, const Vec<2>& hi, const IVec
   return TriangleMesh(std::move(v), std::move(t), std::move(bnd), "the generated triangle mesh");
 }
 
+double triangle_stability_factor(TrianglePattern pattern) {
+  return pattern == TrianglePattern::right ? 1.0 / std::sqrt(2.0) : 0.5;
+}
+
 }  // namespace mpm

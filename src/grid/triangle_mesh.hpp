@@ -91,4 +91,9 @@ enum class TrianglePattern { right, criss_cross };
 TriangleMesh structured_triangles(const Vec<2>& lo, const Vec<2>& hi, const IVec<2>& n,
                                   TrianglePattern pattern);
 
+// dt_crit = factor h / c on the triangles of `pattern` over square cells of side h: the
+// smallest altitude over h (right: 1 / sqrt 2; criss-cross: 1 / 2), the CFL length of the
+// triangles, as the other bases' factors scale the cell size (driver/stepper.cpp).
+double triangle_stability_factor(TrianglePattern pattern);
+
 }  // namespace mpm

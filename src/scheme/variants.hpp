@@ -10,6 +10,7 @@
 
 #include "basis/maxent_settings.hpp"
 #include "core/types.hpp"
+#include "grid/triangle_mesh.hpp"
 #include "mapping/cubic_spline.hpp"
 #include "mapping/direct.hpp"
 #include "mapping/mls.hpp"
@@ -27,6 +28,8 @@ template <int Dim, int Degree>
 class BSplineBasis;
 template <int Dim>
 class UGimpBasis;
+template <int Dim>
+class TriangleP1Basis;
 template <int Dim>
 class CpGimpBasis;
 template <int Dim>
@@ -132,6 +135,19 @@ struct MaxEntKind {
   using type = MaxEntBasis<Dim>;
   MaxEntSettings settings;
 };
+// P1 on a structured triangulation of the grid (basis/p1_triangle.hpp); the kind carries the
+// pattern (method.triangles), which make_basis passes to the basis.
+struct TriangleP1Kind {
+  static constexpr std::string_view kName = "p1_triangles";
+  static constexpr std::string_view kDescription =
+      "P1 on triangles: each grid cell split into 2 (method.triangles = \"right\") or 4 "
+      "(\"criss_cross\") triangles (D 3.3; 2D, direct mapping)";
+  static constexpr bool supports_dimension(int dim) { return dim == 2; }
+  static constexpr int kDegree = 0;  // not a B-spline
+  template <int Dim>
+  using type = TriangleP1Basis<Dim>;
+  TrianglePattern pattern = TrianglePattern::right;
+};
 // dt_crit = factor h / c of the max-ent basis with these settings, computed as the B-spline
 // factors are, from the stiffness and lumped mass of a uniform 1D bar (basis/maxent.cpp).
 double maxent_stability_factor(const MaxEntSettings& s);
@@ -139,7 +155,7 @@ double maxent_stability_factor(const MaxEntSettings& s);
 // The order is that of `mpm list` and of the choices in error messages (setup/registry.hpp).
 using BasisKind = std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi2Kind,
                                BSplineKind<1>, BSplineKind<2>, BSplineKind<3>, BSplineKind<4>,
-                               BSplineKind<5>, DdmpmKind, MaxEntKind>;
+                               BSplineKind<5>, DdmpmKind, MaxEntKind, TriangleP1Kind>;
 
 // Whether a basis kind runs with a mapping (checked by run_settings with an input error naming
 // the keys; the steppers of refused pairs are not compiled). Max-ent runs with the direct
@@ -148,9 +164,14 @@ using BasisKind = std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi
 // to six cells, the plate of plate_mms_2d became unstable (TLS: non-finite stress at step 1649;
 // MLS with USF: a mass error of 0.5 at step 1272) where every other basis runs; the cause is not
 // established (docs/verification.md).
+// P1 on triangles runs with the direct mapping: the reconstructions integrate over rectangular
+// cells (TLS on triangles exists standalone, mapping/tls_triangle.hpp, not yet as a mapping).
 template <class Kind, class Mapping>
 constexpr bool supports_mapping() {
-  return !std::is_same_v<Kind, MaxEntKind> || std::is_same_v<Mapping, DirectMapping>;
+  if constexpr (std::is_same_v<Kind, MaxEntKind> || std::is_same_v<Kind, TriangleP1Kind>)
+    return std::is_same_v<Mapping, DirectMapping>;
+  else
+    return true;
 }
 
 // The basis of a kind on a grid; a kind with settings passes them on (the more specialised
@@ -162,6 +183,10 @@ typename Kind::template type<Dim> make_basis(const Kind&, const Grid<Dim>& g) {
 template <int Dim>
 MaxEntBasis<Dim> make_basis(const MaxEntKind& kind, const Grid<Dim>& g) {
   return MaxEntBasis<Dim>(g, kind.settings);
+}
+template <int Dim>
+TriangleP1Basis<Dim> make_basis(const TriangleP1Kind& kind, const Grid<Dim>& g) {
+  return TriangleP1Basis<Dim>(g, kind.pattern);
 }
 using MappingKind =
     std::variant<DirectMapping, CubicSplineMapping, TlsMapping, MlsMapping, ImlsMapping>;

@@ -168,6 +168,8 @@ std::vector<KeySpec> declare() {
            "a step whose relative mass or momentum error on the grid (summary.json "
            "'conservation') exceeds this stops the run (exit code 9)"),
       choice("method.solver", "mpm", kSolvers, "time-stepping method"),
+      choice("method.triangles", "right", kTrianglePatterns,
+             "triangulation of the grid cells for method.basis = \"p1_triangles\""),
       choice("method.sort", "auto", kSortModes,
              "re-sorting of the particles by cell between steps (locality of the parallel "
              "scatters; changes results by round-off only)"),

@@ -125,6 +125,11 @@ inline constexpr Entry kVtkFormats[] = {
 };
 
 // method.sort: re-sorting the particles by cell between steps (scheme/sort.hpp).
+inline constexpr Entry kTrianglePatterns[] = {
+    {"right", "each cell split along its diagonal from the lower-left corner (2 triangles)"},
+    {"criss_cross", "each cell split by both diagonals at a centre vertex (4 triangles)"},
+};
+
 inline constexpr Entry kSortModes[] = {
     {"auto", "sort by cell when the order has degraded (chunk DOF spans twice the sorted ones)"},
     {"never", "keep the particles in their order (seeded, or as a checkpoint stored them)"},
