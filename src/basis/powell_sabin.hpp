@@ -39,12 +39,18 @@
 // DOF 3 i + j is N_ij. A quadratic f has the coefficients c_ij = f(V_i) + grad f(V_i) . (Q_ij -
 // V_i), the tangent plane of f at V_i evaluated at Q_ij (x = sum_ij Q_ij N_ij for f = x).
 #include <array>
+#include <cmath>
+#include <memory>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 #include <vector>
 
+#include "basis/basis.hpp"
 #include "basis/stencil.hpp"
 #include "core/types.hpp"
+#include "grid/grid.hpp"
 #include "grid/triangle_mesh.hpp"
 
 namespace mpm {
@@ -124,5 +130,76 @@ class PowellSabinBasis {
   std::vector<Vec<2>> ps_points_;
   std::vector<std::array<Vec<2>, 3>> ps_triangle_;
 };
+
+// Powell-Sabin splines on a structured triangulation of the run's grid (method.basis =
+// "powell_sabin", method.triangles = "right" | "criss_cross"; D 3.3, PS-MPM): as
+// TriangleP1Basis (basis/p1_triangle.hpp), the grid keeps seeding, the named sides, the
+// stability length and the inside check, and the functions live on its triangles. DOFs 3 v + j
+// of mesh vertex v. A side's DOFs are the three of each vertex on it: those are the functions
+// that do not vanish on the side (the others vanish with their gradient on every edge away
+// from their vertex), so fixing them fixes the velocity on the whole side.
+template <int Dim>
+class PowellSabinGridBasis {
+  static_assert(Dim == 2, "Powell-Sabin splines are two-dimensional");
+
+ public:
+  static constexpr std::string_view kName = "powell_sabin";
+  static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = false,
+                        kTrackedCorners = false, kIterative = false;
+  using StencilT = Stencil<Dim, 9>;
+
+  // The mesh is shared, so that copies of the basis (the run's state holds one by value) keep
+  // the address the spline construction refers to.
+  PowellSabinGridBasis(const Grid<Dim>& g, TrianglePattern pattern)
+      : mesh_(std::make_shared<const TriangleMesh>(
+            structured_triangles(g.origin, g.upper(), g.cells, pattern))),
+        ps_(*mesh_) {}
+
+  Index num_dofs() const { return ps_.num_dofs(); }
+  // Not a tensor-product layout (dof_strides of it is unused, the stencils hold their DOFs).
+  IVec<Dim> dofs_per_dim() const { return {num_dofs(), 1}; }
+  Vec<Dim> dof_position(Index i) const { return ps_.dof_position(i); }
+  // The DOFs whose PS-triangle vertex Q_vj lies on the side's line, two per vertex on it. The
+  // third function of such a vertex has value and tangential derivative 0 along the side (its
+  // barycentric coordinate L_vj vanishes on the PS triangle's side there), so fixing the two
+  // makes the velocity zero on the side and leaves its normal derivative free; fixing all three
+  // would also force that derivative to zero. The PS triangles of boundary vertices have a
+  // side on the boundary (the hull's supporting line along it; checked here).
+  std::vector<Index> boundary_dofs(int d, int side) const {
+    const std::string name = std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
+    const double line = side == 0 ? mesh_->lower()[d] : mesh_->upper()[d];
+    const double tol = 1e-12 * (mesh_->upper() - mesh_->lower()).norm();
+    std::vector<Index> dofs;
+    for (Index v : mesh_->boundary_vertices(name)) {
+      int on_line = 0;
+      for (Index j = 0; j < 3; ++j)
+        if (std::abs(ps_.ps_triangle(v)[static_cast<std::size_t>(j)][d] - line) <= tol) {
+          dofs.push_back(3 * v + j);
+          ++on_line;
+        }
+      if (on_line != 2)
+        throw std::logic_error(
+            "PowellSabinGridBasis: the PS triangle of a boundary vertex has no "
+            "side on the boundary " +
+            name);
+    }
+    return dofs;
+  }
+  // Zero weights outside the mesh (callers check that points are inside the grid first).
+  void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
+    if (ps_.evaluate_point(x, s)) return;
+    for (std::size_t a = 0; a < 9; ++a) s.dof[a] = 0, s.w[a] = 0.0, s.grad[a].setZero();
+  }
+  void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
+    evaluate_point(P.x[static_cast<std::size_t>(p)], s);
+  }
+  const PowellSabinBasis& splines() const { return ps_; }
+
+ private:
+  std::shared_ptr<const TriangleMesh> mesh_;
+  PowellSabinBasis ps_;
+};
+
+static_assert(Basis<PowellSabinGridBasis<2>, 2>);
 
 }  // namespace mpm

@@ -111,11 +111,15 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
   if (vtk_) {
     // The background the basis lives on: the grid's cells, or their triangles.
     std::string grid = io::grid_vtu(pb.grid, {}, vtk_binary_);
-    if constexpr (Dim == 2)
-      if (const auto* tri = std::get_if<TriangleP1Kind>(&s.method.basis))
+    if constexpr (Dim == 2) {
+      std::optional<TrianglePattern> pattern;
+      if (const auto* k = std::get_if<TriangleP1Kind>(&s.method.basis)) pattern = k->pattern;
+      if (const auto* k = std::get_if<PowellSabinKind>(&s.method.basis)) pattern = k->pattern;
+      if (pattern)
         grid = io::triangle_mesh_vtu(
-            structured_triangles(pb.grid.origin, pb.grid.upper(), pb.grid.cells, tri->pattern), {},
-            {}, vtk_binary_);
+            structured_triangles(pb.grid.origin, pb.grid.upper(), pb.grid.cells, *pattern), {}, {},
+            vtk_binary_);
+    }
     io::write_file_atomic(dir_ / "grid.vtu", grid);
   }
   history_header_ = "time,kinetic_energy,strain_energy,total_energy,mass";

@@ -70,6 +70,9 @@ double stability_factor(const BasisKind& basis) {
           return maxent_stability_factor(k.settings);
         else if constexpr (std::is_same_v<Kind, TriangleP1Kind>)
           return triangle_stability_factor(k.pattern);
+        // PS splines are quadratic: the quadratic B-spline's factor on the triangles' length.
+        else if constexpr (std::is_same_v<Kind, PowellSabinKind>)
+          return triangle_stability_factor(k.pattern) * bspline_stability_factor(2);
         else if constexpr (Kind::kDegree > 0)
           return bspline_stability_factor(Kind::kDegree);
         else

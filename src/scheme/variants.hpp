@@ -31,6 +31,8 @@ class UGimpBasis;
 template <int Dim>
 class TriangleP1Basis;
 template <int Dim>
+class PowellSabinGridBasis;
+template <int Dim>
 class CpGimpBasis;
 template <int Dim>
 class CpdiBasis;
@@ -135,6 +137,20 @@ struct MaxEntKind {
   using type = MaxEntBasis<Dim>;
   MaxEntSettings settings;
 };
+// Quadratic Powell-Sabin splines on a structured triangulation of the grid
+// (basis/powell_sabin.hpp; D 3.3, PS-MPM); the kind carries the pattern (method.triangles).
+struct PowellSabinKind {
+  static constexpr std::string_view kName = "powell_sabin";
+  static constexpr std::string_view kDescription =
+      "quadratic Powell-Sabin splines (C1, three per vertex) on the grid's cells split into "
+      "triangles by method.triangles (D 3.3, PS-MPM; 2D, direct mapping)";
+  static constexpr bool supports_dimension(int dim) { return dim == 2; }
+  static constexpr int kDegree = 0;  // not a B-spline
+  template <int Dim>
+  using type = PowellSabinGridBasis<Dim>;
+  TrianglePattern pattern = TrianglePattern::right;
+};
+
 // P1 on a structured triangulation of the grid (basis/p1_triangle.hpp); the kind carries the
 // pattern (method.triangles), which make_basis passes to the basis.
 struct TriangleP1Kind {
@@ -153,9 +169,10 @@ struct TriangleP1Kind {
 double maxent_stability_factor(const MaxEntSettings& s);
 
 // The order is that of `mpm list` and of the choices in error messages (setup/registry.hpp).
-using BasisKind = std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi2Kind,
-                               BSplineKind<1>, BSplineKind<2>, BSplineKind<3>, BSplineKind<4>,
-                               BSplineKind<5>, DdmpmKind, MaxEntKind, TriangleP1Kind>;
+using BasisKind =
+    std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi2Kind, BSplineKind<1>,
+                 BSplineKind<2>, BSplineKind<3>, BSplineKind<4>, BSplineKind<5>, DdmpmKind,
+                 MaxEntKind, TriangleP1Kind, PowellSabinKind>;
 
 // Whether a basis kind runs with a mapping (checked by run_settings with an input error naming
 // the keys; the steppers of refused pairs are not compiled). Max-ent runs with the direct
@@ -164,11 +181,13 @@ using BasisKind = std::variant<LinearKind, UGimpKind, CpGimpKind, CpdiKind, Cpdi
 // to six cells, the plate of plate_mms_2d became unstable (TLS: non-finite stress at step 1649;
 // MLS with USF: a mass error of 0.5 at step 1272) where every other basis runs; the cause is not
 // established (docs/verification.md).
-// P1 on triangles runs with the direct mapping: the reconstructions integrate over rectangular
-// cells (TLS on triangles exists standalone, mapping/tls_triangle.hpp, not yet as a mapping).
+// P1 and PS splines on triangles run with the direct mapping: the reconstructions integrate over
+// rectangular cells (TLS on triangles exists standalone, mapping/tls_triangle.hpp, not yet as a
+// mapping).
 template <class Kind, class Mapping>
 constexpr bool supports_mapping() {
-  if constexpr (std::is_same_v<Kind, MaxEntKind> || std::is_same_v<Kind, TriangleP1Kind>)
+  if constexpr (std::is_same_v<Kind, MaxEntKind> || std::is_same_v<Kind, TriangleP1Kind> ||
+                std::is_same_v<Kind, PowellSabinKind>)
     return std::is_same_v<Mapping, DirectMapping>;
   else
     return true;
@@ -187,6 +206,10 @@ MaxEntBasis<Dim> make_basis(const MaxEntKind& kind, const Grid<Dim>& g) {
 template <int Dim>
 TriangleP1Basis<Dim> make_basis(const TriangleP1Kind& kind, const Grid<Dim>& g) {
   return TriangleP1Basis<Dim>(g, kind.pattern);
+}
+template <int Dim>
+PowellSabinGridBasis<Dim> make_basis(const PowellSabinKind& kind, const Grid<Dim>& g) {
+  return PowellSabinGridBasis<Dim>(g, kind.pattern);
 }
 using MappingKind =
     std::variant<DirectMapping, CubicSplineMapping, TlsMapping, MlsMapping, ImlsMapping>;

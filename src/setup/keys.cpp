@@ -169,7 +169,8 @@ std::vector<KeySpec> declare() {
            "'conservation') exceeds this stops the run (exit code 9)"),
       choice("method.solver", "mpm", kSolvers, "time-stepping method"),
       choice("method.triangles", "right", kTrianglePatterns,
-             "triangulation of the grid cells for method.basis = \"p1_triangles\""),
+             "triangulation of the grid cells for method.basis = \"p1_triangles\" and "
+             "\"powell_sabin\""),
       choice("method.sort", "auto", kSortModes,
              "re-sorting of the particles by cell between steps (locality of the parallel "
              "scatters; changes results by round-off only)"),

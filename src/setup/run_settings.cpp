@@ -95,10 +95,11 @@ RunSettings run_settings(const Config& cfg, int dim) {
       return choose_basis(cfg.get_string("method.basis"),
                           static_cast<int>(cfg.get_int("method.degree")));
     });
-    if (auto* k = std::get_if<TriangleP1Kind>(&m.basis))
-      k->pattern = cfg.get_string("method.triangles") == "criss_cross"
-                       ? TrianglePattern::criss_cross
-                       : TrianglePattern::right;
+    const TrianglePattern pattern = cfg.get_string("method.triangles") == "criss_cross"
+                                        ? TrianglePattern::criss_cross
+                                        : TrianglePattern::right;
+    if (auto* k = std::get_if<TriangleP1Kind>(&m.basis)) k->pattern = pattern;
+    if (auto* k = std::get_if<PowellSabinKind>(&m.basis)) k->pattern = pattern;
     if (auto* k = std::get_if<MaxEntKind>(&m.basis)) {
       k->settings.dmax = cfg.get_real("method.maxent_dmax");
       k->settings.tolerance = cfg.get_real("method.maxent_tolerance");
