@@ -142,6 +142,19 @@ std::vector<Vec<2>> make_points_2d(const ReconstructOptions& opt, const Grid<2>&
       opt.points));
 }
 
+// f at the data points; InputError naming the function and the point where it is not finite.
+std::vector<double> sample_2d(const Expression& f, const std::string& text,
+                              const std::vector<Vec<2>>& points) {
+  std::vector<double> fx;
+  for (const Vec<2>& p : points) {
+    fx.push_back(f(p[0], p[1]));
+    if (!std::isfinite(fx.back()))
+      throw InputError(fmt::format("--function \"{}\" is not finite at the point ({}, {}): {}",
+                                   text, p[0], p[1], fx.back()));
+  }
+  return fx;
+}
+
 // Calls fn(x, w) at the n x n Gauss points of element e (weights include the Jacobian).
 template <class Fn>
 void for_each_gauss_point(const Grid<2>& g, Index e, const GaussRule& rule, Fn&& fn) {
@@ -168,15 +181,10 @@ ReconstructResult reconstruct_2d(const ReconstructOptions& opt, double a, double
 
   ReconstructResult res;
   res.xy = make_points_2d(opt, g);
-  std::vector<double> fx;
-  for (const Vec<2>& p : res.xy) {
+  for (const Vec<2>& p : res.xy)
     if (!g.inside(p))
       throw InputError(fmt::format("--points: ({}, {}) lies outside [{}, {}]^2", p[0], p[1], a, b));
-    fx.push_back(f(p[0], p[1]));
-    if (!std::isfinite(fx.back()))
-      throw InputError(fmt::format("--function \"{}\" is not finite at the point ({}, {}): {}",
-                                   opt.function, p[0], p[1], fx.back()));
-  }
+  const std::vector<double> fx = sample_2d(f, opt.function, res.xy);
 
   // Exact element integrals (20 x 20 Gauss: far below any reconstruction error here).
   const GaussRule exact_rule = gauss_legendre(20);
@@ -311,13 +319,7 @@ ReconstructResult reconstruct_triangles(const ReconstructOptions& opt, double a,
       if (mesh.inside(p)) res.xy.push_back(p);
     }
   }
-  std::vector<double> fx;
-  for (const Vec<2>& p : res.xy) {
-    fx.push_back(f(p[0], p[1]));
-    if (!std::isfinite(fx.back()))
-      throw InputError(fmt::format("--function \"{}\" is not finite at the point ({}, {}): {}",
-                                   opt.function, p[0], p[1], fx.back()));
-  }
+  const std::vector<double> fx = sample_2d(f, opt.function, res.xy);
   const auto ne = static_cast<std::size_t>(mesh.num_cells());
   // Element integrals with the degree-4 rule on 8 x 8 sub-triangles (far below any
   // reconstruction error here).

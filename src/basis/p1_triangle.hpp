@@ -29,6 +29,18 @@ inline void p1_triangle_stencil(const TriangleMesh& m, Index cell, const Vec<2>&
   }
 }
 
+// The name of grid side (d, side) among a structured triangulation's boundaries ("x-", ...).
+inline std::string side_name(int d, int side) {
+  return std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
+}
+
+// A stencil with no weight (a point outside the mesh).
+template <int N>
+void clear_stencil(Stencil<2, N>& s) {
+  for (std::size_t a = 0; a < static_cast<std::size_t>(N); ++a)
+    s.dof[a] = 0, s.w[a] = 0.0, s.grad[a].setZero();
+}
+
 class P1TriangleBasis {
  public:
   static constexpr std::string_view kName = "linear";
@@ -83,13 +95,13 @@ class TriangleP1Basis {
   IVec<Dim> dofs_per_dim() const { return {num_dofs(), 1}; }
   Vec<Dim> dof_position(Index i) const { return mesh_.vertex(i); }
   std::vector<Index> boundary_dofs(int d, int side) const {
-    return mesh_.boundary_vertices(std::string(1, "xy"[d]) + (side == 0 ? "-" : "+"));
+    return mesh_.boundary_vertices(side_name(d, side));
   }
   // Zero weights outside the mesh (callers check that points are inside the grid first).
   void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     const Index c = mesh_.cell_index(x);
     if (c >= 0) return p1_triangle_stencil(mesh_, c, x, s);
-    for (std::size_t a = 0; a < 3; ++a) s.dof[a] = 0, s.w[a] = 0.0, s.grad[a].setZero();
+    clear_stencil(s);
   }
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
     evaluate_point(P.x[static_cast<std::size_t>(p)], s);

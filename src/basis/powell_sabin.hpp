@@ -48,6 +48,7 @@
 #include <vector>
 
 #include "basis/basis.hpp"
+#include "basis/p1_triangle.hpp"
 #include "basis/stencil.hpp"
 #include "core/types.hpp"
 #include "grid/grid.hpp"
@@ -166,7 +167,7 @@ class PowellSabinGridBasis {
   // would also force that derivative to zero. The PS triangles of boundary vertices have a
   // side on the boundary (the hull's supporting line along it; checked here).
   std::vector<Index> boundary_dofs(int d, int side) const {
-    const std::string name = std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
+    const std::string name = side_name(d, side);
     const double line = side == 0 ? mesh_->lower()[d] : mesh_->upper()[d];
     const double tol = 1e-12 * (mesh_->upper() - mesh_->lower()).norm();
     std::vector<Index> dofs;
@@ -188,7 +189,7 @@ class PowellSabinGridBasis {
   // Zero weights outside the mesh (callers check that points are inside the grid first).
   void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     if (ps_.evaluate_point(x, s)) return;
-    for (std::size_t a = 0; a < 9; ++a) s.dof[a] = 0, s.w[a] = 0.0, s.grad[a].setZero();
+    clear_stencil(s);
   }
   void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
     evaluate_point(P.x[static_cast<std::size_t>(p)], s);
