@@ -19,6 +19,12 @@
 //   kIterative       the evaluation is an iteration that can fail at a point (max-ent): the
 //                    point's weights are NaN and recorded, and every stage that evaluated the
 //                    basis calls throw_if_failed(step, time, where) after its loop
+//   kTriangleMesh    the functions live on a triangular mesh, mesh() (P1 and Powell-Sabin
+//                    splines): element-wise mappings (TLS) fit and integrate over its triangles
+//                    instead of the grid's rectangles. Each triangle is the union of pieces()
+//                    triangles piece(c, k) on which the functions are polynomials (P1: 1, the
+//                    triangle; PS: 6, its Powell-Sabin split), where Gauss rules apply
+#include <array>
 #include <concepts>
 #include <string_view>
 #include <vector>
@@ -30,6 +36,8 @@
 
 namespace mpm {
 
+class TriangleMesh;  // grid/triangle_mesh.hpp
+
 template <class B, int Dim>
 concept Basis = requires(const B& b, const Vec<Dim>& x, typename B::StencilT& s, int d, int side,
                          Index i) {
@@ -39,6 +47,7 @@ concept Basis = requires(const B& b, const Vec<Dim>& x, typename B::StencilT& s,
   { B::kPrepare } -> std::convertible_to<bool>;
   { B::kTrackedCorners } -> std::convertible_to<bool>;
   { B::kIterative } -> std::convertible_to<bool>;
+  { B::kTriangleMesh } -> std::convertible_to<bool>;
   { b.num_dofs() } -> std::convertible_to<Index>;
   { b.dofs_per_dim() } -> std::convertible_to<IVec<Dim>>;
   { b.dof_position(i) } -> std::convertible_to<Vec<Dim>>;
@@ -61,8 +70,14 @@ concept Basis = requires(const B& b, const Vec<Dim>& x, typename B::StencilT& s,
        b.set_corners(cb.corners());
        b.permute(perm);
      }) &&
-    (!B::kIterative || requires(const B& b, Index step, double time, std::string_view where) {
-      b.throw_if_failed(step, time, where);
+    (!B::kIterative ||
+     requires(const B& b, Index step, double time, std::string_view where) {
+       b.throw_if_failed(step, time, where);
+     }) &&
+    (!B::kTriangleMesh || requires(const B& b, Index c, int k) {
+      { b.mesh() } -> std::same_as<const TriangleMesh&>;
+      { b.pieces() } -> std::convertible_to<int>;
+      { b.piece(c, k) } -> std::convertible_to<std::array<Vec<2>, 3>>;
     });
 
 }  // namespace mpm

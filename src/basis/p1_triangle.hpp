@@ -83,7 +83,7 @@ class TriangleP1Basis {
  public:
   static constexpr std::string_view kName = "p1_triangles";
   static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = false,
-                        kTrackedCorners = false, kIterative = false;
+                        kTrackedCorners = false, kIterative = false, kTriangleMesh = true;
   using StencilT = Stencil<Dim, 3>;
 
   TriangleP1Basis(const Grid<Dim>& g, TrianglePattern pattern)
@@ -107,6 +107,12 @@ class TriangleP1Basis {
     evaluate_point(P.x[static_cast<std::size_t>(p)], s);
   }
   const TriangleMesh& mesh() const { return mesh_; }
+  // One polynomial piece per triangle: the triangle.
+  static constexpr int pieces() { return 1; }
+  std::array<Vec<2>, 3> piece(Index c, int) const {
+    const auto& t = mesh_.cell_vertices(c);
+    return {mesh_.vertex(t[0]), mesh_.vertex(t[1]), mesh_.vertex(t[2])};
+  }
 
  private:
   TriangleMesh mesh_;

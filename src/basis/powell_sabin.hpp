@@ -146,7 +146,7 @@ class PowellSabinGridBasis {
  public:
   static constexpr std::string_view kName = "powell_sabin";
   static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = false,
-                        kTrackedCorners = false, kIterative = false;
+                        kTrackedCorners = false, kIterative = false, kTriangleMesh = true;
   using StencilT = Stencil<Dim, 9>;
 
   // The mesh is shared, so that copies of the basis (the run's state holds one by value) keep
@@ -195,6 +195,10 @@ class PowellSabinGridBasis {
     evaluate_point(P.x[static_cast<std::size_t>(p)], s);
   }
   const PowellSabinBasis& splines() const { return ps_; }
+  const TriangleMesh& mesh() const { return *mesh_; }  // the macro triangles
+  // The polynomial pieces of a triangle: its six mini-triangles.
+  static constexpr int pieces() { return 6; }
+  std::array<Vec<2>, 3> piece(Index c, int k) const { return ps_.mini_triangle(c, k); }
 
  private:
   std::shared_ptr<const TriangleMesh> mesh_;

@@ -92,6 +92,13 @@ Problem<2> make_custom_2d(const Config& cfg);
 void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,
                     std::function<Vec<1>(const Vec<1>&)> velocity);
 
+// The particles of a 2D body [lo, hi] in grid g: particles.per_cell per cell and direction, or
+// with particles.per_triangle > 0 that many in every triangle of the grid's triangulation
+// (method.basis p1_triangles or powell_sabin, method.triangles; the body must be the grid).
+// InputError naming the key otherwise.
+Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
+                          double rho0);
+
 // Material from the [material] keys for a problem in `dim` dimensions.
 Material material_from_config(const Config& cfg, int dim);
 

@@ -98,6 +98,12 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
             fmt::format("{}: key '{}': the pressure \"{}\" may depend on t only, "
                         "not on x, y or z (uniform over the face)",
                         cfg.where(pkey), pkey, p.text()));
+      if (cfg.get_int("particles.per_triangle") != 0)
+        throw InputError(fmt::format(
+            "{}: key '{}': tractions act through the outer layer of particles.per_cell's "
+            "particles; with particles.per_triangle they are not available yet",
+            cfg.where(is_zero(cfg, key.c_str()) ? pkey : key),
+            is_zero(cfg, key.c_str()) ? pkey : key));
       // A pressure p pushes against the outward normal n = sign e_d of the reference face:
       // tau = -p n (a dead load, like the traction).
       const double sign = side == 0 ? -1.0 : 1.0;
@@ -247,7 +253,7 @@ Problem<2> make_custom_2d(const Config& cfg) {
   if (cy == 0) cy = std::max<Index>(1, std::llround((g1[1] - g0[1]) / ((g1[0] - g0[0]) / cx)));
   pb.grid = Grid<2>(g0, g1, IVec<2>{cx, cy});
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
-  pb.particles = seed_particles<2>(pb.grid, b0, b1, per_cell, rho);
+  pb.particles = seed_body_2d(cfg, pb.grid, b0, b1, rho);
   pb.body_min = b0;
   pb.body_max = b1;
 

@@ -8,6 +8,7 @@
 
 #include "benchmarks/benchmarks.hpp"
 #include "grid/grid_state.hpp"
+#include "grid/triangle_mesh.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {
@@ -107,6 +108,110 @@ template Particles<1> seed_particles<1>(const Grid<1>&, const Vec<1>&, const Vec
 template Particles<2> seed_particles<2>(const Grid<2>&, const Vec<2>&, const Vec<2>&, int, double);
 template Particles<3> seed_particles<3>(const Grid<3>&, const Vec<3>&, const Vec<3>&, int, double);
 
+std::pair<int, int> triangle_seed_pattern(int per_triangle) {
+  for (int m : {1, 3, 6}) {
+    if (per_triangle <= 0 || per_triangle % m != 0) continue;
+    const int k2 = per_triangle / m;
+    const int k = static_cast<int>(std::lround(std::sqrt(static_cast<double>(k2))));
+    if (k * k == k2) return {m, k};
+  }
+  return {0, 0};
+}
+
+Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_triangle, double rho0) {
+  const auto [m, k] = triangle_seed_pattern(per_triangle);
+  if (m == 0)
+    throw InputError(
+        fmt::format("{} particles per triangle is not of the form m k^2 with m = 1, "
+                    "3 or 6 (3, 4, 6, 9, 12, 16, 24, 25, 27, 36, ...)",
+                    per_triangle));
+  // The pattern in reference coordinates (xi, eta): the centroids of the parts, each with the
+  // same share 1 / per_triangle of the area.
+  std::vector<Vec<2>> ref;
+  const double inv = 1.0 / k;
+  auto parts = [&](const Vec<2>& a, const Vec<2>& b, const Vec<2>& c) {
+    const Vec<2> g = (a + b + c) / 3.0;
+    if (m == 1) {
+      ref.push_back(g);
+      return;
+    }
+    const std::array<Vec<2>, 3> v{a, b, c};
+    for (std::size_t e = 0; e < 3; ++e) {
+      const Vec<2>& p = v[e];
+      const Vec<2>& q = v[(e + 1) % 3];
+      if (m == 3) {
+        ref.push_back((g + p + q) / 3.0);
+      } else {  // the medians cut the part (g, p, q) at the edge's midpoint
+        const Vec<2> mid = 0.5 * (p + q);
+        ref.push_back((g + p + mid) / 3.0);
+        ref.push_back((g + mid + q) / 3.0);
+      }
+    }
+  };
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i + j < k; ++i) {
+      const Vec<2> o(i * inv, j * inv);
+      parts(o, o + Vec<2>(inv, 0.0), o + Vec<2>(0.0, inv));  // pointing up
+      if (i + j + 1 < k)                                     // pointing down
+        parts(o + Vec<2>(inv, 0.0), o + Vec<2>(inv, inv), o + Vec<2>(0.0, inv));
+    }
+  const auto per = static_cast<Index>(ref.size());
+  const double total = static_cast<double>(mesh.num_cells()) * static_cast<double>(per);
+  const double memory = physical_memory();
+  if (memory > 0.0 && total * static_cast<double>(Particles<2>::bytes_per_particle()) > memory)
+    throw InputError(fmt::format(
+        "{} triangles with {} particles each need about {:.3g} GB for the particle state alone; "
+        "this machine has {:.3g} GB of memory",
+        mesh.num_cells(), per,
+        total * static_cast<double>(Particles<2>::bytes_per_particle()) / 1e9, memory / 1e9));
+  Particles<2> P;
+  P.resize(mesh.num_cells() * per);
+  for (Index c = 0; c < mesh.num_cells(); ++c) {
+    const auto& t = mesh.cell_vertices(c);
+    const Vec<2>& x0 = mesh.vertex(t[0]);
+    const Vec<2> e1 = mesh.vertex(t[1]) - x0, e2 = mesh.vertex(t[2]) - x0;
+    const double vol = mesh.cell_volume(c) / static_cast<double>(per);
+    for (Index a = 0; a < per; ++a) {
+      const auto i = static_cast<std::size_t>(c * per + a);
+      const Vec<2>& r = ref[static_cast<std::size_t>(a)];
+      P.x[i] = P.x0[i] = x0 + r[0] * e1 + r[1] * e2;
+      P.volume[i] = P.volume0[i] = vol;
+      P.density[i] = rho0;
+      P.mass[i] = rho0 * vol;
+    }
+  }
+  return P;
+}
+
+Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
+                          double rho0) {
+  const auto per_triangle = static_cast<int>(cfg.get_int("particles.per_triangle"));
+  if (per_triangle == 0)
+    return seed_particles<2>(g, lo, hi, static_cast<int>(cfg.get_int("particles.per_cell")), rho0);
+  const std::string basis = cfg.get_string("method.basis");
+  if (basis != "p1_triangles" && basis != "powell_sabin")
+    throw InputError(fmt::format(
+        "{}: particles.per_triangle = {} seeds the triangles of method.basis = \"p1_triangles\" "
+        "or \"powell_sabin\", not of \"{}\" (use particles.per_cell, or 0 here)",
+        cfg.where("particles.per_triangle"), per_triangle, basis));
+  if (lo != g.origin || hi != g.upper())
+    throw InputError(fmt::format(
+        "{}: particles.per_triangle fills whole triangles, so the body must be the grid "
+        "(body.min = grid.min and body.max = grid.max); use particles.per_cell for a body that "
+        "fills part of the grid",
+        cfg.where("particles.per_triangle")));
+  if (triangle_seed_pattern(per_triangle).first == 0)
+    throw InputError(fmt::format(
+        "{}: particles.per_triangle = {} is not of the form m k^2 with m = 1, 3 or 6; choose "
+        "one of 1, 3, 4, 6, 9, 12, 16, 24, 25, 27, 36, 48, 49, 54, 64, ...",
+        cfg.where("particles.per_triangle"), per_triangle));
+  const TrianglePattern pattern = cfg.get_string("method.triangles") == "criss_cross"
+                                      ? TrianglePattern::criss_cross
+                                      : TrianglePattern::right;
+  return seed_particles_in_triangles(structured_triangles(g.origin, g.upper(), g.cells, pattern),
+                                     per_triangle, rho0);
+}
+
 namespace {
 // A grid whose nodal state alone would not fit in memory is refused before it is allocated
 // (issue 16, 10: std::bad_alloc was an "internal error" naming nothing). The particles are
@@ -148,6 +253,11 @@ AnyProblem make_any_problem(const Config& cfg) {
 
 AnyProblem make_problem(const Config& cfg) {
   AnyProblem pb = make_any_problem(cfg);
+  if (cfg.get_int("particles.per_triangle") != 0 && std::holds_alternative<Problem<1>>(pb))
+    throw InputError(fmt::format(
+        "{}: particles.per_triangle seeds the triangles of a 2D run; this problem is 1D (use "
+        "particles.per_cell)",
+        cfg.where("particles.per_triangle")));
   std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid); }, pb);
   return pb;
 }

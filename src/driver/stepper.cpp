@@ -34,6 +34,15 @@ void report_mapping(nlohmann::ordered_json& summary, const TlsMapping& m, int) {
                     {"with_neighbours", t.with_neighbours},
                     {"min_terms", t.min_terms},
                     {"max_condition", t.max_condition}};
+  if (m.on_triangles()) {
+    // Triangles (D 6.3): the completion resolved, the fits with dropped directions, and the
+    // smallest rank (min_terms) of an element's fit.
+    auto& j = summary["tls"];
+    j.erase("with_virtual");
+    j.erase("with_neighbours");
+    j["truncated"] = t.truncated;
+    j["completion"] = tls_completion_name(m.settings().completion);
+  }
 }
 
 namespace {

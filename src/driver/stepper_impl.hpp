@@ -21,10 +21,30 @@ namespace mpm::driver {
 // Before the first step: with method.tls_completion = "none" every element holding particles
 // must support the Taylor basis on its own (D 5.2.3, 6.3.1); otherwise the run would stop at
 // step 0, so the input is refused with what to change.
-template <int Dim, class Mapping>
+template <int Dim, class Basis, class Mapping>
 void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& grid,
-                                const Particles<Dim>& P, const Mapping& mapping) {
-  if constexpr (std::is_same_v<Mapping, TlsMapping>) {
+                                const Basis& basis, const Particles<Dim>& P,
+                                const Mapping& mapping) {
+  if constexpr (std::is_same_v<Mapping, TlsMapping> && Basis::kTriangleMesh) {
+    const TlsSettings& s = mapping.settings();
+    if (s.completion != TlsCompletion::None) return;
+    TlsTriangleReconstruction recon(basis.mesh(), tls_triangle_settings(s));
+    const TlsTriangleReport& rep = recon.set_points(P.x);
+    const Index failed = std::max(rep.plain.failed, rep.conservative.failed);
+    if (failed > 0) {
+      const Index plain = rep.plain.first_deficient, cons = rep.conservative.first_deficient;
+      const Index e = plain < 0 ? cons : cons < 0 ? plain : std::min(plain, cons);
+      const auto& info = recon.element(e);
+      throw InputError(fmt::format(
+          "{}: method.tls_completion = \"none\", but the initial particles cannot support {} "
+          "Taylor terms in {} triangle(s) or more: triangle {} has {} particle(s) (condition "
+          "number {:.3g}, limit method.tls_max_condition = {:.3g}); seed more particles "
+          "(particles.per_triangle), use fewer terms (method.tls_terms) or set "
+          "method.tls_completion = \"reduce\", \"min_norm\" or \"graded\"",
+          method.where_tls_completion, recon.terms(), failed, e, info.points,
+          std::max(info.plain.condition, info.conservative.condition), s.max_condition));
+    }
+  } else if constexpr (std::is_same_v<Mapping, TlsMapping>) {
     const TlsSettings& s = mapping.settings();
     if (s.completion != TlsCompletion::None) return;
     BasicTlsReconstruction<Dim> recon(s);
@@ -58,7 +78,7 @@ class TypedStepper final : public Stepper<Dim> {
     const MethodSettings& method = in.method;
     const Problem<Dim>& pb = in.problem;
     if (in.check_input)
-      check_reconstruction_input<Dim>(method, sim_.grid, sim_.particles, sim_.mapping);
+      check_reconstruction_input<Dim>(method, sim_.grid, sim_.basis, sim_.particles, sim_.mapping);
     sim_.mass_type = method.mass;
     sim_.mass_tolerance = method.mass_tolerance;
     sim_.consistent.configure(method.mass_solver);

@@ -79,9 +79,12 @@ TlsCompletion parse_tls_completion(std::string_view name) {
   if (name == "reduce") return TlsCompletion::Reduce;
   if (name == "virtual") return TlsCompletion::Virtual;
   if (name == "neighbour") return TlsCompletion::Neighbour;
-  throw InputError(fmt::format(
-      "TLS completion \"{}\" is not available; choose one of: none, reduce, virtual, neighbour",
-      name));
+  if (name == "min_norm") return TlsCompletion::MinimumNorm;
+  if (name == "graded") return TlsCompletion::Graded;
+  throw InputError(
+      fmt::format("TLS completion \"{}\" is not available; choose one of: none, reduce, virtual, "
+                  "neighbour (rectangles), min_norm, graded (triangles)",
+                  name));
 }
 
 std::string_view tls_completion_name(TlsCompletion c) {
@@ -94,6 +97,10 @@ std::string_view tls_completion_name(TlsCompletion c) {
       return "virtual";
     case TlsCompletion::Neighbour:
       return "neighbour";
+    case TlsCompletion::MinimumNorm:
+      return "min_norm";
+    case TlsCompletion::Graded:
+      return "graded";
   }
   return "none";
 }
@@ -146,6 +153,7 @@ void accumulate(TlsReport& total, const TlsReport& step) {
     total.failed_condition = step.failed_condition;
   }
   total.failed += step.failed;
+  total.truncated += step.truncated;
 }
 
 template <int Dim>
@@ -426,6 +434,12 @@ void BasicTlsReconstruction<Dim>::factorise(System& sys) {
 
 template <int Dim>
 void BasicTlsReconstruction<Dim>::build_systems() {
+  if (settings_.completion == TlsCompletion::MinimumNorm ||
+      settings_.completion == TlsCompletion::Graded)
+    throw InputError(fmt::format(
+        "TLS completion \"{}\" works on triangles (mapping/tls_triangle.hpp); on the grid's "
+        "cells choose none, reduce, virtual or neighbour",
+        tls_completion_name(settings_.completion)));
   const Index ne = grid_.num_cells();
   const auto ne_s = static_cast<std::size_t>(ne);
   const int nb = nb_;
@@ -513,6 +527,9 @@ void BasicTlsReconstruction<Dim>::build_systems() {
           break;
         case TlsCompletion::Neighbour:
           borrow_points(e, sys, D, distinct);
+          break;
+        case TlsCompletion::MinimumNorm:  // refused by build_systems
+        case TlsCompletion::Graded:
           break;
       }
     }

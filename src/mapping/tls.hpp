@@ -30,6 +30,7 @@
 
 #include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
+#include "mapping/tls_triangle.hpp"
 #include "scheme/simulation.hpp"
 
 namespace mpm {
@@ -41,9 +42,14 @@ enum class TlsCompletion {
   Reduce,     // fewer Taylor terms (1D: 3 -> 2 -> 1; 2D: 6 -> 3 -> 1) until well posed
   Virtual,    // virtual points on the faces, valued by the neighbours' reconstructions
   Neighbour,  // borrow the nearest points of the adjacent elements (2D: faces, then corners)
+  // Triangles only (mapping/tls_triangle.hpp, TlsTriangleStrategy): truncated SVD of the data
+  // matrix with the minimum-norm coefficients, or resolved towards the lowest degree (graded).
+  MinimumNorm,
+  Graded,
 };
 
-// "none", "reduce", "virtual", "neighbour" (registry::kTlsCompletions). Throws InputError.
+// "none", "reduce", "virtual", "neighbour", "min_norm", "graded" (registry::kTlsCompletions;
+// "auto" is resolved by the run set-up). Throws InputError.
 TlsCompletion parse_tls_completion(std::string_view name);
 std::string_view tls_completion_name(TlsCompletion c);
 
@@ -98,6 +104,7 @@ struct TlsReport {
   Index with_virtual = 0;      // data completed with virtual face points
   Index with_neighbours = 0;   // data completed with points borrowed from adjacent elements
   Index failed = 0;            // deficient with completion None: not fitted
+  Index truncated = 0;         // triangles (min_norm, graded): fitted with rank below the terms
   Index outside = 0;           // points outside the grid, ignored (standalone input only)
   int min_terms = 0;           // fewest terms of a fitted element (0: none fitted)
   double max_condition = 0.0;  // largest cond(D) of a fitted element's final system
@@ -351,6 +358,37 @@ struct TlsMappingState {
   }
 };
 
+// The TLS mapping on a triangular mesh (a basis with kTriangleMesh: P1, Powell-Sabin; D 6.1.2,
+// 6.3): the reconstruction per triangle and a Gauss rule on each polynomial piece of the basis
+// (P1: the triangle; PS: its six mini-triangles), so that the products of the basis functions
+// are integrated piece by piece. The rule is the collapsed (conical) product of n-point
+// Gauss-Legendre rules on the reference triangle, (xi, eta) = (u, v (1 - u)) with weight
+// w_u w_v (1 - u) on [0, 1]^2: exact for total degree 2n - 2, so n = 2 (4 points per piece)
+// integrates the quadratic Taylor basis exactly, which conservation needs (D eq. 5.19-5.21).
+// Weights sum to 1/2, the reference area; a piece's are 2 |piece| times these.
+struct TlsTriangleMappingState {
+  TlsTriangleReconstruction recon;
+  int per_cell = 1;                           // pieces per triangle
+  std::vector<std::array<Vec<2>, 3>> pieces;  // piece k of triangle c at c * per_cell + k
+  std::vector<Vec<2>> ref;                    // Gauss points (xi, eta) of a piece
+  std::vector<double> ref_w;                  // their weights
+  std::vector<TriangleTaylor> psi;            // Taylor basis at the Gauss points of the step
+  TlsTriangleCoefficients coef;
+  std::vector<double> rho;  // at the Gauss points of the step
+  std::vector<Vec<2>> rhov, rhob;
+  std::vector<Mat<2>> sigma;
+  std::vector<double> values, integrals;  // per particle, per triangle
+
+  TlsTriangleMappingState(const TriangleMesh& mesh, const TlsSettings& s, int per_cell,
+                          std::vector<std::array<Vec<2>, 3>> pieces);
+};
+
+// The settings of the triangles' reconstruction from the mapping's: the completion becomes the
+// strategy (none, reduce, min_norm, graded); virtual and neighbour, which place points on the
+// faces of rectangles, are refused (InputError), as is a Gauss rule that does not integrate the
+// Taylor basis exactly (n = 1 with linear or quadratic terms).
+TlsTriangleSettings tls_triangle_settings(const TlsSettings& s);
+
 // The TLS particle-to-grid mapping (D 5.3.1, 6.3, 004 4.4.3) in 1D and 2D (rectangles). map_mass,
 // the first mapping call of every step, bins the particles, factorises the element systems and
 // places the Gauss points; map_momentum and map_forces of the same step reuse them (positions do
@@ -392,7 +430,14 @@ class TlsMapping {
     return st->recon;
   }
   const TlsReport& last_report() const {
+    if (triangles_) return triangle_report_;
     return dim_ == 2 ? reconstruction<2>().report() : reconstruction<1>().report();
+  }
+  // Whether the last step ran on a triangular mesh, and its reconstruction there.
+  bool on_triangles() const { return triangles_.has_value(); }
+  const TlsTriangleReconstruction& triangle_reconstruction() const {
+    if (!triangles_) throw std::logic_error("TlsMapping: no triangle reconstruction yet");
+    return triangles_->recon;
   }
   // Counts summed over the steps so far (element-steps), largest condition number of the run.
   const TlsReport& totals() const { return totals_; }
@@ -407,13 +452,28 @@ class TlsMapping {
   // per dimension (tls_mapping.cpp), the assembly once per basis.
   // rho^ conservative with c_e = sum m_p and data rho_p; lumped masses and, with consistent
   // mass, M_ij = sum_g phi_i rho^ phi_j w_g (D eq. 5.14, 5.17).
+  // On a triangular mesh (kTriangleMesh) the elements are its triangles (D 6.1.2, 6.3).
   template <class Sim>
   void map_mass(Sim& sim) {
     constexpr int Dim = Sim::kDim;
     auto& q = quad_.prepare<Sim>();
-    fit_mass<Dim>(sim, q);
-    q.evaluate(sim.basis, sim.step, sim.time);
-    assemble_mass(sim, q, state<Dim>().rho);
+    if constexpr (Sim::BasisT::kTriangleMesh) {
+      const auto& b = sim.basis;
+      // The mesh is the basis's; a new one (a restored or copied state) gets new operators.
+      if (!triangles_ || &triangles_->recon.mesh() != &b.mesh()) {
+        std::vector<std::array<Vec<2>, 3>> pieces;
+        for (Index c = 0; c < b.mesh().num_cells(); ++c)
+          for (int k = 0; k < b.pieces(); ++k) pieces.push_back(b.piece(c, k));
+        triangles_.emplace(b.mesh(), settings_, b.pieces(), std::move(pieces));
+      }
+      fit_mass_triangles(sim, q);
+      q.evaluate(sim.basis, sim.step, sim.time);
+      assemble_mass(sim, q, triangles_->rho);
+    } else {
+      fit_mass<Dim>(sim, q);
+      q.evaluate(sim.basis, sim.step, sim.time);
+      assemble_mass(sim, q, state<Dim>().rho);
+    }
   }
 
   // (rho v)^ conservative per component with c_e = sum m_p v_p and data rho_p v_p (D eq. 5.14,
@@ -422,8 +482,13 @@ class TlsMapping {
   void map_momentum(Sim& sim) {
     constexpr int Dim = Sim::kDim;
     const auto& q = quad_.prepared<Sim>();
-    fit_momentum<Dim>(sim, q);
-    assemble_momentum(sim, q, state<Dim>().rhov);
+    if constexpr (Sim::BasisT::kTriangleMesh) {
+      fit_momentum_triangles(sim, q);
+      assemble_momentum(sim, q, triangles_->rhov);
+    } else {
+      fit_momentum<Dim>(sim, q);
+      assemble_momentum(sim, q, state<Dim>().rhov);
+    }
   }
 
   // sigma^ by plain least squares per component (D eq. 5.12-5.13, 6.19-6.20); the body-force
@@ -433,9 +498,14 @@ class TlsMapping {
   void map_forces(Sim& sim) {
     constexpr int Dim = Sim::kDim;
     const auto& q = quad_.prepared<Sim>();
-    fit_forces<Dim>(sim, q);
-    const auto& st = state<Dim>();
-    assemble_forces(sim, q, st.rhob, st.sigma);
+    if constexpr (Sim::BasisT::kTriangleMesh) {
+      fit_forces_triangles(sim, q);
+      assemble_forces(sim, q, triangles_->rhob, triangles_->sigma);
+    } else {
+      fit_forces<Dim>(sim, q);
+      const auto& st = state<Dim>();
+      assemble_forces(sim, q, st.rhob, st.sigma);
+    }
   }
 
  private:
@@ -495,11 +565,17 @@ class TlsMapping {
   void fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q);
   template <int Dim>
   void fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q);
+  // tls_triangle_mapping.cpp: the same on the triangles of `mesh` (the basis's).
+  void fit_mass_triangles(RunState<2>& sim, GaussPoints<2>& q);
+  void fit_momentum_triangles(RunState<2>& sim, const GaussPoints<2>& q);
+  void fit_forces_triangles(RunState<2>& sim, const GaussPoints<2>& q);
 
   TlsSettings settings_;
   int dim_ = 1;  // dimension of the last step
   std::optional<TlsMappingState<1>> state1_;
   std::optional<TlsMappingState<2>> state2_;
+  std::optional<TlsTriangleMappingState> triangles_;  // on a triangular mesh
+  TlsReport triangle_report_;                         // of the last step there
   QuadratureStore quad_;
   std::vector<double> values_, integrals_;  // per particle, per element
   TlsReport totals_;

@@ -101,6 +101,7 @@ std::string TlsMapping::save_totals() const {
     w.i64(v);
   w.f64(t.max_condition);
   w.f64(t.failed_condition);
+  w.i64(t.truncated);  // since the triangles (checkpoints before them end here)
   return std::move(w.bytes());
 }
 
@@ -115,6 +116,7 @@ void TlsMapping::load_totals(std::string_view bytes, const std::string& what) {
   t.failed_points = r.i64();
   t.max_condition = r.f64();
   t.failed_condition = r.f64();
+  if (!r.done()) t.truncated = r.i64();
   r.expect_done();
   totals_ = t;
 }

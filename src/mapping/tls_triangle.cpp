@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "core/parallel.hpp"
+#include "mapping/quadrature.hpp"
 
 namespace mpm {
 
@@ -25,6 +26,37 @@ constexpr double kGradedTolerance = 1e-3;
 // Polynomial degree of Taylor term k (0-based): psi_1: 0; psi_2, psi_3: 1; psi_4..psi_6: 2.
 constexpr int degree(Index k) {
   return k == 0 ? 0 : (k < 3 ? 1 : 2);
+}
+
+// The Gram matrix of the Taylor basis in the mean over the reference triangle,
+// Gram_kl = 2 int psi_k psi_l d(xi, eta), exact: the collapsed product of 4-point Gauss rules
+// integrates total degree 6 (the products have degree 4). Block diagonal: psi_2..psi_6 have
+// zero mean (D eq. 5.7), so they are orthogonal to psi_1 = 1.
+const Eigen::Matrix<double, 6, 6>& taylor_gram() {
+  static const Eigen::Matrix<double, 6, 6> gram = [] {
+    Eigen::Matrix<double, 6, 6> g = Eigen::Matrix<double, 6, 6>::Zero();
+    const GaussRule rule = gauss_legendre(4);
+    for (std::size_t i = 0; i < rule.xi.size(); ++i)
+      for (std::size_t j = 0; j < rule.xi.size(); ++j) {
+        const double u = 0.5 * (1.0 + rule.xi[i]), v = 0.5 * (1.0 + rule.xi[j]);
+        const double w = 2.0 * 0.25 * rule.w[i] * rule.w[j] * (1.0 - u);
+        const TriangleTaylor psi = triangle_taylor_basis(u, v * (1.0 - u));
+        g += w * psi * psi.transpose();
+      }
+    return g;
+  }();
+  return gram;
+}
+
+// W = L^{-T} with L L^T the Cholesky factor of the Gram block of terms first..first+n-1: the
+// basis phi = W^T psi is orthonormal in the mean over the triangle (L lower triangular, so phi_k
+// combines psi_first..psi_k and the leading j columns of B W span the leading j terms).
+Eigen::MatrixXd orthonormalising(int first, int n) {
+  if (n == 0) return Eigen::MatrixXd(0, 0);
+  const Eigen::MatrixXd g = taylor_gram().block(first, first, n, n);
+  const Eigen::LLT<Eigen::MatrixXd> llt(g);
+  const Eigen::MatrixXd L = llt.matrixL();
+  return L.transpose().triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(n, n));
 }
 
 // cond_2(D) = (sigma_max / sigma_min)^2 from the singular values of B (descending); infinite when
@@ -47,9 +79,21 @@ struct SystemResult {
   TlsTriangleSystemInfo info;
 };
 
-SystemResult solve_system(const Eigen::MatrixXd& B, int first, std::span<const int> sizes,
-                          TlsTriangleStrategy strategy, double max_condition) {
+//
+// The system is solved, and its condition judged, in the orthonormal basis phi = W^T psi: data
+// matrix B W, coefficients c, a = W c. Least-squares fits do not depend on the basis of the
+// space, but cond(D) does: in psi it is about 1e3 for a uniform layout (psi_4..psi_6 are small
+// on the triangle), in phi the normal matrix of m uniformly spread points is about m I, so
+// cond(D) is 1 for ideal sampling and grows as some polynomial of the space is sampled worse
+// than by uniform points: the measure of sampling quality of least squares on polynomial
+// spaces (Cohen, Davenport and Leviatan 2013, Found. Comput. Math. 13: the empirical Gram
+// matrix of an orthonormal basis). The Graded strategy minimises the coefficients c of phi by
+// degree, i.e. the L2 norms of the degree-2 and degree-1 parts of the reconstruction.
+SystemResult solve_system(const Eigen::MatrixXd& Bpsi, const Eigen::MatrixXd& W, int first,
+                          std::span<const int> sizes, TlsTriangleStrategy strategy,
+                          double max_condition) {
   using Eigen::MatrixXd;
+  const MatrixXd B = Bpsi * W;
   const Index m = B.rows(), n = B.cols();
   SystemResult res;
   res.G = MatrixXd::Zero(n, m);
@@ -89,7 +133,7 @@ SystemResult solve_system(const Eigen::MatrixXd& B, int first, std::span<const i
   if (n == 0) {  // nothing fitted (the conservative system of one term)
     info.condition = 1.0;
     fit_block(0);
-    return res;
+    return res;  // no columns: nothing to transform
   }
   const Svd full = svd(n);
   info.condition = condition_of(full.singularValues());
@@ -155,6 +199,7 @@ SystemResult solve_system(const Eigen::MatrixXd& B, int first, std::span<const i
       break;
     }
   }
+  res.G = W * res.G;  // a = W c
   return res;
 }
 
@@ -281,6 +326,7 @@ const TlsTriangleReport& TlsTriangleReconstruction::set_points(std::span<const V
   const std::span<const int> cons_sizes(kConservative.data() + skip, kConservative.size() - skip);
   const double max_condition = settings_.max_condition;
   const TlsTriangleStrategy strategy = settings_.strategy;
+  const Eigen::MatrixXd w_plain = orthonormalising(0, nb_), w_cons = orthonormalising(1, nb_ - 1);
 
   // Elements are independent: parallel, the same bits for any thread count.
   parallel_for(ne, [&](Index e) {
@@ -294,9 +340,9 @@ const TlsTriangleReport& TlsTriangleReconstruction::set_points(std::span<const V
       const Vec<2>& xp = x[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin + k)])];
       B.row(k) = basis(e, xp).head(nb_).transpose();
     }
-    const SystemResult plain = solve_system(B, 0, plain_sizes, strategy, max_condition);
+    const SystemResult plain = solve_system(B, w_plain, 0, plain_sizes, strategy, max_condition);
     const SystemResult cons =
-        solve_system(B.rightCols(nb_ - 1), 1, cons_sizes, strategy, max_condition);
+        solve_system(B.rightCols(nb_ - 1), w_cons, 1, cons_sizes, strategy, max_condition);
     for (Index k = 0; k < m; ++k) {
       const auto slot = static_cast<std::size_t>(begin + k);
       q_[slot].head(nb_) = plain.G.col(k);

@@ -16,6 +16,8 @@
 
 namespace mpm {
 
+class TriangleMesh;  // grid/triangle_mesh.hpp
+
 template <int Dim>
 struct ExactState {
   Vec<Dim> u;       // displacement at the material point X [m]
@@ -63,6 +65,18 @@ using AnyProblem = std::variant<Problem<1>, Problem<2>>;
 template <int Dim>
 Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
                               int per_cell, double rho0);
+
+// Particles in every triangle of m, per_triangle = m k^2 (m = 1, 3 or 6, k >= 1) each: the
+// triangle is cut into k^2 similar sub-triangles (lines parallel to its edges at 1/k steps) and
+// each sub-triangle into m parts of equal area (m = 3: joining its centroid to its vertices;
+// m = 6: its three medians); one particle sits at the centroid of every part and carries its
+// area. Volumes are exact shares of the mesh's area, the layout is the same in every triangle's
+// reference coordinates, and a particle never lies on an edge. D 6.3.1 runs 12, 16 and 24
+// "uniformly distributed" points per triangle without saying how; 12 = 3 * 4, 16 = 1 * 16 and
+// 24 = 6 * 4 here. Particles are numbered by triangle, then by part. mass = rho0 V, F = I.
+Particles<2> seed_particles_in_triangles(const TriangleMesh& m, int per_triangle, double rho0);
+// (m, k) of a count, or {0, 0} when it is not of the form m k^2.
+std::pair<int, int> triangle_seed_pattern(int per_triangle);
 
 // The traction tau(t) on the face of the body box [lo, hi] normal to `direction` (side +1: at
 // hi, -1: at lo), applied through the outer layer of the particles seed_particles(g, lo, hi,

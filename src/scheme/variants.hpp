@@ -181,14 +181,15 @@ using BasisKind =
 // to six cells, the plate of plate_mms_2d became unstable (TLS: non-finite stress at step 1649;
 // MLS with USF: a mass error of 0.5 at step 1272) where every other basis runs; the cause is not
 // established (docs/verification.md).
-// P1 and PS splines on triangles run with the direct mapping: the reconstructions integrate over
-// rectangular cells (TLS on triangles exists standalone, mapping/tls_triangle.hpp, not yet as a
-// mapping).
+// P1 and PS splines on triangles run with the direct and the TLS mapping (TLS fits and
+// integrates per triangle, D 6.1.2, 6.3); the other reconstructions (MLS, IMLS, cubic spline)
+// integrate over the grid's rectangular cells.
 template <class Kind, class Mapping>
 constexpr bool supports_mapping() {
-  if constexpr (std::is_same_v<Kind, MaxEntKind> || std::is_same_v<Kind, TriangleP1Kind> ||
-                std::is_same_v<Kind, PowellSabinKind>)
+  if constexpr (std::is_same_v<Kind, MaxEntKind>)
     return std::is_same_v<Mapping, DirectMapping>;
+  else if constexpr (std::is_same_v<Kind, TriangleP1Kind> || std::is_same_v<Kind, PowellSabinKind>)
+    return std::is_same_v<Mapping, DirectMapping> || std::is_same_v<Mapping, TlsMapping>;
   else
     return true;
 }

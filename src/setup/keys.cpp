@@ -123,6 +123,11 @@ std::vector<KeySpec> declare() {
 
       integer("particles.per_cell", 4, at_least(1),
               "material points per cell per direction, evenly spaced"),
+      integer("particles.per_triangle", 0, at_least(0),
+              "material points per triangle of method.basis = \"p1_triangles\" or "
+              "\"powell_sabin\", m k^2 with m = 1, 3 or 6 (k^2 similar sub-triangles, each split "
+              "into m equal parts, one point at each part's centroid: 3, 4, 6, 9, 12, 16, 24, ...; "
+              "D 6.3.1); 0: particles.per_cell per grid cell"),
 
       real("time.dt", "s", kRequired, greater_than(0), "time-step size"),
       real("time.end", "s", kRequired, greater_than(0), "end time of the simulation"),
@@ -177,10 +182,15 @@ std::vector<KeySpec> declare() {
       integer("method.tls_terms", 0, closed(0, 6),
               "Taylor basis functions per element of the TLS mapping (1D: 1-3; 2D: 1, 3 or 6; 0: "
               "the quadratic basis, 3 in 1D and 6 in 2D)"),
-      choice("method.tls_completion", "virtual", kTlsCompletions,
+      choice("method.tls_completion", "auto", kTlsCompletions,
              "what TLS does in an element with too few or badly placed particles (D 5.2.3)"),
       real("method.tls_max_condition", "", 1e8, greater_than(1),
-           "largest condition number of an element's least-squares matrix before completion"),
+           "largest condition number of an element's least-squares matrix before completion "
+           "(the grid's cells)"),
+      real("method.tls_triangle_max_condition", "", 10.0, greater_than(1),
+           "largest condition number of a triangle's least-squares matrix in the L2-orthonormal "
+           "Taylor basis (1: as well sampled as by uniform points) before completion "
+           "(p1_triangles, powell_sabin; D 6.3.1, docs/verification.md)"),
       integer("method.gauss_points", 0, closed(0, 10),
               "Gauss points per element of a reconstruction mapping (0: the method's own: 2 "
               "for TLS, 2 per half element for the cubic spline)"),

@@ -5,7 +5,9 @@ namespace mpm {
 TlsSettings tls_settings(const Config& cfg, int dim) {
   TlsSettings s;
   s.terms = static_cast<int>(cfg.get_int("method.tls_terms"));
-  s.completion = parse_tls_completion(cfg.get_string("method.tls_completion"));
+  // "auto" is virtual here; run_settings makes it reduce on triangles.
+  const std::string completion = cfg.get_string("method.tls_completion");
+  s.completion = completion == "auto" ? TlsCompletion::Virtual : parse_tls_completion(completion);
   s.max_condition = cfg.get_real("method.tls_max_condition");
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
   validate(s, dim);

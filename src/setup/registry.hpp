@@ -95,6 +95,10 @@ inline constexpr Entry kTlsCompletions[] = {
     {"reduce", "use fewer Taylor terms in that element (D 5.2.3)"},
     {"virtual", "add virtual points from the neighbouring elements' reconstructions (D 5.2.3)"},
     {"neighbour", "borrow the nearest particles of the neighbouring elements (D 5.2.3)"},
+    {"min_norm", "triangles: truncated SVD, minimum-norm coefficients (mapping/tls_triangle.hpp)"},
+    {"graded",
+     "triangles: truncated SVD, undetermined directions resolved towards the lowest degree"},
+    {"auto", "virtual on the grid's rectangles, reduce on triangles (docs/verification.md)"},
 };
 
 inline constexpr auto kSchemes = entries_of<Scheme>();

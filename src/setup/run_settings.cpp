@@ -172,6 +172,46 @@ RunSettings run_settings(const Config& cfg, int dim) {
   if (m.solver != Solver::Ulfem)
     m.mapping =
         dim == 1 ? configured_mapping<1>(m.mapping, cfg) : configured_mapping<2>(m.mapping, cfg);
+  if (auto* tls = std::get_if<TlsMapping>(&m.mapping); tls && m.solver == Solver::Mpm) {
+    // The completions differ between the grid's rectangles and triangles (mapping/tls.hpp).
+    const bool triangles = std::holds_alternative<TriangleP1Kind>(m.basis) ||
+                           std::holds_alternative<PowellSabinKind>(m.basis);
+    TlsSettings ts = tls->settings();
+    const std::string completion = cfg.get_string("method.tls_completion");
+    // "auto" on triangles: reduce, the most accurate completion of the study of D 6.3.1's plate
+    // in docs/verification.md (12, 16, 24 particles per triangle, A = 0.05 and 0.1 m).
+    if (completion == "auto")
+      ts.completion = triangles ? TlsCompletion::Reduce : TlsCompletion::Virtual;
+    const bool triangle_only =
+        ts.completion == TlsCompletion::MinimumNorm || ts.completion == TlsCompletion::Graded;
+    if (!triangles && triangle_only)
+      throw InputError(fmt::format(
+          "{}: method.tls_completion = \"{}\" works on triangles (method.basis = "
+          "\"p1_triangles\" or \"powell_sabin\"); on the grid's cells choose one of: none, "
+          "reduce, virtual, neighbour, auto",
+          m.where_tls_completion, completion));
+    // The two limits measure different things (the raw Taylor basis of the rectangles, the
+    // orthonormal one of the triangles), so each is refused where it does not apply.
+    const char* other =
+        triangles ? "method.tls_max_condition" : "method.tls_triangle_max_condition";
+    const KeySpec* spec = find_key(other);
+    if (spec != nullptr && spec->default_value &&
+        cfg.get_real(other) != std::get<double>(*spec->default_value))
+      throw InputError(fmt::format(
+          "{}: {} applies to {}; this run's basis \"{}\" uses {}", cfg.where(other), other,
+          triangles ? "the grid's cells" : "triangles (p1_triangles, powell_sabin)",
+          name_of(m.basis),
+          triangles ? "method.tls_triangle_max_condition" : "method.tls_max_condition"));
+    if (triangles) {
+      ts.max_condition = cfg.get_real("method.tls_triangle_max_condition");
+      try {
+        (void)tls_triangle_settings(ts);
+      } catch (const InputError& e) {
+        throw InputError(fmt::format("{}: {}", m.where_tls_completion, e.what()));
+      }
+    }
+    *tls = TlsMapping(ts, dim);
+  }
   if (m.solver == Solver::Otm) {
     // OTM's update x_p = sum phi_i x_i needs consistent bases (D eq. 4.14-4.16), and it
     // integrates at the material points (D Algorithm 3).

@@ -1,0 +1,197 @@
+// The TLS mapping on triangular meshes (tls.hpp, TlsMapping with a kTriangleMesh basis; D 6.1.2,
+// 6.3): the reconstructions of map_mass, map_momentum and map_forces per triangle, compiled
+// once. The basis evaluation and the assembly at the Gauss points are the rectangles'
+// (quadrature.hpp, once per basis).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "mapping/tls.hpp"
+
+namespace mpm {
+
+TlsTriangleSettings tls_triangle_settings(const TlsSettings& s) {
+  TlsTriangleSettings t;
+  t.terms = s.terms;
+  t.max_condition = s.max_condition;
+  switch (s.completion) {
+    case TlsCompletion::None:
+      t.strategy = TlsTriangleStrategy::None;
+      break;
+    case TlsCompletion::Reduce:
+      t.strategy = TlsTriangleStrategy::Reduce;
+      break;
+    case TlsCompletion::MinimumNorm:
+      t.strategy = TlsTriangleStrategy::MinimumNorm;
+      break;
+    case TlsCompletion::Graded:
+      t.strategy = TlsTriangleStrategy::Graded;
+      break;
+    case TlsCompletion::Virtual:
+    case TlsCompletion::Neighbour:
+      throw InputError(fmt::format(
+          "method.tls_completion = \"{}\" completes the grid's rectangles; on triangles choose "
+          "one of: none, reduce, min_norm, graded (or auto: reduce)",
+          tls_completion_name(s.completion)));
+  }
+  // The collapsed n x n rule is exact for total degree 2n - 2: linear and quadratic Taylor
+  // terms need n >= 2, or the Gauss points lose mass (D 5.3.2).
+  if (s.gauss_points_used() < 2 && t.terms_used() > 1)
+    throw InputError(fmt::format(
+        "method.gauss_points = {} integrates only constants exactly on a triangle (the collapsed "
+        "rule of n x n points is exact to degree 2n - 2); {} Taylor terms need at least 2",
+        s.gauss_points_used(), t.terms_used()));
+  validate(t);
+  return t;
+}
+
+TlsTriangleMappingState::TlsTriangleMappingState(const TriangleMesh& mesh, const TlsSettings& s,
+                                                 int per_cell_,
+                                                 std::vector<std::array<Vec<2>, 3>> pieces_)
+    : recon(mesh, tls_triangle_settings(s)), per_cell(per_cell_), pieces(std::move(pieces_)) {
+  const GaussRule rule = gauss_legendre(s.gauss_points_used());
+  for (std::size_t i = 0; i < rule.xi.size(); ++i)
+    for (std::size_t j = 0; j < rule.xi.size(); ++j) {
+      const double u = 0.5 * (1.0 + rule.xi[i]), v = 0.5 * (1.0 + rule.xi[j]);
+      ref.emplace_back(u, v * (1.0 - u));
+      ref_w.push_back(0.25 * rule.w[i] * rule.w[j] * (1.0 - u));
+    }
+}
+
+namespace {
+// The mapping's summary of one step's fits: an element counts once, by the worse of its two
+// systems (plain: stress; conservative: density, momentum, body force).
+TlsReport summarise(const TlsTriangleReconstruction& recon) {
+  const TlsTriangleReport& rep = recon.report();
+  TlsReport r;
+  r.elements = rep.elements;
+  r.active = rep.active;
+  r.outside = rep.outside;
+  const int nb = recon.terms();
+  for (Index e = 0; e < recon.num_elements(); ++e) {
+    const TlsTriangleElementInfo& info = recon.element(e);
+    if (info.points == 0) continue;
+    const auto& a = info.plain;
+    const auto& b = info.conservative;
+    if (a.failed || b.failed) {
+      if (r.failed++ == 0) {
+        r.failed_element = e;
+        r.failed_points = info.points;
+        r.failed_condition = std::max(a.condition, b.condition);
+      }
+      continue;
+    }
+    if (!a.deficient && !b.deficient) ++r.full;
+    if (a.terms < nb || b.terms < nb) ++r.reduced;
+    if (a.rank < a.terms || b.rank < b.terms) ++r.truncated;
+    const int rank = std::min(a.rank, b.rank);
+    r.min_terms = r.min_terms > 0 ? std::min(r.min_terms, rank) : rank;
+    r.max_condition = std::max({r.max_condition, a.condition_solved, b.condition_solved});
+  }
+  return r;
+}
+
+// st.integrals[e] = the sum of value(p) over the particles of triangle e.
+template <class Value>
+void triangle_sums(TlsTriangleMappingState& st, Value&& value) {
+  const Index ne = st.recon.num_elements();
+  st.integrals.resize(static_cast<std::size_t>(ne));
+  parallel_for(ne, [&](Index e) {
+    double c = 0.0;
+    for (const Index p : st.recon.points(e)) c += value(static_cast<std::size_t>(p));
+    st.integrals[static_cast<std::size_t>(e)] = c;
+  });
+}
+
+// st.values[i] = value(i) for every particle (sized by the caller).
+template <class Value>
+void triangle_values(TlsTriangleMappingState& st, Value&& value) {
+  parallel_for(static_cast<Index>(st.values.size()), [&](Index i) {
+    st.values[static_cast<std::size_t>(i)] = value(static_cast<std::size_t>(i));
+  });
+}
+
+// The reconstruction st.coef at every Gauss point (of triangle q.element[g]).
+template <class Store>
+void triangle_at_gauss(const TlsTriangleMappingState& st, const GaussPoints<2>& q, Store&& store) {
+  parallel_for(static_cast<Index>(q.size()), [&](Index gi) {
+    const auto g = static_cast<std::size_t>(gi);
+    store(g, st.coef[static_cast<std::size_t>(q.element[g])].dot(st.psi[g]));
+  });
+}
+}  // namespace
+
+void TlsMapping::fit_mass_triangles(RunState<2>& sim, GaussPoints<2>& q) {
+  dim_ = 2;
+  auto& st = *triangles_;
+  const auto& P = sim.particles;
+  st.recon.set_points(P.x);
+  triangle_report_ = summarise(st.recon);
+  const TlsReport& rep = triangle_report_;
+  accumulate(totals_, rep);
+  if (rep.failed > 0)
+    throw RunError(
+        exit_code::kReconstruction,
+        fmt::format("step {}, t = {:.9g} s: TLS cannot fit triangle {} ({} particles, condition "
+                    "number {:.3g}){}; set method.tls_completion = reduce, min_norm or graded",
+                    sim.step, sim.time, rep.failed_element, rep.failed_points, rep.failed_condition,
+                    rep.failed > 1 ? fmt::format(" and {} more triangle(s)", rep.failed - 1)
+                                   : std::string()));
+  q.clear();
+  st.psi.clear();
+  for (Index e = 0; e < st.recon.num_elements(); ++e) {
+    if (st.recon.element(e).points == 0) continue;  // no particles: no reconstruction, no mass
+    for (int k = 0; k < st.per_cell; ++k) {
+      const auto& v = st.pieces[static_cast<std::size_t>(e * st.per_cell + k)];
+      const Vec<2> e1 = v[1] - v[0], e2 = v[2] - v[0];
+      const double jacobian = std::abs(e1[0] * e2[1] - e1[1] * e2[0]);  // 2 |piece|
+      for (std::size_t g = 0; g < st.ref.size(); ++g) {
+        const Vec<2> x = v[0] + st.ref[g][0] * e1 + st.ref[g][1] * e2;
+        q.add(x, jacobian * st.ref_w[g], e);
+        st.psi.push_back(st.recon.basis(e, x));
+      }
+    }
+  }
+  triangle_sums(st, [&](std::size_t i) { return P.mass[i]; });
+  st.recon.fit_conservative(P.density, st.integrals, st.coef);
+  st.rho.resize(q.size());
+  triangle_at_gauss(st, q, [&](std::size_t g, double v) { st.rho[g] = v; });
+}
+
+void TlsMapping::fit_momentum_triangles(RunState<2>& sim, const GaussPoints<2>& q) {
+  auto& st = *triangles_;
+  const auto& P = sim.particles;
+  st.rhov.resize(q.size());
+  st.values.resize(P.x.size());
+  for (int d = 0; d < 2; ++d) {
+    triangle_values(st, [&](std::size_t i) { return P.density[i] * P.v[i][d]; });
+    triangle_sums(st, [&](std::size_t i) { return P.mass[i] * P.v[i][d]; });
+    st.recon.fit_conservative(st.values, st.integrals, st.coef);
+    triangle_at_gauss(st, q, [&](std::size_t g, double v) { st.rhov[g][d] = v; });
+  }
+}
+
+void TlsMapping::fit_forces_triangles(RunState<2>& sim, const GaussPoints<2>& q) {
+  auto& st = *triangles_;
+  const auto& P = sim.particles;
+  st.values.resize(P.x.size());
+  st.sigma.resize(q.size());
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) {
+      triangle_values(st, [&](std::size_t i) { return P.stress[i](r, c); });
+      st.recon.fit_plain(st.values, st.coef);
+      triangle_at_gauss(st, q, [&](std::size_t g, double v) { st.sigma[g](r, c) = v; });
+    }
+  st.rhob.resize(q.size());
+  for (int d = 0; d < 2; ++d) {
+    triangle_values(st, [&](std::size_t i) { return P.density[i] * P.body[i][d]; });
+    triangle_sums(st, [&](std::size_t i) { return P.mass[i] * P.body[i][d]; });
+    st.recon.fit_conservative(st.values, st.integrals, st.coef);
+    triangle_at_gauss(st, q, [&](std::size_t g, double v) { st.rhob[g][d] = v; });
+  }
+}
+
+}  // namespace mpm
