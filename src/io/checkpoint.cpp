@@ -301,18 +301,18 @@ std::optional<std::string> value_text(const Config& cfg, const KeySpec& k) {
         return cfg.get_bool(k.name) ? "true" : "false";
       case KeyType::String:
       case KeyType::Expression:
-        return "\"" + cfg.get_string(k.name) + "\"";
+        return fmt::format("\"{}\"", cfg.get_string(k.name));
       case KeyType::RealVector: {
         std::string text;
         for (double v : cfg.get_reals(k.name))
           text += (text.empty() ? "" : ", ") + fmt::format("{}", v);
-        return "[" + text + "]";
+        return fmt::format("[{}]", text);
       }
       case KeyType::ExpressionVector: {
         std::string text;
         for (const auto& v : cfg.get_expressions(k.name))
           text += (text.empty() ? "\"" : ", \"") + v + "\"";
-        return "[" + text + "]";
+        return fmt::format("[{}]", text);
       }
     }
   } catch (const InputError&) {
