@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/stepper.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "driver/stepper.hpp"
 #include "model/problem.hpp"
@@ -90,19 +91,7 @@ TEST(TlsOnTriangles, LinearVelocityFieldIsExactThroughTheStep) {
       auto r =
           plate({"method.basis=" + basis, "grid.cells=4", "particles.per_triangle=12",
                  "method.triangles=" + pattern, "method.mass=consistent", "method.scheme=usl"});
-      auto& P = r->stepper->state().particles;
-      std::vector<Vec<2>> x0(P.x.begin(), P.x.end());
-      for (std::size_t i = 0; i < P.x.size(); ++i) {
-        P.v[i] = A * P.x[i];
-        P.stress[i].setZero();
-      }
-      r->stepper->step(dt);
-      const Mat<2> F = Mat<2>::Identity() + dt * A;
-      double worst_f = 0.0, worst_x = 0.0;
-      for (std::size_t i = 0; i < P.x.size(); ++i) {
-        worst_f = std::max(worst_f, (P.F[i] - F).norm());
-        worst_x = std::max(worst_x, (P.x[i] - (x0[i] + dt * A * x0[i])).norm());
-      }
+      const auto [worst_f, worst_x] = test::linear_field_step(*r->stepper, A, dt);
       EXPECT_LT(worst_f, 1e-13);
       EXPECT_LT(worst_x, 1e-15);
     }
