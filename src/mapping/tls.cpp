@@ -135,6 +135,18 @@ void validate(const TlsSettings& s, int dim) {
         s.gauss_points, terms, dim, taylor_degree(terms, dim)));
 }
 
+void throw_fit_failure(Index step, double time, const TlsReport& rep, std::string_view noun,
+                       const std::string& which, std::string_view completions) {
+  throw RunError(
+      exit_code::kReconstruction,
+      fmt::format(
+          "step {}, t = {:.9g} s: TLS cannot fit {} {} ({} particles, condition "
+          "number {:.3g}){}; set method.tls_completion = {}",
+          step, time, noun, which, rep.failed_points, rep.failed_condition,
+          rep.failed > 1 ? fmt::format(" and {} more {}(s)", rep.failed - 1, noun) : std::string(),
+          completions));
+}
+
 void accumulate(TlsReport& total, const TlsReport& step) {
   total.elements += step.elements;
   total.active += step.active;

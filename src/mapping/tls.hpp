@@ -118,6 +118,13 @@ struct TlsReport {
 // Sums the counts (element-steps over a run), keeps the extreme condition and terms.
 void accumulate(TlsReport& total, const TlsReport& step);
 
+// The run stops (exit code kReconstruction) when a step's fits failed (rep.failed > 0): names the
+// first element that could not be fitted (`noun` "element" or "triangle", `which` its
+// description), how many more did, and the completions of that mesh that would fit them.
+[[noreturn]] void throw_fit_failure(Index step, double time, const TlsReport& rep,
+                                    std::string_view noun, const std::string& which,
+                                    std::string_view completions);
+
 // Per element, after set_points().
 struct TlsElementInfo {
   Index points = 0;          // own data points

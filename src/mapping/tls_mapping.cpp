@@ -17,14 +17,8 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   const TlsReport& rep = st.recon.set_points(sim.grid, P);
   accumulate(totals_, rep);
   if (rep.failed > 0)
-    throw RunError(
-        exit_code::kReconstruction,
-        fmt::format("step {}, t = {:.9g} s: TLS cannot fit element {} ({} particles, condition "
-                    "number {:.3g}){}; set method.tls_completion = reduce, virtual or neighbour",
-                    sim.step, sim.time, st.recon.describe(rep.failed_element), rep.failed_points,
-                    rep.failed_condition,
-                    rep.failed > 1 ? fmt::format(" and {} more element(s)", rep.failed - 1)
-                                   : std::string()));
+    throw_fit_failure(sim.step, sim.time, rep, "element", st.recon.describe(rep.failed_element),
+                      "reduce, virtual or neighbour");
   q.clear();
   // D 6.3: the same Gauss rule in every element of the uniform grid, weights scaled by the
   // half-widths (the Jacobian of the map from [-1, 1]^Dim).

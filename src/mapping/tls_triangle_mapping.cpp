@@ -133,13 +133,8 @@ void TlsMapping::fit_mass_triangles(RunState<2>& sim, GaussPoints<2>& q) {
   const TlsReport& rep = triangle_report_;
   accumulate(totals_, rep);
   if (rep.failed > 0)
-    throw RunError(
-        exit_code::kReconstruction,
-        fmt::format("step {}, t = {:.9g} s: TLS cannot fit triangle {} ({} particles, condition "
-                    "number {:.3g}){}; set method.tls_completion = reduce, min_norm or graded",
-                    sim.step, sim.time, rep.failed_element, rep.failed_points, rep.failed_condition,
-                    rep.failed > 1 ? fmt::format(" and {} more triangle(s)", rep.failed - 1)
-                                   : std::string()));
+    throw_fit_failure(sim.step, sim.time, rep, "triangle", std::to_string(rep.failed_element),
+                      "reduce, min_norm or graded");
   q.clear();
   st.psi.clear();
   for (Index e = 0; e < st.recon.num_elements(); ++e) {
