@@ -119,7 +119,9 @@ std::pair<int, int> triangle_seed_pattern(int per_triangle) {
 }
 
 Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_triangle, double rho0) {
-  const auto [m, k] = triangle_seed_pattern(per_triangle);
+  // Not a structured binding: the lambda below captures m (clang 14 refuses that).
+  const std::pair<int, int> mk = triangle_seed_pattern(per_triangle);
+  const int m = mk.first, k = mk.second;
   if (m == 0)
     throw InputError(
         fmt::format("{} particles per triangle is not of the form m k^2 with m = 1, "
