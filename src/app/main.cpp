@@ -447,7 +447,7 @@ int main(int argc, char** argv) {
                                {mesh_cells[0], mesh_cells[1]},
                                mesh_pattern == "right" ? mpm::TrianglePattern::right
                                                        : mpm::TrianglePattern::criss_cross)
-                         : mpm::read_gmsh_mesh(mesh_file);
+                         : mpm::with_box_sides(mpm::read_gmsh_mesh(mesh_file));  // as grid.mesh
       const auto q = mpm::mesh_quality(m);
       mpm::print_mesh_summary(std::cout, m, q);
       if (!mesh_vtu.empty()) mpm::write_mesh_vtu(mesh_vtu, m, q);

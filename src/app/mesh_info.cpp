@@ -53,7 +53,9 @@ void print_mesh_summary(std::ostream& os, const TriangleMesh& m, const MeshQuali
     os << "  no named boundaries (Gmsh: physical groups of dimension 1)\n";
     return;
   }
-  os << "  boundaries (boundary.<name> in a configuration):\n";
+  os << "  boundaries (\"x-\", \"x+\", \"y-\", \"y+\": the boundary edges on the sides of the "
+        "bounding box, where the conditions of a run act (boundary.left, right, bottom, top; "
+        "the plate's rollers); the others: the file's physical groups of lines):\n";
   for (const auto& name : names) {
     const auto& b = m.boundary(name);
     double length = 0.0;

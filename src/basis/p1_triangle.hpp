@@ -4,8 +4,10 @@
 // triangle that contains the point, with the triangle's constant gradients. Partition of unity,
 // linear reproduction and C0 continuity across edges hold exactly
 // (tests/basis/test_p1_triangle.cpp).
+#include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "basis/basis.hpp"
@@ -69,13 +71,14 @@ class P1TriangleBasis {
   const TriangleMesh* mesh_;
 };
 
-// P1 on a structured triangulation of the run's grid (method.basis = "p1_triangles",
-// method.triangles = "right" | "criss_cross"; D 3.3's P1 background on triangles): the grid
-// keeps what it does for the other bases (particle seeding, the named sides, the stability
-// length, the check that particles stay inside), and the functions live on its triangles.
-// Vertex numbering: the grid's corners as Grid<2>::vertex (x fastest), then the criss-cross
-// centres, so the fixed sides are the grid's. A full stencil of the 3 vertices of the triangle
-// holding the particle (kTensorProduct = false).
+// P1 on the run's triangles (method.basis = "p1_triangles"; D 3.3's P1 background on
+// triangles): a structured triangulation of the grid (method.triangles = "right" |
+// "criss_cross"), or a Gmsh mesh (grid.mesh), whose bounding box is then the grid. The grid
+// keeps what it does for the other bases (particle seeding, the stability length, the check that
+// particles stay inside, the re-sorting by cell); the functions live on the triangles. Structured
+// vertex numbering: the grid's corners as Grid<2>::vertex (x fastest), then the criss-cross
+// centres. A full stencil of the 3 vertices of the triangle holding the particle
+// (kTensorProduct = false).
 template <int Dim>
 class TriangleP1Basis {
   static_assert(Dim == 2, "P1 on triangles is two-dimensional");
@@ -87,35 +90,44 @@ class TriangleP1Basis {
   using StencilT = Stencil<Dim, 3>;
 
   TriangleP1Basis(const Grid<Dim>& g, TrianglePattern pattern)
-      : mesh_(structured_triangles(g.origin, g.upper(), g.cells, pattern)) {}
+      : TriangleP1Basis(std::make_shared<const TriangleMesh>(
+            structured_triangles(g.origin, g.upper(), g.cells, pattern))) {}
+  // Shared: copies of the basis (the run's state holds one by value) share the mesh.
+  explicit TriangleP1Basis(std::shared_ptr<const TriangleMesh> mesh) : mesh_(std::move(mesh)) {}
 
-  Index num_dofs() const { return mesh_.num_vertices(); }
+  Index num_dofs() const { return mesh_->num_vertices(); }
   // Not a tensor-product layout: one row of all DOFs (dof_strides of it is unused, the stencils
   // hold their DOFs).
   IVec<Dim> dofs_per_dim() const { return {num_dofs(), 1}; }
-  Vec<Dim> dof_position(Index i) const { return mesh_.vertex(i); }
+  Vec<Dim> dof_position(Index i) const { return mesh_->vertex(i); }
+  // The vertices of the mesh boundary on the grid side (d, side): "x-", "x+", "y-", "y+"
+  // (TriangleMesh::add_box_sides for a Gmsh mesh).
   std::vector<Index> boundary_dofs(int d, int side) const {
-    return mesh_.boundary_vertices(side_name(d, side));
+    return mesh_->boundary_vertices(side_name(d, side));
   }
-  // Zero weights outside the mesh (callers check that points are inside the grid first).
-  void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
-    const Index c = mesh_.cell_index(x);
-    if (c >= 0) return p1_triangle_stencil(mesh_, c, x, s);
+  // False, with zero weights, outside the mesh.
+  bool evaluate_point(const Vec<Dim>& x, StencilT& s) const {
+    const Index c = mesh_->cell_index(x);
+    if (c >= 0) {
+      p1_triangle_stencil(*mesh_, c, x, s);
+      return true;
+    }
     clear_stencil(s);
+    return false;
   }
-  void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
-    evaluate_point(P.x[static_cast<std::size_t>(p)], s);
+  bool evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
+    return evaluate_point(P.x[static_cast<std::size_t>(p)], s);
   }
-  const TriangleMesh& mesh() const { return mesh_; }
+  const TriangleMesh& mesh() const { return *mesh_; }
   // One polynomial piece per triangle: the triangle.
   static constexpr int pieces() { return 1; }
   std::array<Vec<2>, 3> piece(Index c, int) const {
-    const auto& t = mesh_.cell_vertices(c);
-    return {mesh_.vertex(t[0]), mesh_.vertex(t[1]), mesh_.vertex(t[2])};
+    const auto& t = mesh_->cell_vertices(c);
+    return {mesh_->vertex(t[0]), mesh_->vertex(t[1]), mesh_->vertex(t[2])};
   }
 
  private:
-  TriangleMesh mesh_;
+  std::shared_ptr<const TriangleMesh> mesh_;
 };
 
 static_assert(Basis<TriangleP1Basis<2>, 2>);

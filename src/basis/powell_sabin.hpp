@@ -38,6 +38,8 @@
 //
 // DOF 3 i + j is N_ij. A quadratic f has the coefficients c_ij = f(V_i) + grad f(V_i) . (Q_ij -
 // V_i), the tangent plane of f at V_i evaluated at Q_ij (x = sum_ij Q_ij N_ij for f = x).
+#include <fmt/format.h>
+
 #include <array>
 #include <cmath>
 #include <memory>
@@ -152,9 +154,11 @@ class PowellSabinGridBasis {
   // The mesh is shared, so that copies of the basis (the run's state holds one by value) keep
   // the address the spline construction refers to.
   PowellSabinGridBasis(const Grid<Dim>& g, TrianglePattern pattern)
-      : mesh_(std::make_shared<const TriangleMesh>(
-            structured_triangles(g.origin, g.upper(), g.cells, pattern))),
-        ps_(*mesh_) {}
+      : PowellSabinGridBasis(std::make_shared<const TriangleMesh>(
+            structured_triangles(g.origin, g.upper(), g.cells, pattern))) {}
+  // A given mesh (grid.mesh: a Gmsh file).
+  explicit PowellSabinGridBasis(std::shared_ptr<const TriangleMesh> mesh)
+      : mesh_(std::move(mesh)), ps_(*mesh_) {}
 
   Index num_dofs() const { return ps_.num_dofs(); }
   // Not a tensor-product layout (dof_strides of it is unused, the stencils hold their DOFs).
@@ -178,21 +182,26 @@ class PowellSabinGridBasis {
           dofs.push_back(3 * v + j);
           ++on_line;
         }
+      // Always found on the structured triangulations; a mesh from a file may place a vertex
+      // where the construction's smallest triangle leaves the side (then the input is refused).
       if (on_line != 2)
-        throw std::logic_error(
-            "PowellSabinGridBasis: the PS triangle of a boundary vertex has no "
-            "side on the boundary " +
-            name);
+        throw InputError(fmt::format(
+            "{}: the Powell-Sabin triangle of vertex {} at ({:.6g}, {:.6g}) on boundary \"{}\" "
+            "has {} corner(s) on the boundary's line, not 2, so the velocity cannot be fixed "
+            "there without constraining the normal derivative; refine the mesh near that vertex "
+            "or leave the side free",
+            mesh_->source(), v, mesh_->vertex(v)[0], mesh_->vertex(v)[1], name, on_line));
     }
     return dofs;
   }
-  // Zero weights outside the mesh (callers check that points are inside the grid first).
-  void evaluate_point(const Vec<Dim>& x, StencilT& s) const {
-    if (ps_.evaluate_point(x, s)) return;
+  // False, with zero weights, outside the mesh.
+  bool evaluate_point(const Vec<Dim>& x, StencilT& s) const {
+    if (ps_.evaluate_point(x, s)) return true;
     clear_stencil(s);
+    return false;
   }
-  void evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
-    evaluate_point(P.x[static_cast<std::size_t>(p)], s);
+  bool evaluate(const Particles<Dim>& P, Index p, StencilT& s) const {
+    return evaluate_point(P.x[static_cast<std::size_t>(p)], s);
   }
   const PowellSabinBasis& splines() const { return ps_; }
   const TriangleMesh& mesh() const { return *mesh_; }  // the macro triangles

@@ -1,5 +1,6 @@
 #pragma once
 // Constructors of the built-in benchmarks (one file each).
+#include <memory>
 #include <numbers>
 
 #include "model/problem.hpp"
@@ -92,12 +93,22 @@ Problem<2> make_custom_2d(const Config& cfg);
 void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,
                     std::function<Vec<1>(const Vec<1>&)> velocity);
 
+// The triangles of grid.mesh (a Gmsh file; a relative path is taken from the configuration
+// file's directory) with the sides of its bounding box named as the grid's (with_box_sides);
+// null when grid.mesh is "". InputError naming the key when the basis is not on triangles
+// (p1_triangles, powell_sabin), method.triangles is also given, or the file cannot be read.
+std::shared_ptr<const TriangleMesh> mesh_from_config(const Config& cfg);
+// InputError naming grid.mesh unless the mesh's bounding box is the grid's (to 1e-9 of the
+// grid's diagonal): the grid's sides are where the conditions on sides act.
+void check_mesh_box(const Config& cfg, const TriangleMesh& m, const Grid<2>& g);
+
 // The particles of a 2D body [lo, hi] in grid g: particles.per_cell per cell and direction, or
 // with particles.per_triangle > 0 that many in every triangle of the grid's triangulation
-// (method.basis p1_triangles or powell_sabin, method.triangles; the body must be the grid).
-// InputError naming the key otherwise.
+// (method.basis p1_triangles or powell_sabin, method.triangles; the body must be the grid), or
+// of `mesh` when the triangles come from a file (then particles.per_cell's particles must all
+// lie in the mesh). InputError naming the key otherwise.
 Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
-                          double rho0);
+                          double rho0, const TriangleMesh* mesh = nullptr);
 
 // Material from the [material] keys for a problem in `dim` dimensions.
 Material material_from_config(const Config& cfg, int dim);

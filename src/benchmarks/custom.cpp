@@ -1,8 +1,12 @@
 #include <fmt/format.h>
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "benchmarks/benchmarks.hpp"
+#include "grid/triangle_mesh.hpp"
 #include "setup/config.hpp"
 #include "setup/expression.hpp"
 
@@ -82,6 +86,17 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
       // A roller fixes the normal component; in 1D that is the only one (as "fixed").
       if (type == "fixed") pb.fixed_sides.push_back({d, side});
       if (type == "roller") pb.fixed_sides.push_back({d, side, 1u << d});
+      if constexpr (Dim == 2) {
+        const std::string name = std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
+        const auto names = pb.mesh ? pb.mesh->boundary_names() : std::vector<std::string>{};
+        if (pb.mesh && type != "free" && std::find(names.begin(), names.end(), name) == names.end())
+          throw InputError(fmt::format(
+              "{}: boundary.{} = \"{}\", but {} has no boundary edge on the grid's side {} = "
+              "{:.9g}; set boundary.{} = \"free\"",
+              cfg.where(fmt::format("boundary.{}", kSideKeys[d][side])), kSideKeys[d][side], type,
+              pb.mesh->source(), "xy"[d], side == 0 ? pb.grid.origin[d] : pb.grid.upper()[d],
+              kSideKeys[d][side]));
+      }
       const std::string key = fmt::format("traction.{}", kSideKeys[d][side]);
       const std::string pkey = fmt::format("pressure.{}", kSideKeys[d][side]);
       const Expression p = cfg.get_expression(pkey);
@@ -231,8 +246,15 @@ Problem<1> make_custom_1d(const Config& cfg) {
 Problem<2> make_custom_2d(const Config& cfg) {
   Problem<2> pb;
   pb.benchmark = "custom";
-  const Vec<2> g0 = per_direction<2>(cfg, "grid.min"), g1 = per_direction<2>(cfg, "grid.max");
-  const Vec<2> b0 = per_direction<2>(cfg, "body.min"), b1 = per_direction<2>(cfg, "body.max");
+  // With a mesh file the grid is its bounding box unless given (and then checked against it),
+  // and the body the grid unless given.
+  pb.mesh = mesh_from_config(cfg);
+  auto given_or = [&](const char* key, const Vec<2>& fallback) {
+    return pb.mesh && !cfg.is_set(key) ? fallback : per_direction<2>(cfg, key);
+  };
+  const Vec<2> g0 = given_or("grid.min", pb.mesh ? pb.mesh->lower() : Vec<2>::Zero());
+  const Vec<2> g1 = given_or("grid.max", pb.mesh ? pb.mesh->upper() : Vec<2>::Zero());
+  const Vec<2> b0 = given_or("body.min", g0), b1 = given_or("body.max", g1);
   for (int d = 0; d < 2; ++d) {
     const char* axis = d == 0 ? "x" : "y";
     if (!(g1[d] > g0[d]))
@@ -252,8 +274,9 @@ Problem<2> make_custom_2d(const Config& cfg) {
   auto cy = static_cast<Index>(cfg.get_int("grid.cells_y"));
   if (cy == 0) cy = std::max<Index>(1, std::llround((g1[1] - g0[1]) / ((g1[0] - g0[0]) / cx)));
   pb.grid = Grid<2>(g0, g1, IVec<2>{cx, cy});
+  if (pb.mesh) check_mesh_box(cfg, *pb.mesh, pb.grid);
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
-  pb.particles = seed_body_2d(cfg, pb.grid, b0, b1, rho);
+  pb.particles = seed_body_2d(cfg, pb.grid, b0, b1, rho, pb.mesh.get());
   pb.body_min = b0;
   pb.body_max = b1;
 

@@ -85,7 +85,10 @@ Problem<2> make_plate_mms_2d(const Config& cfg) {
                            cfg.get_real("mms.amplitude")};
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
   pb.grid = Grid<2>(Vec<2>::Zero(), Vec<2>(L, L), IVec<2>{cells, cells});
-  pb.particles = seed_body_2d(cfg, pb.grid, Vec<2>::Zero(), Vec<2>(L, L), rho);
+  // D Fig. 3.6, 3.9: the plate on an unstructured triangulation of the square (grid.mesh).
+  pb.mesh = mesh_from_config(cfg);
+  if (pb.mesh) check_mesh_box(cfg, *pb.mesh, pb.grid);
+  pb.particles = seed_body_2d(cfg, pb.grid, Vec<2>::Zero(), Vec<2>(L, L), rho, pb.mesh.get());
   pb.body_min = Vec<2>::Zero();
   pb.body_max = Vec<2>(L, L);
   pb.initial_velocity = [ex](const Vec<2>& X) { return ex(X, 0.0).v; };

@@ -4,12 +4,16 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <memory>
+#include <system_error>
 #include <variant>
 
 #include "benchmarks/benchmarks.hpp"
 #include "grid/grid_state.hpp"
 #include "grid/triangle_mesh.hpp"
 #include "setup/config.hpp"
+#include "setup/gmsh_mesh.hpp"
 
 namespace mpm {
 
@@ -185,11 +189,76 @@ Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_trian
   return P;
 }
 
+std::shared_ptr<const TriangleMesh> mesh_from_config(const Config& cfg) {
+  const std::string file = cfg.get_string("grid.mesh");
+  if (file.empty()) return nullptr;
+  const std::string basis = cfg.get_string("method.basis");
+  if (basis != "p1_triangles" && basis != "powell_sabin")
+    throw InputError(fmt::format(
+        "{}: grid.mesh = \"{}\" holds triangles, which carry method.basis = \"p1_triangles\" or "
+        "\"powell_sabin\"; method.basis = \"{}\" lives on the grid's cells (leave grid.mesh "
+        "out)",
+        cfg.where("grid.mesh"), file, basis));
+  if (cfg.is_set("method.triangles"))
+    throw InputError(fmt::format(
+        "{}: method.triangles splits the grid's cells into triangles; with grid.mesh = \"{}\" "
+        "the triangles come from the file (leave method.triangles out)",
+        cfg.where("method.triangles"), file));
+  // Relative to the configuration file; from the working directory when the configuration
+  // is not a file (a checkpoint's stored configuration, a text parsed in a test).
+  std::filesystem::path path(file);
+  std::error_code ec;
+  const bool from_file = std::filesystem::is_regular_file(cfg.source(), ec);
+  if (path.is_relative() && from_file)
+    path = std::filesystem::path(cfg.source()).parent_path() / path;
+  try {
+    return std::make_shared<const TriangleMesh>(with_box_sides(read_gmsh_mesh(path.string())));
+  } catch (const InputError& e) {
+    throw InputError(fmt::format(
+        "{}: grid.mesh: {}{}", cfg.where("grid.mesh"), e.what(),
+        path.is_relative() && !from_file
+            ? " (taken from the working directory: the configuration is not a file, as in a "
+              "restart from a checkpoint alone; give the configuration file too)"
+            : ""));
+  }
+}
+
+void check_mesh_box(const Config& cfg, const TriangleMesh& m, const Grid<2>& g) {
+  const double tol = 1e-9 * (g.upper() - g.origin).norm();
+  if ((m.lower() - g.origin).cwiseAbs().maxCoeff() > tol ||
+      (m.upper() - g.upper()).cwiseAbs().maxCoeff() > tol)
+    throw InputError(fmt::format(
+        "{}: the mesh's bounding box [{:.9g}, {:.9g}] x [{:.9g}, {:.9g}] is not the grid's "
+        "[{:.9g}, "
+        "{:.9g}] x [{:.9g}, {:.9g}]; the grid's sides are where the boundary conditions act, so "
+        "the two must agree",
+        cfg.where("grid.mesh"), m.lower()[0], m.upper()[0], m.lower()[1], m.upper()[1], g.origin[0],
+        g.upper()[0], g.origin[1], g.upper()[1]));
+}
+
 Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
-                          double rho0) {
+                          double rho0, const TriangleMesh* mesh) {
   const auto per_triangle = static_cast<int>(cfg.get_int("particles.per_triangle"));
-  if (per_triangle == 0)
-    return seed_particles<2>(g, lo, hi, static_cast<int>(cfg.get_int("particles.per_cell")), rho0);
+  if (per_triangle == 0) {
+    Particles<2> P =
+        seed_particles<2>(g, lo, hi, static_cast<int>(cfg.get_int("particles.per_cell")), rho0);
+    if (mesh == nullptr) return P;
+    // A mesh need not fill its box: every particle must lie in a triangle.
+    std::vector<Index> outside;
+    for (Index p = 0; p < P.size(); ++p)
+      if (!mesh->inside(P.x[static_cast<std::size_t>(p)])) outside.push_back(p);
+    if (!outside.empty()) {
+      const Vec<2>& x = P.x[static_cast<std::size_t>(outside[0])];
+      throw InputError(fmt::format(
+          "{}: {} of the {} particles of the body [{:.6g}, {:.6g}] x [{:.6g}, {:.6g}] "
+          "(particles.per_cell) lie in no triangle of {} (the first at ({:.6g}, {:.6g})); make the "
+          "body (body.min, body.max) lie inside the mesh, or seed its triangles with "
+          "particles.per_triangle",
+          cfg.where("grid.mesh"), outside.size(), P.size(), lo[0], hi[0], lo[1], hi[1],
+          mesh->source(), x[0], x[1]));
+    }
+    return P;
+  }
   const std::string basis = cfg.get_string("method.basis");
   if (basis != "p1_triangles" && basis != "powell_sabin")
     throw InputError(fmt::format(
@@ -207,6 +276,7 @@ Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo,
         "{}: particles.per_triangle = {} is not of the form m k^2 with m = 1, 3 or 6; choose "
         "one of 1, 3, 4, 6, 9, 12, 16, 24, 25, 27, 36, 48, 49, 54, 64, ...",
         cfg.where("particles.per_triangle"), per_triangle));
+  if (mesh != nullptr) return seed_particles_in_triangles(*mesh, per_triangle, rho0);
   const TrianglePattern pattern = cfg.get_string("method.triangles") == "criss_cross"
                                       ? TrianglePattern::criss_cross
                                       : TrianglePattern::right;
@@ -260,6 +330,14 @@ AnyProblem make_problem(const Config& cfg) {
         "{}: particles.per_triangle seeds the triangles of a 2D run; this problem is 1D (use "
         "particles.per_cell)",
         cfg.where("particles.per_triangle")));
+  // grid.mesh is read by the problems that place the body on it (plate_mms_2d, 2D custom).
+  const bool meshed = std::visit([](const auto& p) { return p.mesh != nullptr; }, pb);
+  if (!meshed && !cfg.get_string("grid.mesh").empty())
+    throw InputError(fmt::format(
+        "{}: grid.mesh applies to the 2D problems plate_mms_2d and custom; benchmark = \"{}\"{} "
+        "builds its own grid (leave grid.mesh out)",
+        cfg.where("grid.mesh"), cfg.get_string("benchmark"),
+        std::holds_alternative<Problem<1>>(pb) ? " in 1D" : ""));
   std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid); }, pb);
   return pb;
 }

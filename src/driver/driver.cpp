@@ -115,7 +115,9 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
       std::optional<TrianglePattern> pattern;
       if (const auto* k = std::get_if<TriangleP1Kind>(&s.method.basis)) pattern = k->pattern;
       if (const auto* k = std::get_if<PowellSabinKind>(&s.method.basis)) pattern = k->pattern;
-      if (pattern)
+      if (pb.mesh)
+        grid = io::triangle_mesh_vtu(*pb.mesh, {}, {}, vtk_binary_);
+      else if (pattern)
         grid = io::triangle_mesh_vtu(
             structured_triangles(pb.grid.origin, pb.grid.upper(), pb.grid.cells, *pattern), {}, {},
             vtk_binary_);

@@ -116,8 +116,17 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   if constexpr (Dim == 1)
     if (pb.fem_reference) reference.emplace(pb, settings.reference_dofs - 1);
 
-  check_stability(ts, pb.grid.h.minCoeff(), pb.material, stability_factor(basis), Dim,
-                  fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
+  if constexpr (Dim == 2) {
+    if (pb.mesh)  // h: the smallest altitude of the mesh's triangles
+      check_stability(ts, pb.mesh->min_altitude(), pb.material, altitude_stability_factor(basis),
+                      Dim,
+                      fmt::format("{} basis on {}, lumped-mass bound, h the smallest triangle "
+                                  "altitude",
+                                  basis_name(basis), pb.mesh->source()));
+  }
+  if (!pb.mesh)
+    check_stability(ts, pb.grid.h.minCoeff(), pb.material, stability_factor(basis), Dim,
+                    fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
 
   if (opt.shuffle_seed != 0 && !opt.restart)
     shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <type_traits>
 #include <utility>
 
@@ -70,18 +71,23 @@ void report_mapping(nlohmann::ordered_json& summary, const ImlsMapping& m, int d
   report_mls(summary, m, dim);
 }
 
+double altitude_stability_factor(const BasisKind& basis) {
+  // PS splines are quadratic: the quadratic B-spline's factor on the triangles' length.
+  if (std::holds_alternative<PowellSabinKind>(basis)) return bspline_stability_factor(2);
+  if (std::holds_alternative<TriangleP1Kind>(basis)) return 1.0;
+  throw std::logic_error("altitude_stability_factor: not a basis on triangles");
+}
+
 double stability_factor(const BasisKind& basis) {
   return std::visit(
-      [](const auto& k) {
+      [&basis](const auto& k) {
         using Kind = std::decay_t<decltype(k)>;
         // GIMP, CPDI and DDMPM use the P1 bound (their gradients are averages of P1's).
         if constexpr (std::is_same_v<Kind, MaxEntKind>)
           return maxent_stability_factor(k.settings);
-        else if constexpr (std::is_same_v<Kind, TriangleP1Kind>)
-          return triangle_stability_factor(k.pattern);
-        // PS splines are quadratic: the quadratic B-spline's factor on the triangles' length.
-        else if constexpr (std::is_same_v<Kind, PowellSabinKind>)
-          return triangle_stability_factor(k.pattern) * bspline_stability_factor(2);
+        else if constexpr (std::is_same_v<Kind, TriangleP1Kind> ||
+                           std::is_same_v<Kind, PowellSabinKind>)
+          return triangle_stability_factor(k.pattern) * altitude_stability_factor(basis);
         else if constexpr (Kind::kDegree > 0)
           return bspline_stability_factor(Kind::kDegree);
         else

@@ -95,6 +95,9 @@ int boundary_cells(const BasisKind& basis);
 // and the name and B-spline degree (0 for the others) reported in summary.json.
 std::string_view basis_name(const BasisKind& basis);
 int basis_degree(const BasisKind& basis);
+// The stability factor of the bases on triangles (p1_triangles, powell_sabin) with h the
+// smallest altitude of the triangles (a mesh from a file: TriangleMesh::min_altitude).
+double altitude_stability_factor(const BasisKind& basis);
 
 }  // namespace driver
 }  // namespace mpm

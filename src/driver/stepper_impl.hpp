@@ -157,7 +157,8 @@ std::unique_ptr<Stepper<Dim>> make_stepper_for(const StepperInput<Dim>& in) {
             throw std::logic_error("make_stepper_for: basis and mapping not available together");
           else
             return std::make_unique<TypedStepper<Dim, Basis, Mapping>>(
-                in, make_basis<Dim>(std::get<I>(in.method.basis), in.problem.grid));
+                in,
+                make_basis<Dim>(std::get<I>(in.method.basis), in.problem.grid, in.problem.mesh));
         },
         in.method.mapping);
   }

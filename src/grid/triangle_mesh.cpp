@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <utility>
 
 namespace mpm {
@@ -233,6 +235,48 @@ TriangleMesh structured_triangles(const Vec<2>& lo, const Vec<2>& hi, const IVec
     bnd["x+"].push_back({corner(nx, j), corner(nx, j + 1)});
   }
   return TriangleMesh(std::move(v), std::move(t), std::move(bnd), "the generated triangle mesh");
+}
+
+double TriangleMesh::min_altitude() const {
+  double h = std::numeric_limits<double>::infinity();
+  for (std::size_t c = 0; c < triangles_.size(); ++c) {
+    const auto& t = triangles_[c];
+    double longest = 0.0;
+    for (std::size_t i = 0; i < 3; ++i)
+      longest = std::max(longest, (vertex(t[(i + 1) % 3]) - vertex(t[i])).norm());
+    h = std::min(h, 2.0 * area_[c] / longest);
+  }
+  return h;
+}
+
+TriangleMesh with_box_sides(const TriangleMesh& m) {
+  // Boundary edges: an edge of one triangle only (counted without direction).
+  std::map<std::pair<Index, Index>, int> count;
+  for (Index c = 0; c < m.num_cells(); ++c) {
+    const auto& t = m.cell_vertices(c);
+    for (std::size_t i = 0; i < 3; ++i) ++count[std::minmax(t[i], t[(i + 1) % 3])];
+  }
+  std::map<std::string, std::vector<TriangleMesh::Edge>> boundaries;
+  for (const auto& name : m.boundary_names()) boundaries[name] = m.boundary(name).edges;
+  const double tol = 1e-10 * (m.upper() - m.lower()).norm();
+  for (int d = 0; d < 2; ++d)
+    for (int side = 0; side < 2; ++side) {
+      const std::string name = std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
+      if (boundaries.contains(name)) continue;
+      const double line = side == 0 ? m.lower()[d] : m.upper()[d];
+      std::vector<TriangleMesh::Edge> edges;
+      for (const auto& [e, n] : count)
+        if (n == 1 && std::abs(m.vertex(e.first)[d] - line) <= tol &&
+            std::abs(m.vertex(e.second)[d] - line) <= tol)
+          edges.push_back({e.first, e.second});
+      if (!edges.empty()) boundaries[name] = std::move(edges);
+    }
+  std::vector<Vec<2>> vertices(static_cast<std::size_t>(m.num_vertices()));
+  for (Index v = 0; v < m.num_vertices(); ++v) vertices[static_cast<std::size_t>(v)] = m.vertex(v);
+  std::vector<TriangleMesh::Triangle> triangles(static_cast<std::size_t>(m.num_cells()));
+  for (Index c = 0; c < m.num_cells(); ++c)
+    triangles[static_cast<std::size_t>(c)] = m.cell_vertices(c);
+  return TriangleMesh(std::move(vertices), std::move(triangles), std::move(boundaries), m.source());
 }
 
 double triangle_stability_factor(TrianglePattern pattern) {

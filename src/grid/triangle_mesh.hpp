@@ -59,6 +59,9 @@ class TriangleMesh {
   const std::array<Vec<2>, 3>& barycentric_gradients(Index c) const {
     return gradient_[static_cast<std::size_t>(c)];
   }
+  // The smallest altitude of any triangle [m] (twice its area over its longest edge): the CFL
+  // length of P1 on the mesh (triangle_stability_factor's structured values are this over h).
+  double min_altitude() const;
   // The smallest box holding the mesh.
   const Vec<2>& lower() const { return lo_; }
   const Vec<2>& upper() const { return hi_; }
@@ -90,6 +93,13 @@ static_assert(Mesh<TriangleMesh>);
 enum class TrianglePattern { right, criss_cross };
 TriangleMesh structured_triangles(const Vec<2>& lo, const Vec<2>& hi, const IVec<2>& n,
                                   TrianglePattern pattern);
+
+// The mesh with the boundary edges (those of one triangle) that lie on the sides of its bounding
+// box named as the grid's sides, "x-", "x+", "y-", "y+" (within 1e-10 of the box's diagonal),
+// so that conditions on the sides of a rectangle (FixedSide, boundary.left = "fixed", ...)
+// apply to a mesh read from a file. A side that the file already names, or that holds no
+// boundary edge, is not added.
+TriangleMesh with_box_sides(const TriangleMesh& m);
 
 // dt_crit = factor h / c on the triangles of `pattern` over square cells of side h: the
 // smallest altitude over h (right: 1 / sqrt 2; criss-cross: 1 / 2), the CFL length of the

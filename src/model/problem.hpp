@@ -3,6 +3,7 @@
 // solution; it hands the runner a Problem. Exact solutions are evaluated only for outputs and
 // error norms, never inside the time-step loops.
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -45,6 +46,10 @@ struct Problem {
   Particles<Dim> particles;
   Material material;
   std::vector<FixedSide> fixed_sides;
+  // The triangles of a mesh file (grid.mesh; 2D, P1 and Powell-Sabin bases), shared with the
+  // basis; then `grid` is the mesh's bounding box. Null: the basis lives on the grid (for the
+  // triangle bases, a structured triangulation of it).
+  std::shared_ptr<const TriangleMesh> mesh;
   BodyForce<Dim> body_force;
   std::vector<Traction<Dim>> tractions;
   // The body before deformation and its initial fields as functions of the material position,

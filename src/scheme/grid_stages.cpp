@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/parallel.hpp"
+#include "grid/triangle_mesh.hpp"
 #include "scheme/stages.hpp"
 
 namespace mpm::stages {
@@ -69,6 +70,19 @@ void throw_left_grid(const RunState<Dim>& sim) {
       exit_code::kLeftGrid,
       fmt::format("step {}, t = {:.9g} s: {} particle(s) left the grid {}: {}", sim.step, sim.time,
                   ids.size(), describe_box(sim.grid), describe_particles(P, ids)));
+}
+
+void throw_left_mesh(const RunState<2>& sim, const TriangleMesh& mesh) {
+  const auto& P = sim.particles;
+  std::vector<Index> ids;
+  for (Index p = 0; p < P.size(); ++p)
+    if (!sim.grid.inside(P.x[static_cast<std::size_t>(p)])) throw_left_grid(sim);
+  for (Index p = 0; p < P.size(); ++p)
+    if (!mesh.inside(P.x[static_cast<std::size_t>(p)])) ids.push_back(p);
+  throw RunError(
+      exit_code::kLeftGrid,
+      fmt::format("step {}, t = {:.9g} s: {} particle(s) left the mesh ({}): {}", sim.step,
+                  sim.time, ids.size(), mesh.source(), describe_particles(P, ids)));
 }
 
 template <int Dim>

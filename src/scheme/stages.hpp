@@ -19,6 +19,10 @@
 #include "core/parallel.hpp"
 #include "scheme/simulation.hpp"
 
+namespace mpm {
+class TriangleMesh;  // grid/triangle_mesh.hpp
+}  // namespace mpm
+
 namespace mpm::stages {
 
 namespace detail {
@@ -31,6 +35,9 @@ template <int Dim>
 // Every particle outside the grid (the grid's box named).
 template <int Dim>
 [[noreturn]] void throw_left_grid(const RunState<Dim>& sim);
+// As throw_left_grid when a particle left the grid; otherwise the particles in no triangle of
+// the mesh (a mesh from a file that does not fill its bounding box).
+[[noreturn]] void throw_left_mesh(const RunState<2>& sim, const TriangleMesh& mesh);
 // The face point x_face of particle index i's loaded face outside the grid.
 template <int Dim>
 [[noreturn]] void throw_face_left_grid(const RunState<Dim>& sim, std::size_t i,
@@ -109,6 +116,14 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
           stride *= g.cells[d];
         }
         basis.evaluate_scaled(sx, cx, s);
+      } else if constexpr (B::kTriangleMesh) {
+        // A mesh from a file need not fill the grid (its bounding box): a particle in no
+        // triangle stops the run as one outside the grid does.
+        c = g.cell_index(P.x[i]);
+        if (!basis.evaluate(P, p, s)) {
+          chunk_outside[ck] = 1;
+          continue;
+        }
       } else {
         c = g.cell_index(P.x[i]);
         basis.evaluate(P, p, s);
@@ -137,7 +152,12 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
       detail::throw_unfit(sim, ids, B::kName);
     }
   }
-  if (outside) detail::throw_left_grid(sim);
+  if (outside) {
+    if constexpr (B::kTriangleMesh)
+      detail::throw_left_mesh(sim, basis.mesh());
+    else
+      detail::throw_left_grid(sim);
+  }
   if constexpr (B::kIterative) basis.throw_if_failed(sim.step, sim.time, "particles");
 }
 

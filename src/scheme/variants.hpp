@@ -3,6 +3,7 @@
 // kName; one std::visit then enters fully templated code. An unknown name is an error listing
 // the alternatives, never a fallback.
 #include <fmt/format.h>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -195,22 +196,28 @@ constexpr bool supports_mapping() {
 }
 
 // The basis of a kind on a grid; a kind with settings passes them on (the more specialised
-// overload). Instantiated where the basis header is included (the kind's stepper unit).
+// overload). `mesh`: the run's triangles from a file (grid.mesh; Problem::mesh), null for a
+// structured triangulation of the grid; set-up allows it for the triangle kinds only.
+// Instantiated where the basis header is included (the kind's stepper unit).
 template <int Dim, class Kind>
-typename Kind::template type<Dim> make_basis(const Kind&, const Grid<Dim>& g) {
+typename Kind::template type<Dim> make_basis(const Kind&, const Grid<Dim>& g,
+                                             const std::shared_ptr<const TriangleMesh>&) {
   return typename Kind::template type<Dim>(g);
 }
 template <int Dim>
-MaxEntBasis<Dim> make_basis(const MaxEntKind& kind, const Grid<Dim>& g) {
+MaxEntBasis<Dim> make_basis(const MaxEntKind& kind, const Grid<Dim>& g,
+                            const std::shared_ptr<const TriangleMesh>&) {
   return MaxEntBasis<Dim>(g, kind.settings);
 }
 template <int Dim>
-TriangleP1Basis<Dim> make_basis(const TriangleP1Kind& kind, const Grid<Dim>& g) {
-  return TriangleP1Basis<Dim>(g, kind.pattern);
+TriangleP1Basis<Dim> make_basis(const TriangleP1Kind& kind, const Grid<Dim>& g,
+                                const std::shared_ptr<const TriangleMesh>& mesh) {
+  return mesh ? TriangleP1Basis<Dim>(mesh) : TriangleP1Basis<Dim>(g, kind.pattern);
 }
 template <int Dim>
-PowellSabinGridBasis<Dim> make_basis(const PowellSabinKind& kind, const Grid<Dim>& g) {
-  return PowellSabinGridBasis<Dim>(g, kind.pattern);
+PowellSabinGridBasis<Dim> make_basis(const PowellSabinKind& kind, const Grid<Dim>& g,
+                                     const std::shared_ptr<const TriangleMesh>& mesh) {
+  return mesh ? PowellSabinGridBasis<Dim>(mesh) : PowellSabinGridBasis<Dim>(g, kind.pattern);
 }
 using MappingKind =
     std::variant<DirectMapping, CubicSplineMapping, TlsMapping, MlsMapping, ImlsMapping>;

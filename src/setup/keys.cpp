@@ -121,6 +121,13 @@ std::vector<KeySpec> declare() {
               "cells in y of a 2D custom grid (0: round((max_y - min_y) / h_x), at least 1, the "
               "cells closest to square)"),
 
+      choice("grid.mesh", "", {},
+             "Gmsh mesh file (.msh 4.1 or 2.2, linear triangles) whose triangles carry "
+             "method.basis = \"p1_triangles\" or \"powell_sabin\" instead of a structured "
+             "triangulation (2D plate_mms_2d and custom); relative to the configuration file's "
+             "directory. The grid stays the box of the particles' seeding and re-sorting and "
+             "must be the mesh's bounding box; its sides are the mesh's boundary edges on them"),
+
       integer("particles.per_cell", 4, at_least(1),
               "material points per cell per direction, evenly spaced"),
       integer("particles.per_triangle", 0, at_least(0),

@@ -135,3 +135,39 @@ TEST(TriangleMesh, PointLocationMatchesBruteForceOnADistortedMesh) {
 
 }  // namespace
 }  // namespace mpm
+
+namespace mpm {
+namespace {
+
+// The smallest altitude is the CFL length of the structured patterns' stability factors
+// (triangle_stability_factor: altitude over h), here on cells of side 0.25.
+TEST(TriangleMesh, SmallestAltitudeIsTheStructuredStabilityLength) {
+  for (auto pattern : {TrianglePattern::right, TrianglePattern::criss_cross}) {
+    const auto m = structured_triangles(Vec<2>(0, 0), Vec<2>(1, 1), {4, 4}, pattern);
+    EXPECT_NEAR(m.min_altitude(), 0.25 * triangle_stability_factor(pattern), 1e-15);
+  }
+}
+
+// A mesh that names other boundaries gets the sides of its bounding box as the grid's: the
+// boundary edges on x = lo, ..., with their vertices; a side the mesh only touches at a vertex
+// (a diamond) is not added, and a name the mesh already has is kept.
+TEST(TriangleMesh, BoxSidesAreTheBoundaryEdgesOnTheBoundingBox) {
+  // The unit square as four triangles around its centre, with one named side.
+  const std::vector<Vec<2>> v{{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5}};
+  const std::vector<TriangleMesh::Triangle> t{{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+  const TriangleMesh square(v, t, {{"x+", {{1, 2}}}, {"inlet", {{3, 0}}}}, "square");
+  const TriangleMesh s = with_box_sides(square);
+  EXPECT_EQ(s.boundary_names(), (std::vector<std::string>{"inlet", "x+", "x-", "y+", "y-"}));
+  EXPECT_EQ(s.boundary_vertices("x-"), (std::vector<Index>{0, 3}));
+  EXPECT_EQ(s.boundary_vertices("y-"), (std::vector<Index>{0, 1}));
+  EXPECT_EQ(s.boundary_vertices("y+"), (std::vector<Index>{2, 3}));
+  EXPECT_EQ(s.boundary("x-").edges.size(), 1u);
+  EXPECT_EQ(s.source(), "square");
+  // The diamond touches each side of its box at one vertex only.
+  const std::vector<Vec<2>> d{{0.5, 0}, {1, 0.5}, {0.5, 1}, {0, 0.5}, {0.5, 0.5}};
+  const TriangleMesh diamond = with_box_sides(TriangleMesh(d, t, {}, "diamond"));
+  EXPECT_TRUE(diamond.boundary_names().empty());
+}
+
+}  // namespace
+}  // namespace mpm

@@ -20,25 +20,10 @@
 namespace mpm {
 namespace {
 
-struct Run {
-  Problem<2> pb;
-  RunSettings settings;
-  std::unique_ptr<driver::Stepper<2>> stepper;
-};
-
 // The plate with TLS and `sets`; `free_sides`: no rollers and (amplitude 0) no body force.
-std::unique_ptr<Run> plate(std::vector<std::string> sets, bool free_sides = true) {
+std::unique_ptr<test::PlateRun> plate(std::vector<std::string> sets, bool free_sides = true) {
   sets.insert(sets.begin(), "method.mapping=tls");
-  if (free_sides) sets.push_back("mms.amplitude=0");
-  auto r = std::make_unique<Run>();
-  const Config cfg =
-      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml", sets);
-  r->pb = std::get<Problem<2>>(make_problem(cfg));
-  if (free_sides) r->pb.fixed_sides.clear();
-  r->settings = run_settings(cfg, 2);
-  r->stepper = driver::make_stepper<2>(r->settings.method.basis,
-                                       driver::StepperInput<2>{r->pb, r->settings.method, true});
-  return r;
+  return test::plate_run(std::move(sets), free_sides);
 }
 
 // D eq. 5.19-5.21 on triangles: the conservative density and momentum fits integrate exactly

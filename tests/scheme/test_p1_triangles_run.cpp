@@ -18,25 +18,11 @@
 namespace mpm {
 namespace {
 
-struct Run {
-  Problem<2> pb;
-  RunSettings settings;
-  std::unique_ptr<driver::Stepper<2>> stepper;
-};
-
 // The plate with `sets`, its sides free (no rollers) and, with amplitude 0, no body force.
-std::unique_ptr<Run> plate(std::vector<std::string> sets,
-                           const std::string& basis = "p1_triangles") {
-  sets.insert(sets.end(), {"method.basis=" + basis, "mms.amplitude=0"});
-  auto r = std::make_unique<Run>();
-  const Config cfg =
-      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml", sets);
-  r->pb = std::get<Problem<2>>(make_problem(cfg));
-  r->pb.fixed_sides.clear();
-  r->settings = run_settings(cfg, 2);
-  r->stepper = driver::make_stepper<2>(r->settings.method.basis,
-                                       driver::StepperInput<2>{r->pb, r->settings.method, true});
-  return r;
+std::unique_ptr<test::PlateRun> plate(std::vector<std::string> sets,
+                                      const std::string& basis = "p1_triangles") {
+  sets.push_back("method.basis=" + basis);
+  return test::plate_run(std::move(sets), true);
 }
 
 // v_p = A x_p with zero stress: P1 reproduces the linear field, and with consistent mass the

@@ -334,7 +334,7 @@ TEST(Sort, RestartAfterSortIsBitwise) {
     const int k = 5, n = 15;
     const double dt = 1e-5;
     const std::vector<std::string> base = {
-        "grid.cells=24",    "particles.per_cell=3", fmt::format("method.basis=\"{}\"", basis),
+        "grid.cells=16",    "particles.per_cell=3", fmt::format("method.basis=\"{}\"", basis),
         "output.csv=false", "output.vtk=false",     fmt::format("output.checkpoint_every={}", k)};
     auto with_end = [&](int steps) {
       auto s = base;

@@ -11,7 +11,12 @@
 #include <variant>
 #include <vector>
 
+#include <string>
+
+#include "benchmarks/benchmarks.hpp"
 #include "driver/stepper.hpp"
+#include "setup/config.hpp"
+#include "setup/run_settings.hpp"
 
 namespace mpm::test {
 
@@ -108,6 +113,27 @@ inline LinearFieldErrors linear_field_step(driver::Stepper<2>& stepper, const Ma
     e.x = std::max(e.x, (P.x[i] - (x0[i] + dt * A * x0[i])).norm());
   }
   return e;
+}
+
+// The 2D plate of examples/plate_mms_2d.toml with `sets`, set up as `mpm run` does
+// (make_problem, run_settings, the reconstruction input check before the first step).
+// `free_sides`: no rollers, and with mms.amplitude = 0 no body force.
+struct PlateRun {
+  Problem<2> pb;
+  RunSettings settings;
+  std::unique_ptr<driver::Stepper<2>> stepper;
+};
+inline std::unique_ptr<PlateRun> plate_run(std::vector<std::string> sets, bool free_sides) {
+  if (free_sides) sets.push_back("mms.amplitude=0");
+  auto r = std::make_unique<PlateRun>();
+  const Config cfg =
+      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml", sets);
+  r->pb = std::get<Problem<2>>(make_problem(cfg));
+  if (free_sides) r->pb.fixed_sides.clear();
+  r->settings = run_settings(cfg, 2);
+  r->stepper = driver::make_stepper<2>(r->settings.method.basis,
+                                       driver::StepperInput<2>{r->pb, r->settings.method, true});
+  return r;
 }
 
 }  // namespace mpm::test
