@@ -2671,6 +2671,20 @@ def sec_ps_partial(R, ctx):
     fragile = any(ps_stops[m] > b2_stops[m] for m in ps_stops) or any(
         ps_g[m] is not None and b2_g[m] is not None and ps_g[m] > 2 * b2_g[m] for m in ps_g)
 
+    full_stops = [f"{cases[ci][0]} (t = {fail_time(r.get('failure'))} s)" for ci in range(len(cases))
+                  for r in [res[(ci, tops[0], "powell_sabin", "consistent")]]
+                  if r.get("status") != "ok"]
+    def t_stop(r):
+        t = fail_time(r.get("failure"))
+        return float(t) if r.get("status") != "ok" and t != "?" else math.inf
+    earlier = all(t_stop(res[(ci, top, "powell_sabin", "consistent")]) <
+                  t_stop(res[(ci, tops[0], "powell_sabin", "consistent")])
+                  for ci in range(len(cases)) for top in tops[1:])
+    full_text = ("PS-MPM with consistent mass stops also with the top row full, in "
+                 f"{' and '.join(full_stops)}: a free surface above full cells is enough"
+                 + (", and every partial row makes it stop earlier" if earlier else "")
+                 + ". What stops the full-row runs is not examined. " if full_stops else "")
+
     def gtext(g):
         return "a run stops" if g is None else f"worst partial / full {g:.1f}x"
     measured = "; ".join(
@@ -2713,7 +2727,7 @@ consistent mass matrix; hence the common dt = 1e-4 s here. {why}
 |---|---|---|---|
 | PS-MPM is not robust with partially filled elements; rule: with a partial top row PS-MPM stops in more runs than B2, or its error grows more than 2x B2's growth over the full-row run | yes (words) | {measured} | {verdict_claim(fragile, measured)} |
 
-Partial lumping (D 7.2) is not implemented."""
+{full_text}Partial lumping (D 7.2) is not implemented."""
 
 
 def sec_001(R, ctx):

@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../support/stepper.hpp"
@@ -72,17 +73,21 @@ std::string message_of(const std::function<void()>& f) {
 }
 
 // The same triangles from a file and from method.triangles: the same vertices, triangles and
-// box sides, hence bitwise the same steps, with the plate's rollers and body force.
+// box sides, hence bitwise the same steps, with the plate's rollers and body force, for both
+// masses with the direct mapping and with TLS on the triangles.
 TEST(MeshFileRun, StructuredMeshFromAFileRunsBitwiseAsTheGeneratedOne) {
   for (const std::string pattern : {"right", "criss_cross"}) {
     const auto p = pattern == "right" ? TrianglePattern::right : TrianglePattern::criss_cross;
     const std::string file =
         write_msh(structured_triangles(Vec<2>(0, 0), Vec<2>(1, 1), {4, 4}, p), pattern);
     for (const std::string basis : {"p1_triangles", "powell_sabin"})
-      for (const std::string mass : {"lumped", "consistent"}) {
-        SCOPED_TRACE(pattern + " " + basis + " " + mass);
-        const std::vector<std::string> common{"grid.cells=4", "particles.per_triangle=12",
-                                              "method.basis=" + basis, "method.mass=" + mass};
+      for (const auto& [mass, mapping] :
+           {std::pair{"lumped", "direct"}, std::pair{"consistent", "direct"},
+            std::pair{"lumped", "tls"}}) {
+        SCOPED_TRACE(pattern + " " + basis + " " + mass + " " + mapping);
+        const std::vector<std::string> common{
+            "grid.cells=4", "particles.per_triangle=12", "method.basis=" + basis,
+            std::string("method.mass=") + mass, std::string("method.mapping=") + mapping};
         auto with = [&](std::string extra) {
           auto sets = common;
           sets.push_back(std::move(extra));
