@@ -105,6 +105,10 @@ class TriangleP1Basis {
   std::vector<Index> boundary_dofs(int d, int side) const {
     return mesh_->boundary_vertices(side_name(d, side));
   }
+  // The vertices of a named boundary (a mesh file's physical group, FixedSide::boundary).
+  std::vector<Index> boundary_dofs(std::string_view name) const {
+    return mesh_->boundary_vertices(name);
+  }
   // False, with zero weights, outside the mesh.
   bool evaluate_point(const Vec<Dim>& x, StencilT& s) const {
     const Index c = mesh_->cell_index(x);

@@ -171,28 +171,20 @@ class PowellSabinGridBasis {
   // would also force that derivative to zero. The PS triangles of boundary vertices have a
   // side on the boundary (the hull's supporting line along it; checked here).
   std::vector<Index> boundary_dofs(int d, int side) const {
-    const std::string name = side_name(d, side);
-    const double line = side == 0 ? mesh_->lower()[d] : mesh_->upper()[d];
-    const double tol = 1e-12 * (mesh_->upper() - mesh_->lower()).norm();
-    std::vector<Index> dofs;
-    for (Index v : mesh_->boundary_vertices(name)) {
-      int on_line = 0;
-      for (Index j = 0; j < 3; ++j)
-        if (std::abs(ps_.ps_triangle(v)[static_cast<std::size_t>(j)][d] - line) <= tol) {
-          dofs.push_back(3 * v + j);
-          ++on_line;
-        }
-      // Always found on the structured triangulations; a mesh from a file may place a vertex
-      // where the construction's smallest triangle leaves the side (then the input is refused).
-      if (on_line != 2)
-        throw InputError(fmt::format(
-            "{}: the Powell-Sabin triangle of vertex {} at ({:.6g}, {:.6g}) on boundary \"{}\" "
-            "has {} corner(s) on the boundary's line, not 2, so the velocity cannot be fixed "
-            "there without constraining the normal derivative; refine the mesh near that vertex "
-            "or leave the side free",
-            mesh_->source(), v, mesh_->vertex(v)[0], mesh_->vertex(v)[1], name, on_line));
-    }
-    return dofs;
+    Vec<Dim> point = side == 0 ? mesh_->lower() : mesh_->upper(), normal = Vec<Dim>::Zero();
+    normal[d] = 1.0;
+    return dofs_on_line(side_name(d, side), point, normal);
+  }
+  // The same on a named boundary (FixedSide::boundary), which must lie on one straight line.
+  std::vector<Index> boundary_dofs(std::string_view name) const {
+    const auto line = straight_boundary(*mesh_, name);
+    if (!line)
+      throw InputError(fmt::format(
+          "{}: boundary \"{}\" does not lie on one straight line; Powell-Sabin splines fix the "
+          "velocity along straight boundaries (the two functions per vertex whose PS-triangle "
+          "vertex lies on the line); split it into straight physical groups",
+          mesh_->source(), name));
+    return dofs_on_line(name, line->point, line->normal);
   }
   // False, with zero weights, outside the mesh.
   bool evaluate_point(const Vec<Dim>& x, StencilT& s) const {
@@ -212,6 +204,33 @@ class PowellSabinGridBasis {
  private:
   std::shared_ptr<const TriangleMesh> mesh_;
   PowellSabinBasis ps_;
+
+  // The DOFs of boundary `name` whose PS-triangle vertex lies on the line through `point` with
+  // unit `normal` (within 1e-12 of the mesh's box diagonal), two per boundary vertex. Always
+  // found on the structured triangulations; a mesh from a file may place a vertex where the
+  // construction's smallest triangle leaves the line (then the input is refused).
+  std::vector<Index> dofs_on_line(std::string_view name, const Vec<Dim>& point,
+                                  const Vec<Dim>& normal) const {
+    const double tol = 1e-12 * (mesh_->upper() - mesh_->lower()).norm();
+    std::vector<Index> dofs;
+    for (Index v : mesh_->boundary_vertices(name)) {
+      int on_line = 0;
+      for (Index j = 0; j < 3; ++j)
+        if (std::abs((ps_.ps_triangle(v)[static_cast<std::size_t>(j)] - point).dot(normal)) <=
+            tol) {
+          dofs.push_back(3 * v + j);
+          ++on_line;
+        }
+      if (on_line != 2)
+        throw InputError(fmt::format(
+            "{}: the Powell-Sabin triangle of vertex {} at ({:.6g}, {:.6g}) on boundary \"{}\" "
+            "has {} corner(s) on the boundary's line, not 2, so the velocity cannot be fixed "
+            "there without constraining the normal derivative; refine the mesh near that vertex "
+            "or leave the boundary free",
+            mesh_->source(), v, mesh_->vertex(v)[0], mesh_->vertex(v)[1], name, on_line));
+    }
+    return dofs;
+  }
 };
 
 static_assert(Basis<PowellSabinGridBasis<2>, 2>);

@@ -132,6 +132,73 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
     }
 }
 
+// The names of a comma-separated list key (boundary.fixed, boundary.roller), blanks trimmed.
+std::vector<std::string> names_of(const Config& cfg, const char* key) {
+  std::vector<std::string> out;
+  const std::string text = cfg.get_string(key);
+  std::size_t b = 0;
+  while (b <= text.size()) {
+    const std::size_t e = std::min(text.find(',', b), text.size());
+    const auto first = text.find_first_not_of(" \t", b);
+    const auto last = text.find_last_not_of(" \t", e == 0 ? 0 : e - 1);
+    if (first != std::string::npos && first < e && last != std::string::npos && last >= first)
+      out.push_back(text.substr(first, last - first + 1));
+    b = e + 1;
+  }
+  return out;
+}
+
+// Conditions on the named boundaries of a mesh file (its physical groups of lines):
+// boundary.fixed (every component) and boundary.roller (the normal component of a boundary on
+// one straight line parallel to x or y; the grid constraints act per component).
+void named_boundaries(Problem<2>& pb, const Config& cfg) {
+  const auto fixed = names_of(cfg, "boundary.fixed"), roller = names_of(cfg, "boundary.roller");
+  if (fixed.empty() && roller.empty()) return;
+  const char* first_key = fixed.empty() ? "boundary.roller" : "boundary.fixed";
+  if (!pb.mesh)
+    throw InputError(fmt::format(
+        "{}: {} names boundaries of a mesh file (grid.mesh); without one the grid's sides take "
+        "boundary.left, right, bottom, top",
+        cfg.where(first_key), first_key));
+  const auto names = pb.mesh->boundary_names();
+  auto check = [&](const std::string& name, const char* key) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "\"" : ", \"") + n + "\"";
+      throw InputError(fmt::format("{}: {}: {} has no boundary \"{}\"; its boundaries: {}",
+                                   cfg.where(key), key, pb.mesh->source(), name,
+                                   list.empty() ? std::string("none") : list));
+    }
+  };
+  for (const auto& name : fixed) {
+    check(name, "boundary.fixed");
+    if (std::find(roller.begin(), roller.end(), name) != roller.end())
+      throw InputError(
+          fmt::format("{}: boundary \"{}\" is in boundary.fixed and in "
+                      "boundary.roller; name it in one of them",
+                      cfg.where("boundary.roller"), name));
+    pb.fixed_sides.push_back({0, 0, ~0u, name});
+  }
+  for (const auto& name : roller) {
+    check(name, "boundary.roller");
+    const auto line = straight_boundary(*pb.mesh, name);
+    if (!line)
+      throw InputError(fmt::format(
+          "{}: boundary.roller: boundary \"{}\" of {} does not lie on one straight line, so it "
+          "has no single normal; split it into straight physical groups or fix it",
+          cfg.where("boundary.roller"), name, pb.mesh->source()));
+    const Vec<2>& n = line->normal;
+    const int d = std::abs(n[0]) > 1.0 - 1e-12 ? 0 : std::abs(n[1]) > 1.0 - 1e-12 ? 1 : -1;
+    if (d < 0)
+      throw InputError(fmt::format(
+          "{}: boundary.roller: boundary \"{}\" of {} is inclined (normal ({:.6g}, {:.6g})); "
+          "rollers act on one velocity component, so they need a boundary parallel to x or y "
+          "(along an inclined one: not yet); use boundary.fixed",
+          cfg.where("boundary.roller"), name, pb.mesh->source(), n[0], n[1]));
+    pb.fixed_sides.push_back({d, 0, 1u << d, name});
+  }
+}
+
 // The exact solution of exact.*: none when all three keys are "0" (their default); otherwise a
 // key left at "0" means that field is zero (e.g. the velocity of a static solution).
 template <int Dim>
@@ -319,6 +386,7 @@ Problem<2> make_custom_2d(const Config& cfg) {
   };
 
   sides_from_config<2>(pb, cfg, b0, b1, per_cell);
+  named_boundaries(pb, cfg);
   pb.exact = exact_from_config<2>(cfg);
   return pb;
 }

@@ -338,6 +338,14 @@ AnyProblem make_problem(const Config& cfg) {
         "builds its own grid (leave grid.mesh out)",
         cfg.where("grid.mesh"), cfg.get_string("benchmark"),
         std::holds_alternative<Problem<1>>(pb) ? " in 1D" : ""));
+  // boundary.fixed / roller name the boundaries of a mesh file in the 2D custom problem, which
+  // reads them; every other problem fixes its own.
+  for (const char* key : {"boundary.fixed", "boundary.roller"})
+    if (!cfg.get_string(key).empty() && !(meshed && cfg.get_string("benchmark") == "custom"))
+      throw InputError(fmt::format(
+          "{}: {} names boundaries of a mesh file (grid.mesh) in the 2D custom problem; "
+          "benchmark = \"{}\"{} sets its own conditions",
+          cfg.where(key), key, cfg.get_string("benchmark"), meshed ? "" : " without grid.mesh"));
   std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid); }, pb);
   return pb;
 }

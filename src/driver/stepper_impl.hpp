@@ -85,7 +85,12 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.spline_degree = basis_degree(method.basis);
     sim_.conservation_limit = method.conservation_limit;
     sim_.sorting.mode = method.sort;
-    for (const auto& f : pb.fixed_sides) sim_.fix_side(f.direction, f.side, f.components);
+    for (const auto& f : pb.fixed_sides) {
+      if (f.boundary.empty())
+        sim_.fix_side(f.direction, f.side, f.components);
+      else
+        sim_.fix_boundary(f.boundary, f.components);
+    }
     sim_.body_force = pb.body_force;
     sim_.tractions = pb.tractions;
     if (sim_.body_force.fill) sim_.body_force.fill(sim_.particles, 0.0, sim_.particles.body);

@@ -279,6 +279,18 @@ TriangleMesh with_box_sides(const TriangleMesh& m) {
   return TriangleMesh(std::move(vertices), std::move(triangles), std::move(boundaries), m.source());
 }
 
+std::optional<BoundaryLine> straight_boundary(const TriangleMesh& m, std::string_view name) {
+  const auto& b = m.boundary(name);
+  if (b.edges.empty()) return std::nullopt;
+  const Vec<2> a = m.vertex(b.edges[0][0]);
+  const Vec<2> t = m.vertex(b.edges[0][1]) - a;
+  const Vec<2> n = Vec<2>(-t[1], t[0]) / t.norm();
+  const double tol = 1e-10 * (m.upper() - m.lower()).norm();
+  for (Index v : b.vertices)
+    if (std::abs((m.vertex(v) - a).dot(n)) > tol) return std::nullopt;
+  return BoundaryLine{a, n};
+}
+
 double triangle_stability_factor(TrianglePattern pattern) {
   return pattern == TrianglePattern::right ? 1.0 / std::sqrt(2.0) : 0.5;
 }

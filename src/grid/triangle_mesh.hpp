@@ -6,6 +6,7 @@
 // (setup/gmsh_mesh.hpp).
 #include <array>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -100,6 +101,14 @@ TriangleMesh structured_triangles(const Vec<2>& lo, const Vec<2>& hi, const IVec
 // apply to a mesh read from a file. A side that the file already names, or that holds no
 // boundary edge, is not added.
 TriangleMesh with_box_sides(const TriangleMesh& m);
+
+// A named boundary that lies on one straight line (every vertex within 1e-10 of the mesh's box
+// diagonal of the line through its first edge): a point on it and its unit normal; nullopt for a
+// boundary that bends. InputError for an unknown name (as TriangleMesh::boundary).
+struct BoundaryLine {
+  Vec<2> point, normal;
+};
+std::optional<BoundaryLine> straight_boundary(const TriangleMesh& m, std::string_view name);
 
 // dt_crit = factor h / c on the triangles of `pattern` over square cells of side h: the
 // smallest altitude over h (right: 1 / sqrt 2; criss-cross: 1 / 2), the CFL length of the

@@ -36,6 +36,9 @@ struct FixedSide {
   int direction = 0;
   int side = 0;
   unsigned components = ~0u;
+  // Not empty: the named boundary of the run's triangle mesh (a mesh file's physical group,
+  // boundary.fixed / boundary.roller) instead of the grid side (direction, side).
+  std::string boundary = {};
 };
 
 template <int Dim>

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -112,9 +113,21 @@ struct BasisState : RunState<Dim> {
   // Prescribe zero velocity on a grid side (d: direction, side 0/1) in the components whose
   // bit is set in `components` (all by default); conditions on several sides combine.
   void fix_side(int d, int side, unsigned components = ~0u) {
+    fix_dofs(basis.boundary_dofs(d, side), components);
+  }
+  // The same on a named boundary of the basis's triangle mesh (FixedSide::boundary).
+  void fix_boundary(std::string_view name, unsigned components = ~0u) {
+    if constexpr (Basis::kTriangleMesh)
+      fix_dofs(basis.boundary_dofs(name), components);
+    else
+      throw std::logic_error("fix_boundary: named boundaries belong to bases on triangles");
+  }
+
+ private:
+  void fix_dofs(const std::vector<Index>& dofs, unsigned components) {
     auto& fixed = this->nodes.fixed;
     const auto mask = static_cast<std::uint8_t>(components & ((1u << Dim) - 1u));
-    for (Index i : basis.boundary_dofs(d, side)) fixed[static_cast<std::size_t>(i)] |= mask;
+    for (Index i : dofs) fixed[static_cast<std::size_t>(i)] |= mask;
     constexpr std::uint8_t kAll = (1u << Dim) - 1u;
     this->consistent_per_component =
         std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });

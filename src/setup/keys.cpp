@@ -255,6 +255,13 @@ std::vector<KeySpec> declare() {
              "condition on the grid side y = grid.min (2D custom)"),
       choice("boundary.top", "fixed", kBoundaryTypes,
              "condition on the grid side y = grid.max (2D custom)"),
+      choice("boundary.fixed", "", {},
+             "named boundaries of grid.mesh (its physical groups of lines; `mpm mesh FILE` "
+             "lists them) whose velocity is zero, separated by commas, e.g. \"inlet, base\" "
+             "(2D custom)"),
+      choice("boundary.roller", "", {},
+             "named boundaries of grid.mesh whose normal velocity is zero, separated by commas; "
+             "each must lie on one straight line parallel to x or y (2D custom)"),
       expression_vector("traction.left", "Pa", "0",
                         "traction on the body face x = body.min, one expression of t per "
                         "component, per unit reference area (custom; \"0\": traction-free)"),

@@ -8,9 +8,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -28,21 +31,37 @@ namespace mpm {
 namespace {
 
 // `m` as a Gmsh 2.2 ASCII file in the temporary directory: node tags 1.. in vertex order (the
-// reader numbers by ascending tag), the triangles in order in one physical surface, no lines.
-// Returns the path; `keep` triangles only when given (the others are left out).
+// reader numbers by ascending tag), the triangles in order in one physical surface, and each of
+// `lines` as a named physical group of line elements. Returns the path; `keep` triangles only
+// when given (the others are left out).
 std::string write_msh(const TriangleMesh& m, const std::string& name,
-                      const std::vector<bool>& keep = {}) {
+                      const std::vector<bool>& keep = {},
+                      const std::map<std::string, std::vector<TriangleMesh::Edge>>& lines = {}) {
   const auto path = std::filesystem::temp_directory_path() /
                     fmt::format("mpm_test_{}_{}.msh", name, static_cast<long>(getpid()));
   std::ofstream f(path);
-  f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << m.num_vertices() << "\n";
+  f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
+  if (!lines.empty()) {
+    f << "$PhysicalNames\n" << lines.size() + 1 << "\n";
+    int tag = 1;
+    for (const auto& [group, edges] : lines) f << "1 " << ++tag << " \"" << group << "\"\n";
+    f << "2 1 \"body\"\n$EndPhysicalNames\n";
+  }
+  f << "$Nodes\n" << m.num_vertices() << "\n";
   for (Index v = 0; v < m.num_vertices(); ++v)
     f << fmt::format("{} {:.17g} {:.17g} 0\n", v + 1, m.vertex(v)[0], m.vertex(v)[1]);
-  Index kept = 0;
+  std::size_t count = 0;
   for (Index c = 0; c < m.num_cells(); ++c)
-    kept += keep.empty() || keep[static_cast<std::size_t>(c)] ? 1 : 0;
-  f << "$EndNodes\n$Elements\n" << kept << "\n";
+    count += keep.empty() || keep[static_cast<std::size_t>(c)] ? 1 : 0;
+  for (const auto& [group, edges] : lines) count += edges.size();
+  f << "$EndNodes\n$Elements\n" << count << "\n";
   Index k = 0;
+  int tag = 1;
+  for (const auto& [group, edges] : lines) {
+    ++tag;
+    for (const auto& e : edges)
+      f << fmt::format("{} 1 2 {} {} {} {}\n", ++k, tag, tag, e[0] + 1, e[1] + 1);
+  }
   for (Index c = 0; c < m.num_cells(); ++c) {
     if (!keep.empty() && !keep[static_cast<std::size_t>(c)]) continue;
     const auto& t = m.cell_vertices(c);
@@ -79,14 +98,14 @@ TEST(MeshFileRun, StructuredMeshFromAFileRunsBitwiseAsTheGeneratedOne) {
   for (const std::string pattern : {"right", "criss_cross"}) {
     const auto p = pattern == "right" ? TrianglePattern::right : TrianglePattern::criss_cross;
     const std::string file =
-        write_msh(structured_triangles(Vec<2>(0, 0), Vec<2>(1, 1), {4, 4}, p), pattern);
+        write_msh(structured_triangles(Vec<2>(0, 0), Vec<2>(1, 1), {3, 3}, p), pattern);
     for (const std::string basis : {"p1_triangles", "powell_sabin"})
       for (const auto& [mass, mapping] :
            {std::pair{"lumped", "direct"}, std::pair{"consistent", "direct"},
             std::pair{"lumped", "tls"}}) {
         SCOPED_TRACE(pattern + " " + basis + " " + mass + " " + mapping);
         const std::vector<std::string> common{
-            "grid.cells=4", "particles.per_triangle=12", "method.basis=" + basis,
+            "grid.cells=3", "particles.per_triangle=12", "method.basis=" + basis,
             std::string("method.mass=") + mass, std::string("method.mapping=") + mapping};
         auto with = [&](std::string extra) {
           auto sets = common;
@@ -97,7 +116,7 @@ TEST(MeshFileRun, StructuredMeshFromAFileRunsBitwiseAsTheGeneratedOne) {
         const auto read = with("grid.mesh=" + file);
         ASSERT_TRUE(read->pb.mesh);
         EXPECT_FALSE(generated->pb.mesh);
-        for (int s = 0; s < 5; ++s) {
+        for (int s = 0; s < 3; ++s) {
           generated->stepper->step(1e-5);
           read->stepper->step(1e-5);
         }
@@ -232,6 +251,115 @@ TEST(MeshFileRun, InputThatDoesNotFitIsRefusedWithTheKey) {
                                       "body.max=[1, 1]"};
   EXPECT_NE(refusal(base, custom).find("lie in no triangle of mesh file"), std::string::npos);
   std::filesystem::remove(l_file);
+}
+
+// A custom problem on Gmsh's triangulation of the square (tests/data/meshes/square_v41.msh,
+// whose physical groups are "bottom", "right", "top_left" and "7"): `sets` added.
+std::unique_ptr<test::PlateRun> custom_on_square(std::vector<std::string> sets) {
+  const std::string mesh = std::string(MPM_SOURCE_DIR) + "/tests/data/meshes/square_v41.msh";
+  std::vector<std::string> all{"grid.mesh=" + mesh,
+                               "grid.min=[0, 0]",
+                               "grid.max=[1, 1]",
+                               "body.min=[0, 0]",
+                               "body.max=[1, 1]",
+                               "grid.cells=4",
+                               "particles.per_triangle=12",
+                               "boundary.left=free",
+                               "boundary.right=free",
+                               "boundary.bottom=free",
+                               "boundary.top=free",
+                               "time.dt=1e-4",
+                               "loading.body_force=[\"0\", \"-10\"]",
+                               "exact.displacement=0",
+                               "exact.stress=0"};
+  all.insert(all.end(), sets.begin(), sets.end());
+  auto r = std::make_unique<test::PlateRun>();
+  const Config cfg =
+      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/custom_plate_2d.toml", all);
+  r->pb = std::get<Problem<2>>(make_problem(cfg));
+  r->settings = run_settings(cfg, 2);
+  r->stepper = driver::make_stepper<2>(r->settings.method.basis,
+                                       driver::StepperInput<2>{r->pb, r->settings.method, true});
+  return r;
+}
+
+// boundary.fixed and boundary.roller act on the mesh file's physical groups: the groups
+// "bottom" and "right" of square_v41.msh are the box sides y- and x+, so naming them gives
+// bitwise the run of boundary.bottom = "fixed" and boundary.right = "roller", for P1 and PS.
+TEST(MeshFileRun, NamedBoundariesOfTheFileActAsTheSidesTheyLieOn) {
+  for (const std::string basis : {"p1_triangles", "powell_sabin"}) {
+    SCOPED_TRACE(basis);
+    const auto named = custom_on_square(
+        {"method.basis=" + basis, "boundary.fixed=bottom", "boundary.roller= right"});
+    const auto sides = custom_on_square(
+        {"method.basis=" + basis, "boundary.bottom=fixed", "boundary.right=roller"});
+    const auto& fixed = named->stepper->state().nodes.fixed;
+    ASSERT_EQ(fixed, sides->stepper->state().nodes.fixed);
+    EXPECT_GT(std::count(fixed.begin(), fixed.end(), std::uint8_t{3}), 0);
+    EXPECT_GT(std::count(fixed.begin(), fixed.end(), std::uint8_t{1}), 0);
+    for (int s = 0; s < 5; ++s) {
+      named->stepper->step(1e-4);
+      sides->stepper->step(1e-4);
+    }
+    const auto& a = named->stepper->state().particles;
+    const auto& b = sides->stepper->state().particles;
+    for (std::size_t i = 0; i < a.x.size(); ++i) {
+      ASSERT_EQ(a.x[i], b.x[i]) << i;
+      ASSERT_EQ(a.stress[i], b.stress[i]) << i;
+    }
+  }
+}
+
+// Named boundaries that cannot carry the condition are refused with the key: an unknown name
+// (the mesh's names listed), a roller on a boundary that bends ("top_left") or is inclined, a
+// name in both lists, and the keys without a mesh file or in another problem.
+TEST(MeshFileRun, NamedBoundariesThatDoNotFitAreRefused) {
+  auto refusal = [](const std::function<void()>& f) { return message_of(f); };
+  const std::string tri = "method.basis=p1_triangles";
+  EXPECT_NE(refusal([&] {
+              custom_on_square({tri, "boundary.fixed=inlet"});
+            })
+                .find("has no boundary \"inlet\"; its boundaries: \"7\", \"bottom\", "
+                      "\"right\", \"top_left\", \"x+\", \"x-\", \"y+\", \"y-\""),
+            std::string::npos);
+  EXPECT_NE(refusal([&] {
+              custom_on_square({tri, "boundary.roller=top_left"});
+            }).find("does not lie on one straight line"),
+            std::string::npos);
+  EXPECT_NE(refusal([&] {
+              custom_on_square({tri, "boundary.fixed=bottom, right", "boundary.roller=right"});
+            }).find("is in boundary.fixed and in boundary.roller"),
+            std::string::npos);
+  EXPECT_NE(refusal([&] {
+              custom_on_square({"method.basis=powell_sabin", "boundary.fixed=top_left"});
+            }).find("does not lie on one straight line; Powell-Sabin splines"),
+            std::string::npos);
+  // A right triangle whose hypotenuse "slope" is a physical group.
+  const std::vector<Vec<2>> corners{{0, 0}, {1, 0}, {0, 1}};
+  const TriangleMesh half(corners, {{0, 1, 2}}, {}, "half");
+  const std::string file = write_msh(half, "slope", {}, {{"slope", {{1, 2}}}});
+  const std::string custom = std::string(MPM_SOURCE_DIR) + "/examples/custom_plate_2d.toml";
+  auto on_half = [&](std::vector<std::string> sets) {
+    sets.insert(sets.end(),
+                {tri, "grid.mesh=" + file, "grid.cells=2", "grid.min=[0, 0]", "grid.max=[1, 1]",
+                 "body.min=[0, 0]", "body.max=[0.3, 0.3]", "boundary.left=free",
+                 "boundary.right=free", "boundary.bottom=free", "boundary.top=free"});
+    (void)make_problem(Config::load(custom, sets));
+  };
+  EXPECT_NE(refusal([&] { on_half({"boundary.roller=slope"}); }).find("is inclined (normal"),
+            std::string::npos);
+  EXPECT_EQ(refusal([&] { on_half({"boundary.fixed=slope"}); }), "");
+  std::filesystem::remove(file);
+  EXPECT_NE(refusal([&] {
+              (void)make_problem(Config::load(custom, {"boundary.fixed=bottom"}));
+            }).find("names boundaries of a mesh file (grid.mesh); without one"),
+            std::string::npos);
+  EXPECT_NE(
+      refusal([&] {
+        (void)make_problem(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml",
+                                        {"boundary.roller=x-"}));
+      }).find("sets its own conditions"),
+      std::string::npos);
 }
 
 }  // namespace
