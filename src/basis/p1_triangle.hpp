@@ -31,11 +31,6 @@ inline void p1_triangle_stencil(const TriangleMesh& m, Index cell, const Vec<2>&
   }
 }
 
-// The name of grid side (d, side) among a structured triangulation's boundaries ("x-", ...).
-inline std::string side_name(int d, int side) {
-  return std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
-}
-
 // A stencil with no weight (a point outside the mesh).
 template <int N>
 void clear_stencil(Stencil<2, N>& s) {
@@ -101,7 +96,7 @@ class TriangleP1Basis {
   IVec<Dim> dofs_per_dim() const { return {num_dofs(), 1}; }
   Vec<Dim> dof_position(Index i) const { return mesh_->vertex(i); }
   // The vertices of the mesh boundary on the grid side (d, side): "x-", "x+", "y-", "y+"
-  // (TriangleMesh::add_box_sides for a Gmsh mesh).
+  // (with_box_sides for a Gmsh mesh).
   std::vector<Index> boundary_dofs(int d, int side) const {
     return mesh_->boundary_vertices(side_name(d, side));
   }

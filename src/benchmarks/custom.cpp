@@ -87,9 +87,7 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
       if (type == "fixed") pb.fixed_sides.push_back({d, side});
       if (type == "roller") pb.fixed_sides.push_back({d, side, 1u << d});
       if constexpr (Dim == 2) {
-        const std::string name = std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
-        const auto names = pb.mesh ? pb.mesh->boundary_names() : std::vector<std::string>{};
-        if (pb.mesh && type != "free" && std::find(names.begin(), names.end(), name) == names.end())
+        if (pb.mesh && type != "free" && !pb.mesh->has_boundary(side_name(d, side)))
           throw InputError(fmt::format(
               "{}: boundary.{} = \"{}\", but {} has no boundary edge on the grid's side {} = "
               "{:.9g}; set boundary.{} = \"free\"",
@@ -160,11 +158,11 @@ void named_boundaries(Problem<2>& pb, const Config& cfg) {
         "{}: {} names boundaries of a mesh file (grid.mesh); without one the grid's sides take "
         "boundary.left, right, bottom, top",
         cfg.where(first_key), first_key));
-  const auto names = pb.mesh->boundary_names();
   auto check = [&](const std::string& name, const char* key) {
-    if (std::find(names.begin(), names.end(), name) == names.end()) {
+    if (!pb.mesh->has_boundary(name)) {
       std::string list;
-      for (const auto& n : names) list += (list.empty() ? "\"" : ", \"") + n + "\"";
+      for (const auto& n : pb.mesh->boundary_names())
+        list += (list.empty() ? "\"" : ", \"") + n + "\"";
       throw InputError(fmt::format("{}: {}: {} has no boundary \"{}\"; its boundaries: {}",
                                    cfg.where(key), key, pb.mesh->source(), name,
                                    list.empty() ? std::string("none") : list));

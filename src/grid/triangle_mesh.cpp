@@ -261,7 +261,7 @@ TriangleMesh with_box_sides(const TriangleMesh& m) {
   const double tol = 1e-10 * (m.upper() - m.lower()).norm();
   for (int d = 0; d < 2; ++d)
     for (int side = 0; side < 2; ++side) {
-      const std::string name = std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
+      const std::string name = side_name(d, side);
       if (boundaries.contains(name)) continue;
       const double line = side == 0 ? m.lower()[d] : m.upper()[d];
       std::vector<TriangleMesh::Edge> edges;

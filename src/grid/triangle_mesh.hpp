@@ -47,6 +47,7 @@ class TriangleMesh {
   const Triangle& cell_vertices(Index c) const { return triangles_[static_cast<std::size_t>(c)]; }
   double cell_volume(Index c) const { return area_[static_cast<std::size_t>(c)]; }
   std::vector<std::string> boundary_names() const;
+  bool has_boundary(std::string_view name) const { return boundaries_.contains(name); }
   // InputError naming the mesh's boundaries for an unknown name.
   std::vector<Index> boundary_vertices(std::string_view name) const {
     return boundary(name).vertices;
@@ -85,6 +86,12 @@ class TriangleMesh {
 };
 
 static_assert(Mesh<TriangleMesh>);
+
+// The name of grid side (d, side) among a mesh's boundaries: "x-", "x+", "y-", "y+" (the
+// structured triangulations, with_box_sides).
+inline std::string side_name(int d, int side) {
+  return std::string(1, "xy"[d]) + (side == 0 ? "-" : "+");
+}
 
 // The two structured triangulations of a rectangle: `right` splits each of the n[0] x n[1]
 // rectangles along its diagonal from the lower-left to the upper-right corner (two right
