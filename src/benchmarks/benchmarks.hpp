@@ -1,5 +1,6 @@
 #pragma once
 // Constructors of the built-in benchmarks (one file each).
+#include <array>
 #include <memory>
 #include <numbers>
 
@@ -75,6 +76,34 @@ struct PlateMms2DExact {
   Mat<2> cauchy_stress(const Mat<2>& F) const;                   // sigma(F) [Pa]
   Mat<2> piola_stress(const Mat<2>& F) const;                    // P(F) [Pa]
   Vec<2> body_force(const Vec<2>& X, double t) const;            // b(X, t) [m/s^2]
+  ExactState<2> operator()(const Vec<2>& X, double t) const;
+};
+
+// The generalized vortex (Kamojjala, Brannon, Sadeghirad & Guilkey, Eng. Comput. 2015), a
+// rotation test: the material of the annulus R_i <= R <= R_o turns about its centre by
+// alpha(R, t) = g(t) h(R), g = A sin(2 pi t / period), h = (1 - 4 xi^2)^2 with
+// xi = (R - (R_i + R_o)/2) / (R_o - R_i) (R_i = 0.75, R_o = 1.25: the paper's
+// 1 - 32 (R - 1)^2 + 256 (R - 1)^4), so x = Q(alpha) X, J = 1, and F = I with zero traction on
+// both circles. Plane-strain neo-Hookean; body force b = x_tt - Div P / rho0 derived in
+// scripts/vortex_mms.py. The grid is [-half_width, half_width]^2, the body its particles whose
+// centre lies in the annulus (vortex.seeding = "cells") or rings of particles that tile it
+// (seed_annulus, "polar", the default); no boundary condition.
+Problem<2> make_vortex_2d(const Config& cfg);
+
+// Particles tiling the annulus inner <= R <= outer (centred at the origin) in rings of annular
+// sectors about h / per_cell wide in both directions (h: the grid's cell size), each carrying
+// its sector's area; mass = rho0 V, F = I.
+Particles<2> seed_annulus(const Grid<2>& g, double inner, double outer, int per_cell, double rho0);
+
+struct Vortex2DExact {
+  double inner_radius, outer_radius, amplitude, period, density, lambda, mu;
+  double g(double t) const;                 // rotation amplitude g(t) [rad]
+  double g_t(double t) const;               // dg/dt [rad/s]
+  double g_tt(double t) const;              // d2g/dt2 [rad/s^2]
+  std::array<double, 3> h(double R) const;  // h, dh/dR [1/m], d2h/dR2 [1/m^2]; 0 outside
+  Mat<2> deformation_gradient(const Vec<2>& X, double t) const;
+  Mat<2> cauchy_stress(const Mat<2>& F) const;         // sigma(F) [Pa]
+  Vec<2> body_force(const Vec<2>& X, double t) const;  // b(X, t) [m/s^2]
   ExactState<2> operator()(const Vec<2>& X, double t) const;
 };
 

@@ -318,6 +318,7 @@ AnyProblem make_any_problem(const Config& cfg) {
     return make_custom_1d(cfg);
   }
   if (name == "plate_mms_2d") return make_plate_mms_2d(cfg);
+  if (name == "vortex_2d") return make_vortex_2d(cfg);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Material points as a struct of arrays (one contiguous array per field), D Algorithm 2 input.
 #include <numeric>
+#include <utility>
 #include <vector>
 
 #include "core/types.hpp"
@@ -45,6 +46,20 @@ struct Particles {
     if (s > old)
       std::iota(id.begin() + static_cast<std::ptrdiff_t>(old), id.end(),
                 static_cast<CompactIndex>(old));
+  }
+
+  // Keeps the particles i with keep(*this, i), in order, and numbers them 0, 1, ... again: for
+  // set-up only (a body cut out of a seeded box), before any output names an id.
+  template <class Keep>
+  void keep_if(Keep&& keep) {
+    std::vector<std::size_t> kept;
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (keep(std::as_const(*this), i)) kept.push_back(i);
+    for_each_field([&](auto& field) {
+      for (std::size_t k = 0; k < kept.size(); ++k) field[k] = field[kept[k]];
+      field.resize(kept.size());
+    });
+    std::iota(id.begin(), id.end(), CompactIndex{0});
   }
 
   // Whether the particles are in id order (never re-sorted, or sorted back).

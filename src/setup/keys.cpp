@@ -223,6 +223,21 @@ std::vector<KeySpec> declare() {
       real("bar.v0", "m/s", 0.1, any(), "amplitude v0 of the initial velocity v0 sin(pi x/L)"),
       real("plate.length", "m", 1.0, greater_than(0),
            "side L of the square plate of plate_mms_2d (001: 1 m)"),
+      real("vortex.amplitude", "rad", 1.0, any(),
+           "largest turn A of the vortex_2d annulus, alpha = A sin(2 pi t / period) h(R) (at "
+           "the mid radius)"),
+      real("vortex.period", "s", 2.0, greater_than(0),
+           "period of the vortex_2d rotation g(t) = A sin(2 pi t / period) (2: the sin(pi t) of "
+           "Kamojjala et al. 2015)"),
+      real("vortex.inner_radius", "m", 0.75, greater_than(0),
+           "inner radius R_i of the vortex_2d annulus"),
+      real("vortex.outer_radius", "m", 1.25, greater_than(0),
+           "outer radius R_o of the vortex_2d annulus"),
+      real("vortex.half_width", "m", 1.5, greater_than(0),
+           "half side of the square grid [-w, w]^2 of vortex_2d, centred on the annulus (at "
+           "least vortex.outer_radius)"),
+      choice("vortex.seeding", "polar", kVortexSeedings,
+             "particle layout of the vortex_2d annulus"),
       real("column.height", "m", 50.0, greater_than(0),
            "initial height H of the compacted column (D 5.4.2)"),
       real("column.body_force", "m/s^2", -200.0, any(),

@@ -75,6 +75,19 @@ inline constexpr Entry kBenchmarks[] = {
     {"plate_mms_2d",
      "2D axis-aligned vibration of a unit square, neo-Hookean manufactured solution (001, D "
      "3.4.1)"},
+    {"vortex_2d",
+     "2D generalized vortex: an annulus turned by a radius-dependent angle, neo-Hookean "
+     "manufactured solution with large shear and rotation (Kamojjala et al. 2015)"},
+};
+
+// vortex.seeding: where the particles of the vortex_2d annulus sit.
+inline constexpr Entry kVortexSeedings[] = {
+    {"polar",
+     "rings of particles.per_cell per cell width across the annulus, each ring cut into equal "
+     "sectors of about the same width; the sectors tile the annulus exactly"},
+    {"cells",
+     "the grid's particles (particles.per_cell or per_triangle) whose centre lies in the "
+     "annulus: a staircase along both circles"},
 };
 
 inline constexpr auto kBases = entries_of<BasisKind>();
