@@ -369,6 +369,31 @@ void MovingLeastSquaresMapping<Improved>::fit_mass(RunState<Dim>& sim, GaussPoin
   gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
     rho_[g] = t.apply(r, [&](std::size_t p) { return P.density[p]; });
   });
+  if (settings_.conservative) {
+    // rho~ = rho^ M / sum_g w_g rho^_g (mls.hpp).
+    double integral = 0.0, mass = 0.0;
+    for (std::size_t g = 0; g < q.size(); ++g) integral += q.w[g] * rho_[g];
+    for (double m : P.mass) mass += m;
+    if (integral > 0.0)
+      for (double& r : rho_) r *= mass / integral;
+  }
+}
+
+template <bool Improved>
+template <int Dim, class V>
+void MovingLeastSquaresMapping<Improved>::conserve_with_density(const GaussPoints<Dim>& q,
+                                                                std::vector<V>& f,
+                                                                const V& total) const {
+  // f~_g = f_g + rho~_g delta with sum_g w_g f~_g = total (mls.hpp); serial sums in point order.
+  V integral = V::Zero();
+  double mass = 0.0;
+  for (std::size_t g = 0; g < q.size(); ++g) {
+    integral += q.w[g] * f[g];
+    mass += q.w[g] * rho_[g];
+  }
+  if (!(mass > 0.0)) return;
+  const V delta = (total - integral) / mass;
+  for (std::size_t g = 0; g < q.size(); ++g) f[g] += rho_[g] * delta;
 }
 
 template <bool Improved>
@@ -407,12 +432,32 @@ void MovingLeastSquaresMapping<Improved>::fit_momentum(RunState<Dim>& sim,
       const auto i = static_cast<std::size_t>(node_dof_[r]);
       out[i] = sim.nodes.mass[i] * t.apply<V>(k, [&](std::size_t p) -> const V& { return P.v[p]; });
     });
+    if (settings_.conservative) {
+      // The common velocity shift (mls.hpp): sums in DOF and particle order, serial.
+      V nodal = V::Zero(), particles = V::Zero();
+      double mass = 0.0;
+      for (Index i : node_dof_) {
+        nodal += out[static_cast<std::size_t>(i)];
+        mass += sim.nodes.mass[static_cast<std::size_t>(i)];
+      }
+      for (std::size_t p = 0; p < P.v.size(); ++p) particles += P.mass[p] * P.v[p];
+      if (mass > 0.0) {
+        const V shift = (particles - nodal) / mass;
+        for (Index i : node_dof_)
+          out[static_cast<std::size_t>(i)] += sim.nodes.mass[static_cast<std::size_t>(i)] * shift;
+      }
+    }
   } else {
     auto& vec = std::get<Dim - 1>(work_).vec;
     vec.resize(q.size());
     gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
       vec[g] = t.apply<V>(r, [&](std::size_t p) -> V { return P.density[p] * P.v[p]; });
     });
+    if (settings_.conservative) {
+      V total = V::Zero();
+      for (std::size_t p = 0; p < P.v.size(); ++p) total += P.mass[p] * P.v[p];
+      conserve_with_density(q, vec, total);
+    }
   }
 }
 
@@ -440,6 +485,11 @@ void MovingLeastSquaresMapping<Improved>::fit_forces(RunState<Dim>& sim,
     sig[g] = s;
     vec[g] = rho_[g] * b;
   });
+  if (settings_.conservative) {
+    V total = V::Zero();
+    for (std::size_t p = 0; p < P.body.size(); ++p) total += P.mass[p] * P.body[p];
+    conserve_with_density(q, vec, total);
+  }
 }
 
 #define MPM_MLS_MAPPING_DIM(I, D)                                                         \

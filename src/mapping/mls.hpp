@@ -280,6 +280,11 @@ struct MlsSettings {
   int gauss_points = 0;  // per active element; 0: 2
   double max_condition = 1e8;
   double dilation = kMlsDilation;  // method.mls_dilation
+  // method.mls_conservative: shift the reconstructed densities in each element so that they
+  // integrate to the particles' mass, momentum and body force there (conserve_by_element), and
+  // IMLS's nodal velocities by one common vector so that the nodal momenta add up to the
+  // particles'. false: 001's and 003's definitions, which conserve neither.
+  bool conservative = false;
   int gauss_points_used() const { return gauss_points > 0 ? gauss_points : 2; }
 };
 
@@ -297,6 +302,25 @@ struct MlsSettings {
 //     that solve_velocity's M^-1 q returns v_i; needs lumped mass (003 eq. 32). Only DOFs with
 //     mass get a value; one with no particle within a cell (possible for B-splines, whose DOFs
 //     sit at Greville points) uses the quadratic-spline weight instead (report().widened).
+// Settings::conservative adds the conservation that 001 and 003 lack (issue 22), by the smallest
+// corrections of the reconstructed fields that make their totals the particles':
+//   rho~_g = rho^_g M / sum_g w_g rho^_g, M = sum_p m_p: the minimiser of
+//     sum_g w_g (rho~_g - rho^_g)^2 / rho^_g under sum_g w_g rho~_g = M (a Lagrange multiplier
+//     gives rho~ proportional to rho^), so the shape of the fit is kept and its sign too;
+//   (rho v)~_g = (rho v)^_g + rho~_g delta, delta = (sum_p m_p v_p - sum_g w_g (rho v)^_g) / M:
+//     the minimiser of sum_g w_g |(rho v)~_g - (rho v)^_g|^2 / rho~_g under the momentum total,
+//     a common velocity added to the whole body (Galilean: it leaves relative motion alone);
+//   (rho b)~ likewise with sum_p m_p b_p.
+// The basis is a partition of unity at every Gauss point, so sum_i m_i = sum_p m_p,
+// sum_i q_i = sum_p m_p v_p and the external forces add up to sum_p m_p b_p to round-off;
+// internal forces add up to zero as before. IMLS's momentum is nodal (003 eq. 31): its nodal
+// velocities get the common shift (sum_p m_p v_p - sum_i m_i v_i) / sum_i m_i, the same
+// correction at the nodes. A per-element version (each element's integral set to its own
+// particles' mass, the constraint of conservative TLS, D eq. 5.8-5.9) was tried and rejected: the
+// particle mass in an element jumps by a whole m_p whenever a particle crosses a cell face, which
+// brought back the grid-crossing noise that the MLS smoothing removes (mms_1d, P1 and B2 with MLS
+// and P1 with IMLS on 16, 32, 64 cells: 5 of the 9 runs stopped, the others had errors 4-18x
+// those of 001's and 003's definitions).
 template <bool Improved>
 class MovingLeastSquaresMapping {
  public:
@@ -405,6 +429,10 @@ class MovingLeastSquaresMapping {
   void fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q);
   template <int Dim>
   void fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q);
+  // Settings::conservative: f_g + rho_g delta with the common delta that makes
+  // sum_g w_g f_g = total (mls.hpp).
+  template <int Dim, class V>
+  void conserve_with_density(const GaussPoints<Dim>& q, std::vector<V>& f, const V& total) const;
 
   Settings settings_;
   std::tuple<Work<1>, Work<2>> work_;

@@ -206,6 +206,10 @@ std::vector<KeySpec> declare() {
       real("method.mls_dilation", "", 2.0, greater_than(0),
            "dilation a of the MLS/IMLS quadratic-spline weight, r = |x - x_p| / (a h) per "
            "direction, support 1.5 a h each side (001 eq. 16 and 003 eq. 27: a = 2)"),
+      boolean("method.mls_conservative", false,
+              "MLS/IMLS: scale the reconstructed density and add a common velocity and body "
+              "force so that mass, momentum and external force are the particles' (conservative "
+              "to round-off; src/mapping/mls.hpp); false: 001's and 003's definitions"),
       real("mms.amplitude", "m", 0.1, any(),
            "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (mms_1d: "
            "003; "

@@ -19,6 +19,7 @@ MlsSettings mls_settings(const Config& cfg, bool improved) {
   s.degree = static_cast<int>(cfg.get_int("method.mls_degree"));
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
   s.dilation = cfg.get_real("method.mls_dilation");
+  s.conservative = cfg.get_bool("method.mls_conservative");
   if (improved && cfg.get_string("method.mass") != "lumped")
     throw InputError("method.mapping = imls needs method.mass = lumped (003 eq. 32)");
   return s;
