@@ -4,6 +4,7 @@
 #include <memory>
 #include <numbers>
 
+#include "core/parallel.hpp"
 #include "model/problem.hpp"
 
 namespace mpm {
@@ -138,6 +139,25 @@ void check_mesh_box(const Config& cfg, const TriangleMesh& m, const Grid<2>& g);
 // lie in the mesh). InputError naming the key otherwise.
 Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
                           double rho0, const TriangleMesh* mesh = nullptr);
+
+// A 2D manufactured solution `ex` (plate_mms_2d, vortex_2d) on pb's particles: their initial
+// velocity ex(X, 0).v, the body force ex.body_force(X, t) at their material positions X = x0
+// refilled every step in parallel (sines, cosines per particle), and ex as the exact solution.
+template <class Exact>
+void use_manufactured_solution(Problem<2>& pb, const Exact& ex) {
+  pb.initial_velocity = [ex](const Vec<2>& X) { return ex(X, 0.0).v; };
+  for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
+    pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
+  // b depends on the material position X (P.x0, fixed), so only time dependence is flagged.
+  pb.body_force.time_dependent = true;
+  pb.body_force.fill = [ex](const Particles<2>& P, double t, std::vector<Vec<2>>& b) {
+    parallel_for(static_cast<Index>(b.size()), [&](Index p) {
+      const auto i = static_cast<std::size_t>(p);
+      b[i] = ex.body_force(P.x0[i], t);
+    });
+  };
+  pb.exact = ex;
+}
 
 // Material from the [material] keys for a problem in `dim` dimensions.
 Material material_from_config(const Config& cfg, int dim);

@@ -3,7 +3,6 @@
 #include <numbers>
 
 #include "benchmarks/benchmarks.hpp"
-#include "core/parallel.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {
@@ -91,23 +90,11 @@ Problem<2> make_plate_mms_2d(const Config& cfg) {
   pb.particles = seed_body_2d(cfg, pb.grid, Vec<2>::Zero(), Vec<2>(L, L), rho, pb.mesh.get());
   pb.body_min = Vec<2>::Zero();
   pb.body_max = Vec<2>(L, L);
-  pb.initial_velocity = [ex](const Vec<2>& X) { return ex(X, 0.0).v; };
-  for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
-    pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
   // "Fixed at the entire boundary" fixes the normal component only (rollers): u_x = 0 on X = 0
   // and X = L, u_y = 0 on Y = 0 and Y = L. The tangential components follow the manufactured
   // solution (u_y(0, Y, t) != 0), so fixing both would contradict it.
   pb.fixed_sides = {{0, 0, 1u}, {0, 1, 1u}, {1, 0, 2u}, {1, 1, 2u}};
-  // b depends on the material position X (P.x0, fixed), so only time dependence is flagged.
-  pb.body_force.time_dependent = true;
-  // Refilled every step (sines, cosines and a logarithm per particle): in parallel.
-  pb.body_force.fill = [ex](const Particles<2>& P, double t, std::vector<Vec<2>>& b) {
-    parallel_for(static_cast<Index>(b.size()), [&](Index p) {
-      const auto i = static_cast<std::size_t>(p);
-      b[i] = ex.body_force(P.x0[i], t);
-    });
-  };
-  pb.exact = ex;
+  use_manufactured_solution(pb, ex);
   return pb;
 }
 

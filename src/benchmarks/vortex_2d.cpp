@@ -3,7 +3,6 @@
 #include <numbers>
 
 #include "benchmarks/benchmarks.hpp"
-#include "core/parallel.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {
@@ -168,19 +167,9 @@ Problem<2> make_vortex_2d(const Config& cfg) {
                     cfg.where("grid.cells"), cells, cells, ex.inner_radius, ex.outer_radius));
   pb.body_min = Vec<2>(-ex.outer_radius, -ex.outer_radius);
   pb.body_max = Vec<2>(ex.outer_radius, ex.outer_radius);
-  pb.initial_velocity = [ex](const Vec<2>& X) { return ex(X, 0.0).v; };
-  for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
-    pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
   // No condition: the traction vanishes on both circles (h = h' = 0 there), and the grid's
   // sides are away from the body.
-  pb.body_force.time_dependent = true;
-  pb.body_force.fill = [ex](const Particles<2>& P, double t, std::vector<Vec<2>>& b) {
-    parallel_for(static_cast<Index>(b.size()), [&](Index p) {
-      const auto i = static_cast<std::size_t>(p);
-      b[i] = ex.body_force(P.x0[i], t);
-    });
-  };
-  pb.exact = ex;
+  use_manufactured_solution(pb, ex);
   return pb;
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "../support/mms.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "material/materials.hpp"
 
@@ -25,24 +26,10 @@ PlateMms2DExact make_exact(double A = 0.1) {
   return {1.0, p.density, p.lambda(), p.mu(), std::sqrt(p.youngs_modulus / p.density), A};
 }
 
-// F = I + Grad u by central differences of the exact displacement.
-Mat<2> fd_deformation_gradient(const PlateMms2DExact& ex, const Vec<2>& X, double t) {
-  const double h = 1e-6;
-  Mat<2> F = Mat<2>::Identity();
-  for (int b = 0; b < 2; ++b) {
-    Vec<2> e = Vec<2>::Zero();
-    e[b] = h;
-    F.col(b) += (ex(X + e, t).u - ex(X - e, t).u) / (2.0 * h);
-  }
-  return F;
-}
+using test::fd_deformation_gradient;
 
-// First Piola-Kirchhoff stress P = J sigma F^-T of the library's neo-Hookean law.
 Mat<2> law_piola(const Mat<2>& F) {
-  const NeoHookean law{params()};
-  Mat<2> sigma = Mat<2>::Zero();
-  law.update<2>(sigma, F, Mat<2>::Zero());
-  return F.determinant() * sigma * F.inverse().transpose();
+  return test::neo_hookean_piola(params(), F);
 }
 
 TEST(PlateMms2DExact, VelocityDeformationAndStressFromTheDisplacement) {

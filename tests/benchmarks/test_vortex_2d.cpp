@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "../support/mms.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "driver/run.hpp"
 #include "material/materials.hpp"
@@ -28,22 +29,10 @@ Vortex2DExact make_exact(double A = 1.0) {
   return {0.75, 1.25, A, 2.0, p.density, p.lambda(), p.mu()};
 }
 
-Mat<2> fd_deformation_gradient(const Vortex2DExact& ex, const Vec<2>& X, double t) {
-  const double h = 1e-6;
-  Mat<2> F = Mat<2>::Identity();
-  for (int b = 0; b < 2; ++b) {
-    Vec<2> e = Vec<2>::Zero();
-    e[b] = h;
-    F.col(b) += (ex(X + e, t).u - ex(X - e, t).u) / (2.0 * h);
-  }
-  return F;
-}
+using test::fd_deformation_gradient;
 
 Mat<2> law_piola(const Mat<2>& F) {
-  const NeoHookean law{params()};
-  Mat<2> sigma = Mat<2>::Zero();
-  law.update<2>(sigma, F, Mat<2>::Zero());
-  return F.determinant() * sigma * F.inverse().transpose();
+  return test::neo_hookean_piola(params(), F);
 }
 
 // Points across the annulus (0.75 < R < 1.25) in all four quadrants.
