@@ -90,7 +90,7 @@ Mat<2> Vortex2DExact::cauchy_stress(const Mat<2>& F) const {
 Vec<2> Vortex2DExact::body_force(const Vec<2>& X, double t) const {
   // b = x_tt - Div P / rho0 in the current polar frame (e_r, e_phi), phi = Theta + alpha
   // (derived with sympy in scripts/vortex_mms.py, which checks it against the Cartesian
-  // x_tt - Div P / rho0; Kamojjala et al. 2015 derive the same for a general law):
+  // x_tt - Div P / rho0; tests/benchmarks/test_vortex_2d.cpp checks it by finite differences):
   //   b_r = R (mu/rho0 alpha_R^2 - alpha_t^2),  b_phi = R alpha_tt - mu/rho0 (3 alpha_R + R
   //   alpha_RR).
   const double R = X.norm();
