@@ -48,6 +48,9 @@ SLOW+='|VerifyQuick\.'  # refinement studies through build/mpm (scripts/verify.p
 SLOW+='|MappingParallel\.(Mls2DQuadraticBSpline|Imls2DQuadraticBSpline|Imls2D)SameForOneAndTwoThreads'
 SLOW+='|Sort\.Shuffled(TractionBar1DCpdi|Plate2DCpdi2)MatchesSeeded'
 SLOW+='|MappingParallel\.Tls2DNeighbourCompletionSameForOneAndTwoThreads'
+# Refinement guards of the vortex and of conservative MLS/IMLS in 1D (65 s each under the
+# sanitizers); the free-body conservation test keeps the conservative code under them.
+SLOW+='|Vortex2D\.QuadraticBsplinesConvergeInDisplacementAndStress|MlsConservative\.MassAndMomentumToRoundOffIn1D'
 # 2D runs of 20-40 s under the sanitizers whose stages the 1D and smaller 2D tests exercise.
 SLOW+='|Parallel\.Plate2DQuadraticBSplineEverySchemeSameForOneAndTwoThreads'
 SLOW+='|Traction2D\.PlaneStrainColumnMatchesTheTractionBarRowByRow|Custom2D\.GravityPlateMatchesTheQuasiStaticSolution'
