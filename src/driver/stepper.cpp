@@ -35,6 +35,9 @@ void report_mapping(nlohmann::ordered_json& summary, const TlsMapping& m, int) {
                     {"with_neighbours", t.with_neighbours},
                     {"min_terms", t.min_terms},
                     {"max_condition", t.max_condition}};
+  // The robustness measures of the grid's cells, where switched on (element-steps).
+  if (m.settings().positivity) summary["tls"]["positivity_limited"] = t.limited;
+  if (m.settings().surface_volume) summary["tls"]["surface_elements"] = t.surface;
   if (m.on_triangles()) {
     // Triangles (D 6.3): the completion resolved, the fits with dropped directions, and the
     // smallest rank (min_terms) of an element's fit.

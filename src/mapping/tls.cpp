@@ -117,7 +117,9 @@ void validate(const TlsSettings& s, int dim) {
         s.terms));
   if (!(s.max_condition > 1.0))
     throw InputError(
-        fmt::format("method.tls_max_condition = {} must be greater than 1", s.max_condition));
+        fmt::format("method.tls_max_condition = {} must be greater than 1 (0: the default of the "
+                    "dimension)",
+                    s.max_condition));
   if (s.gauss_points < 0 || s.gauss_points > 10)
     throw InputError(fmt::format("method.gauss_points = {} must lie in [0, 10]", s.gauss_points));
   if (s.max_borrowed < 0)
@@ -166,6 +168,8 @@ void accumulate(TlsReport& total, const TlsReport& step) {
   }
   total.failed += step.failed;
   total.truncated += step.truncated;
+  total.limited += step.limited;
+  total.surface += step.surface;
 }
 
 template <int Dim>
@@ -275,9 +279,17 @@ void BasicTlsReconstruction<Dim>::add_datum(System& sys, Matrix& D, const Datum&
   add_outer(D, d.psi);
 }
 
+// In the orthonormal Taylor basis (TlsSettings::max_condition): phi = L psi, so the normal
+// matrix is L D L with L the inverse root-mean-square norms of psi_1..psi_K over [-1, 1]^Dim.
 template <int Dim>
 double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t) const {
-  return condition_number(D, settings_.conservative_only ? 1 : 0, t);
+  Taylor l;
+  if constexpr (Dim == 1)
+    l << 1.0, std::sqrt(3.0), std::sqrt(45.0);
+  else
+    l << 1.0, std::sqrt(3.0), std::sqrt(3.0), std::sqrt(45.0), std::sqrt(45.0), 3.0;
+  const Matrix S = l.asDiagonal() * D * l.asDiagonal();
+  return condition_number(S, settings_.conservative_only ? 1 : 0, t);
 }
 
 // Enough distinct positions for the unknowns (t, or t - 1 when a_1 is always given) and
@@ -586,7 +598,7 @@ void BasicTlsReconstruction<Dim>::build_systems() {
 // have virtual points (they fit all terms from their own points), so two passes suffice.
 template <int Dim>
 void BasicTlsReconstruction<Dim>::fit(std::span<const double> f, const double* integrals,
-                                      Coefficients& a) const {
+                                      const unsigned char* conservative, Coefficients& a) const {
   if (f.size() < x_.size())
     throw std::invalid_argument("TlsReconstruction: one value per point of set_points");
   const Index ne = grid_.num_cells();
@@ -615,7 +627,7 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f, const double* i
         return a[static_cast<std::size_t>(d.source)].dot(taylor_basis_at<Dim>(d.s_source));
       };
       Taylor coef = Taylor::Zero();
-      if (integrals != nullptr) {
+      if (integrals != nullptr && (conservative == nullptr || conservative[ei] != 0)) {
         // D eq. 5.9: a_1 fixed by the element integral; the rest fit f - a_1 without psi_1:
         // a_2..t = R_c^{-1} Q_c^T (U - a_1).
         const double a1 = integrals[ei] / volume;
@@ -656,14 +668,27 @@ void BasicTlsReconstruction<Dim>::fit_conservative(std::span<const double> f,
                                                    Coefficients& a) const {
   if (integrals.size() < static_cast<std::size_t>(grid_.num_cells()))
     throw std::invalid_argument("TlsReconstruction::fit_conservative: one integral per element");
-  fit(f, integrals.data(), a);
+  fit(f, integrals.data(), nullptr, a);
 }
 
 template <int Dim>
 void BasicTlsReconstruction<Dim>::fit_plain(std::span<const double> f, Coefficients& a) const {
   if (settings_.conservative_only)
     throw std::logic_error("TlsReconstruction::fit_plain: the settings are conservative_only");
-  fit(f, nullptr, a);
+  fit(f, nullptr, nullptr, a);
+}
+
+template <int Dim>
+void BasicTlsReconstruction<Dim>::fit_mixed(std::span<const double> f,
+                                            std::span<const double> integrals,
+                                            std::span<const unsigned char> conservative,
+                                            Coefficients& a) const {
+  const auto ne = static_cast<std::size_t>(grid_.num_cells());
+  if (integrals.size() < ne || conservative.size() < ne)
+    throw std::invalid_argument("TlsReconstruction::fit_mixed: one integral and flag per element");
+  if (settings_.conservative_only)
+    throw std::logic_error("TlsReconstruction::fit_mixed: the settings are conservative_only");
+  fit(f, integrals.data(), conservative.data(), a);
 }
 
 template <int Dim>

@@ -66,9 +66,26 @@ struct TlsSettings {
   int terms = 0;
   TlsCompletion completion = TlsCompletion::Virtual;
   // Largest cond(D) accepted before an element counts as deficient (D 5.2.3). D is the normal
-  // matrix sum psi psi^T of the Taylor basis, which is already scaled by the element half-widths,
-  // so the number does not depend on the element size.
+  // matrix sum phi phi^T of the Taylor basis made orthonormal over the element (phi_k = psi_k /
+  // ||psi_k||, the mean-square norms over [-1, 1]^Dim: 1, 1/3 per linear term, 1/45 per square,
+  // 1/9 for s t; the psi_k are already orthogonal there), as on triangles (tls_triangle.hpp):
+  // cond = 1 for points that sample the element as well as uniformly spread ones, whatever the
+  // element's size, and 1 / lambda_min bounds how much a fit can grow from the points to the
+  // element (Cohen, Davenport and Leviatan 2013). The raw basis gives 45 for such points.
+  // The run set-up's default: 1e8 in 1D, 10 in 2D (method.tls_max_condition).
   double max_condition = 1e8;
+  // Positivity of the conservative fields (Zhang and Shu 2010, J. Comput. Phys. 229:3091): in an
+  // element whose density reconstruction is negative at a Gauss point, the terms beyond a_1 of
+  // the density, momentum and body-force densities (and of the surface stress) are scaled by the
+  // largest theta in [0, 1] that makes the density there non-negative. a_1 is untouched, so mass
+  // and momentum stay conserved, and the lumped nodal masses stay non-negative.
+  bool positivity = false;
+  // Elements at a free surface (one of the 3^Dim - 1 elements around them holds no particle)
+  // integrate the stress of their material, not of the whole element: the stress is fitted
+  // conservatively with the element integral sum_p V_p sigma_p, as the density with sum_p m_p.
+  // The plain fit of D 6.3 integrates sigma^ over the whole element, i.e. as if an element cut by
+  // the surface were full, which overstates the internal forces there by |Omega_e| / sum V_p.
+  bool surface_volume = false;
   // Gauss points per direction of every active element for the mapping; 0: 2, exact for
   // quadratic TLS (D 5.3.1; 2 x 2 in 2D).
   int gauss_points = 0;
@@ -105,6 +122,8 @@ struct TlsReport {
   Index with_neighbours = 0;   // data completed with points borrowed from adjacent elements
   Index failed = 0;            // deficient with completion None: not fitted
   Index truncated = 0;         // triangles (min_norm, graded): fitted with rank below the terms
+  Index limited = 0;           // positivity: elements whose higher terms were scaled down
+  Index surface = 0;           // surface_volume: elements at a free surface
   Index outside = 0;           // points outside the grid, ignored (standalone input only)
   int min_terms = 0;           // fewest terms of a fitted element (0: none fitted)
   double max_condition = 0.0;  // largest cond(D) of a fitted element's final system
@@ -197,6 +216,10 @@ class BasicTlsReconstruction {
                         Coefficients& a) const;
   // All coefficients from least squares (D eq. 5.1). Not with settings().conservative_only.
   void fit_plain(std::span<const double> f, Coefficients& a) const;
+  // Conservative in the elements with conservative[e] != 0 (integral integrals[e]), plain in the
+  // others.
+  void fit_mixed(std::span<const double> f, std::span<const double> integrals,
+                 std::span<const unsigned char> conservative, Coefficients& a) const;
 
   // The reconstruction at x: element-local; an interior face belongs to the upper element, like
   // Grid::cell_of. Zero outside the grid.
@@ -312,7 +335,8 @@ class BasicTlsReconstruction {
   bool well_posed(const Matrix& D, int distinct, int t, double& cond) const;
   double condition(const Matrix& D, int t) const;
   void factorise(System& sys);
-  void fit(std::span<const double> f, const double* integrals, Coefficients& a) const;
+  void fit(std::span<const double> f, const double* integrals, const unsigned char* conservative,
+           Coefficients& a) const;
 
   TlsSettings settings_;
   int nb_ = 0;                   // terms requested
@@ -346,6 +370,10 @@ struct TlsMappingState {
   std::vector<double> rho;  // at the Gauss points of the step
   std::vector<Vec<Dim>> rhov, rhob;
   std::vector<Mat<Dim>> sigma;
+  // Per element, set by the density fit of the step: the positivity factor theta (1: not
+  // limited) and whether the element lies at a free surface (TlsSettings).
+  std::vector<double> theta;
+  std::vector<unsigned char> surface;
 
   explicit TlsMappingState(const TlsSettings& s) : recon(s) {
     const GaussRule rule = gauss_legendre(s.gauss_points_used());
@@ -568,6 +596,14 @@ class TlsMapping {
   // points placed in q, rho^ there), map_momentum ((rho v)^) and map_forces (sigma^, (rho b)^).
   template <int Dim>
   void fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q);
+  // tls_mapping.cpp: TlsSettings::surface_volume's element flags and positivity's theta (both
+  // from the density fit in st.coef), and theta applied to a conservative fit in st.coef.
+  template <int Dim>
+  void mark_surface(TlsMappingState<Dim>& st);
+  template <int Dim>
+  void limit_density(TlsMappingState<Dim>& st);
+  template <int Dim>
+  void apply_theta(TlsMappingState<Dim>& st, const unsigned char* only);
   template <int Dim>
   void fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q);
   template <int Dim>

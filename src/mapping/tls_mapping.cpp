@@ -3,12 +3,78 @@
 // dimension.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <string>
 
 #include "core/bytes.hpp"
 #include "mapping/tls.hpp"
 
 namespace mpm {
+
+// TlsSettings::surface_volume: an active element with an inactive one among the 3^Dim - 1
+// around it (inside the grid) is cut by a free surface.
+template <int Dim>
+void TlsMapping::mark_surface(TlsMappingState<Dim>& st) {
+  const auto& recon = st.recon;
+  const Index ne = recon.num_elements();
+  st.surface.assign(static_cast<std::size_t>(ne), 0);
+  if (!settings_.surface_volume) return;
+  const auto& cells = recon.grid().cells;
+  int around = 1;
+  for (int d = 0; d < Dim; ++d) around *= 3;
+  parallel_for(ne, [&](Index e) {
+    if (!recon.active(e)) return;
+    const IVec<Dim> c = recon.cell(e);
+    for (int k = 0; k < around; ++k) {
+      Index n = 0, stride = 1;
+      bool inside = true;
+      for (int d = 0, r = k; d < Dim; ++d, r /= 3) {
+        const Index cd = c[d] + r % 3 - 1;
+        inside = inside && cd >= 0 && cd < cells[d];
+        n += cd * stride;
+        stride *= cells[d];
+      }
+      if (inside && !recon.active(n)) {
+        st.surface[static_cast<std::size_t>(e)] = 1;
+        return;
+      }
+    }
+  });
+  for (unsigned char f : st.surface) totals_.surface += f;
+}
+
+// TlsSettings::positivity (Zhang and Shu 2010): with m = min_g rho^(x_g) < 0 over the element's
+// Gauss points, rho^ = a_1 + theta (rho^ - a_1) with theta = a_1 / (a_1 - m) is zero there and
+// non-negative at the others; a_1 = sum m_p / |Omega_e| > 0 is kept, so mass is conserved.
+template <int Dim>
+void TlsMapping::limit_density(TlsMappingState<Dim>& st) {
+  const Index ne = st.recon.num_elements();
+  st.theta.assign(static_cast<std::size_t>(ne), 1.0);
+  if (!settings_.positivity) return;
+  parallel_for(ne, [&](Index e) {
+    if (!st.recon.active(e)) return;
+    auto& a = st.coef[static_cast<std::size_t>(e)];
+    double lowest = 0.0;
+    for (const auto& psi : st.psi) lowest = std::min(lowest, a.dot(psi));
+    if (lowest < 0.0) {
+      const double theta = a[0] / (a[0] - lowest);
+      st.theta[static_cast<std::size_t>(e)] = theta;
+      a.tail(a.size() - 1) *= theta;
+    }
+  });
+  for (double t : st.theta) totals_.limited += t < 1.0;
+}
+
+// The same theta on the terms beyond a_1 of a conservative field fitted in st.coef (every
+// element, or those with only[e] != 0), so that (rho v)^ / rho^ stays what the fits give where
+// theta = 1 and the element's integral is kept.
+template <int Dim>
+void TlsMapping::apply_theta(TlsMappingState<Dim>& st, const unsigned char* only) {
+  if (!settings_.positivity) return;
+  for (std::size_t e = 0; e < st.theta.size(); ++e)
+    if (st.theta[e] < 1.0 && (only == nullptr || only[e] != 0))
+      st.coef[e].tail(st.coef[e].size() - 1) *= st.theta[e];
+}
 
 template <int Dim>
 void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
@@ -38,6 +104,8 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   }
   element_sums(st.recon, [&](std::size_t i) { return P.mass[i]; });
   st.recon.fit_conservative(P.density, integrals_, st.coef);
+  mark_surface(st);
+  limit_density(st);
   st.rho.resize(q.size());
   at_gauss(st, q, [&](std::size_t g, double v) { st.rho[g] = v; });
 }
@@ -52,6 +120,7 @@ void TlsMapping::fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
     fill_values([&](std::size_t i) { return P.density[i] * P.v[i][d]; });
     element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.v[i][d]; });
     st.recon.fit_conservative(values_, integrals_, st.coef);
+    apply_theta(st, nullptr);
     at_gauss(st, q, [&](std::size_t g, double v) { st.rhov[g][d] = v; });
   }
 }
@@ -65,7 +134,14 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   for (int r = 0; r < Dim; ++r)
     for (int c = 0; c < Dim; ++c) {
       fill_values([&](std::size_t i) { return P.stress[i](r, c); });
-      st.recon.fit_plain(values_, st.coef);
+      if (settings_.surface_volume) {
+        // Surface elements: the stress of their material, int_e sigma^ = sum_p V_p sigma_p.
+        element_sums(st.recon, [&](std::size_t i) { return P.volume[i] * P.stress[i](r, c); });
+        st.recon.fit_mixed(values_, integrals_, st.surface, st.coef);
+        apply_theta(st, st.surface.data());
+      } else {
+        st.recon.fit_plain(values_, st.coef);
+      }
       at_gauss(st, q, [&](std::size_t g, double v) { st.sigma[g](r, c) = v; });
     }
 
@@ -74,10 +150,15 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
     fill_values([&](std::size_t i) { return P.density[i] * P.body[i][d]; });
     element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.body[i][d]; });
     st.recon.fit_conservative(values_, integrals_, st.coef);
+    apply_theta(st, nullptr);
     at_gauss(st, q, [&](std::size_t g, double v) { st.rhob[g][d] = v; });
   }
 }
 
+template void TlsMapping::mark_surface<1>(TlsMappingState<1>&);
+template void TlsMapping::mark_surface<2>(TlsMappingState<2>&);
+template void TlsMapping::limit_density<1>(TlsMappingState<1>&);
+template void TlsMapping::limit_density<2>(TlsMappingState<2>&);
 template void TlsMapping::fit_mass<1>(RunState<1>&, GaussPoints<1>&);
 template void TlsMapping::fit_mass<2>(RunState<2>&, GaussPoints<2>&);
 template void TlsMapping::fit_momentum<1>(RunState<1>&, const GaussPoints<1>&);
@@ -96,6 +177,8 @@ std::string TlsMapping::save_totals() const {
   w.f64(t.max_condition);
   w.f64(t.failed_condition);
   w.i64(t.truncated);  // since the triangles (checkpoints before them end here)
+  w.i64(t.limited);    // since positivity and surface stress (earlier checkpoints end above)
+  w.i64(t.surface);
   return std::move(w.bytes());
 }
 
@@ -111,6 +194,10 @@ void TlsMapping::load_totals(std::string_view bytes, const std::string& what) {
   t.max_condition = r.f64();
   t.failed_condition = r.f64();
   if (!r.done()) t.truncated = r.i64();
+  if (!r.done()) {
+    t.limited = r.i64();
+    t.surface = r.i64();
+  }
   r.expect_done();
   totals_ = t;
 }

@@ -191,9 +191,15 @@ std::vector<KeySpec> declare() {
               "the quadratic basis, 3 in 1D and 6 in 2D)"),
       choice("method.tls_completion", "auto", kTlsCompletions,
              "what TLS does in an element with too few or badly placed particles (D 5.2.3)"),
-      real("method.tls_max_condition", "", 1e8, greater_than(1),
-           "largest condition number of an element's least-squares matrix before completion "
-           "(the grid's cells)"),
+      real("method.tls_max_condition", "", 0.0, at_least(0),
+           "largest condition number of an element's least-squares matrix in the L2-orthonormal "
+           "Taylor basis (1: as well sampled as by uniform points) before completion (the grid's "
+           "cells; 0: 1e8 in 1D as D 5.2.3, 10 in 2D from the study of docs/verification.md)"),
+      choice("method.tls_positivity", "auto", kTlsPositivity,
+             "TLS: scale the higher Taylor terms of an element's conservative fields so that its "
+             "density is non-negative at the Gauss points (the grid's cells)"),
+      choice("method.tls_surface_stress", "auto", kTlsSurfaceStress,
+             "TLS: the stress integrated in elements at a free surface (the grid's cells)"),
       real("method.tls_triangle_max_condition", "", 10.0, greater_than(1),
            "largest condition number of a triangle's least-squares matrix in the L2-orthonormal "
            "Taylor basis (1: as well sampled as by uniform points) before completion "

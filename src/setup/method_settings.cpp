@@ -5,10 +5,17 @@ namespace mpm {
 TlsSettings tls_settings(const Config& cfg, int dim) {
   TlsSettings s;
   s.terms = static_cast<int>(cfg.get_int("method.tls_terms"));
-  // "auto" is virtual here; run_settings makes it reduce on triangles.
+  // "auto" is virtual here; run_settings makes it reduce in 2D.
   const std::string completion = cfg.get_string("method.tls_completion");
   s.completion = completion == "auto" ? TlsCompletion::Virtual : parse_tls_completion(completion);
+  // 0: 1e8 in 1D (D 5.2.3's "nearly singular"), 10 in 2D (the study of docs/verification.md,
+  // as on triangles).
   s.max_condition = cfg.get_real("method.tls_max_condition");
+  if (s.max_condition == 0.0) s.max_condition = dim == 1 ? 1e8 : 10.0;
+  const std::string positivity = cfg.get_string("method.tls_positivity");
+  s.positivity = positivity == "on" || (positivity == "auto" && dim == 2);
+  const std::string surface = cfg.get_string("method.tls_surface_stress");
+  s.surface_volume = surface == "volume" || (surface == "auto" && dim == 2);
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
   validate(s, dim);
   return s;

@@ -111,7 +111,25 @@ inline constexpr Entry kTlsCompletions[] = {
     {"min_norm", "triangles: truncated SVD, minimum-norm coefficients (mapping/tls_triangle.hpp)"},
     {"graded",
      "triangles: truncated SVD, undetermined directions resolved towards the lowest degree"},
-    {"auto", "virtual on the grid's rectangles, reduce on triangles (docs/verification.md)"},
+    {"auto", "virtual in 1D (D 5.2.3), reduce in 2D (docs/verification.md)"},
+};
+
+// method.tls_positivity and method.tls_surface_stress (mapping/tls.hpp, TlsSettings). "auto"
+// keeps D's method in 1D, whose results the report reproduces, and takes the robust choice in
+// 2D (the study "Robust TLS on the grid's cells" of docs/verification.md).
+inline constexpr Entry kTlsPositivity[] = {
+    {"auto", "on in 2D, off in 1D"},
+    {"on",
+     "scale the terms beyond the mean of density, momentum and body force where the density "
+     "would be negative at a Gauss point (Zhang and Shu 2010; conservative)"},
+    {"off", "the fits as they are (D 5.3, 6.3)"},
+};
+inline constexpr Entry kTlsSurfaceStress[] = {
+    {"auto", "volume in 2D, element in 1D"},
+    {"volume",
+     "elements next to an empty one integrate their material's stress: conservative fit with "
+     "the integral sum V_p sigma_p"},
+    {"element", "plain least squares over the whole element (D 5.3.1, 6.3)"},
 };
 
 inline constexpr auto kSchemes = entries_of<Scheme>();

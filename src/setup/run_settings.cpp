@@ -178,10 +178,12 @@ RunSettings run_settings(const Config& cfg, int dim) {
                            std::holds_alternative<PowellSabinKind>(m.basis);
     TlsSettings ts = tls->settings();
     const std::string completion = cfg.get_string("method.tls_completion");
-    // "auto" on triangles: reduce, the most accurate completion of the study of D 6.3.1's plate
-    // in docs/verification.md (12, 16, 24 particles per triangle, A = 0.05 and 0.1 m).
+    // "auto": reduce in 2D, the most accurate completion of the studies in docs/verification.md
+    // (triangles: D 6.3.1's plate with 12, 16, 24 particles per triangle, A = 0.05 and 0.1 m;
+    // the grid's cells: the plate at A = 0.05 m and the generalized vortex); virtual in 1D,
+    // D 5.2.3's, whose results the report reproduces.
     if (completion == "auto")
-      ts.completion = triangles ? TlsCompletion::Reduce : TlsCompletion::Virtual;
+      ts.completion = dim == 2 ? TlsCompletion::Reduce : TlsCompletion::Virtual;
     const bool triangle_only =
         ts.completion == TlsCompletion::MinimumNorm || ts.completion == TlsCompletion::Graded;
     if (!triangles && triangle_only)
@@ -190,8 +192,9 @@ RunSettings run_settings(const Config& cfg, int dim) {
           "\"p1_triangles\" or \"powell_sabin\"); on the grid's cells choose one of: none, "
           "reduce, virtual, neighbour, auto",
           m.where_tls_completion, completion));
-    // The two limits measure different things (the raw Taylor basis of the rectangles, the
-    // orthonormal one of the triangles), so each is refused where it does not apply.
+    // Both limits are measured in the orthonormal Taylor basis of their element, but each was
+    // chosen for its own elements, so each is refused where it does not apply; so are the
+    // rectangles' positivity and surface stress on triangles.
     const char* other =
         triangles ? "method.tls_max_condition" : "method.tls_triangle_max_condition";
     const KeySpec* spec = find_key(other);
@@ -203,6 +206,14 @@ RunSettings run_settings(const Config& cfg, int dim) {
           name_of(m.basis),
           triangles ? "method.tls_triangle_max_condition" : "method.tls_max_condition"));
     if (triangles) {
+      for (const char* key : {"method.tls_positivity", "method.tls_surface_stress"})
+        if (cfg.get_string(key) != "auto")
+          throw InputError(fmt::format(
+              "{}: {} applies to the grid's cells; this run's basis \"{}\" uses triangles, "
+              "whose TLS keeps the plain stress fit and no positivity scaling (leave it \"auto\")",
+              cfg.where(key), key, name_of(m.basis)));
+      ts.positivity = false;
+      ts.surface_volume = false;
       ts.max_condition = cfg.get_real("method.tls_triangle_max_condition");
       try {
         (void)tls_triangle_settings(ts);

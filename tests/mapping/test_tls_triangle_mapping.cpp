@@ -152,7 +152,8 @@ TEST(TlsOnTriangles, SettingsThatDoNotApplyAreRefused) {
   const auto mls =
       refusal({"method.basis=powell_sabin", "method.mapping=mls"}, "plate_mms_2d.toml");
   EXPECT_NE(mls.find("method.mapping"), std::string::npos) << mls;
-  // The default completion on triangles is reduce, on the grid's cells virtual.
+  // The default completion in 2D is reduce, on triangles and on the grid's cells (with the
+  // cells' positivity and surface stress), virtual in 1D (D 5.2.3).
   const auto t = run_settings(
       Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml", tri), 2);
   EXPECT_EQ(std::get<TlsMapping>(t.method.mapping).settings().completion, TlsCompletion::Reduce);
@@ -161,7 +162,18 @@ TEST(TlsOnTriangles, SettingsThatDoNotApplyAreRefused) {
       run_settings(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml",
                                 {"method.mapping=tls"}),
                    2);
-  EXPECT_EQ(std::get<TlsMapping>(q.method.mapping).settings().completion, TlsCompletion::Virtual);
+  const auto& qs = std::get<TlsMapping>(q.method.mapping).settings();
+  EXPECT_EQ(qs.completion, TlsCompletion::Reduce);
+  EXPECT_EQ(qs.max_condition, 10.0);
+  EXPECT_TRUE(qs.positivity && qs.surface_volume);
+  EXPECT_FALSE(std::get<TlsMapping>(t.method.mapping).settings().positivity);
+  const auto one = run_settings(
+      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/mms_1d.toml", {"method.mapping=tls"}),
+      1);
+  const auto& os = std::get<TlsMapping>(one.method.mapping).settings();
+  EXPECT_EQ(os.completion, TlsCompletion::Virtual);
+  EXPECT_EQ(os.max_condition, 1e8);
+  EXPECT_FALSE(os.positivity || os.surface_volume);
 }
 
 }  // namespace
