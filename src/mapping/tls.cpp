@@ -283,11 +283,14 @@ void BasicTlsReconstruction<Dim>::add_datum(System& sys, Matrix& D, const Datum&
 // matrix is L D L with L the inverse root-mean-square norms of psi_1..psi_K over [-1, 1]^Dim.
 template <int Dim>
 double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t) const {
-  Taylor l;
-  if constexpr (Dim == 1)
-    l << 1.0, std::sqrt(3.0), std::sqrt(45.0);
-  else
-    l << 1.0, std::sqrt(3.0), std::sqrt(3.0), std::sqrt(45.0), std::sqrt(45.0), 3.0;
+  static const Taylor l = [] {
+    Taylor v;
+    if constexpr (Dim == 1)
+      v << 1.0, std::sqrt(3.0), std::sqrt(45.0);
+    else
+      v << 1.0, std::sqrt(3.0), std::sqrt(3.0), std::sqrt(45.0), std::sqrt(45.0), 3.0;
+    return v;
+  }();
   const Matrix S = l.asDiagonal() * D * l.asDiagonal();
   return condition_number(S, settings_.conservative_only ? 1 : 0, t);
 }

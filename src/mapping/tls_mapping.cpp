@@ -15,10 +15,10 @@ namespace mpm {
 // around it (inside the grid) is cut by a free surface.
 template <int Dim>
 void TlsMapping::mark_surface(TlsMappingState<Dim>& st) {
+  if (!settings_.surface_volume) return;  // st.surface is read only with it
   const auto& recon = st.recon;
   const Index ne = recon.num_elements();
   st.surface.assign(static_cast<std::size_t>(ne), 0);
-  if (!settings_.surface_volume) return;
   const auto& cells = recon.grid().cells;
   int around = 1;
   for (int d = 0; d < Dim; ++d) around *= 3;
@@ -48,9 +48,9 @@ void TlsMapping::mark_surface(TlsMappingState<Dim>& st) {
 // non-negative at the others; a_1 = sum m_p / |Omega_e| > 0 is kept, so mass is conserved.
 template <int Dim>
 void TlsMapping::limit_density(TlsMappingState<Dim>& st) {
+  if (!settings_.positivity) return;  // st.theta is read only with it (apply_theta)
   const Index ne = st.recon.num_elements();
   st.theta.assign(static_cast<std::size_t>(ne), 1.0);
-  if (!settings_.positivity) return;
   parallel_for(ne, [&](Index e) {
     if (!st.recon.active(e)) return;
     auto& a = st.coef[static_cast<std::size_t>(e)];

@@ -178,12 +178,6 @@ RunSettings run_settings(const Config& cfg, int dim) {
                            std::holds_alternative<PowellSabinKind>(m.basis);
     TlsSettings ts = tls->settings();
     const std::string completion = cfg.get_string("method.tls_completion");
-    // "auto": reduce in 2D, the most accurate completion of the studies in docs/verification.md
-    // (triangles: D 6.3.1's plate with 12, 16, 24 particles per triangle, A = 0.05 and 0.1 m;
-    // the grid's cells: the plate at A = 0.05 m and the generalized vortex); virtual in 1D,
-    // D 5.2.3's, whose results the report reproduces.
-    if (completion == "auto")
-      ts.completion = dim == 2 ? TlsCompletion::Reduce : TlsCompletion::Virtual;
     const bool triangle_only =
         ts.completion == TlsCompletion::MinimumNorm || ts.completion == TlsCompletion::Graded;
     if (!triangles && triangle_only)
