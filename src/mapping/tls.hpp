@@ -86,6 +86,15 @@ struct TlsSettings {
   // The plain fit of D 6.3 integrates sigma^ over the whole element, i.e. as if an element cut by
   // the surface were full, which overstates the internal forces there by |Omega_e| / sum V_p.
   bool surface_volume = false;
+  // The element integrals of the conservative fits (a_1 = c_e / |Omega_e|, D eq. 5.9) from the
+  // particles' domains instead of their centres: each particle's value is split among the active
+  // elements its domain overlaps, by the overlap (the domain is the cpGIMP box, side F_dd l0_d:
+  // V_p in 1D). D's sum over the particles whose centre lies in the element is the content of the
+  // material region those particles span, not of the element: under a strain u_X it is off by a
+  // relative u_X, whatever h, so refinement stalls at an error proportional to the amplitude
+  // (docs/verification.md, "The conservative constant of TLS"). The split keeps sum_e c_e =
+  // sum_p value_p (each particle's fractions sum to one).
+  bool domain_integrals = false;
   // Gauss points per direction of every active element for the mapping; 0: 2, exact for
   // quadratic TLS (D 5.3.1; 2 x 2 in 2D).
   int gauss_points = 0;
@@ -563,11 +572,23 @@ class TlsMapping {
       return *state2_;
     }
   }
-  // integrals_[e] = sum over the element's particles of value(p).
+  // integrals_[e] = sum over the element's particles of value(p); with
+  // TlsSettings::domain_integrals (on the grid's cells), sum over the particles whose domain
+  // overlaps e of value(p) times the overlap fraction (split_, built by split_domains).
   template <class Recon, class Value>
   void element_sums(const Recon& recon, Value&& value) {
     const auto& bins = recon.bins();
     integrals_.resize(static_cast<std::size_t>(recon.num_elements()));
+    if (split_.used) {
+      parallel_for(recon.num_elements(), [&](Index e) {
+        const auto ei = static_cast<std::size_t>(e);
+        double c = 0.0;
+        for (std::size_t k = split_.start[ei]; k < split_.start[ei + 1]; ++k)
+          c += value(static_cast<std::size_t>(split_.point[k])) * split_.fraction[k];
+        integrals_[ei] = c;
+      });
+      return;
+    }
     parallel_for(recon.num_elements(), [&](Index e) {
       double c = 0.0;
       for (const Index* p = bins.begin(e); p != bins.end(e); ++p)
@@ -575,6 +596,10 @@ class TlsMapping {
       integrals_[static_cast<std::size_t>(e)] = c;
     });
   }
+  // TlsSettings::domain_integrals: the overlap fractions of the particles' domains with the
+  // active elements, by element (CSR), rebuilt by fit_mass each step (tls_mapping.cpp).
+  template <int Dim>
+  void split_domains(const RunState<Dim>& sim, const BasicTlsReconstruction<Dim>& recon);
   // values_[i] = value(i) for every particle (values_ sized by the caller).
   template <class Value>
   void fill_values(Value&& value) {
@@ -621,6 +646,13 @@ class TlsMapping {
   TlsReport triangle_report_;                         // of the last step there
   QuadratureStore quad_;
   std::vector<double> values_, integrals_;  // per particle, per element
+  struct DomainSplit {
+    bool used = false;               // the fractions below hold for this step's points
+    std::vector<std::size_t> start;  // element e: entries start[e] .. start[e + 1]
+    std::vector<Index> point;        // particle
+    std::vector<double> fraction;    // of the particle's domain in e (sum over e: 1)
+    std::vector<std::pair<Index, std::pair<Index, double>>> scratch;  // (e, (p, overlap))
+  } split_;
   TlsReport totals_;
 };
 

@@ -76,6 +76,87 @@ void TlsMapping::apply_theta(TlsMappingState<Dim>& st, const unsigned char* only
       st.coef[e].tail(st.coef[e].size() - 1) *= st.theta[e];
 }
 
+// TlsSettings::domain_integrals. A particle's domain is the cpGIMP box (basis/gimp.hpp): side
+// l_d = F_dd l0_d with l0 = V_p^0 in 1D and h_d (V_p^0 / |cell|)^(1/Dim) otherwise, clipped to
+// the grid. Its value is split among the active elements the box overlaps, in proportion to the
+// overlap; overlap with inactive elements (no particle centre: no reconstruction) is given to
+// the active ones, so each particle's fractions sum to one and sum_e c_e = sum_p value_p. A box
+// that is empty or not finite (F_dd <= 0) leaves the whole value in the particle's own element,
+// as D's sum does. Serial, in element-then-bin order, then sorted by element (stable): the same
+// entries and order for any thread count.
+template <int Dim>
+void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstruction<Dim>& recon) {
+  split_.used = settings_.domain_integrals;
+  if (!split_.used) return;
+  const auto& P = sim.particles;
+  const auto& g = recon.grid();
+  const Index ne = recon.num_elements();
+  const auto& bins = recon.bins();
+  auto& list = split_.scratch;
+  list.clear();
+  list.reserve(bins.order.size() * (Dim == 1 ? 2 : 4));
+  for (Index e = 0; e < ne; ++e)
+    for (const Index* it = bins.begin(e); it != bins.end(e); ++it) {
+      const auto p = static_cast<std::size_t>(*it);
+      std::array<double, Dim> lo{}, hi{};
+      std::array<Index, Dim> c0{}, c1{};
+      bool box = true;
+      for (int d = 0; d < Dim; ++d) {
+        const double l0 =
+            Dim == 1 ? P.volume0[p] : g.h[d] * std::pow(P.volume0[p] / g.cell_volume(), 1.0 / Dim);
+        const double r = 0.5 * P.F[p](d, d) * l0 / g.h[d];  // half side in cell units
+        const double s = (P.x[p][d] - g.origin[d]) / g.h[d];
+        const auto n = static_cast<double>(g.cells[d]);
+        box = box && r > 0.0 && std::isfinite(r) && std::isfinite(s);
+        lo[d] = std::clamp(s - r, 0.0, n);
+        hi[d] = std::clamp(s + r, 0.0, n);
+        c0[d] = std::clamp(static_cast<Index>(std::floor(lo[d])), Index{0}, g.cells[d] - 1);
+        c1[d] = std::clamp(static_cast<Index>(std::ceil(hi[d])) - 1, c0[d], g.cells[d] - 1);
+      }
+      const std::size_t first = list.size();
+      double total = 0.0;
+      if (box) {
+        std::array<Index, Dim> c = c0;
+        while (true) {
+          double overlap = 1.0;
+          Index n = 0, stride = 1;
+          for (int d = 0; d < Dim; ++d) {
+            overlap *= std::max(0.0, std::min(hi[d], static_cast<double>(c[d] + 1)) -
+                                         std::max(lo[d], static_cast<double>(c[d])));
+            n += c[d] * stride;
+            stride *= g.cells[d];
+          }
+          if (overlap > 0.0 && recon.active(n)) {
+            list.push_back({n, {*it, overlap}});
+            total += overlap;
+          }
+          int d = 0;
+          while (d < Dim && c[d] == c1[d]) c[d] = c0[d], ++d;
+          if (d == Dim) break;
+          ++c[d];
+        }
+      }
+      if (!(total > 0.0)) {
+        list.resize(first);
+        list.push_back({e, {*it, 1.0}});
+        total = 1.0;
+      }
+      for (std::size_t k = first; k < list.size(); ++k) list[k].second.second /= total;
+    }
+  auto& start = split_.start;
+  start.assign(static_cast<std::size_t>(ne) + 1, 0);
+  for (const auto& t : list) ++start[static_cast<std::size_t>(t.first) + 1];
+  for (std::size_t e = 0; e < static_cast<std::size_t>(ne); ++e) start[e + 1] += start[e];
+  split_.point.resize(list.size());
+  split_.fraction.resize(list.size());
+  std::vector<std::size_t> next(start.begin(), start.end() - 1);
+  for (const auto& t : list) {
+    const std::size_t k = next[static_cast<std::size_t>(t.first)]++;
+    split_.point[k] = t.second.first;
+    split_.fraction[k] = t.second.second;
+  }
+}
+
 template <int Dim>
 void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   auto& st = state<Dim>();
@@ -102,6 +183,7 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
       q.add(x, wg, e);
     }
   }
+  split_domains(sim, st.recon);
   element_sums(st.recon, [&](std::size_t i) { return P.mass[i]; });
   st.recon.fit_conservative(P.density, integrals_, st.coef);
   mark_surface(st);
@@ -159,6 +241,8 @@ template void TlsMapping::mark_surface<1>(TlsMappingState<1>&);
 template void TlsMapping::mark_surface<2>(TlsMappingState<2>&);
 template void TlsMapping::limit_density<1>(TlsMappingState<1>&);
 template void TlsMapping::limit_density<2>(TlsMappingState<2>&);
+template void TlsMapping::split_domains<1>(const RunState<1>&, const BasicTlsReconstruction<1>&);
+template void TlsMapping::split_domains<2>(const RunState<2>&, const BasicTlsReconstruction<2>&);
 template void TlsMapping::fit_mass<1>(RunState<1>&, GaussPoints<1>&);
 template void TlsMapping::fit_mass<2>(RunState<2>&, GaussPoints<2>&);
 template void TlsMapping::fit_momentum<1>(RunState<1>&, const GaussPoints<1>&);

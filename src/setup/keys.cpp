@@ -200,6 +200,9 @@ std::vector<KeySpec> declare() {
              "density is non-negative at the Gauss points (the grid's cells)"),
       choice("method.tls_surface_stress", "auto", kTlsSurfaceStress,
              "TLS: the stress integrated in elements at a free surface (the grid's cells)"),
+      choice("method.tls_cell_integrals", "auto", kTlsCellIntegrals,
+             "TLS: the element integrals (mass, momentum, body force) of the conservative fits "
+             "(the grid's cells)"),
       real("method.tls_triangle_max_condition", "", 10.0, greater_than(1),
            "largest condition number of a triangle's least-squares matrix in the L2-orthonormal "
            "Taylor basis (1: as well sampled as by uniform points) before completion "

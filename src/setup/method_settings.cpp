@@ -21,6 +21,8 @@ TlsSettings tls_settings(const Config& cfg, int dim) {
   s.positivity = positivity == "on" || (positivity == "auto" && dim == 2);
   const std::string surface = cfg.get_string("method.tls_surface_stress");
   s.surface_volume = surface == "volume" || (surface == "auto" && dim == 2);
+  const std::string integrals = cfg.get_string("method.tls_cell_integrals");
+  s.domain_integrals = integrals == "domains" || (integrals == "auto" && dim == 2);
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
   validate(s, dim);
   return s;

@@ -124,6 +124,13 @@ inline constexpr Entry kTlsPositivity[] = {
      "would be negative at a Gauss point (Zhang and Shu 2010; conservative)"},
     {"off", "the fits as they are (D 5.3, 6.3)"},
 };
+inline constexpr Entry kTlsCellIntegrals[] = {
+    {"auto", "domains in 2D, centres (D's method) in 1D"},
+    {"centres", "c_e = sum over the particles whose centre lies in the element (D eq. 5.9)"},
+    {"domains",
+     "c_e = each particle's value split among the active elements its domain (the cpGIMP box) "
+     "overlaps, by the overlap"},
+};
 inline constexpr Entry kTlsSurfaceStress[] = {
     {"auto", "volume in 2D, element in 1D"},
     {"volume",

@@ -200,14 +200,18 @@ RunSettings run_settings(const Config& cfg, int dim) {
           name_of(m.basis),
           triangles ? "method.tls_triangle_max_condition" : "method.tls_max_condition"));
     if (triangles) {
-      for (const char* key : {"method.tls_positivity", "method.tls_surface_stress"})
+      for (const char* key :
+           {"method.tls_positivity", "method.tls_surface_stress", "method.tls_cell_integrals"})
         if (cfg.get_string(key) != "auto")
           throw InputError(fmt::format(
               "{}: {} applies to the grid's cells; this run's basis \"{}\" uses triangles, "
-              "whose TLS keeps the plain stress fit and no positivity scaling (leave it \"auto\")",
+              "whose TLS keeps the plain stress fit, D's element integrals and no positivity "
+              "scaling "
+              "(leave it \"auto\")",
               cfg.where(key), key, name_of(m.basis)));
       ts.positivity = false;
       ts.surface_volume = false;
+      ts.domain_integrals = false;
       ts.max_condition = cfg.get_real("method.tls_triangle_max_condition");
       try {
         (void)tls_triangle_settings(ts);

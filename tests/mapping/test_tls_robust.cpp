@@ -117,7 +117,8 @@ TEST(TlsRobust, VortexThatStoppedTheEarlierDefaultsRuns) {
                                          "time.end=0.02"};
   auto old = sets;
   for (const char* s : {"method.tls_completion=virtual", "method.tls_max_condition=1e10",
-                        "method.tls_positivity=off", "method.tls_surface_stress=element"})
+                        "method.tls_positivity=off", "method.tls_surface_stress=element",
+                        "method.tls_cell_integrals=centres"})
     old.push_back(s);
   const auto before = run_vortex(old);
   EXPECT_NE(before.exit_code, 0);
@@ -148,7 +149,8 @@ TEST(TlsRobust, EachMeasureConservesOnAFreeBody) {
 }
 
 TEST(TlsRobust, RectangleMeasuresAreRefusedOnTriangles) {
-  for (const char* which : {"method.tls_positivity=on", "method.tls_surface_stress=volume"}) {
+  for (const char* which : {"method.tls_positivity=on", "method.tls_surface_stress=volume",
+                            "method.tls_cell_integrals=domains"}) {
     SCOPED_TRACE(which);
     try {
       run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_tls_triangles_2d.toml",
