@@ -206,8 +206,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
           throw InputError(fmt::format(
               "{}: {} applies to the grid's cells; this run's basis \"{}\" uses triangles, "
               "whose TLS keeps the plain stress fit, D's element integrals and no positivity "
-              "scaling "
-              "(leave it \"auto\")",
+              "scaling (leave it \"auto\")",
               cfg.where(key), key, name_of(m.basis)));
       ts.positivity = false;
       ts.surface_volume = false;
