@@ -62,6 +62,10 @@ SLOW+='|TlsTriangle\.PlateMotionLosesRankWith12And16ParticlesPerTriangleNot24'
 # D 6.3.1's 1058-triangle plate, 60 TLS steps (2.6 s in Release): the completions and the
 # refusal it exercises run in the smaller TlsOnTriangles and TlsTriangle tests.
 SLOW+='|TlsOnTriangles\.RankLossOfD631StopsTheBaselineNotTheDefault'
+# TLS's element integrals: the 1D refinement (145 s under the sanitizers) and the 2D plate runs
+# (over 300 s); TlsDomains.CellAlignedDomainsGiveDsSums and the TlsRobust runs (2D defaults) keep
+# split_domains under them.
+SLOW+='|TlsDomains\.(SmallStrainBarConvergesWhereCentresStall|PlateStressErrorBelowDsSums)'
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
 else
