@@ -263,7 +263,7 @@ void BasicTlsReconstruction<Dim>::bin_points(bool share_face_points) {
 template <int Dim>
 bool BasicTlsReconstruction<Dim>::coincides(const System& sys, const Vec<Dim>& s) const {
   for (Index k = sys.begin; k < sys.end; ++k) {
-    const Taylor& psi = data_[static_cast<std::size_t>(k)].psi;  // psi_2..psi_{1+Dim} = s
+    const Taylor& psi = psi_[static_cast<std::size_t>(k)];  // psi_2..psi_{1+Dim} = s
     bool same = true;
     for (int d = 0; d < Dim; ++d) same = same && std::abs(psi[1 + d] - s[d]) <= kCoincident;
     if (same) return true;
@@ -272,11 +272,23 @@ bool BasicTlsReconstruction<Dim>::coincides(const System& sys, const Vec<Dim>& s
 }
 
 template <int Dim>
-void BasicTlsReconstruction<Dim>::add_datum(System& sys, Matrix& D, const Datum& d) {
+void BasicTlsReconstruction<Dim>::place(System& sys, const Vec<Dim>& s, Index point,
+                                        Index source, const Vec<Dim>& s_source) {
   // The element's slot in data_ holds its own points and the most completion points it can
   // take (build_systems), so this never writes into the next element's slot.
-  data_[static_cast<std::size_t>(sys.end++)] = d;
-  add_outer(D, d.psi);
+  const auto k = static_cast<std::size_t>(sys.end++);
+  data_[k].q.setZero();  // factorise fills the first t (t - 1) entries
+  data_[k].qc.setZero();
+  data_[k].point = point;
+  psi_[k] = taylor_basis_at<Dim>(s);
+  if (source >= 0) from_[k] = {source, s_source};
+}
+
+template <int Dim>
+void BasicTlsReconstruction<Dim>::add_datum(System& sys, Matrix& D, const Vec<Dim>& s,
+                                            Index point, Index source, const Vec<Dim>& s_source) {
+  place(sys, s, point, source, s_source);
+  add_outer(D, psi_[static_cast<std::size_t>(sys.end - 1)]);
 }
 
 // In the orthonormal Taylor basis (TlsSettings::max_condition): phi = L psi, so the normal
@@ -326,7 +338,7 @@ void BasicTlsReconstruction<Dim>::add_virtual_points(Index e, System& sys, Matri
         Vec<Dim> s_source = s;  // the same point in the neighbour's coordinates
         s_source[d] = -s[d];
         if (coincides(sys, s)) continue;
-        add_datum(sys, D, Datum::virtual_point(s, n, s_source));
+        add_datum(sys, D, s, -1, n, s_source);
         sys.has_virtual = true;
         ++distinct;
         ++info_[static_cast<std::size_t>(e)].virtual_points;
@@ -407,7 +419,7 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
       last_p = best_p;
       const Vec<Dim> s = local(e, x_[static_cast<std::size_t>(best_p)]);
       if (coincides(sys, s)) continue;
-      add_datum(sys, D, Datum::real(s, best_p));
+      add_datum(sys, D, s, best_p);
       ++distinct;
       ++taken;
       ++info_[static_cast<std::size_t>(e)].borrowed;
@@ -418,40 +430,40 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
 // Thin QR of the element's data matrix by modified Gram-Schmidt applied twice ("twice is
 // enough": orthogonal to working precision for cond(B) well below 1/eps, which max_condition
 // guarantees), once for terms 1..t (plain) and once for terms 2..t (conservative, psi_1 left
-// out as in D 5.3.1). Q is stored in the data, so no allocation.
+// out as in D 5.3.1). The columns are worked on in a per-thread buffer and Q is stored in the
+// data.
 template <int Dim>
 void BasicTlsReconstruction<Dim>::factorise(System& sys) {
   const int t = sys.terms;
-  auto orthonormalise = [&](auto column, auto& R, int first, int n) {
+  const auto m = static_cast<std::size_t>(sys.end - sys.begin);
+  const auto begin = static_cast<std::size_t>(sys.begin);
+  // The columns of the element's data matrix, contiguous (column j at col[j * m]): the rows of
+  // data_ are 96 bytes apart, and these loops run over the rows for every pair of columns.
+  thread_local std::vector<double> col;
+  col.resize(static_cast<std::size_t>(K) * m);
+  auto orthonormalise = [&](auto&& row, auto& R, int first, int n) {
     R.setZero();
     for (int j = 0; j < n; ++j) {
-      for (Index k = sys.begin; k < sys.end; ++k) {
-        Datum& d = data_[static_cast<std::size_t>(k)];
-        column(d)[j] = d.psi[first + j];
-      }
+      double* cj = col.data() + static_cast<std::size_t>(j) * m;
+      for (std::size_t k = 0; k < m; ++k) cj[k] = psi_[begin + k][first + j];
       for (int pass = 0; pass < 2; ++pass) {
         for (int i = 0; i < j; ++i) {
+          const double* ci = col.data() + static_cast<std::size_t>(i) * m;
           double r = 0.0;
-          for (Index k = sys.begin; k < sys.end; ++k) {
-            Datum& d = data_[static_cast<std::size_t>(k)];
-            r += column(d)[i] * column(d)[j];
-          }
-          for (Index k = sys.begin; k < sys.end; ++k) {
-            Datum& d = data_[static_cast<std::size_t>(k)];
-            column(d)[j] -= r * column(d)[i];
-          }
+          for (std::size_t k = 0; k < m; ++k) r += ci[k] * cj[k];
+          for (std::size_t k = 0; k < m; ++k) cj[k] -= r * ci[k];
           R(i, j) += r;
         }
       }
       double norm2 = 0.0;
-      for (Index k = sys.begin; k < sys.end; ++k) {
-        const double v = column(data_[static_cast<std::size_t>(k)])[j];
-        norm2 += v * v;
-      }
+      for (std::size_t k = 0; k < m; ++k) norm2 += cj[k] * cj[k];
       R(j, j) = std::sqrt(norm2);
       const double inv = R(j, j) > 0.0 ? 1.0 / R(j, j) : 0.0;
-      for (Index k = sys.begin; k < sys.end; ++k)
-        column(data_[static_cast<std::size_t>(k)])[j] *= inv;
+      for (std::size_t k = 0; k < m; ++k) cj[k] *= inv;
+    }
+    for (std::size_t k = 0; k < m; ++k) {
+      auto& q = row(data_[begin + k]);
+      for (int j = 0; j < n; ++j) q[j] = col[static_cast<std::size_t>(j) * m + k];
     }
   };
   if (!settings_.conservative_only)
@@ -521,6 +533,8 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     if (count > 0) slots += count + (own_[e].ok ? 0 : extra);
   }
   data_.resize(slots);
+  psi_.resize(slots);
+  from_.resize(slots);
 
   // Pass 2: data, completion, number of terms and factorisations; independent per element (a
   // completion reads only the pass-1 results of its neighbours).
@@ -537,7 +551,7 @@ void BasicTlsReconstruction<Dim>::build_systems() {
       const Vec<Dim>& x = x_[static_cast<std::size_t>(*it)];
       Vec<Dim> s;
       for (int d = 0; d < Dim; ++d) s[d] = (x[d] - xc[d]) / dx[d];
-      data_[static_cast<std::size_t>(sys.end++)] = Datum::real(s, *it);
+      place(sys, s, *it);
     }
     Matrix D = o.D;
     int distinct = o.distinct;
@@ -600,12 +614,15 @@ void BasicTlsReconstruction<Dim>::build_systems() {
 // Elements with virtual points need their neighbours' coefficients, and their neighbours never
 // have virtual points (they fit all terms from their own points), so two passes suffice.
 template <int Dim>
-void BasicTlsReconstruction<Dim>::fit(std::span<const double> f, const double* integrals,
-                                      const unsigned char* conservative, Coefficients& a) const {
-  if (f.size() < x_.size())
-    throw std::invalid_argument("TlsReconstruction: one value per point of set_points");
+void BasicTlsReconstruction<Dim>::fit(std::span<const double> f,
+                                      std::span<const Field> fields) const {
+  const std::size_t nf = fields.size();
+  if (nf == 0 || nf > static_cast<std::size_t>(kMaxFields))
+    throw std::invalid_argument("TlsReconstruction: 1 to kMaxFields fields per fit");
+  if (f.size() < x_.size() * nf)
+    throw std::invalid_argument("TlsReconstruction: one value per point and field of set_points");
   const Index ne = grid_.num_cells();
-  a.resize(static_cast<std::size_t>(ne));
+  for (const Field& fd : fields) fd.a->resize(static_cast<std::size_t>(ne));
   const double volume = grid_.cell_volume();  // |Omega_e| (D eq. 6.7)
   // Elements are independent within a pass (pass 1 reads only pass-0 coefficients): parallel,
   // the same bits for any thread count.
@@ -615,54 +632,80 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f, const double* i
       const System& sys = systems_[ei];
       if (pass == 0) {
         if (info_[ei].points == 0) {
-          a[ei].setZero();
+          for (const Field& fd : fields) (*fd.a)[ei].setZero();
           return;
         }
         if (info_[ei].failed) {
-          a[ei].setConstant(std::numeric_limits<double>::quiet_NaN());
+          for (const Field& fd : fields)
+            (*fd.a)[ei].setConstant(std::numeric_limits<double>::quiet_NaN());
           return;
         }
       }
       if (sys.terms == 0 || sys.has_virtual != (pass == 1)) return;
       const int t = sys.terms;
-      auto value = [&](const Datum& d) {
-        if (d.point >= 0) return f[static_cast<std::size_t>(d.point)];
-        return a[static_cast<std::size_t>(d.source)].dot(taylor_basis_at<Dim>(d.s_source));
-      };
-      Taylor coef = Taylor::Zero();
-      if (integrals != nullptr && (conservative == nullptr || conservative[ei] != 0)) {
-        // D eq. 5.9: a_1 fixed by the element integral; the rest fit f - a_1 without psi_1:
-        // a_2..t = R_c^{-1} Q_c^T (U - a_1).
-        const double a1 = integrals[ei] / volume;
-        coef[0] = a1;
-        if (t > 1) {
-          Taylor1 rhs = Taylor1::Zero();
-          for (Index k = sys.begin; k < sys.end; ++k) {
-            const Datum& d = data_[static_cast<std::size_t>(k)];
-            rhs += d.qc * (value(d) - a1);  // q_c is zero beyond t - 1 columns
+      // Per field: D eq. 5.9 (conservative: a_1 fixed by the element integral, the rest fit
+      // f - a_1 without psi_1, a_2..t = R_c^{-1} Q_c^T (U - a_1)) or D eq. 5.1 (plain:
+      // a = D^{-1} B U = R^{-1} Q^T U). The sums over the data for all fields in one pass.
+      std::array<bool, kMaxFields> cons{};
+      std::array<double, kMaxFields> a1{};
+      std::array<Taylor, kMaxFields> rhs;
+      std::array<Taylor1, kMaxFields> rhs_c;
+      for (std::size_t j = 0; j < nf; ++j) {
+        const Field& fd = fields[j];
+        cons[j] = fd.integrals != nullptr && (fd.conservative == nullptr || fd.conservative[ei] != 0);
+        a1[j] = cons[j] ? fd.integrals[ei] / volume : 0.0;
+        rhs[j].setZero();
+        rhs_c[j].setZero();
+      }
+      for (Index k = sys.begin; k < sys.end; ++k) {
+        const Datum& d = data_[static_cast<std::size_t>(k)];
+        const double* v = d.point >= 0 ? f.data() + static_cast<std::size_t>(d.point) * nf : nullptr;
+        for (std::size_t j = 0; j < nf; ++j) {
+          double value = 0.0;
+          if (v != nullptr) {
+            value = v[j];
+          } else {
+            const DatumSource& src = from_[static_cast<std::size_t>(k)];
+            value = (*fields[j].a)[static_cast<std::size_t>(src.source)].dot(
+                taylor_basis_at<Dim>(src.s_source));
           }
-          for (int i = t - 2; i >= 0; --i) {  // back substitution
-            double v = rhs[i];
-            for (int j = i + 1; j < t - 1; ++j) v -= sys.Rc(i, j) * coef[1 + j];
-            coef[1 + i] = v / sys.Rc(i, i);
-          }
-        }
-      } else {
-        // D eq. 5.1: a = D^{-1} B U = R^{-1} Q^T U.
-        Taylor rhs = Taylor::Zero();
-        for (Index k = sys.begin; k < sys.end; ++k) {
-          const Datum& d = data_[static_cast<std::size_t>(k)];
-          rhs += d.q * value(d);  // q is zero beyond t columns
-        }
-        for (int i = t - 1; i >= 0; --i) {
-          double v = rhs[i];
-          for (int j = i + 1; j < t; ++j) v -= sys.R(i, j) * coef[j];
-          coef[i] = v / sys.R(i, i);
+          if (cons[j])
+            rhs_c[j] += d.qc * (value - a1[j]);  // q_c is zero beyond t - 1 columns
+          else
+            rhs[j] += d.q * value;  // q is zero beyond t columns
         }
       }
-      a[ei] = coef;
+      for (std::size_t j = 0; j < nf; ++j) {
+        Taylor coef = Taylor::Zero();
+        if (cons[j]) {
+          coef[0] = a1[j];
+          for (int i = t - 2; i >= 0; --i) {  // back substitution
+            double v = rhs_c[j][i];
+            for (int l = i + 1; l < t - 1; ++l) v -= sys.Rc(i, l) * coef[1 + l];
+            coef[1 + i] = v / sys.Rc(i, i);
+          }
+        } else {
+          for (int i = t - 1; i >= 0; --i) {
+            double v = rhs[j][i];
+            for (int l = i + 1; l < t; ++l) v -= sys.R(i, l) * coef[l];
+            coef[i] = v / sys.R(i, i);
+          }
+        }
+        (*fields[j].a)[ei] = coef;
+      }
     });
   }
+}
+
+template <int Dim>
+void BasicTlsReconstruction<Dim>::fit_fields(std::span<const double> f,
+                                             std::span<const Field> fields) const {
+  for (const Field& fd : fields) {
+    if (fd.a == nullptr) throw std::invalid_argument("TlsReconstruction::fit_fields: no output");
+    if (fd.integrals == nullptr && settings_.conservative_only)
+      throw std::logic_error("TlsReconstruction::fit_fields: a plain field with conservative_only");
+  }
+  fit(f, fields);
 }
 
 template <int Dim>
@@ -671,14 +714,16 @@ void BasicTlsReconstruction<Dim>::fit_conservative(std::span<const double> f,
                                                    Coefficients& a) const {
   if (integrals.size() < static_cast<std::size_t>(grid_.num_cells()))
     throw std::invalid_argument("TlsReconstruction::fit_conservative: one integral per element");
-  fit(f, integrals.data(), nullptr, a);
+  const Field fd{integrals.data(), nullptr, &a};
+  fit(f, std::span<const Field>(&fd, 1));
 }
 
 template <int Dim>
 void BasicTlsReconstruction<Dim>::fit_plain(std::span<const double> f, Coefficients& a) const {
   if (settings_.conservative_only)
     throw std::logic_error("TlsReconstruction::fit_plain: the settings are conservative_only");
-  fit(f, nullptr, nullptr, a);
+  const Field fd{nullptr, nullptr, &a};
+  fit(f, std::span<const Field>(&fd, 1));
 }
 
 template <int Dim>
@@ -691,7 +736,8 @@ void BasicTlsReconstruction<Dim>::fit_mixed(std::span<const double> f,
     throw std::invalid_argument("TlsReconstruction::fit_mixed: one integral and flag per element");
   if (settings_.conservative_only)
     throw std::logic_error("TlsReconstruction::fit_mixed: the settings are conservative_only");
-  fit(f, integrals.data(), conservative.data(), a);
+  const Field fd{integrals.data(), conservative.data(), &a};
+  fit(f, std::span<const Field>(&fd, 1));
 }
 
 template <int Dim>

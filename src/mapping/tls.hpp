@@ -19,6 +19,7 @@
 
 #include <Eigen/Dense>
 #include <any>
+#include <array>
 #include <limits>
 #include <optional>
 #include <span>
@@ -230,6 +231,20 @@ class BasicTlsReconstruction {
   void fit_mixed(std::span<const double> f, std::span<const double> integrals,
                  std::span<const unsigned char> conservative, Coefficients& a) const;
 
+  // One field of fit_fields: conservative with integrals (and, with conservative, only in the
+  // elements where conservative[e] != 0, plain in the others), plain without; a receives the
+  // coefficients.
+  struct Field {
+    const double* integrals = nullptr;
+    const unsigned char* conservative = nullptr;
+    Coefficients* a = nullptr;
+  };
+  static constexpr int kMaxFields = 6;
+  // Up to kMaxFields fields of the same points in one pass over the element data: field j's
+  // value at point p is f[p * fields.size() + j]. The same numbers as one fit per field (each
+  // field's sums run in the same order); it reads the data once instead of once per field.
+  void fit_fields(std::span<const double> f, std::span<const Field> fields) const;
+
   // The reconstruction at x: element-local; an interior face belongs to the upper element, like
   // Grid::cell_of. Zero outside the grid.
   double evaluate(const Coefficients& a, const Point& x) const;
@@ -301,21 +316,17 @@ class BasicTlsReconstruction {
   }
 
   // One least-squares datum of an element: a point (own or borrowed) or a virtual face point.
+  // Only what the fits read is here (96 bytes in 2D), so that a fit streams the rows of Q and
+  // nothing else; the Taylor basis at the datum (psi_, for the set-up) and a virtual point's
+  // source (from_) are kept beside it, at the same index.
   struct Datum {
-    Taylor psi;         // Taylor basis of the fitted element at the datum (psi_2.. = position)
-    Taylor q;           // row of Q in B^T = Q R, terms 1..t (plain fits)
-    Taylor1 qc;         // row of Q_c in B_c^T = Q_c R_c, terms 2..t (conservative fits)
-    Index point;        // index of the value in f; -1 for a virtual point
-    Index source;       // virtual: the neighbour whose reconstruction gives the value
-    Vec<Dim> s_source;  // virtual: the point in the neighbour's coordinates
-
-    static Datum real(const Vec<Dim>& s, Index point) {
-      return {taylor_basis_at<Dim>(s), Taylor::Zero(), Taylor1::Zero(), point, -1,
-              Vec<Dim>::Zero()};
-    }
-    static Datum virtual_point(const Vec<Dim>& s, Index source, const Vec<Dim>& s_source) {
-      return {taylor_basis_at<Dim>(s), Taylor::Zero(), Taylor1::Zero(), -1, source, s_source};
-    }
+    Taylor q;     // row of Q in B^T = Q R, terms 1..t (plain fits), zero beyond t
+    Taylor1 qc;   // row of Q_c in B_c^T = Q_c R_c, terms 2..t (conservative fits), zero beyond
+    Index point;  // index of the value in f; -1 for a virtual point
+  };
+  struct DatumSource {
+    Index source;       // the neighbour whose reconstruction gives the value
+    Vec<Dim> s_source;  // the point in the neighbour's coordinates
   };
   // The least-squares problems are solved by a thin QR factorisation of the data matrix
   // (Gram-Schmidt, twice), a = R^{-1} Q^T f: the same solution as D eq. 5.1, a = D^{-1} B U with
@@ -338,14 +349,18 @@ class BasicTlsReconstruction {
   void bin_points(bool share_face_points);
   void build_systems();
   bool coincides(const System& sys, const Vec<Dim>& s) const;
-  void add_datum(System& sys, Matrix& D, const Datum& d);
+  // Puts a datum at s (element coordinates) into the element's next slot: a point (source -1)
+  // or a virtual point valued by element `source` at s_source.
+  void place(System& sys, const Vec<Dim>& s, Index point, Index source = -1,
+             const Vec<Dim>& s_source = Vec<Dim>::Zero());
+  void add_datum(System& sys, Matrix& D, const Vec<Dim>& s, Index point, Index source = -1,
+                 const Vec<Dim>& s_source = Vec<Dim>::Zero());
   void add_virtual_points(Index e, System& sys, Matrix& D, int& distinct);
   void borrow_points(Index e, System& sys, Matrix& D, int& distinct);
   bool well_posed(const Matrix& D, int distinct, int t, double& cond) const;
   double condition(const Matrix& D, int t) const;
   void factorise(System& sys);
-  void fit(std::span<const double> f, const double* integrals, const unsigned char* conservative,
-           Coefficients& a) const;
+  void fit(std::span<const double> f, std::span<const Field> fields) const;
 
   TlsSettings settings_;
   int nb_ = 0;                   // terms requested
@@ -357,6 +372,8 @@ class BasicTlsReconstruction {
   std::vector<System> systems_;
   std::vector<TlsElementInfo> info_;
   std::vector<Datum> data_;
+  std::vector<Taylor> psi_;         // the Taylor basis at data_[k]
+  std::vector<DatumSource> from_;  // data_[k] virtual: its source
   std::vector<Index> fill_;  // binning cursors (standalone point sets)
   TlsReport report_;
 };
@@ -376,6 +393,9 @@ struct TlsMappingState {
   std::vector<Vec<Dim>> w;             // their 1D weights per direction (product: the weight)
   std::vector<TaylorVector<Dim>> psi;  // Taylor basis at xi
   BasicTlsCoefficients<Dim> coef;
+  // The fields fitted together (TlsMapping::fit_momentum, fit_forces): at most the stress
+  // components and the body-force density.
+  std::array<BasicTlsCoefficients<Dim>, BasicTlsReconstruction<Dim>::kMaxFields> fields;
   std::vector<double> rho;  // at the Gauss points of the step
   std::vector<Vec<Dim>> rhov, rhob;
   std::vector<Mat<Dim>> sigma;
@@ -572,39 +592,58 @@ class TlsMapping {
       return *state2_;
     }
   }
-  // integrals_[e] = sum over the element's particles of value(p); with
-  // TlsSettings::domain_integrals (on the grid's cells), sum over the particles whose domain
-  // overlaps e of value(p) times the overlap fraction (split_, built by split_domains).
+  // For the n fields j: integrals_[j * E + e] = sum over the element's particles of value(p, j)
+  // (E elements); with TlsSettings::domain_integrals (on the grid's cells), sum over the
+  // particles whose domain overlaps e of value(p, j) times the overlap fraction (split_, built
+  // by split_domains). One pass over the particle lists for all fields.
   template <class Recon, class Value>
-  void element_sums(const Recon& recon, Value&& value) {
+  void element_sums(const Recon& recon, int n, Value&& value) {
     const auto& bins = recon.bins();
-    integrals_.resize(static_cast<std::size_t>(recon.num_elements()));
+    const auto ne = static_cast<std::size_t>(recon.num_elements());
+    integrals_.resize(ne * static_cast<std::size_t>(n));
+    constexpr int kMax = 8;
+    if (n > kMax) throw std::logic_error("TlsMapping::element_sums: too many fields");
+    auto sum = [&](Index e, auto&& each) {
+      std::array<double, kMax> c{};
+      each([&](std::size_t p, double fraction) {
+        for (int j = 0; j < n; ++j) c[static_cast<std::size_t>(j)] += value(p, j) * fraction;
+      });
+      for (int j = 0; j < n; ++j)
+        integrals_[static_cast<std::size_t>(j) * ne + static_cast<std::size_t>(e)] =
+            c[static_cast<std::size_t>(j)];
+    };
     if (split_.used) {
       parallel_for(recon.num_elements(), [&](Index e) {
         const auto ei = static_cast<std::size_t>(e);
-        double c = 0.0;
-        for (std::size_t k = split_.start[ei]; k < split_.start[ei + 1]; ++k)
-          c += value(static_cast<std::size_t>(split_.point[k])) * split_.fraction[k];
-        integrals_[ei] = c;
+        sum(e, [&](auto&& add) {
+          for (std::size_t k = split_.start[ei]; k < split_.start[ei + 1]; ++k)
+            add(static_cast<std::size_t>(split_.point[k]), split_.fraction[k]);
+        });
       });
       return;
     }
     parallel_for(recon.num_elements(), [&](Index e) {
-      double c = 0.0;
-      for (const Index* p = bins.begin(e); p != bins.end(e); ++p)
-        c += value(static_cast<std::size_t>(*p));
-      integrals_[static_cast<std::size_t>(e)] = c;
+      sum(e, [&](auto&& add) {
+        for (const Index* p = bins.begin(e); p != bins.end(e); ++p)
+          add(static_cast<std::size_t>(*p), 1.0);
+      });
     });
+  }
+  // The integrals of field j of the last element_sums.
+  const double* integrals_of(int j, Index elements) const {
+    return integrals_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(elements);
   }
   // TlsSettings::domain_integrals: the overlap fractions of the particles' domains with the
   // active elements, by element (CSR), rebuilt by fit_mass each step (tls_mapping.cpp).
   template <int Dim>
   void split_domains(const RunState<Dim>& sim, const BasicTlsReconstruction<Dim>& recon);
-  // values_[i] = value(i) for every particle (values_ sized by the caller).
+  // values_[i * n + j] = value(i, j) for the N particles and n fields (values_ sized here).
   template <class Value>
-  void fill_values(Value&& value) {
-    parallel_for(static_cast<Index>(values_.size()), [&](Index i) {
-      values_[static_cast<std::size_t>(i)] = value(static_cast<std::size_t>(i));
+  void fill_values(std::size_t N, int n, Value&& value) {
+    values_.resize(N * static_cast<std::size_t>(n));
+    parallel_for(static_cast<Index>(N), [&](Index i) {
+      const auto p = static_cast<std::size_t>(i);
+      for (int j = 0; j < n; ++j) values_[p * static_cast<std::size_t>(n) + j] = value(p, j);
     });
   }
   // The reconstruction st.coef at every Gauss point: element e, local point k = g mod n^Dim.
@@ -614,6 +653,18 @@ class TlsMapping {
     parallel_for(static_cast<Index>(q.size()), [&](Index gi) {
       const auto g = static_cast<std::size_t>(gi);
       store(g, st.coef[static_cast<std::size_t>(q.element[g])].dot(st.psi[g % n]));
+    });
+  }
+  // The same for the fields st.fields[0..nf): store(g, j, value).
+  template <int Dim, class Store>
+  static void at_gauss(const TlsMappingState<Dim>& st, int nf, const GaussPoints<Dim>& q,
+                       Store&& store) {
+    const std::size_t n = st.psi.size();
+    parallel_for(static_cast<Index>(q.size()), [&](Index gi) {
+      const auto g = static_cast<std::size_t>(gi);
+      const auto e = static_cast<std::size_t>(q.element[g]);
+      for (int j = 0; j < nf; ++j)
+        store(g, j, st.fields[static_cast<std::size_t>(j)][e].dot(st.psi[g % n]));
     });
   }
 
@@ -628,7 +679,8 @@ class TlsMapping {
   template <int Dim>
   void limit_density(TlsMappingState<Dim>& st);
   template <int Dim>
-  void apply_theta(TlsMappingState<Dim>& st, const unsigned char* only);
+  void apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficients<Dim>& coef,
+                   const unsigned char* only);
   template <int Dim>
   void fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q);
   template <int Dim>

@@ -65,15 +65,16 @@ void TlsMapping::limit_density(TlsMappingState<Dim>& st) {
   for (double t : st.theta) totals_.limited += t < 1.0;
 }
 
-// The same theta on the terms beyond a_1 of a conservative field fitted in st.coef (every
-// element, or those with only[e] != 0), so that (rho v)^ / rho^ stays what the fits give where
-// theta = 1 and the element's integral is kept.
+// The same theta on the terms beyond a_1 of a conservative field fitted in coef (every element,
+// or those with only[e] != 0), so that (rho v)^ / rho^ stays what the fits give where theta = 1
+// and the element's integral is kept.
 template <int Dim>
-void TlsMapping::apply_theta(TlsMappingState<Dim>& st, const unsigned char* only) {
+void TlsMapping::apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficients<Dim>& coef,
+                             const unsigned char* only) {
   if (!settings_.positivity) return;
   for (std::size_t e = 0; e < st.theta.size(); ++e)
     if (st.theta[e] < 1.0 && (only == nullptr || only[e] != 0))
-      st.coef[e].tail(st.coef[e].size() - 1) *= st.theta[e];
+      coef[e].tail(coef[e].size() - 1) *= st.theta[e];
 }
 
 // TlsSettings::domain_integrals. A particle's domain is the cpGIMP box (basis/gimp.hpp): side
@@ -185,7 +186,7 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
     }
   }
   split_domains(sim, st.recon);
-  element_sums(st.recon, [&](std::size_t i) { return P.mass[i]; });
+  element_sums(st.recon, 1, [&](std::size_t i, int) { return P.mass[i]; });
   st.recon.fit_conservative(P.density, integrals_, st.coef);
   mark_surface(st);
   limit_density(st);
@@ -193,49 +194,79 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   at_gauss(st, q, [&](std::size_t g, double v) { st.rho[g] = v; });
 }
 
+// Both components in one fit (BasicTlsReconstruction::fit_fields).
 template <int Dim>
 void TlsMapping::fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   auto& st = state<Dim>();
   const auto& P = sim.particles;
+  const Index ne = st.recon.num_elements();
+  fill_values(P.x.size(), Dim, [&](std::size_t i, int d) { return P.density[i] * P.v[i][d]; });
+  element_sums(st.recon, Dim, [&](std::size_t i, int d) { return P.mass[i] * P.v[i][d]; });
+  std::array<typename BasicTlsReconstruction<Dim>::Field, Dim> fields;
+  for (int d = 0; d < Dim; ++d)
+    fields[static_cast<std::size_t>(d)] = {integrals_of(d, ne), nullptr,
+                                           &st.fields[static_cast<std::size_t>(d)]};
+  st.recon.fit_fields(values_, fields);
+  for (int d = 0; d < Dim; ++d) apply_theta(st, st.fields[static_cast<std::size_t>(d)], nullptr);
   st.rhov.resize(q.size());
-  values_.resize(P.x.size());
-  for (int d = 0; d < Dim; ++d) {
-    fill_values([&](std::size_t i) { return P.density[i] * P.v[i][d]; });
-    element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.v[i][d]; });
-    st.recon.fit_conservative(values_, integrals_, st.coef);
-    apply_theta(st, nullptr);
-    at_gauss(st, q, [&](std::size_t g, double v) { st.rhov[g][d] = v; });
-  }
+  at_gauss(st, Dim, q, [&](std::size_t g, int d, double v) { st.rhov[g][d] = v; });
 }
 
+// The stress and the body-force density in one fit. The Cauchy stress is symmetric (every law
+// gives sigma_ij = sigma_ji to the bit), so its Dim (Dim + 1) / 2 independent components are
+// fitted and sigma^ is symmetric too.
 template <int Dim>
 void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   auto& st = state<Dim>();
   const auto& P = sim.particles;
-  values_.resize(P.x.size());
-  st.sigma.resize(q.size());
-  for (int r = 0; r < Dim; ++r)
-    for (int c = 0; c < Dim; ++c) {
-      fill_values([&](std::size_t i) { return P.stress[i](r, c); });
-      if (settings_.surface_volume) {
-        // Surface elements: the stress of their material, int_e sigma^ = sum_p V_p sigma_p.
-        element_sums(st.recon, [&](std::size_t i) { return P.volume[i] * P.stress[i](r, c); });
-        st.recon.fit_mixed(values_, integrals_, st.surface, st.coef);
-        apply_theta(st, st.surface.data());
-      } else {
-        st.recon.fit_plain(values_, st.coef);
-      }
-      at_gauss(st, q, [&](std::size_t g, double v) { st.sigma[g](r, c) = v; });
+  const Index ne = st.recon.num_elements();
+  constexpr int ns = Dim * (Dim + 1) / 2, nf = ns + Dim;
+  // Field j < ns: the stress component (r, c) = comp[j]; field ns + d: (rho b)_d.
+  auto rc = [](int j) {
+    constexpr std::array<std::array<int, 2>, 3> comp{{{0, 0}, {0, 1}, {1, 1}}};
+    return comp[static_cast<std::size_t>(j)];
+  };
+  fill_values(P.x.size(), nf, [&](std::size_t i, int j) {
+    if (j < ns) {
+      const auto [r, c] = rc(j);
+      return P.stress[i](r, c);
     }
-
-  st.rhob.resize(q.size());
-  for (int d = 0; d < Dim; ++d) {
-    fill_values([&](std::size_t i) { return P.density[i] * P.body[i][d]; });
-    element_sums(st.recon, [&](std::size_t i) { return P.mass[i] * P.body[i][d]; });
-    st.recon.fit_conservative(values_, integrals_, st.coef);
-    apply_theta(st, nullptr);
-    at_gauss(st, q, [&](std::size_t g, double v) { st.rhob[g][d] = v; });
+    return P.density[i] * P.body[i][j - ns];
+  });
+  // Surface elements (surface_volume): the stress of their material, int_e sigma^ =
+  // sum_p V_p sigma_p (fitted conservatively there, plain elsewhere).
+  const bool surface = settings_.surface_volume;
+  element_sums(st.recon, nf, [&](std::size_t i, int j) {
+    if (j < ns) {
+      if (!surface) return 0.0;
+      const auto [r, c] = rc(j);
+      return P.volume[i] * P.stress[i](r, c);
+    }
+    return P.mass[i] * P.body[i][j - ns];
+  });
+  std::array<typename BasicTlsReconstruction<Dim>::Field, nf> fields;
+  for (int j = 0; j < nf; ++j) {
+    auto& f = fields[static_cast<std::size_t>(j)];
+    f.a = &st.fields[static_cast<std::size_t>(j)];
+    if (j >= ns || surface) f.integrals = integrals_of(j, ne);
+    if (j < ns && surface) f.conservative = st.surface.data();
   }
+  st.recon.fit_fields(values_, fields);
+  for (int j = 0; j < nf; ++j) {
+    if (j < ns && !surface) continue;
+    apply_theta(st, st.fields[static_cast<std::size_t>(j)], j < ns ? st.surface.data() : nullptr);
+  }
+  st.sigma.resize(q.size());
+  st.rhob.resize(q.size());
+  at_gauss(st, nf, q, [&](std::size_t g, int j, double v) {
+    if (j < ns) {
+      const auto [r, c] = rc(j);
+      st.sigma[g](r, c) = v;
+      st.sigma[g](c, r) = v;
+    } else {
+      st.rhob[g][j - ns] = v;
+    }
+  });
 }
 
 template void TlsMapping::mark_surface<1>(TlsMappingState<1>&);
