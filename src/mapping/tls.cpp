@@ -61,6 +61,76 @@ double condition_number(const Eigen::Matrix<double, K, K>& D, int first, int t) 
   return hi / lo;
 }
 
+// The inverse of the n x n block of the symmetric positive definite A at rows and columns first..
+// first + n - 1, through its Cholesky factor A = R^T R (A^{-1} = R^{-1} R^{-T}), into the leading
+// block of inv (zero elsewhere). A pivot that is not positive is left zero: its inverse is
+// infinite, and so are the entries that depend on it. N = n at compile time, so that the loops
+// unroll.
+template <int N, class In, class Out>
+void spd_inverse_n(const In& A, int first, Out& inv) {
+  inv.setZero();
+  if constexpr (N > 0 && N <= Out::RowsAtCompileTime) {
+    Eigen::Matrix<double, N, N> R = Eigen::Matrix<double, N, N>::Zero(), Ri = R;
+    for (int j = 0; j < N; ++j) {
+      double d = A(first + j, first + j);
+      for (int k = 0; k < j; ++k) d -= R(k, j) * R(k, j);
+      R(j, j) = d > 0.0 ? std::sqrt(d) : 0.0;
+      Ri(j, j) = 1.0 / R(j, j);  // multiplied by below: a division is 4-5x the latency
+      for (int i = j + 1; i < N; ++i) {
+        double v = A(first + j, first + i);
+        for (int k = 0; k < j; ++k) v -= R(k, j) * R(k, i);
+        R(j, i) = v * Ri(j, j);
+      }
+    }
+    for (int j = 0; j < N; ++j)
+      for (int i = j - 1; i >= 0; --i) {
+        double v = 0.0;
+        for (int k = i + 1; k <= j; ++k) v += R(i, k) * Ri(k, j);
+        Ri(i, j) = -v * Ri(i, i);
+      }
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j <= i; ++j) {
+        double v = 0.0;
+        for (int k = i; k < N; ++k) v += Ri(i, k) * Ri(j, k);
+        inv(i, j) = inv(j, i) = v;
+      }
+  }
+}
+
+template <class In, class Out>
+void spd_inverse(const In& A, int first, int n, Out& inv) {
+  switch (n) {
+    case 0:
+      return spd_inverse_n<0>(A, first, inv);
+    case 1:
+      return spd_inverse_n<1>(A, first, inv);
+    case 2:
+      return spd_inverse_n<2>(A, first, inv);
+    case 3:
+      return spd_inverse_n<3>(A, first, inv);
+    case 4:
+      return spd_inverse_n<4>(A, first, inv);
+    case 5:
+      return spd_inverse_n<5>(A, first, inv);
+    default:
+      return spd_inverse_n<6>(A, first, inv);
+  }
+}
+
+// max_i sum_j |A_ij| over the n x n block at first..first + n - 1; infinite when an entry is
+// not finite (an inverse whose pivot was not positive).
+template <class M>
+double norm_inf(const M& A, int first, int n) {
+  double m = 0.0;
+  for (int i = first; i < first + n; ++i) {
+    double r = 0.0;
+    for (int j = first; j < first + n; ++j) r += std::abs(A(i, j));
+    if (!std::isfinite(r)) return kInf;
+    m = std::max(m, r);
+  }
+  return m;
+}
+
 template <int K>
 void add_outer(Eigen::Matrix<double, K, K>& D, const Eigen::Matrix<double, K, 1>& psi) {
   D.noalias() += psi * psi.transpose();
@@ -115,11 +185,12 @@ void validate(const TlsSettings& s, int dim) {
     throw InputError(fmt::format(
         "method.tls_terms = {} must be 1 (constant), 3 (linear) or 6 (quadratic) in 2D (0: 6)",
         s.terms));
-  if (!(s.max_condition > 1.0))
-    throw InputError(
-        fmt::format("method.tls_max_condition = {} must be greater than 1 (0: the default of the "
-                    "dimension)",
-                    s.max_condition));
+  if (!(s.max_condition > 1.0) || !(s.max_condition <= 1e14))
+    throw InputError(fmt::format(
+        "method.tls_max_condition = {} must lie in (1, 1e14] (0: the default of the dimension): "
+        "the fits solve the normal equations, whose rounding error grows like the condition "
+        "number times 2.2e-16",
+        s.max_condition));
   if (s.gauss_points < 0 || s.gauss_points > 10)
     throw InputError(fmt::format("method.gauss_points = {} must lie in [0, 10]", s.gauss_points));
   if (s.max_borrowed < 0)
@@ -263,7 +334,7 @@ void BasicTlsReconstruction<Dim>::bin_points(bool share_face_points) {
 template <int Dim>
 bool BasicTlsReconstruction<Dim>::coincides(const System& sys, const Vec<Dim>& s) const {
   for (Index k = sys.begin; k < sys.end; ++k) {
-    const Taylor& psi = psi_[static_cast<std::size_t>(k)];  // psi_2..psi_{1+Dim} = s
+    const Taylor& psi = data_[static_cast<std::size_t>(k)].psi;  // psi_2..psi_{1+Dim} = s
     bool same = true;
     for (int d = 0; d < Dim; ++d) same = same && std::abs(psi[1 + d] - s[d]) <= kCoincident;
     if (same) return true;
@@ -272,29 +343,26 @@ bool BasicTlsReconstruction<Dim>::coincides(const System& sys, const Vec<Dim>& s
 }
 
 template <int Dim>
-void BasicTlsReconstruction<Dim>::place(System& sys, const Vec<Dim>& s, Index point,
-                                        Index source, const Vec<Dim>& s_source) {
+void BasicTlsReconstruction<Dim>::place(System& sys, const Vec<Dim>& s, Index point, Index source,
+                                        const Vec<Dim>& s_source) {
   // The element's slot in data_ holds its own points and the most completion points it can
   // take (build_systems), so this never writes into the next element's slot.
   const auto k = static_cast<std::size_t>(sys.end++);
-  data_[k].q.setZero();  // factorise fills the first t (t - 1) entries
-  data_[k].qc.setZero();
-  data_[k].point = point;
-  psi_[k] = taylor_basis_at<Dim>(s);
+  data_[k] = {taylor_basis_at<Dim>(s), point};
   if (source >= 0) from_[k] = {source, s_source};
 }
 
 template <int Dim>
-void BasicTlsReconstruction<Dim>::add_datum(System& sys, Matrix& D, const Vec<Dim>& s,
-                                            Index point, Index source, const Vec<Dim>& s_source) {
+void BasicTlsReconstruction<Dim>::add_datum(System& sys, Matrix& D, const Vec<Dim>& s, Index point,
+                                            Index source, const Vec<Dim>& s_source) {
   place(sys, s, point, source, s_source);
-  add_outer(D, psi_[static_cast<std::size_t>(sys.end - 1)]);
+  add_outer(D, data_[static_cast<std::size_t>(sys.end - 1)].psi);
 }
 
 // In the orthonormal Taylor basis (TlsSettings::max_condition): phi = L psi, so the normal
 // matrix is L D L with L the inverse root-mean-square norms of psi_1..psi_K over [-1, 1]^Dim.
 template <int Dim>
-double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t) const {
+const typename BasicTlsReconstruction<Dim>::Taylor& BasicTlsReconstruction<Dim>::scales() {
   static const Taylor l = [] {
     Taylor v;
     if constexpr (Dim == 1)
@@ -303,16 +371,41 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t) const {
       v << 1.0, std::sqrt(3.0), std::sqrt(3.0), std::sqrt(45.0), std::sqrt(45.0), 3.0;
     return v;
   }();
+  return l;
+}
+
+template <int Dim>
+double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_inv,
+                                              bool* has_s_inv) const {
+  const Taylor& l = scales();
+  if (has_s_inv != nullptr) *has_s_inv = false;
   const Matrix S = l.asDiagonal() * D * l.asDiagonal();
-  return condition_number(S, settings_.conservative_only ? 1 : 0, t);
+  const int first = settings_.conservative_only ? 1 : 0, n = t - first;
+  if (!settings_.exact_condition && n > 1) {
+    // cond_2(S) <= ||S||_inf ||S^{-1}||_inf (||A||_2 <= ||A||_inf for symmetric A): when this
+    // bound already meets the limit, the eigenvalues are not needed. Its rounding error is about
+    // n cond eps relative, hence the margin and the ceiling (a failed or non-finite inverse fails
+    // the test and goes to the eigenvalues).
+    Matrix inv;
+    spd_inverse(S, first, n, inv);
+    const double bound = norm_inf(S, first, n) * norm_inf(inv, 0, n);
+    if (bound <= 1e10 && bound * (1.0 + 1e-4) <= settings_.max_condition) {
+      if (s_inv != nullptr && has_s_inv != nullptr) {
+        *s_inv = inv;
+        *has_s_inv = true;
+      }
+      return bound;
+    }
+  }
+  return condition_number(S, first, t);
 }
 
 // Enough distinct positions for the unknowns (t, or t - 1 when a_1 is always given) and
 // cond(D) within the limit.
 template <int Dim>
-bool BasicTlsReconstruction<Dim>::well_posed(const Matrix& D, int distinct, int t,
-                                             double& cond) const {
-  cond = condition(D, t);
+bool BasicTlsReconstruction<Dim>::well_posed(const Matrix& D, int distinct, int t, double& cond,
+                                             Matrix* s_inv, bool* has_s_inv) const {
+  cond = condition(D, t, s_inv, has_s_inv);
   return distinct >= t - (settings_.conservative_only ? 1 : 0) && cond <= settings_.max_condition;
 }
 
@@ -427,48 +520,31 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
   }
 }
 
-// Thin QR of the element's data matrix by modified Gram-Schmidt applied twice ("twice is
-// enough": orthogonal to working precision for cond(B) well below 1/eps, which max_condition
-// guarantees), once for terms 1..t (plain) and once for terms 2..t (conservative, psi_1 left
-// out as in D 5.3.1). The columns are worked on in a per-thread buffer and Q is stored in the
-// data.
+// The inverses of the normal matrix (System) from its Cholesky factor D = R^T R, D^{-1} =
+// R^{-1} R^{-T}: of terms 1..t (plain fits) and of terms 2..t (conservative, psi_1 left out as in
+// D 5.3.1). well_posed bounded cond(D) of the fitted terms by max_condition, so D is positive
+// definite to working precision (the block of terms 2..t too: its eigenvalues lie between D's);
+// a pivot that is not positive all the same is left zero, its inverse is infinite and the fits
+// give the non-finite values the run stops on.
 template <int Dim>
-void BasicTlsReconstruction<Dim>::factorise(System& sys) {
-  const int t = sys.terms;
-  const auto m = static_cast<std::size_t>(sys.end - sys.begin);
-  const auto begin = static_cast<std::size_t>(sys.begin);
-  // The columns of the element's data matrix, contiguous (column j at col[j * m]): the rows of
-  // data_ are 96 bytes apart, and these loops run over the rows for every pair of columns.
-  thread_local std::vector<double> col;
-  col.resize(static_cast<std::size_t>(K) * m);
-  auto orthonormalise = [&](auto&& row, auto& R, int first, int n) {
-    R.setZero();
-    for (int j = 0; j < n; ++j) {
-      double* cj = col.data() + static_cast<std::size_t>(j) * m;
-      for (std::size_t k = 0; k < m; ++k) cj[k] = psi_[begin + k][first + j];
-      for (int pass = 0; pass < 2; ++pass) {
-        for (int i = 0; i < j; ++i) {
-          const double* ci = col.data() + static_cast<std::size_t>(i) * m;
-          double r = 0.0;
-          for (std::size_t k = 0; k < m; ++k) r += ci[k] * cj[k];
-          for (std::size_t k = 0; k < m; ++k) cj[k] -= r * ci[k];
-          R(i, j) += r;
-        }
-      }
-      double norm2 = 0.0;
-      for (std::size_t k = 0; k < m; ++k) norm2 += cj[k] * cj[k];
-      R(j, j) = std::sqrt(norm2);
-      const double inv = R(j, j) > 0.0 ? 1.0 / R(j, j) : 0.0;
-      for (std::size_t k = 0; k < m; ++k) cj[k] *= inv;
+void BasicTlsReconstruction<Dim>::factorise(System& sys, const Matrix& D,
+                                            const Matrix* s_inv) const {
+  // S = L D L on the orthonormal basis (L = diag(scales())), so D^{-1} = L S^{-1} L.
+  const Taylor& l = scales();
+  if (settings_.conservative_only) {
+    if (s_inv != nullptr) {
+      const Taylor1 lc = l.template tail<K - 1>();
+      sys.inv_c = lc.asDiagonal() * s_inv->template topLeftCorner<K - 1, K - 1>() * lc.asDiagonal();
+    } else {
+      spd_inverse(D, 1, sys.terms - 1, sys.inv_c);
     }
-    for (std::size_t k = 0; k < m; ++k) {
-      auto& q = row(data_[begin + k]);
-      for (int j = 0; j < n; ++j) q[j] = col[static_cast<std::size_t>(j) * m + k];
-    }
-  };
-  if (!settings_.conservative_only)
-    orthonormalise([](Datum& d) -> Taylor& { return d.q; }, sys.R, 0, t);
-  orthonormalise([](Datum& d) -> Taylor1& { return d.qc; }, sys.Rc, 1, t - 1);
+    return;
+  }
+  if (s_inv != nullptr)
+    sys.inv = l.asDiagonal() * (*s_inv) * l.asDiagonal();
+  else
+    spd_inverse(D, 0, sys.terms, sys.inv);
+  spd_inverse(D, 1, sys.terms - 1, sys.inv_c);
 }
 
 template <int Dim>
@@ -500,7 +576,11 @@ void BasicTlsReconstruction<Dim>::build_systems() {
       const Vec<Dim>& x = x_[static_cast<std::size_t>(*it)];
       Vec<Dim> s;
       for (int d = 0; d < Dim; ++d) s[d] = (x[d] - xc[d]) / dx[d];
-      add_outer(o.D, taylor_basis_at<Dim>(s));
+      // The upper triangle only (D is symmetric; mirrored below): the same sums, 21 of 36
+      // products in 2D.
+      const Taylor psi = taylor_basis_at<Dim>(s);
+      for (int j = 0; j < K; ++j)
+        for (int i = 0; i <= j; ++i) o.D(i, j) += psi[i] * psi[j];
       if (o.distinct < nb) {
         bool fresh = true;
         for (int k = 0; k < o.distinct; ++k) {
@@ -512,9 +592,10 @@ void BasicTlsReconstruction<Dim>::build_systems() {
         if (fresh) seen[static_cast<std::size_t>(o.distinct++)] = s;
       }
     }
+    o.D.template triangularView<Eigen::StrictlyLower>() = o.D.transpose();
     const Index count = bins_.count(e);
     info_[static_cast<std::size_t>(e)].points = count;
-    o.ok = count > 0 && well_posed(o.D, o.distinct, nb, o.condition);
+    o.ok = count > 0 && well_posed(o.D, o.distinct, nb, o.condition, &o.s_inv, &o.has_s_inv);
     if (count == 0) o.condition = 0.0;
   });
 
@@ -533,7 +614,6 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     if (count > 0) slots += count + (own_[e].ok ? 0 : extra);
   }
   data_.resize(slots);
-  psi_.resize(slots);
   from_.resize(slots);
 
   // Pass 2: data, completion, number of terms and factorisations; independent per element (a
@@ -583,7 +663,9 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     if (!o.ok)
       while (!well_posed(D, distinct, t, cond) && t > 1) t = Dim == 1 ? t - 1 : (t == 6 ? 3 : 1);
     sys.terms = t;
-    factorise(sys);
+    // An element well posed from its own points has D = o.D and t = n_b: its inverse from the
+    // condition bound serves.
+    factorise(sys, D, o.ok && o.has_s_inv ? &o.s_inv : nullptr);
     info.terms = t;
     info.condition = cond;
   });
@@ -642,54 +724,68 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f,
         }
       }
       if (sys.terms == 0 || sys.has_virtual != (pass == 1)) return;
-      const int t = sys.terms;
       // Per field: D eq. 5.9 (conservative: a_1 fixed by the element integral, the rest fit
-      // f - a_1 without psi_1, a_2..t = R_c^{-1} Q_c^T (U - a_1)) or D eq. 5.1 (plain:
-      // a = D^{-1} B U = R^{-1} Q^T U). The sums over the data for all fields in one pass.
+      // f - a_1 without psi_1, a_2..t = D_c^{-1} B_c^T (U - a_1)) or D eq. 5.1 (plain:
+      // a = D^{-1} B U). The sums over the data for all fields in one pass; the entries beyond t
+      // of the sums meet the zero rows and columns of the inverses.
+      // Plain fields take a_1 = 0 here, so that one sum serves both: psi (f - a_1), of which a
+      // conservative fit uses the entries 2..t.
       std::array<bool, kMaxFields> cons{};
       std::array<double, kMaxFields> a1{};
-      std::array<Taylor, kMaxFields> rhs;
-      std::array<Taylor1, kMaxFields> rhs_c;
       for (std::size_t j = 0; j < nf; ++j) {
         const Field& fd = fields[j];
-        cons[j] = fd.integrals != nullptr && (fd.conservative == nullptr || fd.conservative[ei] != 0);
+        cons[j] =
+            fd.integrals != nullptr && (fd.conservative == nullptr || fd.conservative[ei] != 0);
         a1[j] = cons[j] ? fd.integrals[ei] / volume : 0.0;
-        rhs[j].setZero();
-        rhs_c[j].setZero();
       }
-      for (Index k = sys.begin; k < sys.end; ++k) {
-        const Datum& d = data_[static_cast<std::size_t>(k)];
-        const double* v = d.point >= 0 ? f.data() + static_cast<std::size_t>(d.point) * nf : nullptr;
-        for (std::size_t j = 0; j < nf; ++j) {
-          double value = 0.0;
-          if (v != nullptr) {
-            value = v[j];
+      std::array<Taylor, kMaxFields> rhs;
+      // The number of fields at compile time, so that the sums stay in registers.
+      auto accumulate = [&]<int NF>(std::integral_constant<int, NF>) {
+        std::array<Taylor, NF> b;
+        for (auto& v : b) v.setZero();
+        for (Index k = sys.begin; k < sys.end; ++k) {
+          const Datum& d = data_[static_cast<std::size_t>(k)];
+          if (d.point >= 0) {
+            const double* v = f.data() + static_cast<std::size_t>(d.point) * NF;
+            for (int j = 0; j < NF; ++j) b[j] += d.psi * (v[j] - a1[j]);
           } else {
             const DatumSource& src = from_[static_cast<std::size_t>(k)];
-            value = (*fields[j].a)[static_cast<std::size_t>(src.source)].dot(
-                taylor_basis_at<Dim>(src.s_source));
+            const Taylor psi_source = taylor_basis_at<Dim>(src.s_source);
+            for (int j = 0; j < NF; ++j)
+              b[j] +=
+                  d.psi *
+                  ((*fields[j].a)[static_cast<std::size_t>(src.source)].dot(psi_source) - a1[j]);
           }
-          if (cons[j])
-            rhs_c[j] += d.qc * (value - a1[j]);  // q_c is zero beyond t - 1 columns
-          else
-            rhs[j] += d.q * value;  // q is zero beyond t columns
         }
+        for (int j = 0; j < NF; ++j) rhs[j] = b[j];
+      };
+      switch (nf) {
+        case 1:
+          accumulate(std::integral_constant<int, 1>{});
+          break;
+        case 2:
+          accumulate(std::integral_constant<int, 2>{});
+          break;
+        case 3:
+          accumulate(std::integral_constant<int, 3>{});
+          break;
+        case 4:
+          accumulate(std::integral_constant<int, 4>{});
+          break;
+        case 5:
+          accumulate(std::integral_constant<int, 5>{});
+          break;
+        default:
+          accumulate(std::integral_constant<int, kMaxFields>{});
+          break;
       }
       for (std::size_t j = 0; j < nf; ++j) {
-        Taylor coef = Taylor::Zero();
+        Taylor coef;
         if (cons[j]) {
           coef[0] = a1[j];
-          for (int i = t - 2; i >= 0; --i) {  // back substitution
-            double v = rhs_c[j][i];
-            for (int l = i + 1; l < t - 1; ++l) v -= sys.Rc(i, l) * coef[1 + l];
-            coef[1 + i] = v / sys.Rc(i, i);
-          }
+          coef.template tail<K - 1>().noalias() = sys.inv_c * rhs[j].template tail<K - 1>();
         } else {
-          for (int i = t - 1; i >= 0; --i) {
-            double v = rhs[j][i];
-            for (int l = i + 1; l < t; ++l) v -= sys.R(i, l) * coef[l];
-            coef[i] = v / sys.R(i, i);
-          }
+          coef.noalias() = sys.inv * rhs[j];
         }
         (*fields[j].a)[ei] = coef;
       }

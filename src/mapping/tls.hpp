@@ -107,6 +107,13 @@ struct TlsSettings {
   // its six points per element lie on two lines x_1 = const, where psi_4 is constant, so the
   // full normal matrix is singular while the conservative fit of psi_2..psi_6 is well posed.
   bool conservative_only = false;
+  // Every element's condition number from the eigenvalues of D (TlsElementInfo::condition,
+  // TlsReport::max_condition). false: an element whose bound ||D||_inf ||D^{-1}||_inf (on the
+  // orthonormal basis, at least cond_2) already meets max_condition keeps the bound, which saves
+  // the 6 x 6 eigensolve that was a quarter of a 2D TLS step; the decisions are the same (the
+  // bound is only used where it proves cond <= max_condition), the numbers reported are then
+  // upper bounds. The MPM runs use false (method_settings.cpp).
+  bool exact_condition = true;
 
   int gauss_points_used() const { return gauss_points > 0 ? gauss_points : 2; }
   int terms_used(int dim) const { return terms > 0 ? terms : (dim == 1 ? 3 : 6); }
@@ -124,19 +131,21 @@ void validate(const TlsSettings& s, int dim = 1);
 // What one point set (one MPM step) needed. An element can count in several of reduced,
 // with_virtual and with_neighbours (e.g. completed with one virtual point and still reduced).
 struct TlsReport {
-  Index elements = 0;          // cells of the grid
-  Index active = 0;            // elements with at least one point of their own
-  Index full = 0;              // all n_b terms from their own points
-  Index reduced = 0;           // fitted with fewer than n_b terms
-  Index with_virtual = 0;      // data completed with virtual face points
-  Index with_neighbours = 0;   // data completed with points borrowed from adjacent elements
-  Index failed = 0;            // deficient with completion None: not fitted
-  Index truncated = 0;         // triangles (min_norm, graded): fitted with rank below the terms
-  Index limited = 0;           // positivity: elements whose higher terms were scaled down
-  Index surface = 0;           // surface_volume: elements at a free surface
-  Index outside = 0;           // points outside the grid, ignored (standalone input only)
-  int min_terms = 0;           // fewest terms of a fitted element (0: none fitted)
-  double max_condition = 0.0;  // largest cond(D) of a fitted element's final system
+  Index elements = 0;         // cells of the grid
+  Index active = 0;           // elements with at least one point of their own
+  Index full = 0;             // all n_b terms from their own points
+  Index reduced = 0;          // fitted with fewer than n_b terms
+  Index with_virtual = 0;     // data completed with virtual face points
+  Index with_neighbours = 0;  // data completed with points borrowed from adjacent elements
+  Index failed = 0;           // deficient with completion None: not fitted
+  Index truncated = 0;        // triangles (min_norm, graded): fitted with rank below the terms
+  Index limited = 0;          // positivity: elements whose higher terms were scaled down
+  Index surface = 0;          // surface_volume: elements at a free surface
+  Index outside = 0;          // points outside the grid, ignored (standalone input only)
+  int min_terms = 0;          // fewest terms of a fitted element (0: none fitted)
+  // Largest cond(D) of a fitted element's final system (with TlsSettings::exact_condition =
+  // false an upper bound of it, at most max_condition).
+  double max_condition = 0.0;
   // The first failed element, for the error message: its own points and cond(D) with n_b terms
   // (infinite when singular).
   Index failed_element = -1;
@@ -160,7 +169,8 @@ struct TlsElementInfo {
   Index virtual_points = 0;  // virtual face points added
   Index borrowed = 0;        // points borrowed from adjacent elements
   int terms = 0;             // Taylor terms fitted; 0 when inactive or failed
-  double condition = 0.0;    // cond(D) of the final system (own data and n_b terms if failed)
+  double condition = 0.0;    // cond(D) of the final system (own data and n_b terms if failed;
+                             // an upper bound where TlsSettings::exact_condition allows)
   bool failed = false;
 };
 
@@ -315,32 +325,38 @@ class BasicTlsReconstruction {
       return x;
   }
 
-  // One least-squares datum of an element: a point (own or borrowed) or a virtual face point.
-  // Only what the fits read is here (96 bytes in 2D), so that a fit streams the rows of Q and
-  // nothing else; the Taylor basis at the datum (psi_, for the set-up) and a virtual point's
-  // source (from_) are kept beside it, at the same index.
+  // One least-squares datum of an element: a point (own or borrowed) or a virtual face point
+  // (its source in from_, at the same index). 56 bytes in 2D: what a fit reads.
   struct Datum {
-    Taylor q;     // row of Q in B^T = Q R, terms 1..t (plain fits), zero beyond t
-    Taylor1 qc;   // row of Q_c in B_c^T = Q_c R_c, terms 2..t (conservative fits), zero beyond
+    Taylor psi;   // Taylor basis of the fitted element at the datum (psi_2.. = position)
     Index point;  // index of the value in f; -1 for a virtual point
   };
   struct DatumSource {
     Index source;       // the neighbour whose reconstruction gives the value
     Vec<Dim> s_source;  // the point in the neighbour's coordinates
   };
-  // The least-squares problems are solved by a thin QR factorisation of the data matrix
-  // (Gram-Schmidt, twice), a = R^{-1} Q^T f: the same solution as D eq. 5.1, a = D^{-1} B U with
-  // D = R^T R, but with errors growing like cond(B) = cond(D)^(1/2) instead of cond(D).
+  // The least-squares problems are solved by the normal equations, a = D^{-1} B^T f, the
+  // solution of D eq. 5.1, with D^{-1} formed per element once per point set from the Cholesky
+  // factor D = R^T R (factorise), so that each field's fit is the sum B^T f and one 6 x 6
+  // product (two triangular solves per field were half the fit's time: chains of dependent
+  // operations). The rounding error grows like cond(D) eps (a QR factorisation of B: cond(B)
+  // eps = cond(D)^(1/2) eps), which well_posed bounds by max_condition (default 10 in 2D, 1e8
+  // in 1D; at most 1e14, validate): at 1e8 that is 2e-8, below what the fit's own sensitivity,
+  // cond(B) = 1e4 times the data's discretisation error, makes of the data.
   struct System {
     Index begin = 0, end = 0;  // data_[begin, end)
     int terms = 0;
     bool has_virtual = false;  // fitted after its neighbours
-    Matrix R;                  // upper triangular, terms 1..t
-    Matrix1 Rc;                // upper triangular, terms 2..t
+    Matrix inv;                // D^{-1} of terms 1..t (zero beyond): plain fits
+    Matrix1 inv_c;             // the inverse of D's block of terms 2..t: conservative fits
   };
   // Element data from its own points alone (first pass).
   struct Own {
     Matrix D;
+    // The inverse of the fitted block of D on the orthonormal basis (terms 1..n_b, or 2..n_b
+    // with conservative_only), when condition() formed it for its bound: factorise reuses it.
+    Matrix s_inv;
+    bool has_s_inv = false;
     int distinct = 0;  // distinct positions, counted up to n_b
     double condition = 0.0;
     bool ok = false;  // n_b terms are well posed without completion
@@ -357,9 +373,16 @@ class BasicTlsReconstruction {
                  const Vec<Dim>& s_source = Vec<Dim>::Zero());
   void add_virtual_points(Index e, System& sys, Matrix& D, int& distinct);
   void borrow_points(Index e, System& sys, Matrix& D, int& distinct);
-  bool well_posed(const Matrix& D, int distinct, int t, double& cond) const;
-  double condition(const Matrix& D, int t) const;
-  void factorise(System& sys);
+  // s_inv (optional): receives the inverse that condition() formed for its bound, if it did
+  // (*has_s_inv).
+  bool well_posed(const Matrix& D, int distinct, int t, double& cond, Matrix* s_inv = nullptr,
+                  bool* has_s_inv = nullptr) const;
+  double condition(const Matrix& D, int t, Matrix* s_inv = nullptr,
+                   bool* has_s_inv = nullptr) const;
+  // The orthonormal basis's scales: phi_k = l_k psi_k (condition()).
+  static const Taylor& scales();
+  // s_inv: the inverse of the fitted block of D on the orthonormal basis, if known (Own).
+  void factorise(System& sys, const Matrix& D, const Matrix* s_inv = nullptr) const;
   void fit(std::span<const double> f, std::span<const Field> fields) const;
 
   TlsSettings settings_;
@@ -372,9 +395,8 @@ class BasicTlsReconstruction {
   std::vector<System> systems_;
   std::vector<TlsElementInfo> info_;
   std::vector<Datum> data_;
-  std::vector<Taylor> psi_;         // the Taylor basis at data_[k]
   std::vector<DatumSource> from_;  // data_[k] virtual: its source
-  std::vector<Index> fill_;  // binning cursors (standalone point sets)
+  std::vector<Index> fill_;        // binning cursors (standalone point sets)
   TlsReport report_;
 };
 

@@ -103,7 +103,10 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
       std::array<Index, Dim> c0{}, c1{};
       bool box = true;
       // l0_d / h_d in Dim > 1: the domain is similar to the cell (gimp.hpp, initial_length).
-      const double similar = Dim == 1 ? 0.0 : std::pow(P.volume0[p] / g.cell_volume(), 1.0 / Dim);
+      const double ratio = P.volume0[p] / g.cell_volume();
+      const double similar = Dim == 1   ? 0.0
+                             : Dim == 2 ? std::sqrt(ratio)
+                                        : std::pow(ratio, 1.0 / Dim);
       for (int d = 0; d < Dim; ++d) {
         const double l0 = Dim == 1 ? P.volume0[p] : g.h[d] * similar;
         const double r = 0.5 * P.F[p](d, d) * l0 / g.h[d];  // half side in cell units

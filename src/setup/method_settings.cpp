@@ -24,6 +24,9 @@ TlsSettings tls_settings(const Config& cfg, int dim) {
   const std::string integrals = cfg.get_string("method.tls_cell_integrals");
   s.domain_integrals = integrals == "domains" || (integrals == "auto" && dim == 2);
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
+  // The summary's max_condition is an upper bound where a cheap bound proves the element well
+  // posed (TlsSettings::exact_condition; `mpm reconstruct` reports exact values).
+  s.exact_condition = false;
   validate(s, dim);
   return s;
 }
