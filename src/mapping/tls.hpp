@@ -726,6 +726,7 @@ class TlsMapping {
     std::vector<Index> point;        // particle
     std::vector<double> fraction;    // of the particle's domain in e (sum over e: 1)
     std::vector<std::pair<Index, std::pair<Index, double>>> scratch;  // (e, (p, overlap))
+    std::vector<std::size_t> next;  // fill cursors of the counting sort
   } split_;
   TlsReport totals_;
 };

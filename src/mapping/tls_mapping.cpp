@@ -113,10 +113,15 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
         const double s = (P.x[p][d] - g.origin[d]) / g.h[d];
         const auto n = static_cast<double>(g.cells[d]);
         box = box && r > 0.0 && std::isfinite(r) && std::isfinite(s);
+        if (!box) break;
         lo[d] = std::clamp(s - r, 0.0, n);
         hi[d] = std::clamp(s + r, 0.0, n);
-        c0[d] = std::clamp(static_cast<Index>(std::floor(lo[d])), Index{0}, g.cells[d] - 1);
-        c1[d] = std::clamp(static_cast<Index>(std::ceil(hi[d])) - 1, c0[d], g.cells[d] - 1);
+        // floor and ceil of these non-negative values by conversion (the library calls were a
+        // tenth of this function).
+        const auto fl = static_cast<Index>(lo[d]), fh = static_cast<Index>(hi[d]);
+        const Index ch = static_cast<double>(fh) == hi[d] ? fh : fh + 1;
+        c0[d] = std::clamp(fl, Index{0}, g.cells[d] - 1);
+        c1[d] = std::clamp(ch - 1, c0[d], g.cells[d] - 1);
       }
       const std::size_t first = list.size();
       double total = 0.0;
@@ -154,7 +159,8 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
   for (std::size_t e = 0; e < static_cast<std::size_t>(ne); ++e) start[e + 1] += start[e];
   split_.point.resize(list.size());
   split_.fraction.resize(list.size());
-  std::vector<std::size_t> next(start.begin(), start.end() - 1);
+  auto& next = split_.next;
+  next.assign(start.begin(), start.end() - 1);
   for (const auto& t : list) {
     const std::size_t k = next[static_cast<std::size_t>(t.first)]++;
     split_.point[k] = t.second.first;
