@@ -20,6 +20,18 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // no new direction to D.
 constexpr double kCoincident = 1e-10;
 
+// f(std::integral_constant<int, n>{}) for n in 0..Max (larger n: Max), so that the small loops
+// over the terms or fields of an element have their length at compile time and unroll.
+template <int Max, int N = 0, class F>
+void with_size(int n, F&& f) {
+  if constexpr (N >= Max)
+    f(std::integral_constant<int, Max>{});
+  else if (n == N)
+    f(std::integral_constant<int, N>{});
+  else
+    with_size<Max, N + 1>(n, f);
+}
+
 // cond_2 = lambda_max / lambda_min of the block of rows and columns first..t-1 of the symmetric
 // positive semi-definite normal matrix D (D 5.2.3): the leading t x t block for plain fits
 // (first = 0), the terms 2..t for conservative ones (first = 1); infinite when singular, 1 when
@@ -27,35 +39,19 @@ constexpr double kCoincident = 1e-10;
 template <int K>
 double condition_number(const Eigen::Matrix<double, K, K>& D, int first, int t) {
   double lo = 0.0, hi = 0.0;
-  auto eigen = [&]<int N>(std::integral_constant<int, N>) {
-    if constexpr (N <= K) {
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(
-          D.template block<N, N>(first, first), Eigen::EigenvaluesOnly);
-      lo = es.eigenvalues()[0];
-      hi = es.eigenvalues()[N - 1];
-    }
-  };
-  switch (t - first) {
-    case 0:
-      return 1.0;
-    case 1:
-      lo = hi = D(first, first);
-      break;
-    case 2:
-      eigen(std::integral_constant<int, 2>{});
-      break;
-    case 3:
-      eigen(std::integral_constant<int, 3>{});
-      break;
-    case 4:
-      eigen(std::integral_constant<int, 4>{});
-      break;
-    case 5:
-      eigen(std::integral_constant<int, 5>{});
-      break;
-    default:
-      eigen(std::integral_constant<int, 6>{});
-      break;
+  const int n = t - first;
+  if (n == 0) return 1.0;
+  if (n == 1) {
+    lo = hi = D(first, first);
+  } else {
+    with_size<K>(n, [&]<int N>(std::integral_constant<int, N>) {
+      if constexpr (N >= 2) {
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(
+            D.template block<N, N>(first, first), Eigen::EigenvaluesOnly);
+        lo = es.eigenvalues()[0];
+        hi = es.eigenvalues()[N - 1];
+      }
+    });
   }
   if (!(lo > 0.0) || !std::isfinite(hi)) return kInf;
   return hi / lo;
@@ -99,22 +95,8 @@ void spd_inverse_n(const In& A, int first, Out& inv) {
 
 template <class In, class Out>
 void spd_inverse(const In& A, int first, int n, Out& inv) {
-  switch (n) {
-    case 0:
-      return spd_inverse_n<0>(A, first, inv);
-    case 1:
-      return spd_inverse_n<1>(A, first, inv);
-    case 2:
-      return spd_inverse_n<2>(A, first, inv);
-    case 3:
-      return spd_inverse_n<3>(A, first, inv);
-    case 4:
-      return spd_inverse_n<4>(A, first, inv);
-    case 5:
-      return spd_inverse_n<5>(A, first, inv);
-    default:
-      return spd_inverse_n<6>(A, first, inv);
-  }
+  with_size<Out::RowsAtCompileTime>(
+      n, [&]<int N>(std::integral_constant<int, N>) { spd_inverse_n<N>(A, first, inv); });
 }
 
 // max_i sum_j |A_ij| over the n x n block at first..first + n - 1; infinite when an entry is
@@ -759,26 +741,7 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f,
         }
         for (int j = 0; j < NF; ++j) rhs[j] = b[j];
       };
-      switch (nf) {
-        case 1:
-          accumulate(std::integral_constant<int, 1>{});
-          break;
-        case 2:
-          accumulate(std::integral_constant<int, 2>{});
-          break;
-        case 3:
-          accumulate(std::integral_constant<int, 3>{});
-          break;
-        case 4:
-          accumulate(std::integral_constant<int, 4>{});
-          break;
-        case 5:
-          accumulate(std::integral_constant<int, 5>{});
-          break;
-        default:
-          accumulate(std::integral_constant<int, kMaxFields>{});
-          break;
-      }
+      with_size<kMaxFields>(static_cast<int>(nf), accumulate);
       for (std::size_t j = 0; j < nf; ++j) {
         Taylor coef;
         if (cons[j]) {

@@ -112,7 +112,7 @@ struct TlsSettings {
   // orthonormal basis, at least cond_2) already meets max_condition keeps the bound, which saves
   // the 6 x 6 eigensolve that was a quarter of a 2D TLS step; the decisions are the same (the
   // bound is only used where it proves cond <= max_condition), the numbers reported are then
-  // upper bounds. The MPM runs use false (method_settings.cpp).
+  // upper bounds. The 2D MPM runs use false (method_settings.cpp).
   bool exact_condition = true;
 
   int gauss_points_used() const { return gauss_points > 0 ? gauss_points : 2; }

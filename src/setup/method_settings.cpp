@@ -24,9 +24,10 @@ TlsSettings tls_settings(const Config& cfg, int dim) {
   const std::string integrals = cfg.get_string("method.tls_cell_integrals");
   s.domain_integrals = integrals == "domains" || (integrals == "auto" && dim == 2);
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
-  // The summary's max_condition is an upper bound where a cheap bound proves the element well
-  // posed (TlsSettings::exact_condition; `mpm reconstruct` reports exact values).
-  s.exact_condition = false;
+  // 2D: the summary's max_condition is an upper bound where a cheap bound proves the element well
+  // posed (TlsSettings::exact_condition), which saves the 6 x 6 eigensolves; 1D keeps the exact
+  // values (3 x 3; `mpm reconstruct` reports exact values in both).
+  s.exact_condition = dim == 1;
   validate(s, dim);
   return s;
 }
