@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <string>
@@ -222,6 +223,50 @@ TEST(TlsReconstruction2D, ConservesElementIntegralsWithEveryCompletion) {
 // points (3 per face for the quadratic basis, 2 for the linear one) and borrowed points restore
 // the full basis, so the polynomial is reproduced there exactly; Reduce keeps the conserved mean
 // (one point) or the linear part (two points cannot support three terms: reduced to one).
+// fit_fields (what the MPM mapping calls: the fields of a mapping call in one pass over the
+// element data) gives each field what its own fit gives, to the bit: conservative, plain and
+// mixed fields together, with virtual points (fitted in the second pass from the neighbours'
+// coefficients of the same field) and neighbour points.
+TEST(TlsReconstruction2D, FieldsFittedTogetherEqualOneFitEach) {
+  const Grid<2> g(Vec<2>(-1.0, 0.0), Vec<2>(1.4, 2.0), IVec<2>{4, 4});
+  const auto x = scatter(g, {9, 0, 1, 2, 8, 3, 10, 7, 12, 5, 0, 9, 8, 4, 11, 6}, 11);
+  constexpr int nf = 4;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> f(x.size() * nf);
+  std::array<std::vector<double>, nf> fj, cj;
+  for (double& v : f) v = 2.0 + u(rng);
+  std::vector<unsigned char> flags(16);
+  for (std::size_t e = 0; e < 16; ++e) flags[e] = e % 3 == 0;
+  for (int j = 0; j < nf; ++j) {
+    for (std::size_t p = 0; p < x.size(); ++p) fj[j].push_back(f[p * nf + j]);
+    for (int e = 0; e < 16; ++e) cj[j].push_back(0.3 * (2.0 + u(rng)));
+  }
+  for (TlsCompletion mode : {TlsCompletion::Virtual, TlsCompletion::Neighbour}) {
+    SCOPED_TRACE(std::string(tls_completion_name(mode)));
+    TlsReconstruction2D r(settings(6, mode));
+    const TlsReport& rep = r.set_points(g, x);
+    EXPECT_GT(mode == TlsCompletion::Virtual ? rep.with_virtual : rep.with_neighbours, 0);
+    // Fields: conservative, plain, mixed, conservative.
+    std::array<TlsCoefficients2D, nf> together, alone;
+    const std::array<TlsReconstruction2D::Field, nf> fields{{
+        {cj[0].data(), nullptr, &together[0]},
+        {nullptr, nullptr, &together[1]},
+        {cj[2].data(), flags.data(), &together[2]},
+        {cj[3].data(), nullptr, &together[3]},
+    }};
+    r.fit_fields(f, fields);
+    r.fit_conservative(fj[0], cj[0], alone[0]);
+    r.fit_plain(fj[1], alone[1]);
+    r.fit_mixed(fj[2], cj[2], flags, alone[2]);
+    r.fit_conservative(fj[3], cj[3], alone[3]);
+    for (int j = 0; j < nf; ++j)
+      for (std::size_t e = 0; e < 16; ++e)
+        for (int k = 0; k < 6; ++k)
+          EXPECT_EQ(together[j][e][k], alone[j][e][k]) << "field " << j << ", element " << e;
+  }
+}
+
 TEST(TlsReconstruction2D, CompletionsRestoreTheFullBasis) {
   const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(3.0, 1.5), IVec<2>{3, 3});
   for (int own : {1, 2}) {
