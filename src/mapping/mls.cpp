@@ -54,6 +54,10 @@ template <int Dim>
 void MovingLeastSquares<Dim>::bin(const Grid<Dim>& g) {
   grid_ = g;
   outside_ = bins_.build(g, std::span<const Vec<Dim>>(x_));
+  // The positions in bin order: a row's candidates are then read contiguously (gather).
+  xb_.resize(bins_.order.size());
+  for (std::size_t k = 0; k < xb_.size(); ++k)
+    xb_[k] = x_[static_cast<std::size_t>(bins_.order[k])];
   report_ = {};
 }
 
@@ -74,8 +78,8 @@ inline void monomials(const Vec<Dim>& s, int degree, double* q) {
 // MLS with M terms: phi_p = w_p q(s_p)^T A^{-1} e_1 (p(x) = e_1 at s = 0; 001 eq. 14). Returns
 // cond(A); infinite when A is singular (phi untouched).
 template <int M, int Dim>
-double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, int degree,
-                 double singular, std::vector<double>& phi) {
+double mls_shape(const Vec<Dim>* s, const double* w, std::size_t n, int degree, double singular,
+                 double* phi) {
   using Mat = Eigen::Matrix<double, M, M>;
   using Vec = Eigen::Matrix<double, M, 1>;
   // 001 eq. 10, A = sum_p w_p q_p q_p^T: only the lower triangle, the part the symmetric
@@ -90,7 +94,7 @@ double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, i
     // row's time). Entry (i, j) of the lower triangle is (w q_i) q_j summed in point order,
     // the rounding of the generic loop (1 * x = x exactly), so the bits are unchanged.
     double a[M * (M + 1) / 2] = {};  // (0,0), (1,0), .., (M-1,0), (1,1), (2,1), .., (M-1,M-1)
-    for (std::size_t k = 0; k < s.size(); ++k) {
+    for (std::size_t k = 0; k < n; ++k) {
       const double wk = w[k];
       if constexpr (Dim == 1) {
         const double ws = wk * s[k][0];
@@ -112,7 +116,7 @@ double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, i
       for (int i = j; i < M; ++i) A(i, j) = a[l++];
   } else {
     // 001 eq. 10, A = sum_p w_p q_p q_p^T: the lower triangle, the part the eigensolver reads.
-    for (std::size_t k = 0; k < s.size(); ++k) {
+    for (std::size_t k = 0; k < n; ++k) {
       monomials<Dim>(s[k], degree, q.data());
       const Vec wq = w[k] * q;
       for (int j = 0; j < M; ++j)
@@ -130,13 +134,13 @@ double mls_shape(const std::vector<Vec<Dim>>& s, const std::vector<double>& w, i
   if constexpr (kLinear) {
     // q.dot(c) in Eigen's order for these sizes, (q_0 c_0 + q_1 c_1) + q_2 c_2, with q_0 = 1.
     const double c0 = c[0], c1 = c[1], c2 = Dim == 2 ? c[M - 1] : 0.0;
-    for (std::size_t k = 0; k < s.size(); ++k) {
+    for (std::size_t k = 0; k < n; ++k) {
       double v = c0 + s[k][0] * c1;
       if constexpr (Dim == 2) v += s[k][1] * c2;
       phi[k] = w[k] * v;
     }
   } else {
-    for (std::size_t k = 0; k < s.size(); ++k) {
+    for (std::size_t k = 0; k < n; ++k) {
       monomials<Dim>(s[k], degree, q.data());
       phi[k] = w[k] * q.dot(c);
     }
@@ -166,49 +170,88 @@ inline double weighted_dot(const double* w, const double* a, const double* b, st
 
 template <int Dim>
 void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight, Scratch& sc) const {
-  sc.near.clear();
-  sc.s.clear();
-  sc.w.clear();
-  // Cells overlapping the support box [x - R, x + R] per direction (clamped to the grid).
+  // Per direction: the support radius R, 1 / l for the scaled offsets s and 1 / (a l) for the
+  // weight's argument r (mls_weight), so that a candidate costs multiplications, no division.
   IVec<Dim> lo, hi;
+  Vec<Dim> inv_h, inv_r;
   for (int d = 0; d < Dim; ++d) {
     const double R = mls_support(weight, grid_.h[d], dilation_);
+    inv_h[d] = 1.0 / grid_.h[d];
+    inv_r[d] = weight == MlsWeight::QuadraticSpline ? 1.0 / (dilation_ * grid_.h[d]) : inv_h[d];
     const double top = static_cast<double>(grid_.cells[d] - 1);
     const auto cell = [&](double y) {
       return static_cast<Index>(
           std::clamp(std::floor((y - grid_.origin[d]) / grid_.h[d]), 0.0, top));
     };
+    // Cells overlapping the support box [x - R, x + R] (clamped to the grid).
     lo[d] = cell(x[d] - R);
     hi[d] = cell(x[d] + R);
   }
-  // Rows of cells along x are contiguous in the bins (x fastest): one range per row.
-  IVec<Dim> c = lo;
-  while (true) {
-    Index first = lo[0], stride = 1;
-    for (int d = 1; d < Dim; ++d) {
-      stride *= grid_.cells[d - 1];
-      first += c[d] * stride;
+  // Rows of cells along x are contiguous in the bins (x fastest): one range of bin positions
+  // [b, e) per row; f(b, e) for each row in order.
+  const auto for_each_range = [&](auto&& f) {
+    IVec<Dim> c = lo;
+    while (true) {
+      Index first = lo[0], stride = 1;
+      for (int d = 1; d < Dim; ++d) {
+        stride *= grid_.cells[d - 1];
+        first += c[d] * stride;
+      }
+      const Index last = first + (hi[0] - lo[0]);
+      f(static_cast<std::size_t>(bins_.start[static_cast<std::size_t>(first)]),
+        static_cast<std::size_t>(bins_.start[static_cast<std::size_t>(last + 1)]));
+      int d = 1;
+      for (; d < Dim; ++d) {
+        if (++c[d] <= hi[d]) break;
+        c[d] = lo[d];
+      }
+      if (d >= Dim) break;
     }
-    const Index last = first + (hi[0] - lo[0]);
-    const auto b = static_cast<std::size_t>(bins_.start[static_cast<std::size_t>(first)]);
-    const auto e = static_cast<std::size_t>(bins_.start[static_cast<std::size_t>(last + 1)]);
-    for (std::size_t k = b; k < e; ++k) {
-      const Index p = bins_.order[k];
-      const Vec<Dim> dx = x_[static_cast<std::size_t>(p)] - x;
-      double wp = 1.0;  // 001 eq. 16: tensor product of the 1D weights
-      for (int d = 0; d < Dim; ++d) wp *= mls_weight(weight, dx[d], grid_.h[d], dilation_);
-      if (!(wp > 0.0)) continue;
-      sc.near.push_back(p);
-      sc.s.push_back(dx.cwiseQuotient(grid_.h));
-      sc.w.push_back(wp);
-    }
-    int d = 1;
-    for (; d < Dim; ++d) {
-      if (++c[d] <= hi[d]) break;
-      c[d] = lo[d];
-    }
-    if (d >= Dim) break;
+  };
+  std::size_t candidates = 0;
+  for_each_range([&](std::size_t b, std::size_t e) { candidates += e - b; });
+  if (sc.near.size() < candidates) {
+    sc.near.resize(candidates);
+    sc.s.resize(candidates);
+    sc.w.resize(candidates);
   }
+  // Every candidate is written and kept when its weight is positive (no branch on the weight:
+  // the support's edge cells are partly inside, so such a branch is unpredictable). Raw
+  // pointers: through the vectors every store could alias their data pointers, which were
+  // then reloaded for each candidate.
+  Index* near = sc.near.data();
+  Vec<Dim>* s = sc.s.data();
+  double* w = sc.w.data();
+  const Vec<Dim>* xb = xb_.data();
+  const Index* order = bins_.order.data();
+  std::size_t n = 0;
+  const auto scan = [&]<MlsWeight kWeight>(std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      const Vec<Dim> dx = xb[k] - x;
+      double wp = 1.0;  // 001 eq. 16: tensor product of the 1D weights
+      for (int d = 0; d < Dim; ++d) {
+        const double r = std::abs(dx[d]) * inv_r[d];
+        if constexpr (kWeight == MlsWeight::Linear) {
+          wp *= std::max(1.0 - r, 0.0);
+        } else {  // 003 eq. 27 (mls_weight)
+          const double t = std::max(1.5 - r, 0.0);
+          wp *= r <= 0.5 ? 0.75 - r * r : 0.5 * t * t;
+        }
+      }
+      near[n] = order[k];
+      s[n] = dx.cwiseProduct(inv_h);
+      w[n] = wp;
+      n += wp > 0.0 ? 1 : 0;
+    }
+  };
+  if (weight == MlsWeight::Linear)
+    for_each_range(
+        [&](std::size_t b, std::size_t e) { scan.template operator()<MlsWeight::Linear>(b, e); });
+  else
+    for_each_range([&](std::size_t b, std::size_t e) {
+      scan.template operator()<MlsWeight::QuadraticSpline>(b, e);
+    });
+  sc.n = n;
 }
 
 template <int Dim>
@@ -221,45 +264,42 @@ template <int Dim>
 void MovingLeastSquares<Dim>::row(const Vec<Dim>& x, MlsWeight weight, bool widen, Scratch& sc,
                                   ShapeTable& t, MlsReport& rep) const {
   gather(x, weight, sc);
-  if (sc.near.empty() && widen && weight == MlsWeight::Linear) {
+  if (sc.n == 0 && widen && weight == MlsWeight::Linear) {
     gather(x, MlsWeight::QuadraticSpline, sc);
-    if (!sc.near.empty()) ++rep.widened;
+    if (sc.n > 0) ++rep.widened;
   }
   ++rep.points;
-  const std::size_t n = sc.near.size();
+  const std::size_t n = sc.n;
   const std::size_t row = t.point.size();
   if (n == 0) {
     ++rep.empty;
     t.start.push_back(row);
     return;
   }
-  t.point.insert(t.point.end(), sc.near.begin(), sc.near.end());
-  t.phi.resize(row + n);
-
+  const auto nn = static_cast<std::ptrdiff_t>(n);
+  if (sc.phi.size() < n) sc.phi.resize(n);
   if (improved_) {
-    imls_row(row, sc, t, rep);
-    t.start.push_back(row + n);
-    return;
+    imls_row(sc, rep);
+  } else {
+    constexpr int M1 = mls_terms(Dim, 1), M2 = mls_terms(Dim, 2);
+    const double cond =
+        degree_ == 1
+            ? mls_shape<M1, Dim>(sc.s.data(), sc.w.data(), n, degree_, kSingular, sc.phi.data())
+            : mls_shape<M2, Dim>(sc.s.data(), sc.w.data(), n, degree_, kSingular, sc.phi.data());
+    if (cond > rep.max_condition) {
+      rep.max_condition = cond;
+      rep.worst_x = x[0];
+      rep.worst_y = Dim > 1 ? x[Dim - 1] : 0.0;
+    }
+    if (!std::isfinite(cond)) {
+      ++rep.singular;
+      t.start.push_back(row);
+      return;
+    }
+    if (cond > max_condition_) ++rep.ill_conditioned;
   }
-  sc.p.resize(n);  // phi scratch
-  constexpr int M1 = mls_terms(Dim, 1), M2 = mls_terms(Dim, 2);
-  const double cond = degree_ == 1 ? mls_shape<M1, Dim>(sc.s, sc.w, degree_, kSingular, sc.p)
-                                   : mls_shape<M2, Dim>(sc.s, sc.w, degree_, kSingular, sc.p);
-  if (cond > rep.max_condition) {
-    rep.max_condition = cond;
-    rep.worst_x = x[0];
-    rep.worst_y = Dim > 1 ? x[Dim - 1] : 0.0;
-  }
-  if (!std::isfinite(cond)) {
-    ++rep.singular;
-    t.point.resize(row);
-    t.phi.resize(row);
-    t.start.push_back(row);
-    return;
-  }
-  if (cond > max_condition_) ++rep.ill_conditioned;
-  std::copy(sc.p.begin(), sc.p.begin() + static_cast<std::ptrdiff_t>(n),
-            t.phi.begin() + static_cast<std::ptrdiff_t>(row));
+  t.point.insert(t.point.end(), sc.near.begin(), sc.near.begin() + nn);
+  t.phi.insert(t.phi.end(), sc.phi.begin(), sc.phi.begin() + nn);
   t.start.push_back(row + n);
 }
 
@@ -269,10 +309,9 @@ void MovingLeastSquares<Dim>::row(const Vec<Dim>& x, MlsWeight weight, bool wide
 // (kMaxAmplification) are dropped, then phi_p = w_p sum_i p_i(x) p_i(x_p) / <p_i, p_i>
 // (eq. 11, 14).
 template <int Dim>
-void MovingLeastSquares<Dim>::imls_row(std::size_t row, Scratch& sc, ShapeTable& t,
-                                       MlsReport& rep) const {
+void MovingLeastSquares<Dim>::imls_row(Scratch& sc, MlsReport& rep) const {
   constexpr std::size_t S = kMaxTerms;  // stride of p
-  const std::size_t n = sc.near.size();
+  const std::size_t n = sc.n;
   const int m = terms_;
   const std::vector<double>& w = sc.w;
   std::vector<double>& p = sc.p;
@@ -308,7 +347,7 @@ void MovingLeastSquares<Dim>::imls_row(std::size_t row, Scratch& sc, ShapeTable&
   for (std::size_t k = 0; k < n; ++k) {
     double v = 0.0;
     for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) v += a[i] * p[S * k + i];
-    t.phi[row + k] = w[k] * v;
+    sc.phi[k] = w[k] * v;
   }
 }
 

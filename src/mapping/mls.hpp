@@ -233,10 +233,13 @@ class MovingLeastSquares {
   // Scratch of one evaluation point (no allocation once the capacity is reached); one per chunk
   // of add_rows, so that chunks can run concurrently.
   struct Scratch {
+    // The first n entries hold the points in the support (gather); the vectors only grow.
+    std::size_t n = 0;
     std::vector<Index> near;
     std::vector<Vec<Dim>> s;  // (x_p - x) / l per direction
     std::vector<double> w;
-    std::vector<double> p;  // p[kMaxTerms k + i]: monomial / orthogonal p_i at point k
+    std::vector<double> phi;  // the row's shape functions
+    std::vector<double> p;    // IMLS: p[kMaxTerms k + i]: monomial / orthogonal p_i at point k
   };
 
   // Points in the support of a weight centred in the body: the mean points per occupied cell
@@ -252,11 +255,12 @@ class MovingLeastSquares {
                : 0.0;
   }
   void bin(const Grid<Dim>& g);                                         // x_ into bins_
-  void gather(const Vec<Dim>& x, MlsWeight weight, Scratch& sc) const;  // near, s, w
+  void gather(const Vec<Dim>& x, MlsWeight weight, Scratch& sc) const;  // n, near, s, w
   // One row appended to t, counted in rep.
   void row(const Vec<Dim>& x, MlsWeight weight, bool widen, Scratch& sc, ShapeTable& t,
            MlsReport& rep) const;
-  void imls_row(std::size_t row, Scratch& sc, ShapeTable& t, MlsReport& rep) const;
+  // IMLS: the row's shape functions into sc.phi.
+  void imls_row(Scratch& sc, MlsReport& rep) const;
 
   bool improved_;
   int degree_;
@@ -265,6 +269,7 @@ class MovingLeastSquares {
   double dilation_;
   Grid<Dim> grid_;
   std::vector<Vec<Dim>> x_;
+  std::vector<Vec<Dim>> xb_;  // x_ in bin order (bins_.order)
   ElementBins<Dim> bins_;
   Index outside_ = 0;
   std::vector<Scratch> scratch_;  // scratch_[0]: add_row and evaluate; scratch_[c]: chunk c
