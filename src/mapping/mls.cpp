@@ -148,21 +148,19 @@ double mls_shape(const Vec<Dim>* s, const double* w, std::size_t n, int degree, 
   return lam[M - 1] / lam[0];
 }
 
-// sum_k w_k a_k b_k for columns a, b of a row-major table with stride S, in four partial sums
-// (k mod 4) added as (s0 + s1) + (s2 + s3). A single running sum makes the IMLS row
-// latency-bound (one dependent add per point, ~4 cycles, for ~300 points and 9 sums per row);
-// the grouping changes only the rounding.
-inline double weighted_dot(const double* w, const double* a, const double* b, std::size_t n,
-                           std::size_t S) {
+// sum_k w_k a_k b_k for columns a, b, in four partial sums (k mod 4) added as (s0 + s1) +
+// (s2 + s3). A single running sum makes the IMLS row latency-bound (one dependent add per point,
+// ~4 cycles, for ~300 points and 9 sums per row); the grouping changes only the rounding.
+inline double weighted_dot(const double* w, const double* a, const double* b, std::size_t n) {
   double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
   std::size_t k = 0;
   for (; k + 4 <= n; k += 4) {
-    s0 += w[k] * a[S * k] * b[S * k];
-    s1 += w[k + 1] * a[S * (k + 1)] * b[S * (k + 1)];
-    s2 += w[k + 2] * a[S * (k + 2)] * b[S * (k + 2)];
-    s3 += w[k + 3] * a[S * (k + 3)] * b[S * (k + 3)];
+    s0 += w[k] * a[k] * b[k];
+    s1 += w[k + 1] * a[k + 1] * b[k + 1];
+    s2 += w[k + 2] * a[k + 2] * b[k + 2];
+    s3 += w[k + 3] * a[k + 3] * b[k + 3];
   }
-  for (; k < n; ++k) s0 += w[k] * a[S * k] * b[S * k];
+  for (; k < n; ++k) s0 += w[k] * a[k] * b[k];
   return (s0 + s1) + (s2 + s3);
 }
 
@@ -310,27 +308,42 @@ void MovingLeastSquares<Dim>::row(const Vec<Dim>& x, MlsWeight weight, bool wide
 // (eq. 11, 14).
 template <int Dim>
 void MovingLeastSquares<Dim>::imls_row(Scratch& sc, MlsReport& rep) const {
-  constexpr std::size_t S = kMaxTerms;  // stride of p
+  constexpr std::size_t S = kMaxTerms;
   const std::size_t n = sc.n;
   const int m = terms_;
-  const std::vector<double>& w = sc.w;
-  std::vector<double>& p = sc.p;
-  p.resize(S * n);
-  for (std::size_t k = 0; k < n; ++k) monomials<Dim>(sc.s[k], degree_, &p[S * k]);
+  const double* w = sc.w.data();
+  // Column i (p_i at the row's points) is contiguous, p[n i + k], so that the inner products
+  // and the updates run over unit-stride data (vectorised); per point the operations are those
+  // of the point-major layout, so the rounding is the same.
+  if (sc.p.size() < S * n) sc.p.resize(S * n);
+  double* p = sc.p.data();
+  // The monomials (the order of monomials()), one column at a time.
+  const Vec<Dim>* sk = sc.s.data();
+  for (std::size_t k = 0; k < n; ++k) p[k] = 1.0;
+  for (int d = 0; d < Dim; ++d)
+    for (std::size_t k = 0; k < n; ++k) p[n * static_cast<std::size_t>(1 + d) + k] = sk[k][d];
+  if (degree_ == 2) {
+    std::size_t col = Dim + 1;
+    for (int i = 0; i < Dim; ++i)
+      for (int j = i; j < Dim; ++j, ++col)
+        for (std::size_t k = 0; k < n; ++k) p[n * col + k] = sk[k][i] * sk[k][j];
+  }
   double px[S] = {}, nrm[S] = {};
   bool keep[S] = {};
   int kept = 0;
   for (int i = 0; i < m; ++i) {
     const auto ii = static_cast<std::size_t>(i);
+    double* pi = p + n * ii;
     px[ii] = i == 0 ? 1.0 : 0.0;
     for (int pass = 0; pass < 2; ++pass)
       for (std::size_t j = 0; j < ii; ++j) {
         if (!keep[j]) continue;
-        const double c = weighted_dot(w.data(), &p[ii], &p[j], n, S) / nrm[j];
-        for (std::size_t k = 0; k < n; ++k) p[S * k + ii] -= c * p[S * k + j];
+        const double* pj = p + n * j;
+        const double c = weighted_dot(w, pi, pj, n) / nrm[j];
+        for (std::size_t k = 0; k < n; ++k) pi[k] -= c * pj[k];
         px[ii] -= c * px[j];
       }
-    const double nn = weighted_dot(w.data(), &p[ii], &p[ii], n, S);
+    const double nn = weighted_dot(w, pi, pi, n);
     nrm[ii] = nn;
     // Dropped when it vanishes (eq. 17) or when it would amplify the data at x too much:
     // |p_i(x)| > kMaxAmplification rms(p_i), rms(p_i)^2 = <p_i, p_i> / <p_1, p_1>.
@@ -344,11 +357,15 @@ void MovingLeastSquares<Dim>::imls_row(Scratch& sc, MlsReport& rep) const {
   double a[S] = {};
   for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i)
     if (keep[i]) a[i] = px[i] / nrm[i];
-  for (std::size_t k = 0; k < n; ++k) {
-    double v = 0.0;
-    for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) v += a[i] * p[S * k + i];
-    sc.phi[k] = w[k] * v;
+  // phi_k = w_k sum_i a_i p_i(s_k), the sum over i in order, one column at a time.
+  double* phi = sc.phi.data();
+  for (std::size_t k = 0; k < n; ++k) phi[k] = 0.0;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) {
+    const double ai = a[i];
+    const double* pi = p + n * i;
+    for (std::size_t k = 0; k < n; ++k) phi[k] += ai * pi[k];
   }
+  for (std::size_t k = 0; k < n; ++k) phi[k] *= w[k];
 }
 
 template <int Dim>

@@ -239,7 +239,7 @@ class MovingLeastSquares {
     std::vector<Vec<Dim>> s;  // (x_p - x) / l per direction
     std::vector<double> w;
     std::vector<double> phi;  // the row's shape functions
-    std::vector<double> p;    // IMLS: p[kMaxTerms k + i]: monomial / orthogonal p_i at point k
+    std::vector<double> p;    // IMLS: p[n i + k]: monomial / orthogonal p_i at point k
   };
 
   // Points in the support of a weight centred in the body: the mean points per occupied cell
