@@ -34,6 +34,27 @@
 
 namespace mpm {
 
+// Initial side of a particle's domain along d [m] (the file comment): V_p^0 in 1D and
+// h_d (V_p^0 / |cell|)^(1/Dim) otherwise. Shared by the GIMP and CPDI bases and by the TLS
+// mapping's particle domains (mapping/tls_mapping.cpp, the cpGIMP box).
+template <int Dim>
+double domain_initial_side(const Grid<Dim>& g, double volume0, int d) {
+  if constexpr (Dim == 1) {
+    return volume0;
+  } else if constexpr (Dim == 2) {
+    return g.h[d] * std::sqrt(volume0 / g.cell_volume());
+  } else {
+    return g.h[d] * std::pow(volume0 / g.cell_volume(), 1.0 / Dim);
+  }
+}
+
+// The cpGIMP side now, l_d = F_dd l0_d [m] (D eq. 2.63).
+template <int Dim>
+double cpgimp_side(const Grid<Dim>& g, const Particles<Dim>& P, Index p, int d) {
+  const auto i = static_cast<std::size_t>(p);
+  return P.F[i](d, d) * domain_initial_side(g, P.volume0[i], d);
+}
+
 namespace detail {
 
 // Nodes per direction in the GIMP and CPDI stencils.
@@ -144,12 +165,7 @@ class NodalDomainBasis {
   // Initial particle side length along direction d [m]: V_p^0 in 1D, h_d (V_p^0/|cell|)^(1/Dim)
   // in Dim > 1 (the domain is similar to the grid cell; see the file comment).
   double initial_length(const Particles<Dim>& P, Index p, int d) const {
-    const double v0 = P.volume0[static_cast<std::size_t>(p)];
-    if constexpr (Dim == 1) {
-      return v0;
-    } else {
-      return grid_.h[d] * std::pow(v0 / grid_.cell_volume(), 1.0 / Dim);
-    }
+    return domain_initial_side(grid_, P.volume0[static_cast<std::size_t>(p)], d);
   }
 
   // Matrix of the initial half-edge vectors convected by F (D eq. 2.64-2.65): column d is
@@ -227,11 +243,10 @@ class GimpBasis : public NodalDomainBasis<Dim> {
 
   // Side length of the particle domain along d [m] (D eq. 2.63: l_p).
   double length(const Particles<Dim>& P, Index p, int d) const {
-    const double l0 = this->initial_length(P, p, d);
     if constexpr (kSizeFromF) {
-      return P.F[static_cast<std::size_t>(p)](d, d) * l0;
+      return cpgimp_side(this->grid_, P, p, d);
     } else {
-      return l0;
+      return this->initial_length(P, p, d);
     }
   }
 

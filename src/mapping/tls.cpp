@@ -522,11 +522,24 @@ void BasicTlsReconstruction<Dim>::factorise(System& sys, const Matrix& D,
     }
     return;
   }
-  if (s_inv != nullptr)
-    sys.inv = l.asDiagonal() * (*s_inv) * l.asDiagonal();
-  else
+  if (s_inv == nullptr) {
     spd_inverse(D, 0, sys.terms, sys.inv);
-  spd_inverse(D, 1, sys.terms - 1, sys.inv_c);
+    spd_inverse(D, 1, sys.terms - 1, sys.inv_c);
+    return;
+  }
+  const Matrix& Si = *s_inv;
+  sys.inv = l.asDiagonal() * Si * l.asDiagonal();
+  // The block of terms 2..t from the same inverse: for S = [a b^T; b C], C^{-1} = Z - z z^T / w
+  // where S^{-1} = [w z^T; z Z] (the Schur complement of w in S^{-1}), in place of a second
+  // Cholesky factorisation. The subtraction loses at most about cond(S) eps, and s_inv is only
+  // given where the bound ||S||_inf ||S^{-1}||_inf (>= cond_2(S)) is within max_condition.
+  sys.inv_c.setZero();
+  const int tc = sys.terms - 1;
+  for (int i = 0; i < tc; ++i)
+    for (int j = 0; j <= i; ++j) {
+      const double v = (Si(i + 1, j + 1) - Si(i + 1, 0) * Si(0, j + 1) / Si(0, 0)) * l[i + 1];
+      sys.inv_c(i, j) = sys.inv_c(j, i) = v * l[j + 1];
+    }
 }
 
 template <int Dim>

@@ -634,7 +634,7 @@ class TlsMapping {
         integrals_[static_cast<std::size_t>(j) * ne + static_cast<std::size_t>(e)] =
             c[static_cast<std::size_t>(j)];
     };
-    if (split_.used) {
+    if (settings_.domain_integrals) {
       parallel_for(recon.num_elements(), [&](Index e) {
         const auto ei = static_cast<std::size_t>(e);
         sum(e, [&](auto&& add) {
@@ -721,7 +721,6 @@ class TlsMapping {
   QuadratureStore quad_;
   std::vector<double> values_, integrals_;  // per particle, per element
   struct DomainSplit {
-    bool used = false;               // the fractions below hold for this step's points
     std::vector<std::size_t> start;  // element e: entries start[e] .. start[e + 1]
     std::vector<Index> point;        // particle
     std::vector<double> fraction;    // of the particle's domain in e (sum over e: 1)

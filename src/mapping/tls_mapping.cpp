@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <string>
 
+#include "basis/gimp.hpp"
 #include "core/bytes.hpp"
 #include "mapping/tls.hpp"
 
@@ -87,8 +88,7 @@ void TlsMapping::apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficient
 // entries and order for any thread count.
 template <int Dim>
 void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstruction<Dim>& recon) {
-  split_.used = settings_.domain_integrals;
-  if (!split_.used) return;
+  if (!settings_.domain_integrals) return;
   const auto& P = sim.particles;
   const auto& g = recon.grid();
   const Index ne = recon.num_elements();
@@ -96,21 +96,17 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
   auto& list = split_.scratch;
   list.clear();
   list.reserve(bins.order.size() * (Dim == 1 ? 2 : 4));
+  Vec<Dim> inv_h;
+  for (int d = 0; d < Dim; ++d) inv_h[d] = 1.0 / g.h[d];
   for (Index e = 0; e < ne; ++e)
     for (const Index* it = bins.begin(e); it != bins.end(e); ++it) {
       const auto p = static_cast<std::size_t>(*it);
       std::array<double, Dim> lo{}, hi{};
       std::array<Index, Dim> c0{}, c1{};
       bool box = true;
-      // l0_d / h_d in Dim > 1: the domain is similar to the cell (gimp.hpp, initial_length).
-      const double ratio = P.volume0[p] / g.cell_volume();
-      const double similar = Dim == 1   ? 0.0
-                             : Dim == 2 ? std::sqrt(ratio)
-                                        : std::pow(ratio, 1.0 / Dim);
       for (int d = 0; d < Dim; ++d) {
-        const double l0 = Dim == 1 ? P.volume0[p] : g.h[d] * similar;
-        const double r = 0.5 * P.F[p](d, d) * l0 / g.h[d];  // half side in cell units
-        const double s = (P.x[p][d] - g.origin[d]) / g.h[d];
+        const double r = 0.5 * cpgimp_side(g, P, *it, d) * inv_h[d];  // half side in cells
+        const double s = (P.x[p][d] - g.origin[d]) * inv_h[d];
         const auto n = static_cast<double>(g.cells[d]);
         box = box && r > 0.0 && std::isfinite(r) && std::isfinite(s);
         if (!box) break;
