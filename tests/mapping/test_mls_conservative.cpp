@@ -7,29 +7,23 @@
 #include <string>
 #include <vector>
 
+#include "../support/examples.hpp"
 #include "driver/run.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {
 namespace {
 
-RunResult run_example(const std::string& example, std::vector<std::string> sets) {
-  sets.push_back("output.frames=0");
-  const auto r =
-      run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + example + ".toml", sets),
-          RunOptions{});
-  EXPECT_EQ(r.exit_code, 0) << example << ": " << r.failure;
-  return r;
-}
+using test::run_example_ok;
 
 TEST(MlsConservative, MassAndMomentumToRoundOffIn1D) {
   for (const char* mapping : {"method.mapping=mls", "method.mapping=imls"}) {
     SCOPED_TRACE(mapping);
     const std::vector<std::string> sets = {"grid.cells=16", mapping};
-    const auto plain = run_example("mms_1d", sets);
+    const auto plain = run_example_ok("mms_1d", sets);
     auto with = sets;
     with.push_back("method.mls_conservative=true");
-    const auto cons = run_example("mms_1d", with);
+    const auto cons = run_example_ok("mms_1d", with);
     // 001 / 003 as published: a relative mass error of several per cent in some step.
     EXPECT_GT(plain.diag.max_rel_mass_error, 1e-3);
     EXPECT_LT(cons.diag.max_rel_mass_error, 1e-13);
@@ -46,10 +40,10 @@ TEST(MlsConservative, FreeBodyIn2DConservesWhereTheDefinitionDoesNot) {
   const std::vector<std::string> sets = {"benchmark=vortex_2d", "grid.cells=16",
                                          "vortex.amplitude=0.1", "time.end=0.02",
                                          "method.mapping=mls"};
-  const auto plain = run_example("vortex_2d", sets);
+  const auto plain = run_example_ok("vortex_2d", sets);
   auto with = sets;
   with.push_back("method.mls_conservative=true");
-  const auto cons = run_example("vortex_2d", with);
+  const auto cons = run_example_ok("vortex_2d", with);
   EXPECT_GT(plain.diag.max_rel_mass_error, 1e-2);
   EXPECT_GT(plain.diag.max_rel_momentum_error, 1e-3);
   EXPECT_LT(cons.diag.max_rel_mass_error, 1e-13);

@@ -10,17 +10,14 @@
 #include <string>
 #include <vector>
 
+#include "../support/examples.hpp"
 #include "driver/run.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {
 namespace {
 
-RunResult run_example(const std::string& name, std::vector<std::string> sets) {
-  sets.push_back("output.frames=0");
-  return run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + name + ".toml", sets),
-             RunOptions{});
-}
+using test::run_example;
 
 // The large-deformation bar of D 5.4.1 at 1/100 of its amplitude (no particle changes cell up to
 // 80 cells), quadratic B-splines, consistent mass: D's element sums stall at a relative stress

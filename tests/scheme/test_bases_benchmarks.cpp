@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 
+#include "../support/examples.hpp"
 #include "app/study.hpp"
 #include "driver/run.hpp"
 #include "setup/config.hpp"
@@ -20,15 +21,9 @@
 namespace mpm {
 namespace {
 
-Config example(const std::string& name, const std::vector<std::string>& sets) {
-  return Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + name + ".toml", sets);
-}
+using test::example_config;
 
-RunResult run_example(const std::string& name, const std::vector<std::string>& sets) {
-  auto r = run(example(name, sets), RunOptions{});
-  EXPECT_EQ(r.exit_code, 0) << name << ": " << r.failure;
-  return r;
-}
+using test::run_example_ok;
 
 const std::vector<std::pair<std::string, int>> kBases = {
     {"linear", 1},  {"ugimp", 1},   {"cpgimp", 1},  {"cpdi", 1},    {"ddmpm", 1},
@@ -39,9 +34,10 @@ TEST(BasesInTheStep, EveryBasisRunsInEverySchemeAccurately) {
   for (const auto& [basis, degree] : kBases)
     for (const char* scheme : {"usl", "usf", "musl", "usavg"}) {
       SCOPED_TRACE(fmt::format("{} p={} {}", basis, degree, scheme));
-      const auto r = run_example("vibrating_bar_small", {"grid.cells=10", "method.basis=" + basis,
-                                                         fmt::format("method.degree={}", degree),
-                                                         fmt::format("method.scheme={}", scheme)});
+      const auto r =
+          run_example_ok("vibrating_bar_small", {"grid.cells=10", "method.basis=" + basis,
+                                                 fmt::format("method.degree={}", degree),
+                                                 fmt::format("method.scheme={}", scheme)});
       EXPECT_LT(*r.errors.displacement_rms, 0.1 * 0.28 * 1.9e-6);
       EXPECT_LT(r.diag.max_rel_mass_error, 1e-13);
       EXPECT_LT(r.diag.max_rel_momentum_error, 1e-13);
@@ -49,9 +45,9 @@ TEST(BasesInTheStep, EveryBasisRunsInEverySchemeAccurately) {
 }
 
 TEST(BasesInTheStep, BSplineDegreeOneEqualsLinear) {
-  const auto a = run_example("vibrating_bar_crossing", {"grid.cells=51"});
-  const auto b = run_example("vibrating_bar_crossing",
-                             {"grid.cells=51", "method.basis=bspline", "method.degree=1"});
+  const auto a = run_example_ok("vibrating_bar_crossing", {"grid.cells=51"});
+  const auto b = run_example_ok("vibrating_bar_crossing",
+                                {"grid.cells=51", "method.basis=bspline", "method.degree=1"});
   EXPECT_NEAR(*a.errors.stress_rms, *b.errors.stress_rms, 1e-9 * *a.errors.stress_rms);
   EXPECT_NEAR(*a.errors.displacement_rms, *b.errors.displacement_rms,
               1e-9 * *a.errors.displacement_rms);
@@ -60,8 +56,8 @@ TEST(BasesInTheStep, BSplineDegreeOneEqualsLinear) {
 // Total variation of the particle stress along the bar, and of the exact stress, from a run's
 // final state (the example writes CSV frames).
 TEST(BasesInTheStep, GridCrossingOscillationOfMpmIsRemovedByBsmpm) {
-  const auto mpm = run_example("vibrating_bar_crossing", {});
-  const auto bs = run_example("vibrating_bar_crossing", {"method.basis=bspline"});
+  const auto mpm = run_example_ok("vibrating_bar_crossing", {});
+  const auto bs = run_example_ok("vibrating_bar_crossing", {"method.basis=bspline"});
   EXPECT_GT(mpm.diag.grid_crossings, 500);  // particles do cross cells (D 3.4.2)
   // Published: MPM oscillates, BSMPM follows the exact solution (D Fig. 3.7).
   EXPECT_LT(*bs.errors.stress_rms, 0.1 * *mpm.errors.stress_rms);
@@ -76,9 +72,10 @@ TEST(BasesInTheStep, StressTotalVariationShowsTheOscillation) {
     RunOptions ro;
     ro.out_dir = (dir / basis).string();
     ro.quiet = true;
-    const auto r = run(example("vibrating_bar_crossing",
-                               {"method.basis=" + basis, "output.frames=1", "output.vtk=false"}),
-                       ro);
+    const auto r =
+        run(example_config("vibrating_bar_crossing",
+                           {"method.basis=" + basis, "output.frames=1", "output.vtk=false"}),
+            ro);
     EXPECT_EQ(r.exit_code, 0);
     std::ifstream f(dir / basis / "particles_00001.csv");
     std::string line;
@@ -110,8 +107,8 @@ TEST(BasesInTheStep, StressTotalVariationShowsTheOscillation) {
 }
 
 TEST(BasesInTheStep, BsmpmCutsTheColumnCompactionStressError) {
-  const auto mpm = run_example("column_compaction", {});
-  const auto bs = run_example("column_compaction", {"method.basis=bspline"});
+  const auto mpm = run_example_ok("column_compaction", {});
+  const auto bs = run_example_ok("column_compaction", {"method.basis=bspline"});
   // Published: a factor of 10 (D 5.4.2); measured 14.
   EXPECT_GT(*mpm.errors.stress_rel_l2 / *bs.errors.stress_rel_l2, 5.0);
   EXPECT_GT(mpm.diag.grid_crossings, 100);  // D: 180 crossings with MPM
@@ -124,8 +121,8 @@ TEST(BasesInTheStep, BsmpmLumpedBoundaryErrorOnSet2) {
   // ends and does not converge there; the interior (outside the first and last p cells) does.
   std::vector<RunResult> r;
   for (int cells : {10, 20, 40})
-    r.push_back(run_example("vibrating_bar_small",
-                            {fmt::format("grid.cells={}", cells), "method.basis=bspline"}));
+    r.push_back(run_example_ok("vibrating_bar_small",
+                               {fmt::format("grid.cells={}", cells), "method.basis=bspline"}));
   EXPECT_GT(*r[2].errors.velocity_rms_scheme_time, *r[0].errors.velocity_rms_scheme_time);
   EXPECT_GT(observed_order(*r[1].errors.stress_rms_interior, *r[2].errors.stress_rms_interior,
                            r[1].h, r[2].h),

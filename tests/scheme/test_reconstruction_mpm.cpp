@@ -9,6 +9,7 @@
 #include <cmath>
 #include <string>
 
+#include "../support/examples.hpp"
 #include "app/study.hpp"
 #include "driver/run.hpp"
 #include "setup/config.hpp"
@@ -16,12 +17,7 @@
 namespace mpm {
 namespace {
 
-RunResult run_example(const std::string& name, const std::vector<std::string>& sets) {
-  auto r = run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + name + ".toml", sets),
-               RunOptions{});
-  EXPECT_EQ(r.exit_code, 0) << name << ": " << r.failure;
-  return r;
-}
+using test::run_example_ok;
 
 TEST(ReconstructionMpm, EveryBasisSchemeAndMassWithTlsAndCubicSpline) {
   for (const char* mapping : {"tls", "cubic_spline"})
@@ -29,7 +25,7 @@ TEST(ReconstructionMpm, EveryBasisSchemeAndMassWithTlsAndCubicSpline) {
       for (const char* scheme : {"usl", "usf", "musl", "usavg"})
         for (const char* mass : {"lumped", "consistent"}) {
           SCOPED_TRACE(fmt::format("{} {} {} {}", mapping, basis, scheme, mass));
-          const auto r = run_example(
+          const auto r = run_example_ok(
               "vibrating_bar_small",
               {"grid.cells=10", fmt::format("method.basis={}", basis),
                fmt::format("method.mapping={}", mapping), fmt::format("method.scheme={}", scheme),
@@ -46,7 +42,7 @@ TEST(ReconstructionMpm, EveryBasisSchemeAndMassWithTlsAndCubicSpline) {
 TEST(ReconstructionMpm, CubicSplineConservesMassNearlyButNotMomentum) {
   // D Table 5.3 (40 cells, 12 PPC): mass 2.4e-12 (MPM), momentum 1.8e-6 to 3.7e-6.
   const auto r =
-      run_example("vibrating_bar_small", {"grid.cells=40", "method.mapping=cubic_spline"});
+      run_example_ok("vibrating_bar_small", {"grid.cells=40", "method.mapping=cubic_spline"});
   EXPECT_LT(r.diag.max_rel_mass_error, 1e-10);
   EXPECT_GT(r.diag.max_rel_momentum_error, 1e-7);
   EXPECT_LT(r.diag.max_rel_momentum_error, 1e-5);
@@ -56,9 +52,9 @@ TEST(ReconstructionMpm, BsmpmTlsConsistentMassIsThirdOrderWithoutBoundaryError) 
   // dt = 1e-8 s keeps the O(dt^2) start-up error of the velocity below the spatial error.
   std::vector<RunResult> r;
   for (int cells : {5, 10, 20})
-    r.push_back(run_example("vibrating_bar_small",
-                            {fmt::format("grid.cells={}", cells), "method.basis=bspline",
-                             "method.mapping=tls", "method.mass=consistent", "time.dt=1e-8"}));
+    r.push_back(run_example_ok("vibrating_bar_small",
+                               {fmt::format("grid.cells={}", cells), "method.basis=bspline",
+                                "method.mapping=tls", "method.mass=consistent", "time.dt=1e-8"}));
   for (std::size_t k = 1; k < r.size(); ++k) {
     SCOPED_TRACE(k);
     EXPECT_GT(observed_order(*r[k - 1].errors.displacement_rms, *r[k].errors.displacement_rms,
@@ -79,12 +75,12 @@ TEST(ReconstructionMpm, BsmpmTlsConsistentMassIsThirdOrderWithoutBoundaryError) 
 }
 
 TEST(ReconstructionMpm, ReconstructionsReduceTheLargeDeformationError) {
-  const auto mpm = run_example("vibrating_bar_large", {});
-  const auto tls = run_example("vibrating_bar_large", {"method.mapping=tls"});
-  const auto cs = run_example("vibrating_bar_large", {"method.mapping=cubic_spline"});
+  const auto mpm = run_example_ok("vibrating_bar_large", {});
+  const auto tls = run_example_ok("vibrating_bar_large", {"method.mapping=tls"});
+  const auto cs = run_example_ok("vibrating_bar_large", {"method.mapping=cubic_spline"});
   const auto bs_tls =
-      run_example("vibrating_bar_large",
-                  {"method.basis=bspline", "method.mapping=tls", "method.mass=consistent"});
+      run_example_ok("vibrating_bar_large",
+                     {"method.basis=bspline", "method.mapping=tls", "method.mass=consistent"});
   ASSERT_TRUE(mpm.errors.stress_rel_l2.has_value());  // against the ULFEM reference
   const double e = *mpm.errors.stress_rel_l2;
   // Measured: 4.9x (TLS), 5.7x (CS), 8.0x (BSMPM-TLS, consistent mass). Published: 9.9x
@@ -99,8 +95,8 @@ TEST(ReconstructionMpm, ReconstructionsReduceTheLargeDeformationError) {
 }
 
 TEST(ReconstructionMpm, TlsImprovesMpmOnTheColumn) {
-  const auto mpm = run_example("column_compaction", {});
-  const auto tls = run_example("column_compaction", {"method.mapping=tls"});
+  const auto mpm = run_example_ok("column_compaction", {});
+  const auto tls = run_example_ok("column_compaction", {"method.mapping=tls"});
   // Measured 4.7e-2 -> 9.1e-3.
   EXPECT_GT(*mpm.errors.stress_rel_l2 / *tls.errors.stress_rel_l2, 3.0);
   EXPECT_LT(tls.diag.max_rel_mass_error, 1e-12);  // D Table 5.7: 1.05e-12
@@ -168,8 +164,8 @@ TEST(ManufacturedSolution1D, ImlsKeepsSecondOrderWhereMpmDoesNotConverge) {
   auto series = [](const std::string& basis, const std::string& mapping) {
     std::vector<RunResult> r;
     for (int cells : {16, 32, 64})
-      r.push_back(run_example("mms_1d", {fmt::format("grid.cells={}", cells),
-                                         "method.basis=" + basis, "method.mapping=" + mapping}));
+      r.push_back(run_example_ok("mms_1d", {fmt::format("grid.cells={}", cells),
+                                            "method.basis=" + basis, "method.mapping=" + mapping}));
     return r;
   };
   const auto mpm = series("linear", "direct");
@@ -197,7 +193,7 @@ TEST(MlsInTheStep, BothMappingsRunInEverySchemeWithLinearAndBSplineBases) {
     for (const char* basis : {"linear", "bspline"})
       for (const char* scheme : {"usl", "usf", "musl", "usavg"}) {
         SCOPED_TRACE(fmt::format("{} {} {}", mapping, basis, scheme));
-        const auto r = run_example(
+        const auto r = run_example_ok(
             "vibrating_bar_small",
             {"grid.cells=10", fmt::format("method.basis={}", basis),
              fmt::format("method.mapping={}", mapping), fmt::format("method.scheme={}", scheme)});

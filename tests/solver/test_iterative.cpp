@@ -11,6 +11,7 @@
 #include <cmath>
 #include <unsupported/Eigen/KroneckerProduct>
 
+#include "../support/examples.hpp"
 #include "app/massmatrix.hpp"
 #include "driver/run.hpp"
 #include "setup/config.hpp"
@@ -244,10 +245,7 @@ TEST(Iterative, SmoothedErrorIsWhatTheCoarseLevelsCannotReach) {
 // tolerance (1D bar with cubic B-splines, 2D plate with quadratic ones and rollers, which solve
 // per component), and count their iterations; the run stops with exit code 11 and the residual
 // history when a solve does not converge; the combinations that cannot work are refused.
-RunResult run_with(const std::string& example, std::vector<std::string> sets) {
-  return run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + example + ".toml", sets),
-             RunOptions{});
-}
+using test::run_example;
 
 TEST(MassSolver, IterativeSolvesGiveTheDirectResults) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
@@ -257,12 +255,12 @@ TEST(MassSolver, IterativeSolvesGiveTheDirectResults) {
        {"method.basis=bspline", "method.degree=2", "method.mass=consistent", "grid.cells=8",
         "mms.amplitude=1e-4", "time.end=2e-4"}}};
   for (const auto& [example, sets] : cases) {
-    const RunResult direct = run_with(example, sets);
+    const RunResult direct = run_example(example, sets);
     ASSERT_EQ(direct.exit_code, 0) << direct.failure;
     for (const char* solver : {"cg", "pmg"}) {
       auto s = sets;
       s.push_back(std::string("method.mass_solver=") + solver);
-      const RunResult r = run_with(example, s);
+      const RunResult r = run_example(example, s);
       ASSERT_EQ(r.exit_code, 0) << solver << ": " << r.failure;
       EXPECT_GT(r.diag.mass_solver_iterations, 0) << solver;
       EXPECT_GT(r.diag.max_mass_solver_iterations, 0) << solver;
@@ -276,7 +274,7 @@ TEST(MassSolver, IterativeSolvesGiveTheDirectResults) {
 
 TEST(MassSolver, NonConvergenceStopsTheRun) {
   for (const char* solver : {"cg", "pmg"}) {
-    const RunResult r = run_with(
+    const RunResult r = run_example(
         "vibrating_bar_small",
         {"method.basis=bspline", "method.degree=3", "method.mass=consistent",
          std::string("method.mass_solver=") + solver, "method.mass_solver_max_iterations=1"});
@@ -295,9 +293,9 @@ TEST(MassSolver, SingularParticleMatrixStopsEverySolver) {
        {std::pair{"direct", exit_code::kNonFinite}, std::pair{"cg", exit_code::kSolver},
         std::pair{"pmg", exit_code::kSolver}}) {
     const RunResult r =
-        run_with("vibrating_bar_small",
-                 {"particles.per_cell=1", "method.basis=bspline", "method.degree=3",
-                  "method.mass=consistent", std::string("method.mass_solver=") + solver});
+        run_example("vibrating_bar_small",
+                    {"particles.per_cell=1", "method.basis=bspline", "method.degree=3",
+                     "method.mass=consistent", std::string("method.mass_solver=") + solver});
     EXPECT_EQ(r.exit_code, code) << solver << ": " << r.failure;
   }
 }
@@ -305,7 +303,7 @@ TEST(MassSolver, SingularParticleMatrixStopsEverySolver) {
 TEST(MassSolver, InputsAreRefused) {
   auto error = [](std::vector<std::string> sets) {
     try {
-      (void)run_with("vibrating_bar_small", std::move(sets));
+      (void)run_example("vibrating_bar_small", std::move(sets));
     } catch (const InputError& e) {
       return std::string(e.what());
     }
