@@ -55,14 +55,26 @@ struct Grid {
     }
     return true;
   }
-  // Linear cell index (x fastest).
+  // Linear cell index (x fastest) of the cell containing x.
   Index cell_index(const Vec<Dim>& x) const {
+    IVec<Dim> c;
+    for (int d = 0; d < Dim; ++d) c[d] = cell_of(x[d], d);
+    return cell_index(c);
+  }
+  // Linear index of the cell with integer coordinates c (x fastest), and whether c is a cell of
+  // the grid.
+  Index cell_index(const IVec<Dim>& c) const {
     Index idx = 0, stride = 1;
     for (int d = 0; d < Dim; ++d) {
-      idx += cell_of(x[d], d) * stride;
+      idx += c[d] * stride;
       stride *= cells[d];
     }
     return idx;
+  }
+  bool has_cell(const IVec<Dim>& c) const {
+    for (int d = 0; d < Dim; ++d)
+      if (c[d] < 0 || c[d] >= cells[d]) return false;
+    return true;
   }
 
   // The mesh interface (grid/mesh.hpp): vertices x fastest, (cells[d] + 1) per direction.

@@ -190,11 +190,7 @@ void MovingLeastSquares<Dim>::gather(const Vec<Dim>& x, MlsWeight weight, Scratc
   const auto for_each_range = [&](auto&& f) {
     IVec<Dim> c = lo;
     while (true) {
-      Index first = lo[0], stride = 1;
-      for (int d = 1; d < Dim; ++d) {
-        stride *= grid_.cells[d - 1];
-        first += c[d] * stride;
-      }
+      const Index first = grid_.cell_index(c);  // c[0] stays lo[0]
       const Index last = first + (hi[0] - lo[0]);
       f(static_cast<std::size_t>(bins_.start[static_cast<std::size_t>(first)]),
         static_cast<std::size_t>(bins_.start[static_cast<std::size_t>(last + 1)]));

@@ -287,15 +287,10 @@ void BasicTlsReconstruction<Dim>::bin_points(bool share_face_points) {
         l[d] = c[d] - 1;
     }
     for (int mask = 0; mask < (1 << Dim); ++mask) {
-      Index e = 0, stride = 1;
-      bool exists = true;
-      for (int d = 0; d < Dim; ++d) {
-        const bool lower = (mask >> d) & 1;
-        exists = exists && (!lower || l[d] >= 0);
-        e += (lower ? l[d] : c[d]) * stride;
-        stride *= grid_.cells[d];
-      }
-      if (exists) owner(e);
+      IVec<Dim> o = c;
+      for (int d = 0; d < Dim; ++d)
+        if ((mask >> d) & 1) o[d] = l[d];
+      if (grid_.has_cell(o)) owner(grid_.cell_index(o));
     }
     return true;
   };
@@ -452,14 +447,7 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
         IVec<Dim> nc = c;
         nc[0] += dx0;
         if constexpr (Dim == 2) nc[1] += dy;
-        bool inside = true;
-        Index n = 0, stride = 1;
-        for (int d = 0; d < Dim; ++d) {
-          inside = inside && nc[d] >= 0 && nc[d] < grid_.cells[d];
-          n += nc[d] * stride;
-          stride *= grid_.cells[d];
-        }
-        if (inside) nbrs[static_cast<std::size_t>(count++)] = n;
+        if (grid_.has_cell(nc)) nbrs[static_cast<std::size_t>(count++)] = grid_.cell_index(nc);
       }
     double last_d = -1.0;
     Index last_p = -1;

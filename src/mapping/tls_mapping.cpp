@@ -20,22 +20,16 @@ void TlsMapping::mark_surface(TlsMappingState<Dim>& st) {
   const auto& recon = st.recon;
   const Index ne = recon.num_elements();
   st.surface.assign(static_cast<std::size_t>(ne), 0);
-  const auto& cells = recon.grid().cells;
+  const auto& grid = recon.grid();
   int around = 1;
   for (int d = 0; d < Dim; ++d) around *= 3;
   parallel_for(ne, [&](Index e) {
     if (!recon.active(e)) return;
     const IVec<Dim> c = recon.cell(e);
     for (int k = 0; k < around; ++k) {
-      Index n = 0, stride = 1;
-      bool inside = true;
-      for (int d = 0, r = k; d < Dim; ++d, r /= 3) {
-        const Index cd = c[d] + r % 3 - 1;
-        inside = inside && cd >= 0 && cd < cells[d];
-        n += cd * stride;
-        stride *= cells[d];
-      }
-      if (inside && !recon.active(n)) {
+      IVec<Dim> n = c;
+      for (int d = 0, r = k; d < Dim; ++d, r /= 3) n[d] += r % 3 - 1;
+      if (grid.has_cell(n) && !recon.active(grid.cell_index(n))) {
         st.surface[static_cast<std::size_t>(e)] = 1;
         return;
       }
@@ -102,7 +96,7 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
     for (const Index* it = bins.begin(e); it != bins.end(e); ++it) {
       const auto p = static_cast<std::size_t>(*it);
       std::array<double, Dim> lo{}, hi{};
-      std::array<Index, Dim> c0{}, c1{};
+      IVec<Dim> c0{}, c1{};
       bool box = true;
       for (int d = 0; d < Dim; ++d) {
         const double r = 0.5 * cpgimp_side(g, P, *it, d) * inv_h[d];  // half side in cells
@@ -122,16 +116,13 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
       const std::size_t first = list.size();
       double total = 0.0;
       if (box) {
-        std::array<Index, Dim> c = c0;
+        IVec<Dim> c = c0;
         while (true) {
           double overlap = 1.0;
-          Index n = 0, stride = 1;
-          for (int d = 0; d < Dim; ++d) {
+          for (int d = 0; d < Dim; ++d)
             overlap *= std::max(0.0, std::min(hi[d], static_cast<double>(c[d] + 1)) -
                                          std::max(lo[d], static_cast<double>(c[d])));
-            n += c[d] * stride;
-            stride *= g.cells[d];
-          }
+          const Index n = g.cell_index(c);
           if (overlap > 0.0 && recon.active(n)) {
             list.push_back({n, {*it, overlap}});
             total += overlap;
