@@ -143,10 +143,14 @@ void after_mass(RunState<Dim>& sim) {
           exit_code::kConservation,
           fmt::format("step {}, t = {:.9g} s: the particle-to-grid mapping does not conserve "
                       "mass: the grid holds {:.9g}, the particles {:.9g} (relative error {:.3g}, "
-                      "above method.conservation_limit = {:.3g}); the mapping's support does not "
-                      "cover the particles (for MLS/IMLS, is method.mls_dilation too small?)",
+                      "above method.conservation_limit = {:.3g}); {}",
                       sim.step, sim.time, total, particle_mass, sim.diag.rel_mass_error,
-                      sim.conservation_limit));
+                      sim.conservation_limit,
+                      total < particle_mass
+                          ? "the mapping's support does not cover the particles (for MLS/IMLS, "
+                            "is method.mls_dilation too small?)"
+                          : "the reconstruction integrates to more mass than the particles "
+                            "carry (for MLS/IMLS, method.mls_conservative = true rescales it)"));
   }
   const double threshold = sim.mass_tolerance * largest;
   parallel_for(static_cast<Index>(m.size()), [&](Index k) {
