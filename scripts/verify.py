@@ -2630,32 +2630,49 @@ unchanged: `traction_bar` and `custom_bar` write bitwise the same particle frame
 STATIC_LONG = """### The published convergence set-up of 001 (Figs. 2-4): not reproduced, the runs break down
 
 `build/mpm study examples/plate_mms_2d.toml --refine grid.cells=8,16,32,64 --set time.end=0.2
---methods "linear/direct, bspline2/direct, bspline2/tls, linear/tls, bspline2/mls"`: A = 0.1 m,
-9 particles per cell, dt = 1e-5 s, T = 0.2 s (20,000 steps), MUSL, lumped mass. These runs take
-up to hours each, so they are **not part of the default report**: the numbers below are from
-single runs of the sessions of 2026-11-21 and 2026-11-22; regenerate the study with
-`scripts/verify.py --long` (appends the raw study table below; several hours on 2 cores).
+--methods "linear/direct, bspline2/direct, bspline2/tls, linear/tls, bspline2/mls"` and the same
+with `--methods bspline2/imls`: A = 0.1 m, 9 particles per cell, dt = 1e-5 s, T = 0.2 s (20,000
+steps), MUSL, lumped mass, every default (TLS: the 2D defaults of issue 22, domain integrals,
+`tls_max_condition` 10, virtual completion). These runs take up to ten minutes each, so they
+are **not part of the default report**: the numbers below are from the runs of 2026-11-26
+(92a7461, one thread per run, two studies side by side with other work on 2 cores: 2,790 s
+of CPU time for the 24 runs, 3,030 s of run time); regenerate the study with
+`scripts/verify.py --long` (appends the raw study table below).
 
 | cells | P1 u [m] | P1 sigma [Pa] | BSMPM u [m] | BSMPM v [m/s] | BSMPM sigma [Pa] |
 |---|---|---|---|---|---|
 | 8 | 1.65e-2 | 5.32e6 | 1.33e-1 | 190 | 2.54e8 |
-| 16 | 1.27e-1 | 8.08e7 | 3.85e-3 | 11.7 | 1.58e6 |
-| 32 | 3.19e-1 | 3.09e11 | 2.03e-3 | 10.5 | 1.57e6 |
-| 64 | 4.02e-1 | 3.35e12 | non-finite stress at step 14,423 (t = 0.144 s) | | |
+| 16 | 1.00e-1 | 2.94e8 | 3.85e-3 | 11.7 | 1.58e6 |
+| 32 | 4.67e-1 | 2.27e12 | 2.03e-3 | 10.5 | 1.57e6 |
+| 64 | 4.12e-1 | 1.08e12 | non-finite stress at step 14,798 (t = 0.148 s) | | |
 
-The reconstruction variants stop before T on every grid run (step, time):
+The reconstruction variants stop before T on every grid (step, time). MLS and IMLS stop because
+the grid's mass departs from the particles' by more than `method.conservation_limit` (0.5,
+exit code 9); TLS stops with a non-finite stress:
 
-| cells | BSMPM+MLS (001) | BSMPM+IMLS (003) | BSMPM+TLS, MPM+TLS |
-|---|---|---|---|
-| 8 | 2,772 (0.028 s) | 1,940 (0.019 s) | 260-780 steps |
-| 16 | 4,989 (0.050 s) | 3,167 (0.032 s) | 260-780 steps |
-| 32 | 6,851 (0.069 s) | not run | 260-780 steps |
+| cells | BSMPM+MLS (001) | BSMPM+IMLS (003) | BSMPM+TLS | MPM+TLS |
+|---|---|---|---|---|
+| 8 | 643 (0.006 s) | 622 (0.006 s) | 14,398 (0.144 s) | 19,000 (0.190 s) |
+| 16 | 4,472 (0.045 s) | 3,055 (0.031 s) | 17,496 (0.175 s) | 9,599 (0.096 s) |
+| 32 | 6,485 (0.065 s) | 4,762 (0.048 s) | 10,825 (0.108 s) | 7,472 (0.075 s) |
+| 64 | 13,707 (0.137 s) | 6,544 (0.065 s) | 7,374 (0.074 s) | 4,812 (0.048 s) |
+
+On 2026-11-21/22 (before the conservation limit and the robust TLS of issue 22) MLS ran on to
+steps 2,772 / 4,989 / 6,851 on 8 / 16 / 32 cells (on 16 cells with a relative mass error that
+reached 16 before the stress turned non-finite, diagnosis below), IMLS to 1,940 / 3,167, and
+every TLS run stopped within 260-780 steps. TLS with the 2D defaults now runs 6-70x
+longer (P1-TLS on 8 cells to t = 0.19 s of 0.2) but reaches T on no grid. Conservative MLS
+(`method.mls_conservative = true`, mass and momentum to round-off) stops with a non-finite
+stress instead, at step 2,101 on 8 cells and 3,907 on 16 (32 and 64 cells not run). The P1 and BSMPM
+errors differ from those of 2026-11-21 on 16-64 cells (P1 sigma 2.94e8 against 8.08e7 on 16
+cells; the BSMPM breakdown at step 14,798 against 14,423); P1's errors there exceed the
+amplitude, and the difference was not traced.
 
 Published (001 Figs. 2-4): MPM does not converge, BSMPM is far more accurate but stalls on fine
 grids, BSMPM+MLS keeps converging. Reproduced: P1 MPM does not converge (its errors grow with
 refinement and exceed the amplitude); BSMPM is far more accurate on 16 and 32 cells and
 converges slowly. Not reproduced: BSMPM breaks down on 64 cells, and BSMPM+MLS breaks down on
-8, 16 and 32 cells instead of converging. The same code converges at the expected orders at
+every grid instead of converging. The same code converges at the expected orders at
 small amplitude (above), so the body force, the rollers and the mappings are right where the
 deformation is small.
 
