@@ -56,7 +56,7 @@ void print_mesh_summary(std::ostream& os, const TriangleMesh& m, const MeshQuali
   os << "  boundaries (\"x-\", \"x+\", \"y-\", \"y+\": the boundary edges on the sides of the "
         "bounding box, where the conditions of a run act (boundary.left, right, bottom, top; "
         "the plate's rollers); the others: the file's physical groups of lines (boundary.fixed, "
-        "boundary.roller):\n";
+        "boundary.roller, boundary.loaded):\n";
   for (const auto& name : names) {
     const auto& b = m.boundary(name);
     double length = 0.0;

@@ -146,9 +146,20 @@ std::vector<std::string> names_of(const Config& cfg, const char* key) {
   return out;
 }
 
+// InputError naming `key` and the mesh's boundaries when the mesh has no boundary `name`.
+void check_boundary_name(const TriangleMesh& mesh, const Config& cfg, const std::string& name,
+                         const char* key) {
+  if (mesh.has_boundary(name)) return;
+  std::string list;
+  for (const auto& n : mesh.boundary_names()) list += (list.empty() ? "\"" : ", \"") + n + "\"";
+  throw InputError(fmt::format("{}: {}: {} has no boundary \"{}\"; its boundaries: {}",
+                               cfg.where(key), key, mesh.source(), name,
+                               list.empty() ? std::string("none") : list));
+}
+
 // Conditions on the named boundaries of a mesh file (its physical groups of lines):
 // boundary.fixed (every component) and boundary.roller (the normal component of a boundary on
-// one straight line parallel to x or y; the grid constraints act per component).
+// one straight line: per component where it is parallel to x or y, else v . n = 0).
 void named_boundaries(Problem<2>& pb, const Config& cfg) {
   const auto fixed = names_of(cfg, "boundary.fixed"), roller = names_of(cfg, "boundary.roller");
   if (fixed.empty() && roller.empty()) return;
@@ -159,14 +170,7 @@ void named_boundaries(Problem<2>& pb, const Config& cfg) {
         "boundary.left, right, bottom, top",
         cfg.where(first_key), first_key));
   auto check = [&](const std::string& name, const char* key) {
-    if (!pb.mesh->has_boundary(name)) {
-      std::string list;
-      for (const auto& n : pb.mesh->boundary_names())
-        list += (list.empty() ? "\"" : ", \"") + n + "\"";
-      throw InputError(fmt::format("{}: {}: {} has no boundary \"{}\"; its boundaries: {}",
-                                   cfg.where(key), key, pb.mesh->source(), name,
-                                   list.empty() ? std::string("none") : list));
-    }
+    check_boundary_name(*pb.mesh, cfg, name, key);
   };
   for (const auto& name : fixed) {
     check(name, "boundary.fixed");
@@ -187,14 +191,116 @@ void named_boundaries(Problem<2>& pb, const Config& cfg) {
           cfg.where("boundary.roller"), name, pb.mesh->source()));
     const Vec<2>& n = line->normal;
     const int d = std::abs(n[0]) > 1.0 - 1e-12 ? 0 : std::abs(n[1]) > 1.0 - 1e-12 ? 1 : -1;
-    if (d < 0)
-      throw InputError(fmt::format(
-          "{}: boundary.roller: boundary \"{}\" of {} is inclined (normal ({:.6g}, {:.6g})); "
-          "rollers act on one velocity component, so they need a boundary parallel to x or y "
-          "(along an inclined one: not yet); use boundary.fixed",
-          cfg.where("boundary.roller"), name, pb.mesh->source(), n[0], n[1]));
-    pb.fixed_sides.push_back({d, 0, 1u << d, name});
+    if (d >= 0)
+      pb.fixed_sides.push_back({d, 0, 1u << d, name});
+    else  // inclined: v . n = 0, which couples the components (GridState::projected)
+      pb.fixed_sides.push_back({0, 0, 0u, name, {n[0], n[1], 0.0}});
   }
+}
+
+// Loads on the named boundaries of a mesh file (boundary.loaded): the nominal traction
+// traction.loaded and the pressure pressure.loaded (along the inward reference normal of each
+// edge), functions of t only, as dead loads through the particles (model/loads.hpp). Each
+// boundary edge gets q points at the midpoints of q equal pieces, q the edge length over the
+// mean particle spacing of its triangle (sqrt(area / particles), at least 1); each point rides on
+// the nearest particle of that triangle and carries the length of its piece.
+void named_loads(Problem<2>& pb, const Config& cfg) {
+  const auto names = names_of(cfg, "boundary.loaded");
+  const bool traction = !is_zero(cfg, "traction.loaded");
+  const Expression p = cfg.get_expression("pressure.loaded");
+  const bool pressure = p.text() != "0";
+  if (names.empty()) {
+    if (traction || pressure)
+      throw InputError(
+          fmt::format("{}: {} loads the boundaries that boundary.loaded names, and it names none",
+                      cfg.where(traction ? "traction.loaded" : "pressure.loaded"),
+                      traction ? "traction.loaded" : "pressure.loaded"));
+    return;
+  }
+  if (!pb.mesh)
+    throw InputError(fmt::format(
+        "{}: boundary.loaded names boundaries of a mesh file (grid.mesh); without one the body's "
+        "faces take traction.left, right, bottom, top",
+        cfg.where("boundary.loaded")));
+  if (!traction && !pressure)
+    throw InputError(
+        fmt::format("{}: boundary.loaded names boundaries, but traction.loaded and "
+                    "pressure.loaded are both zero; give the load or leave boundary.loaded out",
+                    cfg.where("boundary.loaded")));
+  auto tau = expressions(cfg, "traction.loaded", 2, kComponents[2]);
+  for (const auto& e : tau)
+    if (e.uses_position())
+      throw InputError(
+          fmt::format("{}: key 'traction.loaded': the traction \"{}\" may depend on "
+                      "t only, not on x, y or z (uniform over the boundary)",
+                      cfg.where("traction.loaded"), e.text()));
+  if (p.uses_position())
+    throw InputError(
+        fmt::format("{}: key 'pressure.loaded': the pressure \"{}\" may depend on t "
+                    "only, not on x, y or z (uniform over the boundary)",
+                    cfg.where("pressure.loaded"), p.text()));
+  const TriangleMesh& mesh = *pb.mesh;
+  const auto& P = pb.particles;
+  // The particles of each triangle, by reference position.
+  std::vector<std::vector<Index>> in_cell(static_cast<std::size_t>(mesh.num_cells()));
+  for (Index k = 0; k < P.size(); ++k) {
+    const Index c = mesh.cell_index(P.x0[static_cast<std::size_t>(k)]);
+    if (c >= 0) in_cell[static_cast<std::size_t>(c)].push_back(k);
+  }
+  std::vector<std::vector<Index>> cells_of(static_cast<std::size_t>(mesh.num_vertices()));
+  for (Index c = 0; c < mesh.num_cells(); ++c)
+    for (Index v : mesh.cell_vertices(c)) cells_of[static_cast<std::size_t>(v)].push_back(c);
+  Traction<2> tr;
+  tr.value = [tau](double t) { return vector_from<2>(tau, 0.0, 0.0, t); };
+  if (pressure) tr.pressure = [p](double t) { return p(0.0, 0.0, 0.0, t); };
+  for (const auto& name : names) {
+    check_boundary_name(mesh, cfg, name, "boundary.loaded");
+    for (const auto& e : mesh.boundary(name).edges) {
+      const Vec<2> a = mesh.vertex(e[0]), b = mesh.vertex(e[1]);
+      Index cell = -1;  // the triangle holding the edge (one: it is a boundary edge)
+      for (Index c : cells_of[static_cast<std::size_t>(e[0])]) {
+        const auto& t = mesh.cell_vertices(c);
+        if (std::find(t.begin(), t.end(), e[1]) != t.end()) cell = c;
+      }
+      if (cell < 0) continue;  // (TriangleMesh checks that boundary edges are mesh edges)
+      const auto& own = in_cell[static_cast<std::size_t>(cell)];
+      if (own.empty())
+        throw InputError(fmt::format(
+            "{}: boundary.loaded: the triangle of {} next to the edge ({:.6g}, {:.6g}) - "
+            "({:.6g}, {:.6g}) of boundary \"{}\" holds no particle; a loaded boundary needs "
+            "the body along it (seed it with particles.per_triangle, or move body.min, "
+            "body.max)",
+            cfg.where("boundary.loaded"), mesh.source(), a[0], a[1], b[0], b[1], name));
+      const double length = (b - a).norm();
+      Vec<2> n(b[1] - a[1], a[0] - b[0]);  // (b - a) turned clockwise, then made outward
+      n /= length;
+      Vec<2> third = Vec<2>::Zero();
+      for (Index v : mesh.cell_vertices(cell)) third += mesh.vertex(v);
+      third -= a + b;
+      if (n.dot(third - a) > 0.0) n = -n;
+      const double spacing = std::sqrt(mesh.cell_volume(cell) / static_cast<double>(own.size()));
+      const auto q = std::max<long long>(1, std::llround(length / spacing));
+      for (long long j = 0; j < q; ++j) {
+        const Vec<2> X = a + ((static_cast<double>(j) + 0.5) / static_cast<double>(q)) * (b - a);
+        // The nearest particle; among those as near to round-off, the first (so that a turned
+        // copy of the mesh picks the same one).
+        auto d2 = [&](Index k) { return (P.x0[static_cast<std::size_t>(k)] - X).squaredNorm(); };
+        double nearest = d2(own[0]);
+        for (Index k : own) nearest = std::min(nearest, d2(k));
+        Index host = own[0];
+        for (Index k : own)
+          if (d2(k) <= nearest * (1.0 + 1e-9)) {
+            host = k;
+            break;
+          }
+        tr.particles.push_back(host);
+        tr.area.push_back(length / static_cast<double>(q));
+        tr.offset.push_back(X - P.x0[static_cast<std::size_t>(host)]);
+        tr.normal.push_back(n);
+      }
+    }
+  }
+  pb.tractions.push_back(std::move(tr));
 }
 
 // The exact solution of exact.*: none when all three keys are "0" (their default); otherwise a
@@ -385,6 +491,7 @@ Problem<2> make_custom_2d(const Config& cfg) {
 
   sides_from_config<2>(pb, cfg, b0, b1, per_cell);
   named_boundaries(pb, cfg);
+  named_loads(pb, cfg);
   pb.exact = exact_from_config<2>(cfg);
   return pb;
 }

@@ -96,7 +96,9 @@ Traction<Dim> body_face_traction(const Grid<Dim>& g, const Particles<Dim>& P, co
     if (std::abs(P.x0[static_cast<std::size_t>(p)][direction] - face) < spacing[direction]) {
       tr.particles.push_back(p);
       tr.area.push_back(area);
-      tr.half_width.push_back(0.5 * spacing[direction]);
+      Vec<Dim> offset = Vec<Dim>::Zero();
+      offset[direction] = side * (0.5 * spacing[direction]);
+      tr.offset.push_back(offset);
     }
   return tr;
 }
@@ -265,7 +267,10 @@ Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo,
         "{}: particles.per_triangle = {} seeds the triangles of method.basis = \"p1_triangles\" "
         "or \"powell_sabin\", not of \"{}\" (use particles.per_cell, or 0 here)",
         cfg.where("particles.per_triangle"), per_triangle, basis));
-  if (lo != g.origin || hi != g.upper())
+  // (To round-off: the grid's upper corner is origin + cells h, which need not give back the
+  // box of a mesh file bit for bit.)
+  const double tol = 1e-9 * (g.upper() - g.origin).norm();
+  if ((lo - g.origin).cwiseAbs().maxCoeff() > tol || (hi - g.upper()).cwiseAbs().maxCoeff() > tol)
     throw InputError(fmt::format(
         "{}: particles.per_triangle fills whole triangles, so the body must be the grid "
         "(body.min = grid.min and body.max = grid.max); use particles.per_cell for a body that "
@@ -341,11 +346,21 @@ AnyProblem make_problem(const Config& cfg) {
         std::holds_alternative<Problem<1>>(pb) ? " in 1D" : ""));
   // boundary.fixed / roller name the boundaries of a mesh file in the 2D custom problem, which
   // reads them; every other problem fixes its own.
-  for (const char* key : {"boundary.fixed", "boundary.roller"})
-    if (!cfg.get_string(key).empty() && !(meshed && cfg.get_string("benchmark") == "custom"))
+  // (So do boundary.loaded and the loads on it.)
+  const bool custom_mesh = meshed && cfg.get_string("benchmark") == "custom";
+  for (const char* key : {"boundary.fixed", "boundary.roller", "boundary.loaded"})
+    if (!cfg.get_string(key).empty() && !custom_mesh)
       throw InputError(fmt::format(
           "{}: {} names boundaries of a mesh file (grid.mesh) in the 2D custom problem; "
           "benchmark = \"{}\"{} sets its own conditions",
+          cfg.where(key), key, cfg.get_string("benchmark"), meshed ? "" : " without grid.mesh"));
+  for (const char* key : {"traction.loaded", "pressure.loaded"})
+    if ((key[0] == 't' ? cfg.get_expressions(key) != std::vector<std::string>{"0"}
+                       : cfg.get_string(key) != "0") &&
+        !custom_mesh)
+      throw InputError(fmt::format(
+          "{}: {} loads named boundaries of a mesh file (grid.mesh, boundary.loaded) in the 2D "
+          "custom problem; benchmark = \"{}\"{} has none",
           cfg.where(key), key, cfg.get_string("benchmark"), meshed ? "" : " without grid.mesh"));
   std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid); }, pb);
   return pb;

@@ -86,8 +86,12 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.conservation_limit = method.conservation_limit;
     sim_.sorting.mode = method.sort;
     for (const auto& f : pb.fixed_sides) {
+      Vec<Dim> n;
+      for (int d = 0; d < Dim; ++d) n[d] = f.normal[static_cast<std::size_t>(d)];
       if (f.boundary.empty())
         sim_.fix_side(f.direction, f.side, f.components);
+      else if (n != Vec<Dim>::Zero())
+        sim_.fix_boundary_normal(f.boundary, n);
       else
         sim_.fix_boundary(f.boundary, f.components);
     }

@@ -16,6 +16,15 @@ struct GridState {
   std::vector<Vec<Dim>> accel;       // a_i [m/s^2]
   std::vector<std::uint8_t> active;  // 1 where the DOF carries enough mass to be solved for
   std::vector<std::uint8_t> fixed;   // bit d set: component d is prescribed zero (Dirichlet)
+  // DOFs whose velocity is confined to a subspace that is not a set of components (a roller on
+  // an inclined boundary: v . n = 0), with the orthogonal projector onto the velocities they may
+  // take; sorted by DOF. Their `fixed` bits are folded into the projector and cleared, so a DOF
+  // is constrained either by bits or by an entry here, never both (BasisState::fix_*).
+  struct Projected {
+    Index dof;
+    Mat<Dim> free;
+  };
+  std::vector<Projected> projected;
 
   Index size() const { return static_cast<Index>(mass.size()); }
   // Bytes per DOF of the arrays above: a lower bound of a run's grid memory (the stages add

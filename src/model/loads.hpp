@@ -19,22 +19,26 @@ struct BodyForce {
 };
 
 // A traction tau(t) on a face of the body, applied through the particles adjacent to that face
-// (Steffen et al. 2008; D 4.6.2 and eq. 2.21 for the 1D traction bar): each loaded particle adds
-// the point force phi_i(x_f) tau(t) A_p at the centre x_f of the outer face of its domain, the
-// one-point quadrature of the boundary integral int phi_i tau dA over its share A_p of the face.
-// tau is a nominal traction (force per unit reference area, a dead load): its direction and the
-// areas A_p stay those of the undeformed body. The face centre follows the deformation:
-// x_f = x_p + side F_p (l_p e_d) with l_p the reference half-width of the particle domain along
-// the face normal e_d; in 1D x_f = x_p + side V_p / 2 (V_p is the current length; A_p = 1, the
-// force per unit cross-section).
+// (Steffen et al. 2008; D 4.6.2 and eq. 2.21 for the 1D traction bar): each loaded point k adds
+// the point force phi_i(x_k) (tau(t) - p(t) n_k) A_k, the one-point quadrature of the boundary
+// integral int phi_i tau dA over its share A_k of the face. tau and p are nominal (per unit
+// reference area, dead loads): the direction of tau, the normals n_k and the areas A_k stay those
+// of the undeformed body. The point follows its particle's deformation:
+// x_k = x_p + F_p (X_k - X_p), with the reference offset X_k - X_p fixed at the start (a box face:
+// l_p e_d outwards, l_p the reference half-width of the particle domain along the face normal
+// e_d; a mesh edge: from the nearest particle of its triangle to a point on the edge). In 1D
+// x_k = x_p + side V_p / 2 (V_p is the current length; A_k = 1, the force per unit
+// cross-section).
 template <int Dim>
 struct Traction {
-  int direction = 0;               // d: the face normal is e_d
-  int side = 1;                    // +1: the upper face (outward normal +e_d); -1: the lower face
-  std::vector<Index> particles;    // the particles whose domains touch the face
-  std::vector<double> area;        // A_p [m^(Dim-1)] per loaded particle (1D: 1)
-  std::vector<double> half_width;  // l_p [m] per loaded particle (unused in 1D)
-  std::function<Vec<Dim>(double t)> value;  // tau(t) [Pa], evaluated once per step
+  int direction = 0;             // box faces and 1D: the face normal is e_d
+  int side = 1;                  // +1: the upper face (outward normal +e_d); -1: the lower face
+  std::vector<Index> particles;  // the particle carrying each loaded point
+  std::vector<double> area;      // A_k [m^(Dim-1)] per loaded point (1D: 1)
+  std::vector<Vec<Dim>> offset;  // X_k - X_p [m] per loaded point (unused in 1D)
+  std::vector<Vec<Dim>> normal;  // n_k per loaded point; only read when `pressure` is set
+  std::function<Vec<Dim>(double t)> value;   // tau(t) [Pa], evaluated once per step
+  std::function<double(double t)> pressure;  // p(t) [Pa] along -n_k; empty: in `value` or none
 };
 
 }  // namespace mpm

@@ -2,6 +2,7 @@
 // A benchmark owns its geometry, initial and boundary conditions and (where known) its exact
 // solution; it hands the runner a Problem. Exact solutions are evaluated only for outputs and
 // error norms, never inside the time-step loops.
+#include <array>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -39,6 +40,9 @@ struct FixedSide {
   // Not empty: the named boundary of the run's triangle mesh (a mesh file's physical group,
   // boundary.fixed / boundary.roller) instead of the grid side (direction, side).
   std::string boundary = {};
+  // Not zero: a roller on an inclined straight `boundary`: the velocity component along this
+  // unit normal (x, y[, z]) is zero, whatever `components` says.
+  std::array<double, 3> normal = {};
 };
 
 template <int Dim>

@@ -86,12 +86,14 @@ void throw_left_mesh(const RunState<2>& sim, const TriangleMesh& mesh) {
 }
 
 template <int Dim>
-void throw_face_left_grid(const RunState<Dim>& sim, std::size_t i, const Vec<Dim>& x_face) {
+void throw_face_left_grid(const RunState<Dim>& sim, std::size_t i, const Vec<Dim>& x_face,
+                          bool mesh) {
   throw RunError(exit_code::kLeftGrid,
                  fmt::format("step {}, t = {:.9g} s: the loaded face of the body (particle "
-                             "{}, face centre at x = {}) left the grid {}",
+                             "{}, face point at x = {}) left the {}",
                              sim.step, sim.time, sim.particles.id[i], describe_point(x_face),
-                             describe_box(sim.grid)));
+                             mesh ? std::string("mesh (no triangle holds it)")
+                                  : "grid " + describe_box(sim.grid)));
 }
 
 template <int Dim>
@@ -195,6 +197,28 @@ void after_mass(RunState<Dim>& sim) {
           }
         return spline_pmg(sim.grid, p, pts, keep, sides, sim.consistent.settings().pmg, &fine);
       };
+    if (!sim.nodes.projected.empty()) {
+      // Rollers on inclined boundaries couple the components: one system for all of them.
+      auto& proj = sim.coupled_projector;
+      proj.assign(act.size(), Mat<Dim>::Zero());
+      for (std::size_t i = 0; i < act.size(); ++i)
+        if (act[i])
+          for (int d = 0; d < Dim; ++d) proj[i](d, d) = (fixed[i] & (1u << d)) ? 0.0 : 1.0;
+      for (const auto& e : sim.nodes.projected)
+        if (act[static_cast<std::size_t>(e.dof)]) proj[static_cast<std::size_t>(e.dof)] = e.free;
+      std::vector<double> flat(proj.size() * Dim * Dim);
+      for (std::size_t i = 0; i < proj.size(); ++i)
+        for (int a = 0; a < Dim; ++a)
+          for (int b = 0; b < Dim; ++b)
+            flat[(i * Dim + static_cast<std::size_t>(a)) * Dim + static_cast<std::size_t>(b)] =
+                proj[i](a, b);
+      if (!sim.consistent.factorize_coupled(Dim, flat))
+        throw RunError(exit_code::kNonFinite,
+                       fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
+                                   "(a cell with too few particles); use method.mass = \"lumped\"",
+                                   sim.step, sim.time));
+      return;
+    }
     for (int d = 0; d < (per_component ? Dim : 1); ++d) {
       const auto bit = static_cast<std::uint8_t>(per_component ? 1u << d : kAll);
       if (!sim.consistent.factorize(
@@ -268,10 +292,12 @@ template <int Dim>
   throw RunError(
       exit_code::kSolver,
       fmt::format("step {}, t = {:.9g} s: the {} mass solver did not converge for velocity "
-                  "component {}: relative residual {:.3g} after {} {} (method.mass_solver_"
+                  "{}: relative residual {:.3g} after {} {} (method.mass_solver_"
                   "tolerance = {:.3g}, method.mass_solver_max_iterations = {}); residual "
                   "history (iteration: relative residual): {}",
-                  sim.step, sim.time, s.kind == MassSolver::Cg ? "cg" : "pmg", "xyz"[component],
+                  sim.step, sim.time, s.kind == MassSolver::Cg ? "cg" : "pmg",
+                  component < 0 ? std::string("components (coupled by inclined rollers)")
+                                : fmt::format("component {}", "xyz"[component]),
                   rep.relative_residual, rep.iterations,
                   s.kind == MassSolver::Cg ? "iterations" : "V-cycles", s.tolerance,
                   s.max_iterations, hist));
@@ -287,6 +313,22 @@ void solve_grid(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) 
       const auto i = static_cast<std::size_t>(k);
       y[i] = nd.active[i] ? V(r[i] / nd.mass[i]) : V::Zero();
     });
+  } else if (!nd.projected.empty()) {
+    // The coupled system of the inclined rollers (ConsistentMass::factorize_coupled).
+    const auto& proj = sim.coupled_projector;
+    Eigen::VectorXd rhs(static_cast<Index>(n * Dim));
+    for (std::size_t i = 0; i < n; ++i)
+      rhs.template segment<Dim>(static_cast<Index>(i * Dim)) = proj[i] * r[i];
+    IterationReport rep;
+    const Eigen::VectorXd sol = sim.consistent.solve(rhs, ConsistentMass::kCoupled, &rep);
+    if (sim.consistent.settings().kind != MassSolver::Direct) {
+      sim.diag.mass_solver_iterations += rep.iterations;
+      sim.diag.max_mass_solver_iterations =
+          std::max(sim.diag.max_mass_solver_iterations, rep.iterations);
+      if (!rep.converged) throw_mass_solver_failure(sim, -1, rep);
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      y[i] = sol.template segment<Dim>(static_cast<Index>(i * Dim));
   } else {
     Eigen::VectorXd rhs(static_cast<Index>(n));
     for (int d = 0; d < Dim; ++d) {
@@ -308,6 +350,12 @@ void solve_grid(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) 
     if (nd.fixed[i])
       for (int d = 0; d < Dim; ++d)
         if (nd.fixed[i] & (1u << d)) y[i][d] = 0.0;
+  // v . n = 0 on the inclined rollers: exact for lumped mass (the reaction acts along n alone),
+  // round-off clean-up of the coupled solve.
+  for (const auto& e : nd.projected) {
+    auto& yi = y[static_cast<std::size_t>(e.dof)];
+    yi = V(e.free * yi);
+  }
 }
 }  // namespace
 
@@ -346,12 +394,12 @@ template void advance_grid_velocity<2>(RunState<2>&, double);
 template void detail::throw_unfit<1>(const RunState<1>&, const std::vector<Index>&,
                                      std::string_view);
 template void detail::throw_left_grid<1>(const RunState<1>&);
-template void detail::throw_face_left_grid<1>(const RunState<1>&, std::size_t, const Vec<1>&);
+template void detail::throw_face_left_grid<1>(const RunState<1>&, std::size_t, const Vec<1>&, bool);
 template void detail::throw_particle_failure<1>(const RunState<1>&);
 template void detail::throw_unfit<2>(const RunState<2>&, const std::vector<Index>&,
                                      std::string_view);
 template void detail::throw_left_grid<2>(const RunState<2>&);
-template void detail::throw_face_left_grid<2>(const RunState<2>&, std::size_t, const Vec<2>&);
+template void detail::throw_face_left_grid<2>(const RunState<2>&, std::size_t, const Vec<2>&, bool);
 template void detail::throw_particle_failure<2>(const RunState<2>&);
 
 }  // namespace mpm::stages

@@ -3,6 +3,7 @@
 // BasisState (+ basis and cached stencils), Simulation (+ mapping). Stages (scheme/stages.hpp)
 // operate on the lowest layer they need; schemes order the stages.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -68,6 +69,10 @@ struct RunState {
   // per velocity component. Set by Simulation::fix_side, the only place that changes
   // nodes.fixed.
   bool consistent_per_component = false;
+  // Per DOF the projector onto its admissible velocities (zero for inactive DOFs), when some
+  // DOF has a nodes.projected entry: consistent mass then solves all components in one system
+  // (ConsistentMass::factorize_coupled). Refreshed with the consistent matrix each step.
+  std::vector<Mat<Dim>> coupled_projector;
   // The degree of a B-spline basis on the grid (0 for the others): method.mass_solver = "pmg"
   // builds its hierarchy over the degrees below it.
   int spline_degree = 0;
@@ -122,15 +127,71 @@ struct BasisState : RunState<Dim> {
     else
       throw std::logic_error("fix_boundary: named boundaries belong to bases on triangles");
   }
+  // A roller on an inclined named boundary: v_i . n = 0 on its DOFs (n: unit normal). Since
+  // v . n = sum_i phi_i (v_i . n) on the boundary, this holds along the whole boundary for the
+  // DOFs whose functions do not vanish there (what boundary_dofs lists).
+  void fix_boundary_normal(std::string_view name, const Vec<Dim>& n) {
+    if constexpr (Basis::kTriangleMesh)
+      constrain(basis.boundary_dofs(name), n * n.transpose());
+    else
+      throw std::logic_error("fix_boundary_normal: named boundaries belong to bases on triangles");
+  }
 
  private:
   void fix_dofs(const std::vector<Index>& dofs, unsigned components) {
-    auto& fixed = this->nodes.fixed;
-    const auto mask = static_cast<std::uint8_t>(components & ((1u << Dim) - 1u));
-    for (Index i : dofs) fixed[static_cast<std::size_t>(i)] |= mask;
+    Mat<Dim> c = Mat<Dim>::Zero();
+    for (int d = 0; d < Dim; ++d)
+      if (components & (1u << d)) c(d, d) = 1.0;
+    constrain(dofs, c);
+  }
+
+  // Adds the constrained directions range(c) (c symmetric positive semi-definite) to those of
+  // `dofs`: each DOF's constrained subspace is the span of all its conditions (two rollers
+  // meeting at a corner at an angle fix it; a roller and a parallel one do not add up). A
+  // subspace spanned by axes is kept as nodes.fixed bits, any other as a nodes.projected
+  // projector.
+  void constrain(const std::vector<Index>& dofs, const Mat<Dim>& c) {
     constexpr std::uint8_t kAll = (1u << Dim) - 1u;
-    this->consistent_per_component =
-        std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
+    auto& nd = this->nodes;
+    auto& proj = nd.projected;
+    for (Index i : dofs) {
+      auto& bits = nd.fixed[static_cast<std::size_t>(i)];
+      const auto it = std::lower_bound(proj.begin(), proj.end(), i,
+                                       [](const auto& e, Index k) { return e.dof < k; });
+      const bool has = it != proj.end() && it->dof == i;
+      Mat<Dim> sum = c;
+      if (has) sum += Mat<Dim>::Identity() - it->free;
+      for (int d = 0; d < Dim; ++d)
+        if (bits & (1u << d)) sum(d, d) += 1.0;
+      // The orthogonal projector onto range(sum): its eigenvectors of non-zero eigenvalue
+      // (eigenvalues are 0 or at least 1 - 1e-12 here: sums of unit projectors).
+      const Eigen::SelfAdjointEigenSolver<Mat<Dim>> eig(sum);
+      Mat<Dim> con = Mat<Dim>::Zero();
+      for (int k = 0; k < Dim; ++k)
+        if (eig.eigenvalues()[k] > 1e-9)
+          con += eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose();
+      std::uint8_t axes = 0;
+      bool axis_aligned = true;
+      for (int a = 0; a < Dim; ++a)
+        for (int b = 0; b < Dim; ++b) {
+          const double want = a == b && std::abs(con(a, a) - 1.0) < 1e-12 ? 1.0 : 0.0;
+          if (std::abs(con(a, b) - want) > 1e-12) axis_aligned = false;
+          if (a == b && want == 1.0) axes |= static_cast<std::uint8_t>(1u << a);
+        }
+      if (axis_aligned) {
+        bits = axes;
+        if (has) proj.erase(it);
+      } else {
+        bits = 0;
+        const Mat<Dim> free = Mat<Dim>::Identity() - con;
+        if (has)
+          it->free = free;
+        else
+          proj.insert(it, {i, free});
+      }
+    }
+    this->consistent_per_component = std::any_of(
+        nd.fixed.begin(), nd.fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
   }
 };
 

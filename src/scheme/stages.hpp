@@ -38,10 +38,11 @@ template <int Dim>
 // As throw_left_grid when a particle left the grid; otherwise the particles in no triangle of
 // the mesh (a mesh from a file that does not fill its bounding box).
 [[noreturn]] void throw_left_mesh(const RunState<2>& sim, const TriangleMesh& mesh);
-// The face point x_face of particle index i's loaded face outside the grid.
+// The face point x_face of particle index i's loaded face outside the grid (mesh: outside the
+// triangles of the basis's mesh).
 template <int Dim>
 [[noreturn]] void throw_face_left_grid(const RunState<Dim>& sim, std::size_t i,
-                                       const Vec<Dim>& x_face);
+                                       const Vec<Dim>& x_face, bool mesh = false);
 // Non-finite stress or F, else det F <= 0, at the particles where it holds.
 template <int Dim>
 [[noreturn]] void throw_particle_failure(const RunState<Dim>& sim);
@@ -185,18 +186,24 @@ void after_forces(BasisState<Dim, B>& sim) {
   const auto& P = sim.particles;
   for (const auto& tr : sim.tractions) {
     const Vec<Dim> tau = tr.value(sim.time);
+    const double p = tr.pressure ? tr.pressure(sim.time) : 0.0;
     for (std::size_t k = 0; k < tr.particles.size(); ++k) {
       const auto i = static_cast<std::size_t>(tr.particles[k]);
       Vec<Dim> x_face = P.x[i];
       if constexpr (Dim == 1)
         x_face[0] += 0.5 * tr.side * P.volume[i];  // V_p: the current length
       else
-        x_face += (tr.side * tr.half_width[k]) * P.F[i].col(tr.direction);
+        x_face += P.F[i] * tr.offset[k];
       if (!sim.grid.inside(x_face)) throw_face_left_grid(sim, i, x_face);
       typename BasisState<Dim, B>::StencilT s;
-      sim.basis.evaluate_point(x_face, s);
+      if constexpr (B::kTriangleMesh) {
+        // A mesh need not fill its box: a point outside the triangles would lose its load.
+        if (!sim.basis.evaluate_point(x_face, s)) throw_face_left_grid(sim, i, x_face, true);
+      } else {
+        sim.basis.evaluate_point(x_face, s);
+      }
       // A_p = 1 in 1D: tau * 1.0 is exact, so the 1D forces are those of the end traction.
-      const Vec<Dim> f = tau * tr.area[k];
+      const Vec<Dim> f = (tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k];
       for (int a = 0; a < s.kSize; ++a)
         sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
     }

@@ -289,7 +289,18 @@ std::vector<KeySpec> declare() {
              "(2D custom)"),
       choice("boundary.roller", "", {},
              "named boundaries of grid.mesh whose normal velocity is zero, separated by commas; "
-             "each must lie on one straight line parallel to x or y (2D custom)"),
+             "each must lie on one straight line, which may be inclined (v . n = 0 couples the "
+             "velocity components) (2D custom)"),
+      choice("boundary.loaded", "", {},
+             "named boundaries of grid.mesh loaded by traction.loaded and pressure.loaded, "
+             "separated by commas; the body must lie along them (2D custom)"),
+      expression_vector("traction.loaded", "Pa", "0",
+                        "traction on the boundaries of boundary.loaded, one expression of t per "
+                        "component, per unit reference length (2D custom with grid.mesh)"),
+      expression("pressure.loaded", "Pa", "0",
+                 "normal pressure p(t) on the boundaries of boundary.loaded, positive in "
+                 "compression: adds -p n (each edge's reference outward normal n) to "
+                 "traction.loaded (2D custom with grid.mesh)"),
       expression_vector("traction.left", "Pa", "0",
                         "traction on the body face x = body.min, one expression of t per "
                         "component, per unit reference area (custom; \"0\": traction-free)"),

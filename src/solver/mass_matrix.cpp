@@ -1,5 +1,6 @@
 #include "solver/mass_matrix.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace mpm {
@@ -17,13 +18,9 @@ bool ConsistentMass::factorize_kept(int slot) {
   M.resize(n_, n_);
   M.setFromTriplets(t.begin(), t.end());
   switch (settings_.kind) {
-    case MassSolver::Direct: {
-      auto& solver = solver_[s];
-      solver.compute(M);
-      return solver.info() == Eigen::Success && (solver.vectorD().array() > 0.0).all();
-    }
+    case MassSolver::Direct:
     case MassSolver::Cg:
-      return (M.diagonal().array() > 0.0).all();
+      return factorize_matrix(slot);
     case MassSolver::Pmg: {
       if (!pmg_builder) throw std::logic_error("ConsistentMass: pmg without a hierarchy builder");
       if (!(M.diagonal().array() > 0.0).all()) return false;
@@ -38,6 +35,59 @@ bool ConsistentMass::factorize_kept(int slot) {
     }
   }
   return false;
+}
+
+bool ConsistentMass::factorize_matrix(int slot) {
+  const auto s = static_cast<std::size_t>(slot);
+  const auto& M = M_[s];
+  if (settings_.kind == MassSolver::Cg) return (M.diagonal().array() > 0.0).all();
+  auto& solver = solver_[s];
+  solver.compute(M);
+  return solver.info() == Eigen::Success && (solver.vectorD().array() > 0.0).all();
+}
+
+bool ConsistentMass::factorize_coupled(int dim, const std::vector<double>& projector) {
+  if (settings_.kind == MassSolver::Pmg)
+    throw std::logic_error("ConsistentMass: pmg has no hierarchy for the coupled system");
+  const auto d = static_cast<std::size_t>(dim), dd = d * d;
+  const auto block = [&](Index i) { return projector.data() + static_cast<std::size_t>(i) * dd; };
+  auto zero = [&](Index i) {
+    const double* p = block(i);
+    return std::all_of(p, p + dd, [](double v) { return v == 0.0; });
+  };
+  std::vector<unsigned char> eliminated(static_cast<std::size_t>(n_));
+  for (Index i = 0; i < n_; ++i) eliminated[static_cast<std::size_t>(i)] = zero(i) ? 1 : 0;
+  std::vector<Triplet> t;
+  t.reserve(triplets_.size() * dd + static_cast<std::size_t>(n_) * dd);
+  for (const auto& e : triplets_) {
+    const Index i = e.row(), j = e.col();
+    if (eliminated[static_cast<std::size_t>(i)] || eliminated[static_cast<std::size_t>(j)])
+      continue;
+    // Block (i, j) of P (M (x) I) P: M_ij P_i P_j.
+    const double *pi = block(i), *pj = block(j);
+    for (std::size_t a = 0; a < d; ++a)
+      for (std::size_t b = 0; b < d; ++b) {
+        double v = 0.0;
+        for (std::size_t c = 0; c < d; ++c) v += pi[a * d + c] * pj[c * d + b];
+        if (v != 0.0)
+          t.emplace_back(static_cast<Index>(d) * i + static_cast<Index>(a),
+                         static_cast<Index>(d) * j + static_cast<Index>(b), e.value() * v);
+      }
+  }
+  for (Index i = 0; i < n_; ++i) {  // I - P_i
+    const double* p = block(i);
+    for (std::size_t a = 0; a < d; ++a)
+      for (std::size_t b = 0; b < d; ++b) {
+        const double v = (a == b ? 1.0 : 0.0) - p[a * d + b];
+        if (v != 0.0)
+          t.emplace_back(static_cast<Index>(d) * i + static_cast<Index>(a),
+                         static_cast<Index>(d) * i + static_cast<Index>(b), v);
+      }
+  }
+  auto& M = M_[static_cast<std::size_t>(kCoupled)];
+  M.resize(static_cast<Index>(d) * n_, static_cast<Index>(d) * n_);
+  M.setFromTriplets(t.begin(), t.end());
+  return factorize_matrix(kCoupled);
 }
 
 Eigen::VectorXd ConsistentMass::solve(const Eigen::VectorXd& rhs, int slot,

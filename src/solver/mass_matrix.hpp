@@ -62,6 +62,17 @@ class ConsistentMass {
     return factorize_kept(slot);
   }
 
+  // All velocity components in one system, for DOFs whose admissible velocities are not a set
+  // of components (a roller on an inclined boundary; GridState::projected): with P the
+  // block-diagonal orthogonal projector onto the admissible velocities (`projector`: per DOF a
+  // dim x dim block, row-major; zero for an eliminated DOF), the Galerkin system on them is
+  //   A y = P r,  A = P (M (x) I_dim) P + (I - P),
+  // symmetric positive definite when M is on the kept DOFs; its solution has (I - P) y = 0.
+  // Unknown a of DOF i is entry dim i + a. Factorised (direct) or kept (cg) in slot kCoupled;
+  // pmg has no hierarchy for it (logic_error: the run settings refuse the combination).
+  static constexpr int kCoupled = kSlots;
+  bool factorize_coupled(int dim, const std::vector<double>& projector);
+
   // y = M^-1 rhs with the factorisation (or hierarchy) of `slot`. For cg and pmg `report`, when
   // given, receives the iterations and residuals (converged false: the caller stops the run).
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs, int slot = 0,
@@ -78,9 +89,10 @@ class ConsistentMass {
   Index n_ = 0;
   MassSolverSettings settings_;
   std::vector<Triplet> triplets_;
-  std::vector<unsigned char> kept_;  // keep(i) of the latest factorize
-  std::array<Eigen::SparseMatrix<double>, kSlots> M_;
-  std::array<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>, kSlots> solver_;
+  std::vector<unsigned char> kept_;                        // keep(i) of the latest factorize
+  std::array<Eigen::SparseMatrix<double>, kSlots + 1> M_;  // [kCoupled]: the coupled system
+  std::array<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>, kSlots + 1> solver_;
+  bool factorize_matrix(int slot);
   // pmg: per slot the kept DOFs (increasing) and the hierarchy over them.
   std::array<std::vector<Index>, kSlots> kept_index_;
   std::array<std::unique_ptr<PMultigrid>, kSlots> pmg_;

@@ -464,14 +464,15 @@ TEST(Cli, AnOutputThatCannotBeWrittenFailsWithItsOwnCode) {
 }
 
 // The same on a full disk (issue 16, 6: ENOSPC gave "internal error", exit 1, and no failed
-// summary): a 24 KiB tmpfs (six pages) holds config.toml (7 KB), history.csv and the summary, not
-// the first particle frame (33 KB). The failed frame's temporary file is removed, which frees the
+// summary): a 32 KiB tmpfs (eight pages) holds config.toml (12 KB, every key with its
+// description), history.csv and the summary with its temporary copy, not the first particle
+// frame (33 KB). The failed frame's temporary file is removed, which frees the
 // space for the failed summary. Mounting needs root (CAP_SYS_ADMIN); elsewhere the test is
 // skipped with the reason, and the file-size-limit test above covers the code path.
 TEST(Cli, AFullDiskFailsWithItsOwnCodeAndAFailedSummary) {
   const auto mnt = temp_dir("tmpfs");
   std::filesystem::create_directories(mnt);
-  const std::string mount = "mount -t tmpfs -o size=24k mpm_cli_full " + mnt.string() + " 2>&1";
+  const std::string mount = "mount -t tmpfs -o size=32k mpm_cli_full " + mnt.string() + " 2>&1";
   if (std::system(mount.c_str()) != 0) {
     std::filesystem::remove_all(mnt);
     GTEST_SKIP() << "cannot mount a small tmpfs here (needs root): " << mount;
