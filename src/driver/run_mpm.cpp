@@ -79,6 +79,24 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
         c.cells.empty() ? 0 : *std::min_element(c.cells.begin(), c.cells.end()),
         c.cells.empty() ? 0 : *std::max_element(c.cells.begin(), c.cells.end()),
         sim.grid.num_cells()));
+  // The traction lists name their particles by position in the freshly set-up order; the
+  // checkpoint holds the particles in its own (re-sorted) order: follow the ids there.
+  if (!sim.tractions.empty()) {
+    const auto n = static_cast<std::size_t>(p.size());
+    std::vector<Index> at(n, -1);  // position in the checkpoint of each id
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto id = static_cast<std::size_t>(p.id[k]);
+      if (id >= n || at[id] >= 0)
+        throw InputError(
+            fmt::format("{} is not a state of this run: its particle ids are not "
+                        "0 .. {} once each",
+                        what, n - 1));
+      at[id] = static_cast<Index>(k);
+    }
+    for (auto& tr : sim.tractions)
+      for (auto& q : tr.particles)
+        q = at[static_cast<std::size_t>(sim.particles.id[static_cast<std::size_t>(q)])];
+  }
   sim.particles = std::move(p);
   sim.cell.assign(c.cells.begin(), c.cells.end());
   sim.sorting.reference = c.sort_reference;

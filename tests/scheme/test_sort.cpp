@@ -16,6 +16,7 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "../support/stepper.hpp"
@@ -326,16 +327,23 @@ TEST(Sort, SameBitsForOneAndTwoThreads) {
 }
 
 // A shuffled run is sorted after its first step; a restart from the checkpoint of step k must
-// restore the sorted order (ids) and the trigger state and end in the uninterrupted state.
+// restore the sorted order (ids) and the trigger state and end in the uninterrupted state. The
+// custom plate carries a traction on its top face, whose particles the restart must find by id
+// in the checkpoint's order.
 TEST(Sort, RestartAfterSortIsBitwise) {
-  for (const char* basis : {"bspline", "cpdi2"}) {
-    SCOPED_TRACE(basis);
+  for (const auto& [name, basis, extra] :
+       {std::tuple{"plate_mms_2d", "bspline", std::vector<std::string>{}},
+        std::tuple{"plate_mms_2d", "cpdi2", std::vector<std::string>{}},
+        std::tuple{"custom_plate_2d", "linear",
+                   std::vector<std::string>{"time.dt=1e-5", "traction.top=[\"2e4\", \"-1e5\"]"}}}) {
+    SCOPED_TRACE(std::string(name) + " " + basis);
     TempDir full("full"), part("part"), cont("cont");
     const int k = 5, n = 15;
     const double dt = 1e-5;
-    const std::vector<std::string> base = {
+    std::vector<std::string> base = {
         "grid.cells=16",    "particles.per_cell=3", fmt::format("method.basis=\"{}\"", basis),
         "output.csv=false", "output.vtk=false",     fmt::format("output.checkpoint_every={}", k)};
+    base.insert(base.end(), extra.begin(), extra.end());
     auto with_end = [&](int steps) {
       auto s = base;
       s.push_back(fmt::format("time.end={}", steps * dt));
@@ -351,12 +359,10 @@ TEST(Sort, RestartAfterSortIsBitwise) {
       ro.restart_name = name;
       return run(cfg, ro);
     };
-    const auto r_full =
-        run_in(Config::load(example("plate_mms_2d"), with_end(n)), full.path(), nullptr, "");
+    const auto r_full = run_in(Config::load(example(name), with_end(n)), full.path(), nullptr, "");
     ASSERT_EQ(r_full.exit_code, 0) << r_full.failure;
     ASSERT_GE(r_full.sorts, 1);
-    const auto r_part =
-        run_in(Config::load(example("plate_mms_2d"), with_end(k)), part.path(), nullptr, "");
+    const auto r_part = run_in(Config::load(example(name), with_end(k)), part.path(), nullptr, "");
     ASSERT_EQ(r_part.exit_code, 0) << r_part.failure;
     const fs::path file = part.path() / io::kCheckpointFile;
     auto ck = std::make_shared<const io::Checkpoint>(io::read_checkpoint(file));
