@@ -85,22 +85,7 @@ bottom = "free"
 top = "free"
 )",
                                        file);
-  const Config cfg = Config::parse(text, "mesh_boundaries.toml", sets);
-  auto r = std::make_unique<test::PlateRun>();
-  r->pb = std::get<Problem<2>>(make_problem(cfg));
-  r->settings = run_settings(cfg, 2);
-  r->stepper = driver::make_stepper<2>(r->settings.method.basis,
-                                       driver::StepperInput<2>{r->pb, r->settings.method, true});
-  return r;
-}
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
+  return test::run_2d(Config::parse(text, "mesh_boundaries.toml", sets));
 }
 
 // The same body on the rectangle and on the rectangle turned by 30 degrees, with its base on a
@@ -262,7 +247,7 @@ TEST(MeshBoundaries, ALoadedPointThatLeavesTheMeshStopsTheRun) {
   const std::string file = turned_rectangle(0.2, "pull");
   auto r = on_mesh(file, {"method.basis=p1_triangles", "boundary.loaded=top",
                           "pressure.loaded=-1e5", "boundary.roller=base"});
-  const std::string what = message_of([&] {
+  const std::string what = test::message_of([&] {
     for (int s = 0; s < 5; ++s) r->stepper->step(1e-4);
   });
   EXPECT_NE(what.find("the loaded face of the body (particle"), std::string::npos) << what;
@@ -275,7 +260,7 @@ TEST(MeshBoundaries, LoadsThatDoNotFitAreRefused) {
   const std::string file = turned_rectangle(0.0, "refuse");
   const std::string tri = "method.basis=p1_triangles";
   auto refusal = [&](std::vector<std::string> sets) {
-    return message_of([&] { (void)on_mesh(file, std::move(sets)); });
+    return test::message_of([&] { (void)on_mesh(file, std::move(sets)); });
   };
   EXPECT_NE(refusal({tri, "boundary.loaded=roof", "pressure.loaded=1"})
                 .find("boundary.loaded: mesh file \"" + file +
@@ -301,12 +286,12 @@ TEST(MeshBoundaries, LoadsThatDoNotFitAreRefused) {
   // Without a mesh file, and in a problem that sets its own conditions.
   const std::string custom = std::string(MPM_SOURCE_DIR) + "/examples/custom_plate_2d.toml";
   EXPECT_NE(
-      message_of([&] {
+      test::message_of([&] {
         (void)make_problem(Config::load(custom, {"boundary.loaded=top", "pressure.loaded=1"}));
       }).find("boundary.loaded names boundaries of a mesh file (grid.mesh)"),
       std::string::npos);
   const std::string plate = std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml";
-  EXPECT_NE(message_of([&] {
+  EXPECT_NE(test::message_of([&] {
               (void)make_problem(Config::load(plate, {"pressure.loaded=1"}));
             }).find("pressure.loaded loads named boundaries of a mesh file"),
             std::string::npos);

@@ -42,15 +42,6 @@ std::vector<bool> l_shape(const TriangleMesh& square) {
   return keep;
 }
 
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
-
 // The same triangles from a file and from method.triangles: the same vertices, triangles and
 // box sides, hence bitwise the same steps, with the plate's rollers and body force, for both
 // masses with the direct mapping and with TLS on the triangles.
@@ -181,7 +172,7 @@ TEST(MeshFileRun, InputThatDoesNotFitIsRefusedWithTheKey) {
   const std::string mesh = std::string(MPM_SOURCE_DIR) + "/tests/data/meshes/square_v41.msh";
   const std::string plate = std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml";
   auto refusal = [&](std::vector<std::string> sets, const std::string& config = "") {
-    return message_of(
+    return test::message_of(
         [&] { (void)make_problem(Config::load(config.empty() ? plate : config, sets)); });
   };
   const std::string tri = "method.basis=p1_triangles";
@@ -233,14 +224,8 @@ std::unique_ptr<test::PlateRun> custom_on_square(std::vector<std::string> sets) 
                                "exact.displacement=0",
                                "exact.stress=0"};
   all.insert(all.end(), sets.begin(), sets.end());
-  auto r = std::make_unique<test::PlateRun>();
-  const Config cfg =
-      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/custom_plate_2d.toml", all);
-  r->pb = std::get<Problem<2>>(make_problem(cfg));
-  r->settings = run_settings(cfg, 2);
-  r->stepper = driver::make_stepper<2>(r->settings.method.basis,
-                                       driver::StepperInput<2>{r->pb, r->settings.method, true});
-  return r;
+  return test::run_2d(
+      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/custom_plate_2d.toml", all));
 }
 
 // boundary.fixed and boundary.roller act on the mesh file's physical groups: the groups
@@ -274,7 +259,7 @@ TEST(MeshFileRun, NamedBoundariesOfTheFileActAsTheSidesTheyLieOn) {
 // (the mesh's names listed), a roller on a boundary that bends ("top_left"), a name in both
 // lists, and the keys without a mesh file or in another problem.
 TEST(MeshFileRun, NamedBoundariesThatDoNotFitAreRefused) {
-  auto refusal = [](const std::function<void()>& f) { return message_of(f); };
+  auto refusal = [](const std::function<void()>& f) { return test::message_of(f); };
   const std::string tri = "method.basis=p1_triangles";
   EXPECT_NE(refusal([&] {
               custom_on_square({tri, "boundary.fixed=inlet"});

@@ -4,6 +4,8 @@
 // four schemes again (a scheme's step with every material law was most of a test unit's
 // compile time). Tests of single stages or of a mapping's passes still build a Simulation.
 #include <algorithm>
+#include <exception>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <type_traits>
@@ -123,17 +125,34 @@ struct PlateRun {
   RunSettings settings;
   std::unique_ptr<driver::Stepper<2>> stepper;
 };
-inline std::unique_ptr<PlateRun> plate_run(std::vector<std::string> sets, bool free_sides) {
-  if (free_sides) sets.push_back("mms.amplitude=0");
+// Any 2D configuration set up the same way; `adjust` may change the problem first.
+inline std::unique_ptr<PlateRun> run_2d(const Config& cfg,
+                                        const std::function<void(Problem<2>&)>& adjust = {}) {
   auto r = std::make_unique<PlateRun>();
-  const Config cfg =
-      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml", sets);
   r->pb = std::get<Problem<2>>(make_problem(cfg));
-  if (free_sides) r->pb.fixed_sides.clear();
+  if (adjust) adjust(r->pb);
   r->settings = run_settings(cfg, 2);
   r->stepper = driver::make_stepper<2>(r->settings.method.basis,
                                        driver::StepperInput<2>{r->pb, r->settings.method, true});
   return r;
+}
+inline std::unique_ptr<PlateRun> plate_run(std::vector<std::string> sets, bool free_sides) {
+  if (free_sides) sets.push_back("mms.amplitude=0");
+  const Config cfg =
+      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml", sets);
+  return run_2d(cfg, [free_sides](Problem<2>& pb) {
+    if (free_sides) pb.fixed_sides.clear();
+  });
+}
+
+// The message of the exception `f` throws; empty when it throws none.
+inline std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
 }
 
 }  // namespace mpm::test
