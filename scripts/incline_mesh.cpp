@@ -3,6 +3,7 @@
 // installed by scripts/deps.sh), as examples/meshes/incline_30.msh is made:
 //   g++ -std=c++20 scripts/incline_mesh.cpp -lgmsh -o incline_mesh
 //   ./incline_mesh 30 0.0625 examples/meshes/incline_30.msh   # degrees, edge length, file
+//   ./incline_mesh 0 0.0625 examples/meshes/incline_0.msh     # the block not turned
 // The sides are the physical groups "base" (on the incline), "top", "left" (uphill end) and
 // "right"; Delaunay (Mesh.Algorithm = 5), linear triangles, format 4.1 ASCII, a fixed random
 // seed so that the file is reproducible. Used by examples/incline_pressure_2d.toml.
