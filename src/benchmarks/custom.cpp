@@ -1,7 +1,10 @@
 #include <fmt/format.h>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -157,9 +160,70 @@ void check_boundary_name(const TriangleMesh& mesh, const Config& cfg, const std:
                                list.empty() ? std::string("none") : list));
 }
 
+// The triangles at each vertex of a mesh.
+std::vector<std::vector<Index>> cells_at_vertices(const TriangleMesh& mesh) {
+  std::vector<std::vector<Index>> out(static_cast<std::size_t>(mesh.num_vertices()));
+  for (Index c = 0; c < mesh.num_cells(); ++c)
+    for (Index v : mesh.cell_vertices(c)) out[static_cast<std::size_t>(v)].push_back(c);
+  return out;
+}
+
+// A boundary edge's triangle (the one holding both its vertices; -1 if none) and its outward
+// unit normal (away from the triangle's third vertex).
+std::pair<Index, Vec<2>> edge_cell_and_normal(const TriangleMesh& mesh,
+                                              const std::vector<std::vector<Index>>& cells_at,
+                                              const TriangleMesh::Edge& e) {
+  const Vec<2> a = mesh.vertex(e[0]), b = mesh.vertex(e[1]);
+  Index cell = -1;
+  for (Index c : cells_at[static_cast<std::size_t>(e[0])]) {
+    const auto& t = mesh.cell_vertices(c);
+    if (std::find(t.begin(), t.end(), e[1]) != t.end()) cell = c;
+  }
+  Vec<2> n(b[1] - a[1], a[0] - b[0]);  // (b - a) turned clockwise, then made outward
+  n /= n.norm();
+  if (cell >= 0) {
+    Vec<2> third = -(a + b);
+    for (Index v : mesh.cell_vertices(cell)) third += mesh.vertex(v);
+    if (n.dot(third - a) > 0.0) n = -n;
+  }
+  return {cell, n};
+}
+
+// The vertex normals of a roller along a bent boundary (P1: one DOF per vertex). A vertex on
+// two edges that turn by at most 45 degrees gets the normal of the chord between its neighbours
+// (the edges' normals weighted by their lengths), exact for vertices on a circle; one where the
+// boundary turns more (a corner, e.g. of a rectangle) gets both edges' normals, which fix it; an
+// end vertex its edge's normal.
+std::vector<std::pair<Index, std::array<double, 3>>> roller_vertex_normals(const TriangleMesh& mesh,
+                                                                           std::string_view name) {
+  const auto cells_at = cells_at_vertices(mesh);
+  std::map<Index, std::vector<Vec<2>>> weighted;  // per vertex: length x normal of its edges
+  for (const auto& e : mesh.boundary(name).edges) {
+    const Vec<2> n = edge_cell_and_normal(mesh, cells_at, e).second;
+    const double length = (mesh.vertex(e[1]) - mesh.vertex(e[0])).norm();
+    for (Index v : e) weighted[v].push_back(length * n);
+  }
+  std::vector<std::pair<Index, std::array<double, 3>>> out;
+  auto add = [&](Index v, Vec<2> n) {
+    n /= n.norm();
+    out.push_back({v, {n[0], n[1], 0.0}});
+  };
+  const double cos45 = std::sqrt(0.5);
+  for (const auto& [v, ns] : weighted) {
+    const bool smooth = ns.size() == 2 && ns[0].dot(ns[1]) >= cos45 * ns[0].norm() * ns[1].norm();
+    if (ns.size() == 1 || smooth) {
+      add(v, smooth ? Vec<2>(ns[0] + ns[1]) : ns[0]);
+    } else {
+      for (const auto& n : ns) add(v, n);
+    }
+  }
+  return out;
+}
+
 // Conditions on the named boundaries of a mesh file (its physical groups of lines):
 // boundary.fixed (every component) and boundary.roller (the normal component of a boundary on
-// one straight line: per component where it is parallel to x or y, else v . n = 0).
+// one straight line: per component where it is parallel to x or y, else v . n = 0; along a
+// bent boundary, P1 only, v_i . n_i = 0 with a normal per vertex).
 void named_boundaries(Problem<2>& pb, const Config& cfg) {
   const auto fixed = names_of(cfg, "boundary.fixed"), roller = names_of(cfg, "boundary.roller");
   if (fixed.empty() && roller.empty()) return;
@@ -184,11 +248,19 @@ void named_boundaries(Problem<2>& pb, const Config& cfg) {
   for (const auto& name : roller) {
     check(name, "boundary.roller");
     const auto line = straight_boundary(*pb.mesh, name);
-    if (!line)
-      throw InputError(fmt::format(
-          "{}: boundary.roller: boundary \"{}\" of {} does not lie on one straight line, so it "
-          "has no single normal; split it into straight physical groups or fix it",
-          cfg.where("boundary.roller"), name, pb.mesh->source()));
+    if (!line) {
+      const std::string basis = cfg.get_string("method.basis");
+      if (basis != "p1_triangles")
+        throw InputError(fmt::format(
+            "{}: boundary.roller: boundary \"{}\" of {} does not lie on one straight line, so it "
+            "has no single normal; method.basis = \"p1_triangles\" follows a bent boundary (a "
+            "normal per vertex), \"{}\" needs it split into straight physical groups (or fixed)",
+            cfg.where("boundary.roller"), name, pb.mesh->source(), basis));
+      FixedSide f{0, 0, 0u, name};
+      f.vertex_normals = roller_vertex_normals(*pb.mesh, name);
+      pb.fixed_sides.push_back(std::move(f));
+      continue;
+    }
     const Vec<2>& n = line->normal;
     const int d = std::abs(n[0]) > 1.0 - 1e-12 ? 0 : std::abs(n[1]) > 1.0 - 1e-12 ? 1 : -1;
     if (d >= 0)
@@ -247,9 +319,7 @@ void named_loads(Problem<2>& pb, const Config& cfg) {
     const Index c = mesh.cell_index(P.x0[static_cast<std::size_t>(k)]);
     if (c >= 0) in_cell[static_cast<std::size_t>(c)].push_back(k);
   }
-  std::vector<std::vector<Index>> cells_of(static_cast<std::size_t>(mesh.num_vertices()));
-  for (Index c = 0; c < mesh.num_cells(); ++c)
-    for (Index v : mesh.cell_vertices(c)) cells_of[static_cast<std::size_t>(v)].push_back(c);
+  const auto cells_at = cells_at_vertices(mesh);
   Traction<2> tr;
   tr.value = [tau](double t) { return vector_from<2>(tau, 0.0, 0.0, t); };
   if (pressure) tr.pressure = [p](double t) { return p(0.0, 0.0, 0.0, t); };
@@ -257,11 +327,7 @@ void named_loads(Problem<2>& pb, const Config& cfg) {
     check_boundary_name(mesh, cfg, name, "boundary.loaded");
     for (const auto& e : mesh.boundary(name).edges) {
       const Vec<2> a = mesh.vertex(e[0]), b = mesh.vertex(e[1]);
-      Index cell = -1;  // the triangle holding the edge (one: it is a boundary edge)
-      for (Index c : cells_of[static_cast<std::size_t>(e[0])]) {
-        const auto& t = mesh.cell_vertices(c);
-        if (std::find(t.begin(), t.end(), e[1]) != t.end()) cell = c;
-      }
+      const auto [cell, n] = edge_cell_and_normal(mesh, cells_at, e);
       if (cell < 0) continue;  // (TriangleMesh checks that boundary edges are mesh edges)
       const auto& own = in_cell[static_cast<std::size_t>(cell)];
       if (own.empty())
@@ -272,12 +338,6 @@ void named_loads(Problem<2>& pb, const Config& cfg) {
             "body.max)",
             cfg.where("boundary.loaded"), mesh.source(), a[0], a[1], b[0], b[1], name));
       const double length = (b - a).norm();
-      Vec<2> n(b[1] - a[1], a[0] - b[0]);  // (b - a) turned clockwise, then made outward
-      n /= length;
-      Vec<2> third = Vec<2>::Zero();
-      for (Index v : mesh.cell_vertices(cell)) third += mesh.vertex(v);
-      third -= a + b;
-      if (n.dot(third - a) > 0.0) n = -n;
       const double spacing = std::sqrt(mesh.cell_volume(cell) / static_cast<double>(own.size()));
       const auto q = std::max<long long>(1, std::llround(length / spacing));
       for (long long j = 0; j < q; ++j) {

@@ -90,6 +90,8 @@ class TypedStepper final : public Stepper<Dim> {
       for (int d = 0; d < Dim; ++d) n[d] = f.normal[static_cast<std::size_t>(d)];
       if (f.boundary.empty())
         sim_.fix_side(f.direction, f.side, f.components);
+      else if (!f.vertex_normals.empty())
+        sim_.fix_vertex_normals(f.vertex_normals);
       else if (n != Vec<Dim>::Zero())
         sim_.fix_boundary_normal(f.boundary, n);
       else

@@ -43,6 +43,10 @@ struct FixedSide {
   // Not zero: a roller on an inclined straight `boundary`: the velocity component along this
   // unit normal (x, y[, z]) is zero, whatever `components` says.
   std::array<double, 3> normal = {};
+  // Not empty: a roller on a bent `boundary` of a mesh whose degrees of freedom are its vertices
+  // (P1): v_i . n = 0 for each (vertex i, unit normal n); a corner vertex is listed with the
+  // normals of both its edges.
+  std::vector<std::pair<Index, std::array<double, 3>>> vertex_normals = {};
 };
 
 template <int Dim>

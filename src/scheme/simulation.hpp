@@ -3,6 +3,7 @@
 // BasisState (+ basis and cached stencils), Simulation (+ mapping). Stages (scheme/stages.hpp)
 // operate on the lowest layer they need; schemes order the stages.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -10,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "basis/stencil.hpp"
@@ -135,6 +137,21 @@ struct BasisState : RunState<Dim> {
       constrain(basis.boundary_dofs(name), n * n.transpose());
     else
       throw std::logic_error("fix_boundary_normal: named boundaries belong to bases on triangles");
+  }
+  // A roller on a bent named boundary of a P1 mesh (DOF i is vertex i): v_i . n = 0 for each
+  // (vertex, unit normal) of FixedSide::vertex_normals.
+  void fix_vertex_normals(const std::vector<std::pair<Index, std::array<double, 3>>>& normals) {
+    if constexpr (Basis::kTriangleMesh) {
+      if (basis.num_dofs() != basis.mesh().num_vertices())
+        throw std::logic_error("fix_vertex_normals: the basis's DOFs are not the mesh vertices");
+      for (const auto& [v, a] : normals) {
+        Vec<Dim> n;
+        for (int d = 0; d < Dim; ++d) n[d] = a[static_cast<std::size_t>(d)];
+        constrain({v}, n * n.transpose());
+      }
+    } else {
+      throw std::logic_error("fix_vertex_normals: named boundaries belong to bases on triangles");
+    }
   }
 
  private:

@@ -290,7 +290,8 @@ std::vector<KeySpec> declare() {
       choice("boundary.roller", "", {},
              "named boundaries of grid.mesh whose normal velocity is zero, separated by commas; "
              "each must lie on one straight line, which may be inclined (v . n = 0 couples the "
-             "velocity components) (2D custom)"),
+             "velocity components), or with method.basis = \"p1_triangles\" may bend (a normal "
+             "per vertex; corners turning by more than 45 degrees are fixed) (2D custom)"),
       choice("boundary.loaded", "", {},
              "named boundaries of grid.mesh loaded by traction.loaded and pressure.loaded, "
              "separated by commas; the body must lie along them (2D custom)"),

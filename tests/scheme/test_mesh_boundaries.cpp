@@ -146,6 +146,78 @@ TEST(MeshBoundaries, AnInclinedRollerGivesTheTurnedRunOfAnAxisParallelOne) {
   std::filesystem::remove(turned);
 }
 
+// The ring 0.5 <= r <= 1 in 3 x 32 cells of the polar grid, each cut into two triangles, as a
+// Gmsh file whose physical groups "outer" and "inner" are its circles. Vertex (i, j) (radius
+// index i, angle index j) is number 32 i + j.
+std::string ring_mesh(const std::string& name) {
+  const int nr = 3, nt = 32;
+  std::vector<Vec<2>> vertices;
+  for (int i = 0; i <= nr; ++i)
+    for (int j = 0; j < nt; ++j) {
+      const double r = 0.5 + 0.5 * i / nr, a = 2.0 * M_PI * j / nt;
+      vertices.emplace_back(r * std::cos(a), r * std::sin(a));
+    }
+  auto at = [&](int i, int j) { return static_cast<Index>(i * nt + (j % nt)); };
+  std::vector<TriangleMesh::Triangle> triangles;
+  std::map<std::string, std::vector<TriangleMesh::Edge>> circles;
+  for (int j = 0; j < nt; ++j) {
+    for (int i = 0; i < nr; ++i) {
+      triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+    circles["inner"].push_back({at(0, j), at(0, j + 1)});
+    circles["outer"].push_back({at(nr, j), at(nr, j + 1)});
+  }
+  return test::write_msh(TriangleMesh(vertices, triangles, {}, name), name, {}, circles);
+}
+
+// A roller along a bent boundary (P1): each vertex of the ring's outer circle gets the normal of
+// the chord between its neighbours, here the radius, so its admissible velocity is the tangent.
+// A rigid rotation v = w (-y, x) then passes the wall untouched: with consistent mass P1 carries
+// the linear field exactly, and after a step the grid velocity is w x at every vertex to
+// round-off (the coupled consistent system with per-vertex normals), where a fixed wall stops the
+// outer vertices.
+TEST(MeshBoundaries, ARollerFollowsABentBoundaryWithANormalPerVertex) {
+  const std::string file = ring_mesh("ring");
+  const double w = 2.0;
+  auto run = [&](const std::string& wall) {
+    return on_mesh(
+        file, {"method.basis=p1_triangles", "method.mass=consistent", "particles.per_triangle=6",
+               wall, fmt::format("initial.velocity=[\"-{0}*y\", \"{0}*x\"]", w)});
+  };
+  auto slip = run("boundary.roller=outer");
+  const auto& proj = slip->stepper->state().nodes.projected;
+  // The four vertices on the axes have axis-parallel normals, kept as fixed bits.
+  ASSERT_EQ(proj.size(), 28u);
+  const auto& mesh = *slip->pb.mesh;
+  const auto& bits = slip->stepper->state().nodes.fixed;
+  for (int j = 0; j < 32; j += 8) EXPECT_EQ(bits[static_cast<std::size_t>(96 + j)], j % 16 ? 2 : 1);
+  for (const auto& e : proj) {
+    const Vec<2> x = mesh.vertex(e.dof);
+    EXPECT_NEAR(x.norm(), 1.0, 1e-14);
+    const Vec<2> t = Vec<2>(-x[1], x[0]).normalized();
+    EXPECT_LT((e.free - t * t.transpose()).norm(), 1e-14) << e.dof;
+  }
+  auto fixed = run("boundary.fixed=outer");
+  slip->stepper->step(1e-4);
+  fixed->stepper->step(1e-4);
+  const auto& v = slip->stepper->state().nodes.velocity;
+  const auto& vf = fixed->stepper->state().nodes.velocity;
+  for (Index i = 0; i < mesh.num_vertices(); ++i) {
+    const Vec<2> x = mesh.vertex(i), rigid(-w * x[1], w * x[0]);
+    EXPECT_LT((v[static_cast<std::size_t>(i)] - rigid).norm(), 1e-12 * w) << i;
+    if (i >= 3 * 32) {
+      EXPECT_EQ(vf[static_cast<std::size_t>(i)], Vec<2>::Zero()) << i;
+    }
+  }
+  // PS splines need a straight boundary for a roller.
+  EXPECT_NE(test::message_of([&] {
+              (void)on_mesh(file, {"method.basis=powell_sabin", "boundary.roller=outer"});
+            }).find("does not lie on one straight line, so it has no single normal"),
+            std::string::npos);
+  std::filesystem::remove(file);
+}
+
 // Each DOF's constraint is the span of its conditions: two inclined rollers that meet at an
 // angle fix their common corner in both components, an inclined roller and one parallel to an
 // axis likewise, and the other DOFs of an inclined roller keep the tangential component.
@@ -176,6 +248,25 @@ TEST(MeshBoundaries, RollersMeetingAtAnAngleFixTheirCorner) {
   const Vec<2> t = Vec<2>(-1.0, 1.0).normalized();  // along the slope
   EXPECT_LT((hn.projected[0].free - t * t.transpose()).norm(), 1e-15);
   std::filesystem::remove(hfile);
+  // A bent roller turning by 90 degrees at a corner: the unit square's "top_left" (its top and
+  // left sides, tests/data/meshes/square_v41.msh) fixes the corner (0, 1) and keeps the
+  // tangential component elsewhere.
+  const std::string square = std::string(MPM_SOURCE_DIR) + "/tests/data/meshes/square_v41.msh";
+  auto sq = on_mesh(square, {"method.basis=p1_triangles", "boundary.roller=top_left"});
+  const auto& sn = sq->stepper->state().nodes;
+  const auto& sm = *sq->pb.mesh;
+  int corners = 0;
+  for (Index v : sm.boundary_vertices("top_left")) {
+    const Vec<2> x = sm.vertex(v);
+    if ((x - Vec<2>(0, 1)).norm() < 1e-12) {
+      EXPECT_EQ(sn.fixed[static_cast<std::size_t>(v)], 3);
+      ++corners;
+    } else {  // a side parallel to an axis: one component, as bits
+      EXPECT_EQ(sn.fixed[static_cast<std::size_t>(v)], std::abs(x[0]) < 1e-12 ? 1 : 2) << v;
+    }
+  }
+  EXPECT_EQ(corners, 1);
+  EXPECT_TRUE(sn.projected.empty());
 }
 
 // A free body without gravity, a nominal traction on its base and a pressure on its top (the

@@ -256,8 +256,8 @@ TEST(MeshFileRun, NamedBoundariesOfTheFileActAsTheSidesTheyLieOn) {
 }
 
 // Named boundaries that cannot carry the condition are refused with the key: an unknown name
-// (the mesh's names listed), a roller on a boundary that bends ("top_left"), a name in both
-// lists, and the keys without a mesh file or in another problem.
+// (the mesh's names listed), a roller on a boundary that bends ("top_left") with PS splines, a
+// name in both lists, and the keys without a mesh file or in another problem.
 TEST(MeshFileRun, NamedBoundariesThatDoNotFitAreRefused) {
   auto refusal = [](const std::function<void()>& f) { return test::message_of(f); };
   const std::string tri = "method.basis=p1_triangles";
@@ -268,8 +268,10 @@ TEST(MeshFileRun, NamedBoundariesThatDoNotFitAreRefused) {
                       "\"right\", \"top_left\", \"x+\", \"x-\", \"y+\", \"y-\""),
             std::string::npos);
   EXPECT_NE(refusal([&] {
-              custom_on_square({tri, "boundary.roller=top_left"});
-            }).find("does not lie on one straight line"),
+              custom_on_square({"method.basis=powell_sabin", "boundary.roller=top_left"});
+            })
+                .find("does not lie on one straight line, so it has no single normal; "
+                      "method.basis = \"p1_triangles\" follows a bent boundary"),
             std::string::npos);
   EXPECT_NE(refusal([&] {
               custom_on_square({tri, "boundary.fixed=bottom, right", "boundary.roller=right"});
