@@ -66,6 +66,10 @@ SLOW+='|TlsOnTriangles\.RankLossOfD631StopsTheBaselineNotTheDefault'
 # (over 300 s); TlsDomains.CellAlignedDomainsGiveDsSums and the TlsRobust runs (2D defaults) keep
 # split_domains under them.
 SLOW+='|TlsDomains\.(SmallStrainBarConvergesWhereCentresStall|PlateStressErrorBelowDsSums)'
+# The incline example three times over (2,400 steps each; 4 s in Release, over 300 s here): the
+# inclined roller, the coupled consistent solve and the loads on mesh boundaries run under the
+# sanitizers in the other MeshBoundaries tests.
+SLOW+='|MeshBoundaries\.ABlockPressedOnAnInclineMatchesTheQuasiStaticSolution'
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
 else
