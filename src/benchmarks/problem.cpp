@@ -354,14 +354,14 @@ AnyProblem make_problem(const Config& cfg) {
           "{}: {} names boundaries of a mesh file (grid.mesh) in the 2D custom problem; "
           "benchmark = \"{}\"{} sets its own conditions",
           cfg.where(key), key, cfg.get_string("benchmark"), meshed ? "" : " without grid.mesh"));
-  for (const char* key : {"traction.loaded", "pressure.loaded"})
-    if ((key[0] == 't' ? cfg.get_expressions(key) != std::vector<std::string>{"0"}
-                       : cfg.get_string(key) != "0") &&
-        !custom_mesh)
-      throw InputError(fmt::format(
-          "{}: {} loads named boundaries of a mesh file (grid.mesh, boundary.loaded) in the 2D "
-          "custom problem; benchmark = \"{}\"{} has none",
-          cfg.where(key), key, cfg.get_string("benchmark"), meshed ? "" : " without grid.mesh"));
+  const bool traction = cfg.get_expressions("traction.loaded") != std::vector<std::string>{"0"};
+  if ((traction || cfg.get_string("pressure.loaded") != "0") && !custom_mesh) {
+    const char* key = traction ? "traction.loaded" : "pressure.loaded";
+    throw InputError(fmt::format(
+        "{}: {} loads named boundaries of a mesh file (grid.mesh, boundary.loaded) in the 2D "
+        "custom problem; benchmark = \"{}\"{} has none",
+        cfg.where(key), key, cfg.get_string("benchmark"), meshed ? "" : " without grid.mesh"));
+  }
   std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid); }, pb);
   return pb;
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -206,13 +207,10 @@ void after_mass(RunState<Dim>& sim) {
           for (int d = 0; d < Dim; ++d) proj[i](d, d) = (fixed[i] & (1u << d)) ? 0.0 : 1.0;
       for (const auto& e : sim.nodes.projected)
         if (act[static_cast<std::size_t>(e.dof)]) proj[static_cast<std::size_t>(e.dof)] = e.free;
-      std::vector<double> flat(proj.size() * Dim * Dim);
-      for (std::size_t i = 0; i < proj.size(); ++i)
-        for (int a = 0; a < Dim; ++a)
-          for (int b = 0; b < Dim; ++b)
-            flat[(i * Dim + static_cast<std::size_t>(a)) * Dim + static_cast<std::size_t>(b)] =
-                proj[i](a, b);
-      if (!sim.consistent.factorize_coupled(Dim, flat))
+      // (Fixed-size Eigen matrices are stored contiguously, and the projectors are symmetric,
+      // so column-major blocks read as the row-major ones factorize_coupled takes.)
+      if (!sim.consistent.factorize_coupled(
+              Dim, std::span<const double>(proj.data()->data(), proj.size() * Dim * Dim)))
         throw RunError(exit_code::kNonFinite,
                        fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
                                    "(a cell with too few particles); use method.mass = \"lumped\"",

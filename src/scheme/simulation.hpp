@@ -137,6 +137,7 @@ struct BasisState : RunState<Dim> {
       constrain(basis.boundary_dofs(name), n * n.transpose());
     else
       throw std::logic_error("fix_boundary_normal: named boundaries belong to bases on triangles");
+    refresh_per_component();
   }
   // A roller on a bent named boundary of a P1 mesh (DOF i is vertex i): v_i . n = 0 for each
   // (vertex, unit normal) of FixedSide::vertex_normals.
@@ -152,6 +153,7 @@ struct BasisState : RunState<Dim> {
     } else {
       throw std::logic_error("fix_vertex_normals: named boundaries belong to bases on triangles");
     }
+    refresh_per_component();
   }
 
  private:
@@ -160,6 +162,14 @@ struct BasisState : RunState<Dim> {
     for (int d = 0; d < Dim; ++d)
       if (components & (1u << d)) c(d, d) = 1.0;
     constrain(dofs, c);
+    refresh_per_component();
+  }
+
+  void refresh_per_component() {
+    constexpr std::uint8_t kAll = (1u << Dim) - 1u;
+    const auto& fixed = this->nodes.fixed;
+    this->consistent_per_component =
+        std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
   }
 
   // Adds the constrained directions range(c) (c symmetric positive semi-definite) to those of
@@ -167,8 +177,8 @@ struct BasisState : RunState<Dim> {
   // meeting at a corner at an angle fix it; a roller and a parallel one do not add up). A
   // subspace spanned by axes is kept as nodes.fixed bits, any other as a nodes.projected
   // projector.
+  // (The callers then refresh consistent_per_component, once per condition.)
   void constrain(const std::vector<Index>& dofs, const Mat<Dim>& c) {
-    constexpr std::uint8_t kAll = (1u << Dim) - 1u;
     auto& nd = this->nodes;
     auto& proj = nd.projected;
     for (Index i : dofs) {
@@ -207,8 +217,6 @@ struct BasisState : RunState<Dim> {
           proj.insert(it, {i, free});
       }
     }
-    this->consistent_per_component = std::any_of(
-        nd.fixed.begin(), nd.fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
   }
 };
 

@@ -46,7 +46,7 @@ bool ConsistentMass::factorize_matrix(int slot) {
   return solver.info() == Eigen::Success && (solver.vectorD().array() > 0.0).all();
 }
 
-bool ConsistentMass::factorize_coupled(int dim, const std::vector<double>& projector) {
+bool ConsistentMass::factorize_coupled(int dim, std::span<const double> projector) {
   if (settings_.kind == MassSolver::Pmg)
     throw std::logic_error("ConsistentMass: pmg has no hierarchy for the coupled system");
   const auto d = static_cast<std::size_t>(dim), dd = d * d;

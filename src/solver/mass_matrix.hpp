@@ -14,6 +14,7 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "grid/grid_state.hpp"
@@ -71,7 +72,7 @@ class ConsistentMass {
   // Unknown a of DOF i is entry dim i + a. Factorised (direct) or kept (cg) in slot kCoupled;
   // pmg has no hierarchy for it (logic_error: the run settings refuse the combination).
   static constexpr int kCoupled = kSlots;
-  bool factorize_coupled(int dim, const std::vector<double>& projector);
+  bool factorize_coupled(int dim, std::span<const double> projector);
 
   // y = M^-1 rhs with the factorisation (or hierarchy) of `slot`. For cg and pmg `report`, when
   // given, receives the iterations and residuals (converged false: the caller stops the run).
