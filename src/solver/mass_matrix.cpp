@@ -5,12 +5,26 @@
 
 namespace mpm {
 
+const Eigen::SparseMatrix<double>& ConsistentMass::summed() {
+  if (!summed_) {
+    summed_matrix_.resize(n_, n_);
+    summed_matrix_.setFromTriplets(triplets_.begin(), triplets_.end());
+    summed_ = true;
+  }
+  return summed_matrix_;
+}
+
 bool ConsistentMass::factorize_kept(int slot) {
   const auto keep = [&](Index i) { return kept_[static_cast<std::size_t>(i)] != 0; };
+  // The kept entries of the summed matrix: each is the sum of the same triplets, in the same
+  // order, as when the kept triplets themselves were summed (an entry's triplets are all kept
+  // or all dropped), so the matrix is the same to the last bit.
+  const auto& all = summed();
   std::vector<Triplet> t;
-  t.reserve(triplets_.size() + static_cast<std::size_t>(n_));
-  for (const auto& e : triplets_)
-    if (keep(e.row()) && keep(e.col())) t.push_back(e);
+  t.reserve(static_cast<std::size_t>(all.nonZeros() + n_));
+  for (Index k = 0; k < all.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(all, k); it; ++it)
+      if (keep(it.row()) && keep(it.col())) t.emplace_back(it.row(), it.col(), it.value());
   for (Index i = 0; i < n_; ++i)
     if (!keep(i)) t.emplace_back(i, i, 1.0);
   const auto s = static_cast<std::size_t>(slot);
@@ -28,9 +42,7 @@ bool ConsistentMass::factorize_kept(int slot) {
       for (Index i = 0; i < n_; ++i)
         if (keep(i)) kept_index_[s].push_back(i);
       // The fine level is the assembled matrix itself (whatever the mapping assembled).
-      SparseMatrixD fine(n_, n_);
-      fine.setFromTriplets(triplets_.begin(), triplets_.end());
-      pmg_[s] = std::make_unique<PMultigrid>(pmg_builder(kept_, slot, fine));
+      pmg_[s] = std::make_unique<PMultigrid>(pmg_builder(kept_, slot, summed()));
       return true;
     }
   }
@@ -57,23 +69,25 @@ bool ConsistentMass::factorize_coupled(int dim, std::span<const double> projecto
   };
   std::vector<unsigned char> eliminated(static_cast<std::size_t>(n_));
   for (Index i = 0; i < n_; ++i) eliminated[static_cast<std::size_t>(i)] = zero(i) ? 1 : 0;
+  const auto& all = summed();
   std::vector<Triplet> t;
-  t.reserve(triplets_.size() * dd + static_cast<std::size_t>(n_) * dd);
-  for (const auto& e : triplets_) {
-    const Index i = e.row(), j = e.col();
-    if (eliminated[static_cast<std::size_t>(i)] || eliminated[static_cast<std::size_t>(j)])
-      continue;
-    // Block (i, j) of P (M (x) I) P: M_ij P_i P_j.
-    const double *pi = block(i), *pj = block(j);
-    for (std::size_t a = 0; a < d; ++a)
-      for (std::size_t b = 0; b < d; ++b) {
-        double v = 0.0;
-        for (std::size_t c = 0; c < d; ++c) v += pi[a * d + c] * pj[c * d + b];
-        if (v != 0.0)
-          t.emplace_back(static_cast<Index>(d) * i + static_cast<Index>(a),
-                         static_cast<Index>(d) * j + static_cast<Index>(b), e.value() * v);
-      }
-  }
+  t.reserve(static_cast<std::size_t>(all.nonZeros()) * dd + static_cast<std::size_t>(n_) * dd);
+  for (Index k = 0; k < all.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(all, k); it; ++it) {
+      const Index i = it.row(), j = it.col();
+      if (eliminated[static_cast<std::size_t>(i)] || eliminated[static_cast<std::size_t>(j)])
+        continue;
+      // Block (i, j) of P (M (x) I) P: M_ij P_i P_j.
+      const double *pi = block(i), *pj = block(j);
+      for (std::size_t a = 0; a < d; ++a)
+        for (std::size_t b = 0; b < d; ++b) {
+          double v = 0.0;
+          for (std::size_t c = 0; c < d; ++c) v += pi[a * d + c] * pj[c * d + b];
+          if (v != 0.0)
+            t.emplace_back(static_cast<Index>(d) * i + static_cast<Index>(a),
+                           static_cast<Index>(d) * j + static_cast<Index>(b), it.value() * v);
+        }
+    }
   for (Index i = 0; i < n_; ++i) {  // I - P_i
     const double* p = block(i);
     for (std::size_t a = 0; a < d; ++a)

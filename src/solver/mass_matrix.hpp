@@ -43,6 +43,7 @@ class ConsistentMass {
   void begin(Index ndofs) {
     n_ = ndofs;
     triplets_.clear();
+    summed_ = false;
   }
   void add(Index i, Index j, double value) { triplets_.emplace_back(i, j, value); }
 
@@ -86,6 +87,13 @@ class ConsistentMass {
   // Out of line (mass_matrix.cpp): the sparse factorisation is a large share of the compile
   // time of every unit that steps a simulation.
   bool factorize_kept(int slot);
+  // The particles' contributions summed into one sparse matrix over all DOFs, once per
+  // assembly: the slots (components with their own Dirichlet DOFs) and pmg's fine level start
+  // from it instead of each summing the triplets again (the per-particle triplets, 27^2 per
+  // particle for quadratic B-splines in 3D, were 60 % of a consistent-mass step; BENCHMARKS.md).
+  const Eigen::SparseMatrix<double>& summed();
+  Eigen::SparseMatrix<double> summed_matrix_;
+  bool summed_ = false;
 
   Index n_ = 0;
   MassSolverSettings settings_;
