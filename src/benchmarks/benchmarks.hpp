@@ -80,6 +80,22 @@ struct PlateMms2DExact {
   ExactState<2> operator()(const Vec<2>& X, double t) const;
 };
 
+// 3D axis-aligned vibration of the cube [0, L]^3, manufactured solution (issue 20; 001's plate
+// extended to 3D), neo-Hookean:
+//   u_i = A sin(2 pi X_i/L) sin(omega t),   omega = c pi / L,   c = sqrt(E / rho0),
+// rollers on all six faces; body force b = u_tt - Div P / rho0 (scripts/cube_mms.py derives it).
+Problem<3> make_cube_mms_3d(const Config& cfg);
+
+struct CubeMms3DExact {
+  double length, density, lambda, mu, wave_speed, amplitude;
+  double omega() const { return wave_speed * std::numbers::pi / length; }
+  Mat<3> deformation_gradient(const Vec<3>& X, double t) const;  // F = I + Grad u (diagonal)
+  Mat<3> cauchy_stress(const Mat<3>& F) const;                   // sigma(F) [Pa]
+  Mat<3> piola_stress(const Mat<3>& F) const;                    // P(F) [Pa]
+  Vec<3> body_force(const Vec<3>& X, double t) const;            // b(X, t) [m/s^2]
+  ExactState<3> operator()(const Vec<3>& X, double t) const;
+};
+
 // The generalized vortex (Kamojjala, Brannon, Sadeghirad & Guilkey, Eng. Comput. 2015), a
 // rotation test: the material of the annulus R_i <= R <= R_o turns about its centre by
 // alpha(R, t) = g(t) h(R), g = A sin(2 pi t / period), h = (1 - 4 xi^2)^2 with
@@ -140,17 +156,18 @@ void check_mesh_box(const Config& cfg, const TriangleMesh& m, const Grid<2>& g);
 Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
                           double rho0, const TriangleMesh* mesh = nullptr);
 
-// A 2D manufactured solution `ex` (plate_mms_2d, vortex_2d) on pb's particles: their initial
-// velocity ex(X, 0).v, the body force ex.body_force(X, t) at their material positions X = x0
-// refilled every step in parallel (sines, cosines per particle), and ex as the exact solution.
-template <class Exact>
-void use_manufactured_solution(Problem<2>& pb, const Exact& ex) {
-  pb.initial_velocity = [ex](const Vec<2>& X) { return ex(X, 0.0).v; };
+// A manufactured solution `ex` (plate_mms_2d, vortex_2d, cube_mms_3d) on pb's particles: their
+// initial velocity ex(X, 0).v, the body force ex.body_force(X, t) at their material positions
+// X = x0 refilled every step in parallel (sines, cosines per particle), and ex as the exact
+// solution.
+template <int Dim, class Exact>
+void use_manufactured_solution(Problem<Dim>& pb, const Exact& ex) {
+  pb.initial_velocity = [ex](const Vec<Dim>& X) { return ex(X, 0.0).v; };
   for (std::size_t i = 0; i < pb.particles.x.size(); ++i)
     pb.particles.v[i] = pb.initial_velocity(pb.particles.x0[i]);
   // b depends on the material position X (P.x0, fixed), so only time dependence is flagged.
   pb.body_force.time_dependent = true;
-  pb.body_force.fill = [ex](const Particles<2>& P, double t, std::vector<Vec<2>>& b) {
+  pb.body_force.fill = [ex](const Particles<Dim>& P, double t, std::vector<Vec<Dim>>& b) {
     parallel_for(static_cast<Index>(b.size()), [&](Index p) {
       const auto i = static_cast<std::size_t>(p);
       b[i] = ex.body_force(P.x0[i], t);

@@ -109,6 +109,9 @@ template Traction<1> body_face_traction<1>(const Grid<1>&, const Particles<1>&, 
 template Traction<2> body_face_traction<2>(const Grid<2>&, const Particles<2>&, const Vec<2>&,
                                            const Vec<2>&, int, int, int,
                                            std::function<Vec<2>(double)>);
+template Traction<3> body_face_traction<3>(const Grid<3>&, const Particles<3>&, const Vec<3>&,
+                                           const Vec<3>&, int, int, int,
+                                           std::function<Vec<3>(double)>);
 
 template Particles<1> seed_particles<1>(const Grid<1>&, const Vec<1>&, const Vec<1>&, int, double);
 template Particles<2> seed_particles<2>(const Grid<2>&, const Vec<2>&, const Vec<2>&, int, double);
@@ -324,6 +327,7 @@ AnyProblem make_any_problem(const Config& cfg) {
   }
   if (name == "plate_mms_2d") return make_plate_mms_2d(cfg);
   if (name == "vortex_2d") return make_vortex_2d(cfg);
+  if (name == "cube_mms_3d") return make_cube_mms_3d(cfg);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));
 }

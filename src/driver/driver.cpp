@@ -344,7 +344,10 @@ template ErrorNorms error_norms<1>(const Particles<1>&, const Grid<1>&, const Ex
                                    double, double, double, int);
 template ErrorNorms error_norms<2>(const Particles<2>&, const Grid<2>&, const ExactSolution<2>&,
                                    double, double, double, int);
+template ErrorNorms error_norms<3>(const Particles<3>&, const Grid<3>&, const ExactSolution<3>&,
+                                   double, double, double, int);
 template class OutputSession<1>;
 template class OutputSession<2>;
+template class OutputSession<3>;
 
 }  // namespace mpm::driver

@@ -148,8 +148,12 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 
   if (opt.shuffle_seed != 0 && !opt.restart)
     shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
-  const auto stepper = otm || unified ? make_otm_stepper<Dim>({pb, method, !opt.restart})
-                                      : make_stepper<Dim>(basis, {pb, method, !opt.restart});
+  // OTM and the unified solver are one- and two-dimensional (run_settings refuses them in 3D).
+  const auto stepper = [&]() -> std::unique_ptr<Stepper<Dim>> {
+    if constexpr (Dim <= 2)
+      if (otm || unified) return make_otm_stepper<Dim>({pb, method, !opt.restart});
+    return make_stepper<Dim>(basis, {pb, method, !opt.restart});
+  }();
   RunState<Dim>& sim = stepper->state();
 
   // Outputs start once the input has passed every check above.
@@ -238,6 +242,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 template RunResult run_mpm<1>(Problem<1>&, const RunSettings&, const std::string&,
                               const RunOptions&);
 template RunResult run_mpm<2>(Problem<2>&, const RunSettings&, const std::string&,
+                              const RunOptions&);
+template RunResult run_mpm<3>(Problem<3>&, const RunSettings&, const std::string&,
                               const RunOptions&);
 
 }  // namespace mpm::driver

@@ -13,11 +13,21 @@ static_assert(std::variant_size_v<BasisKind> == MPM_BASIS_KINDS,
               "CMakeLists.txt generates one stepper unit per BasisKind alternative: update "
               "MPM_BASIS_KINDS there");
 
+// In 3D the units exist for the kinds that support it only (CMakeLists.txt, MPM_KINDS_3D): a kind
+// that declares 3D without its unit fails to link, and run_settings refuses the others before.
+template <int Dim, std::size_t I>
+std::unique_ptr<Stepper<Dim>> stepper_of_kind(const StepperInput<Dim>& in) {
+  if constexpr (Dim == 3 && !supports_dimension<std::variant_alternative_t<I, BasisKind>>(Dim))
+    throw std::logic_error("make_stepper: basis not available in 3D");
+  else
+    return make_stepper_for<Dim, I>(in);
+}
+
 template <int Dim>
 std::unique_ptr<Stepper<Dim>> make_stepper(const BasisKind& basis, const StepperInput<Dim>& in) {
   return [&]<std::size_t... I>(std::index_sequence<I...>) {
     std::unique_ptr<Stepper<Dim>> s;
-    (void)((basis.index() == I ? (s = make_stepper_for<Dim, I>(in), true) : false) || ...);
+    (void)((basis.index() == I ? (s = stepper_of_kind<Dim, I>(in), true) : false) || ...);
     return s;
   }
   (std::make_index_sequence<std::variant_size_v<BasisKind>>{});
@@ -25,6 +35,7 @@ std::unique_ptr<Stepper<Dim>> make_stepper(const BasisKind& basis, const Stepper
 
 template std::unique_ptr<Stepper<1>> make_stepper<1>(const BasisKind&, const StepperInput<1>&);
 template std::unique_ptr<Stepper<2>> make_stepper<2>(const BasisKind&, const StepperInput<2>&);
+template std::unique_ptr<Stepper<3>> make_stepper<3>(const BasisKind&, const StepperInput<3>&);
 
 void report_mapping(nlohmann::ordered_json& summary, const TlsMapping& m, int) {
   const auto& t = m.totals();

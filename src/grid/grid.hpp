@@ -133,5 +133,6 @@ struct Grid {
 
 static_assert(Mesh<Grid<1>>);
 static_assert(Mesh<Grid<2>>);
+static_assert(Mesh<Grid<3>>);
 
 }  // namespace mpm

@@ -130,6 +130,7 @@ concept ConstitutiveLaw = requires(const Law& law, Mat<Dim>& sigma, const Mat<Di
 static_assert(ConstitutiveLaw<Elastic1DSmall, 1> && ConstitutiveLaw<Elastic1DLarge, 1>);
 static_assert(ConstitutiveLaw<LinearElastic, 1> && ConstitutiveLaw<LinearElastic, 2>);
 static_assert(ConstitutiveLaw<NeoHookean, 1> && ConstitutiveLaw<NeoHookean, 2>);
+static_assert(ConstitutiveLaw<LinearElastic, 3> && ConstitutiveLaw<NeoHookean, 3>);
 
 using Material = std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean>;
 

@@ -74,7 +74,7 @@ struct Problem {
   bool fem_reference = false;  // empty when the benchmark has no exact solution
 };
 
-using AnyProblem = std::variant<Problem<1>, Problem<2>>;
+using AnyProblem = std::variant<Problem<1>, Problem<2>, Problem<3>>;
 
 // Particles evenly spaced over the body [lo, hi] (per direction), `per_cell` per grid cell
 // width, each carrying an equal share of the volume; mass = rho0 V, F = I, zero stress.

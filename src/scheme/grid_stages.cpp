@@ -385,10 +385,15 @@ template void solve_acceleration<1>(RunState<1>&);
 template void solve_velocity<1>(RunState<1>&);
 template void advance_grid_velocity<1>(RunState<1>&, double);
 template void detail::after_mass<2>(RunState<2>&);
+template void detail::after_mass<3>(RunState<3>&);
 template void detail::after_momentum<2>(RunState<2>&);
+template void detail::after_momentum<3>(RunState<3>&);
 template void solve_acceleration<2>(RunState<2>&);
+template void solve_acceleration<3>(RunState<3>&);
 template void solve_velocity<2>(RunState<2>&);
+template void solve_velocity<3>(RunState<3>&);
 template void advance_grid_velocity<2>(RunState<2>&, double);
+template void advance_grid_velocity<3>(RunState<3>&, double);
 template void detail::throw_unfit<1>(const RunState<1>&, const std::vector<Index>&,
                                      std::string_view);
 template void detail::throw_left_grid<1>(const RunState<1>&);
@@ -396,8 +401,13 @@ template void detail::throw_face_left_grid<1>(const RunState<1>&, std::size_t, c
 template void detail::throw_particle_failure<1>(const RunState<1>&);
 template void detail::throw_unfit<2>(const RunState<2>&, const std::vector<Index>&,
                                      std::string_view);
+template void detail::throw_unfit<3>(const RunState<3>&, const std::vector<Index>&,
+                                     std::string_view);
 template void detail::throw_left_grid<2>(const RunState<2>&);
+template void detail::throw_left_grid<3>(const RunState<3>&);
 template void detail::throw_face_left_grid<2>(const RunState<2>&, std::size_t, const Vec<2>&, bool);
+template void detail::throw_face_left_grid<3>(const RunState<3>&, std::size_t, const Vec<3>&, bool);
 template void detail::throw_particle_failure<2>(const RunState<2>&);
+template void detail::throw_particle_failure<3>(const RunState<3>&);
 
 }  // namespace mpm::stages

@@ -49,7 +49,7 @@ struct LinearKind {
   static constexpr std::string_view kName = "linear";
   static constexpr std::string_view kDescription =
       "piecewise-linear (P1) nodal basis, tensor product (D 2.5)";
-  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = LinearBasis<Dim>;
@@ -67,7 +67,7 @@ struct BSplineKind {
   static constexpr std::string_view kDescription =
       "B-splines of degree method.degree (1-5) from one open uniform knot vector (D 3.1)";
   static constexpr int kDegree = P;
-  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   template <int Dim>
   using type = BSplineBasis<Dim, P>;
 };
@@ -88,7 +88,7 @@ struct UGimpKind {
   static constexpr std::string_view kName = "ugimp";
   static constexpr std::string_view kDescription =
       "uniform GIMP: P1 averaged over the initial particle domain (D 2.6.4, eq. 2.61)";
-  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = UGimpBasis<Dim>;
@@ -98,7 +98,7 @@ struct CpGimpKind {
   static constexpr std::string_view kName = "cpgimp";
   static constexpr std::string_view kDescription =
       "contiguous-particle GIMP: particle domain sized by the diagonal of F (D 2.6.4)";
-  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = CpGimpBasis<Dim>;
@@ -108,7 +108,7 @@ struct CpdiKind {
   static constexpr std::string_view kName = "cpdi";
   static constexpr std::string_view kDescription =
       "CPDI: domain convected by F, P1 interpolated at its corners (D 2.6.4, eq. 2.64)";
-  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = CpdiBasis<Dim>;

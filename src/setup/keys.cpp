@@ -221,8 +221,7 @@ std::vector<KeySpec> declare() {
               "to round-off; src/mapping/mls.hpp); false: 001's and 003's definitions"),
       real("mms.amplitude", "m", 0.1, any(),
            "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (mms_1d: "
-           "003; "
-           "plate_mms_2d: 001)"),
+           "003; plate_mms_2d: 001; cube_mms_3d)"),
       integer("reference.dofs", 120, at_least(2),
               "nodes of the updated-Lagrangian FEM reference of vibrating_bar_large (D: 120)"),
 
@@ -236,6 +235,7 @@ std::vector<KeySpec> declare() {
       real("bar.v0", "m/s", 0.1, any(), "amplitude v0 of the initial velocity v0 sin(pi x/L)"),
       real("plate.length", "m", 1.0, greater_than(0),
            "side L of the square plate of plate_mms_2d (001: 1 m)"),
+      real("cube.length", "m", 1.0, greater_than(0), "side L of the cube of cube_mms_3d"),
       real("vortex.amplitude", "rad", 1.0, any(),
            "largest turn A of the vortex_2d annulus, alpha = A sin(2 pi t / period) h(R) (at "
            "the mid radius)"),

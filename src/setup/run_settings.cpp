@@ -80,6 +80,10 @@ RunSettings run_settings(const Config& cfg, int dim) {
   if (m.solver == Solver::Ulfem && dim != 1)
     throw InputError(fmt::format("{}: method.solver = \"{}\" is one-dimensional (so far)",
                                  cfg.where("method.solver"), solver));
+  if ((m.solver == Solver::Otm || m.solver == Solver::Unified) && dim == 3)
+    throw InputError(
+        fmt::format("{}: method.solver = \"{}\" runs in 1D and 2D (so far); in 3D choose \"mpm\"",
+                    cfg.where("method.solver"), solver));
   m.where_basis = cfg.where("method.basis");
   m.where_mapping = cfg.where("method.mapping");
   m.where_tls_completion = cfg.where("method.tls_completion");
@@ -170,8 +174,9 @@ RunSettings run_settings(const Config& cfg, int dim) {
   m.conservation_limit = cfg.get_real("method.conservation_limit");
   m.sort = cfg.get_string("method.sort") == "never" ? SortMode::Never : SortMode::Auto;
   if (m.solver != Solver::Ulfem)
-    m.mapping =
-        dim == 1 ? configured_mapping<1>(m.mapping, cfg) : configured_mapping<2>(m.mapping, cfg);
+    m.mapping = dim == 1   ? configured_mapping<1>(m.mapping, cfg)
+                : dim == 2 ? configured_mapping<2>(m.mapping, cfg)
+                           : configured_mapping<3>(m.mapping, cfg);
   if (auto* tls = std::get_if<TlsMapping>(&m.mapping); tls && m.solver == Solver::Mpm) {
     // The completions differ between the grid's rectangles and triangles (mapping/tls.hpp).
     const bool triangles = std::holds_alternative<TriangleP1Kind>(m.basis) ||

@@ -244,5 +244,9 @@ template PMultigrid spline_pmg<2>(const Grid<2>&, int, const PointSet<2>&,
                                   const std::vector<unsigned char>&,
                                   const std::vector<std::pair<int, int>>&, const PmgSettings&,
                                   const SparseMatrixD*);
+template PMultigrid spline_pmg<3>(const Grid<3>&, int, const PointSet<3>&,
+                                  const std::vector<unsigned char>&,
+                                  const std::vector<std::pair<int, int>>&, const PmgSettings&,
+                                  const SparseMatrixD*);
 
 }  // namespace mpm

@@ -153,6 +153,7 @@ void SplineMassOperator<Dim>::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y
 
 template class SplineMassOperator<1>;
 template class SplineMassOperator<2>;
+template class SplineMassOperator<3>;
 
 template <int Dim>
 Index spline_count(const Grid<Dim>& g, int p) {
@@ -183,19 +184,27 @@ std::vector<Index> spline_boundary_functions(const Grid<Dim>& g, int p) {
 
 template PointSet<1> gauss_points<1>(const Grid<1>&, int, double);
 template PointSet<2> gauss_points<2>(const Grid<2>&, int, double);
+template PointSet<3> gauss_points<3>(const Grid<3>&, int, double);
 template PointSet<1> regular_points<1>(const Grid<1>&, int, double);
 template PointSet<2> regular_points<2>(const Grid<2>&, int, double);
+template PointSet<3> regular_points<3>(const Grid<3>&, int, double);
 template SparseMatrixD spline_values<1>(const Grid<1>&, int, const std::vector<Vec<1>>&);
 template SparseMatrixD spline_values<2>(const Grid<2>&, int, const std::vector<Vec<2>>&);
+template SparseMatrixD spline_values<3>(const Grid<3>&, int, const std::vector<Vec<3>>&);
 template SparseMatrixD spline_mass<1>(const Grid<1>&, int, int, const PointSet<1>&);
 template SparseMatrixD spline_mass<2>(const Grid<2>&, int, int, const PointSet<2>&);
+template SparseMatrixD spline_mass<3>(const Grid<3>&, int, int, const PointSet<3>&);
 template SparseMatrixD spline_mass_exact<1>(const Grid<1>&, int, int, double);
 template SparseMatrixD spline_mass_exact<2>(const Grid<2>&, int, int, double);
+template SparseMatrixD spline_mass_exact<3>(const Grid<3>&, int, int, double);
 template Eigen::VectorXd spline_load_exact<1>(const Grid<1>&, int, double);
 template Eigen::VectorXd spline_load_exact<2>(const Grid<2>&, int, double);
+template Eigen::VectorXd spline_load_exact<3>(const Grid<3>&, int, double);
 template Index spline_count<1>(const Grid<1>&, int);
 template Index spline_count<2>(const Grid<2>&, int);
+template Index spline_count<3>(const Grid<3>&, int);
 template std::vector<Index> spline_boundary_functions<1>(const Grid<1>&, int);
 template std::vector<Index> spline_boundary_functions<2>(const Grid<2>&, int);
+template std::vector<Index> spline_boundary_functions<3>(const Grid<3>&, int);
 
 }  // namespace mpm

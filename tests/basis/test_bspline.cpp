@@ -1,8 +1,8 @@
 // B-spline basis (D 3.1.1-3.1.2, 004 sec. 4.3): partition of unity, non-negativity, zero
 // derivative sum, linear reproduction with the Greville abscissae, derivatives against finite
 // differences, C^(p-1) continuity at interior knots, interpolatory ends, degree 1 = P1, and the
-// quadratic example of 004 Fig. 4.1. Degrees 1-5 in 1D and 2D, including grids with fewer cells
-// than the degree (then every function touches a boundary knot).
+// quadratic example of 004 Fig. 4.1. Degrees 1-5 in 1D, 2D and 3D, including grids with fewer
+// cells than the degree (then every function touches a boundary knot).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -28,7 +28,8 @@ template <class C>
 class BSplineTest : public ::testing::Test {};
 
 using Cases = ::testing::Types<Case<1, 1>, Case<1, 2>, Case<1, 3>, Case<1, 4>, Case<1, 5>,
-                               Case<2, 1>, Case<2, 2>, Case<2, 3>, Case<2, 4>, Case<2, 5>>;
+                               Case<2, 1>, Case<2, 2>, Case<2, 3>, Case<2, 4>, Case<2, 5>,
+                               Case<3, 1>, Case<3, 2>, Case<3, 3>, Case<3, 4>, Case<3, 5>>;
 
 class CaseNames {
  public:
@@ -46,9 +47,13 @@ std::vector<Grid<Dim>> test_grids() {
   std::vector<Grid<Dim>> out;
   if constexpr (Dim == 1) {
     for (Index n : {1, 2, 3, 7}) out.emplace_back(Vec<1>(-0.3), Vec<1>(1.7), IVec<1>{n});
-  } else {
+  } else if constexpr (Dim == 2) {
     const std::array<IVec<2>, 4> cells{IVec<2>{1, 3}, IVec<2>{2, 7}, IVec<2>{7, 1}, IVec<2>{3, 2}};
     for (const auto& n : cells) out.emplace_back(Vec<2>(0.0, -1.0), Vec<2>(2.0, 0.5), n);
+  } else {
+    // 3D (issue 20): two grids, one with a single cell along z and fewer cells than the degree.
+    const std::array<IVec<3>, 2> cells{IVec<3>{2, 3, 1}, IVec<3>{4, 1, 3}};
+    for (const auto& n : cells) out.emplace_back(Vec<3>(0.0, -1.0, 0.5), Vec<3>(2.0, 0.5, 1.5), n);
   }
   return out;
 }
@@ -326,6 +331,9 @@ TEST(BSplineBasis, DegreeOneEqualsLinearBasis1D) {
 }
 TEST(BSplineBasis, DegreeOneEqualsLinearBasis2D) {
   check_degree_one_is_linear<2>();
+}
+TEST(BSplineBasis, DegreeOneEqualsLinearBasis3D) {
+  check_degree_one_is_linear<3>();
 }
 
 // 004 Fig. 4.1: quadratic, knots {0,0,0,1/3,2/3,1,1,1}, h = 1/3. By hand, with t = 3x in the

@@ -61,6 +61,7 @@ struct StepperSpec {
   Scheme scheme = Musl{};
   MassType mass = MassType::Lumped;
   SortMode sort = SortMode::Auto;
+  double mass_tolerance = 1e-10;  // method.mass_tolerance
   std::vector<FixedSide> fixed_sides = {};
   BodyForce<Dim> body_force = {};
   std::vector<Traction<Dim>> tractions = {};
@@ -81,6 +82,7 @@ std::unique_ptr<driver::Stepper<Dim>> compiled_stepper(StepperSpec<Dim> spec) {
   method.scheme = spec.scheme;
   method.mass = spec.mass;
   method.sort = spec.sort;
+  method.mass_tolerance = spec.mass_tolerance;
   // As a hand-built Simulation: no reconstruction input check before the first step.
   return driver::make_stepper<Dim>(spec.basis, driver::StepperInput<Dim>{pb, method, false});
 }
@@ -99,16 +101,16 @@ nlohmann::ordered_json mapping_report(const driver::Stepper<Dim>& s) {
 struct LinearFieldErrors {
   double f = 0.0, x = 0.0;
 };
-inline LinearFieldErrors linear_field_step(driver::Stepper<2>& stepper, const Mat<2>& A,
-                                           double dt) {
+template <int Dim>
+LinearFieldErrors linear_field_step(driver::Stepper<Dim>& stepper, const Mat<Dim>& A, double dt) {
   auto& P = stepper.state().particles;
-  const std::vector<Vec<2>> x0(P.x.begin(), P.x.end());
+  const std::vector<Vec<Dim>> x0(P.x.begin(), P.x.end());
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.v[i] = A * P.x[i];
     P.stress[i].setZero();
   }
   stepper.step(dt);
-  const Mat<2> F = Mat<2>::Identity() + dt * A;
+  const Mat<Dim> F = Mat<Dim>::Identity() + dt * A;
   LinearFieldErrors e;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     e.f = std::max(e.f, (P.F[i] - F).norm());
