@@ -156,7 +156,9 @@ int cmd_verify(bool quick, bool long_runs, const std::string& out, int jobs, con
 }
 
 int cmd_bench(const mpm::BenchOptions& opt) {
-  const auto r = opt.dim == 2 ? mpm::bench_2d(opt) : mpm::bench_1d(opt);
+  const auto r = opt.dim == 3   ? mpm::bench_3d(opt)
+                 : opt.dim == 2 ? mpm::bench_2d(opt)
+                                : mpm::bench_1d(opt);
   const std::string basis =
       opt.basis == "bspline" ? fmt::format("bspline degree {}", opt.degree) : opt.basis;
   std::cout << fmt::format(
@@ -166,7 +168,7 @@ int cmd_bench(const mpm::BenchOptions& opt) {
       opt.dim, opt.solver != "mpm" ? opt.solver : opt.scheme,
       opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis, opt.mapping,
       opt.mass == "consistent" ? fmt::format("consistent ({} solve)", opt.mass_solver) : opt.mass,
-      r.particles, r.cells, opt.dim == 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
+      r.particles, r.cells, opt.dim >= 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
       r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
   std::cout << fmt::format(
       "  particles {}, method.sort = \"{}\": {} sort(s) per run{}; sort buffers {:.1f} bytes per "
@@ -238,15 +240,18 @@ int main(int argc, char** argv) {
 
   mpm::BenchOptions bopt;
   auto* bench = app.add_subcommand("bench", "time the explicit step (ns per particle-step)");
-  bench->add_option("--dim", bopt.dim, "1: vibrating bar; 2: neo-Hookean plate (--problem)")
-      ->check(CLI::IsMember({1, 2}))
+  bench
+      ->add_option("--dim", bopt.dim,
+                   "1: vibrating bar; 2: neo-Hookean plate (--problem); 3: the cube of "
+                   "cube_mms_3d")
+      ->check(CLI::IsMember({1, 2, 3}))
       ->capture_default_str();
   bench->add_option("--particles", bopt.particles, "number of particles (about, in 2D)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   bench
       ->add_option("--per-cell", bopt.per_cell,
-                   "particles per cell per direction (default 4 in 1D, 3 in 2D)")
+                   "particles per cell per direction (default 4 in 1D, 3 in 2D, 2 in 3D)")
       ->check(CLI::PositiveNumber);
   bench->add_option("--threads", bopt.threads, "OpenMP threads (default: OMP_NUM_THREADS)")
       ->check(CLI::PositiveNumber);

@@ -157,4 +157,31 @@ BenchResult bench_2d(const BenchOptions& opt) {
   return r;
 }
 
+BenchResult bench_3d(const BenchOptions& opt) {
+  BenchResult r;
+  const int per_cell = opt.per_cell > 0 ? opt.per_cell : 2;  // per direction
+  r.cells = std::max<Index>(1, std::llround(std::cbrt(static_cast<double>(opt.particles)) /
+                                            static_cast<double>(per_cell)));
+  const Index per = static_cast<Index>(per_cell);
+  r.particles = r.cells * r.cells * r.cells * per * per * per;
+  r.steps = opt.steps;
+  // The cube of cube_mms_3d, the plate's material, amplitude 1e-3 m (no grid crossing to speak
+  // of), its body force every step; dt = 0.1 h / c with the P-wave speed.
+  const double E = 1e7, nu = 0.3, rho = 1000.0;
+  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = E / (2.0 * (1.0 + nu));
+  const double h = 1.0 / static_cast<double>(r.cells);
+  const double dt = 0.1 * h / std::sqrt((lambda + 2.0 * mu) / rho);
+  const std::string toml = fmt::format(
+      "benchmark = \"cube_mms_3d\"\n"
+      "[grid]\ncells = {}\n[particles]\nper_cell = {}\n"
+      "[time]\ndt = {:.17g}\nend = {:.17g}\n{}"
+      "[material]\nmodel = \"neo_hookean\"\ndensity = {}\nyoungs_modulus = {}\n"
+      "poisson_ratio = {}\n[mms]\namplitude = 1e-3\n",
+      r.cells, per_cell, dt, dt * static_cast<double>(opt.steps), method_toml(opt), rho, E, nu);
+  time_runs(Config::parse(toml, "<bench>"), opt, r);
+  r.bytes_per_particle = bytes_per_particle<3>(opt, r.cells, r.particles);
+  r.sort_bytes_per_particle = sort_bytes_per_particle<3>(r.cells * r.cells * r.cells, r.particles);
+  return r;
+}
+
 }  // namespace mpm

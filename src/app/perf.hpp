@@ -9,7 +9,7 @@ namespace mpm {
 struct BenchOptions {
   int dim = 1;
   Index particles = 1000000;
-  int per_cell = 0;  // per direction; 0: 4 in 1D, 3 in 2D
+  int per_cell = 0;  // per direction; 0: 4 in 1D, 3 in 2D, 2 in 3D
   int threads = 0;   // OpenMP threads; 0: the OpenMP default (OMP_NUM_THREADS or all cores)
   Index steps = 20;
   int repeats = 3;
@@ -54,5 +54,10 @@ BenchResult bench_1d(const BenchOptions& opt);
 // unit square body in a grid padded by two cells per side, v = (0.1 sin(2 pi x),
 // -0.1 sin(2 pi y)) m/s, no body force, free sides, dt = 1e-6 s.
 BenchResult bench_2d(const BenchOptions& opt);
+
+// 3D: the cube of cube_mms_3d (issue 20), about `particles` particles, per_cell per direction
+// (default 2), the 2D plate's material, amplitude 1e-3 m, rollers, its body force every step,
+// dt = 0.1 h / c with the P-wave speed.
+BenchResult bench_3d(const BenchOptions& opt);
 
 }  // namespace mpm

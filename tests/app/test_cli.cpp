@@ -132,7 +132,7 @@ TEST(Cli, RunThreadsFollowTheProblemSize) {
 }
 
 TEST(Cli, CommandLineErrorsExitTwo) {
-  for (const char* args : {"run", "run --no-such-flag x.toml", "frobnicate", "bench --dim 3",
+  for (const char* args : {"run", "run --no-such-flag x.toml", "frobnicate", "bench --dim 4",
                            "bench --particles 0", "bench --particles -5", "bench --steps 0",
                            "bench --repeats -1", "bench --per-cell 0", "bench --threads 0"}) {
     const auto r = sh(args);
@@ -607,7 +607,7 @@ TEST(Cli, StudyPlotsConvergence) {
   std::filesystem::remove_all(out);
 }
 
-TEST(Cli, BenchRunsAShortCaseIn1DAnd2D) {
+TEST(Cli, BenchRunsAShortCaseIn1D2DAnd3D) {
   // The regression guard of the benchmark suite: the bench command builds and runs one short
   // case per dimension and reports its figures (the timings themselves are not checked).
   auto one = sh("bench --particles 2000 --steps 2 --repeats 1 --threads 1");
@@ -619,6 +619,11 @@ TEST(Cli, BenchRunsAShortCaseIn1DAnd2D) {
   ASSERT_EQ(two.code, 0) << two.out;
   EXPECT_NE(two.out.find("2D musl step"), std::string::npos) << two.out;
   EXPECT_NE(two.out.find("bytes per particle"), std::string::npos) << two.out;
+  auto three = sh("bench --dim 3 --particles 1000 --steps 2 --repeats 1 --threads 1");
+  ASSERT_EQ(three.code, 0) << three.out;
+  EXPECT_NE(three.out.find("3D musl step"), std::string::npos) << three.out;
+  EXPECT_NE(three.out.find("1000 particles, 5 cells per direction"), std::string::npos)
+      << three.out;
 }
 
 // `mpm mesh`: the Gmsh square's summary (counts and boundaries computed here from the mesh read

@@ -188,6 +188,16 @@ TEST(Checkpoint, RestartIsBitwise2DPlate) {
   check_bitwise_restart({"plate_mms_2d", {"grid.cells=4", "method.basis=cpdi2"}, 20});
 }
 
+TEST(Checkpoint, RestartIsBitwise3DCube) {
+  // 3D (issue 20): quadratic B-splines with lumped mass, and uGIMP with consistent mass (three
+  // per-component solves of the rollers on the six faces).
+  check_bitwise_restart({"cube_mms_3d", {"grid.cells=3"}, 10});
+  check_bitwise_restart(
+      {"cube_mms_3d",
+       {"grid.cells=3", "method.basis=ugimp", "method.mass=consistent", "method.scheme=usf"},
+       10});
+}
+
 TEST(Checkpoint, RestartIsBitwise2DCustomWithTraction) {
   // Vector keys (arrays) in the stored configuration, expression fields, a face traction.
   check_bitwise_restart({"custom_plate_2d", {"traction.top=[\"1e3*t\", \"-1e3\"]"}, 50});
