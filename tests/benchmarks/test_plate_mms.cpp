@@ -14,11 +14,7 @@ namespace mpm {
 namespace {
 
 ElasticParameters params() {
-  ElasticParameters p;
-  p.density = 1000.0;
-  p.youngs_modulus = 1.0e7;
-  p.poisson_ratio = 0.3;
-  return p;
+  return test::plate_material();
 }
 
 PlateMms2DExact make_exact(double A = 0.1) {

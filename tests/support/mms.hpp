@@ -7,6 +7,15 @@
 
 namespace mpm::test {
 
+// The material of examples/plate_mms_2d.toml and cube_mms_3d.toml (001's plate).
+inline ElasticParameters plate_material() {
+  ElasticParameters p;
+  p.density = 1000.0;
+  p.youngs_modulus = 1.0e7;
+  p.poisson_ratio = 0.3;
+  return p;
+}
+
 // F = I + Grad u by central differences (step h) of ex(X, t).u.
 // (X may be an Eigen expression such as X + e.)
 template <class Exact, class Point>
