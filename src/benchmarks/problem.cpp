@@ -335,11 +335,12 @@ AnyProblem make_any_problem(const Config& cfg) {
 
 AnyProblem make_problem(const Config& cfg) {
   AnyProblem pb = make_any_problem(cfg);
-  if (cfg.get_int("particles.per_triangle") != 0 && std::holds_alternative<Problem<1>>(pb))
+  const int dim = std::visit([](const auto& p) { return std::decay_t<decltype(p)>::kDim; }, pb);
+  if (cfg.get_int("particles.per_triangle") != 0 && dim != 2)
     throw InputError(fmt::format(
-        "{}: particles.per_triangle seeds the triangles of a 2D run; this problem is 1D (use "
+        "{}: particles.per_triangle seeds the triangles of a 2D run; this problem is {}D (use "
         "particles.per_cell)",
-        cfg.where("particles.per_triangle")));
+        cfg.where("particles.per_triangle"), dim));
   // grid.mesh is read by the problems that place the body on it (plate_mms_2d, 2D custom).
   const bool meshed = std::visit([](const auto& p) { return p.mesh != nullptr; }, pb);
   if (!meshed && !cfg.get_string("grid.mesh").empty())
@@ -347,7 +348,7 @@ AnyProblem make_problem(const Config& cfg) {
         "{}: grid.mesh applies to the 2D problems plate_mms_2d and custom; benchmark = \"{}\"{} "
         "builds its own grid (leave grid.mesh out)",
         cfg.where("grid.mesh"), cfg.get_string("benchmark"),
-        std::holds_alternative<Problem<1>>(pb) ? " in 1D" : ""));
+        dim != 2 ? fmt::format(" in {}D", dim) : ""));
   // boundary.fixed / roller name the boundaries of a mesh file in the 2D custom problem, which
   // reads them; every other problem fixes its own.
   // (So do boundary.loaded and the loads on it.)

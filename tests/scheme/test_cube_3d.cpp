@@ -37,6 +37,24 @@ std::unique_ptr<CubeRun> cube(const std::vector<std::string>& sets, bool free_si
   return r;
 }
 
+// Keys of 2D runs are refused in 3D, naming the key, instead of being ignored.
+TEST(Cube3D, TwoDimensionalKeysAndUnavailableMethodsAreRefused) {
+  const auto refused = [](const std::vector<std::string>& sets, const std::string& what) {
+    const std::string m = test::message_of([&] {
+      const Config cfg = test::example_config("cube_mms_3d", sets);
+      (void)make_problem(cfg);
+      (void)run_settings(cfg, 3);
+    });
+    EXPECT_NE(m.find(what), std::string::npos) << m;
+  };
+  refused({"particles.per_triangle=6"},
+          "particles.per_triangle seeds the triangles of a 2D run; "
+          "this problem is 3D");
+  refused({"method.mapping=tls"}, "method.mapping = \"tls\" is not available in 3D");
+  refused({"method.basis=ddmpm"}, "method.basis = \"ddmpm\" is not available in 3D");
+  refused({"method.solver=otm", "method.basis=linear"}, "runs in 1D and 2D (so far)");
+}
+
 TEST(Cube3D, ConvergenceOrdersAtSmallAmplitude) {
   // A = 1e-4 m: no grid crossing, so the displacement error is the spatial discretisation
   // error, O(h^2) for P1 with lumped mass and O(h^3) for quadratic B-splines with consistent
