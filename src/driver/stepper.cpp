@@ -74,7 +74,8 @@ void report_mls(nlohmann::ordered_json& summary, const Mapping& m, int dim) {
                     {"widened", t.widened},
                     {"max_condition", t.max_condition},
                     {"worst_x", t.worst_x}};
-  if (dim == 2) summary["mls"]["worst_y"] = t.worst_y;
+  if (dim >= 2) summary["mls"]["worst_y"] = t.worst_y;
+  if (dim == 3) summary["mls"]["worst_z"] = t.worst_z;
 }
 }  // namespace
 

@@ -29,6 +29,7 @@ void accumulate(MlsReport& total, const MlsReport& step) {
     total.max_condition = step.max_condition;
     total.worst_x = step.worst_x;
     total.worst_y = step.worst_y;
+    total.worst_z = step.worst_z;
   }
 }
 
@@ -87,7 +88,8 @@ double mls_shape(const Vec<Dim>* s, const double* w, std::size_t n, int degree, 
   // full outer-product update it replaces, so the bits are unchanged at half the work.
   Mat A = Mat::Zero();
   Vec q = Vec::Zero();
-  constexpr bool kLinear = M == Dim + 1;  // degree 1: q = (1, s_0 .. s_{D-1})
+  // Degree 1 in 1D and 2D: q = (1, s_0 .. s_{D-1}) written out below; 3D takes the generic loop.
+  constexpr bool kLinear = M == Dim + 1 && Dim <= 2;
   if constexpr (kLinear) {
     // Written out in scalars: the generic loop below kept A and q on the stack and reloaded
     // them as 16-byte pairs right after 8-byte stores (store-forwarding stalls, most of the
@@ -283,7 +285,8 @@ void MovingLeastSquares<Dim>::row(const Vec<Dim>& x, MlsWeight weight, bool wide
     if (cond > rep.max_condition) {
       rep.max_condition = cond;
       rep.worst_x = x[0];
-      rep.worst_y = Dim > 1 ? x[Dim - 1] : 0.0;
+      rep.worst_y = Dim > 1 ? x[1] : 0.0;
+      rep.worst_z = Dim > 2 ? x[Dim - 1] : 0.0;
     }
     if (!std::isfinite(cond)) {
       ++rep.singular;
@@ -374,6 +377,7 @@ double MovingLeastSquares<Dim>::evaluate(const Vec<Dim>& x, MlsWeight weight,
 
 template class MovingLeastSquares<1>;
 template class MovingLeastSquares<2>;
+template class MovingLeastSquares<3>;
 
 // The mapping's reconstructions (mls.hpp, MovingLeastSquaresMapping): everything of map_mass,
 // map_momentum and map_forces but the basis evaluation and assembly at the Gauss points.
@@ -468,7 +472,10 @@ void MovingLeastSquaresMapping<Improved>::finish_mass(RunState<Dim>& sim) {
                     "point(s) (first near x = {:.6g}{}): too few distinct particles "
                     "for method.mls_degree = {}; use method.mapping = imls",
                     sim.step, sim.time, rep.singular, rep.worst_x,
-                    Dim == 2 ? fmt::format(", y = {:.6g}", rep.worst_y) : "", settings_.degree));
+                    Dim == 1   ? std::string()
+                    : Dim == 2 ? fmt::format(", y = {:.6g}", rep.worst_y)
+                               : fmt::format(", y = {:.6g}, z = {:.6g}", rep.worst_y, rep.worst_z),
+                    settings_.degree));
 }
 
 template <bool Improved>
@@ -554,6 +561,8 @@ MPM_MLS_MAPPING_DIM(false, 1)
 MPM_MLS_MAPPING_DIM(false, 2)
 MPM_MLS_MAPPING_DIM(true, 1)
 MPM_MLS_MAPPING_DIM(true, 2)
+MPM_MLS_MAPPING_DIM(false, 3)
+MPM_MLS_MAPPING_DIM(true, 3)
 #undef MPM_MLS_MAPPING_DIM
 
 // The run totals in a checkpoint: six counters, then the largest condition number and where.
@@ -565,6 +574,7 @@ std::string MovingLeastSquaresMapping<Improved>::save_totals() const {
   w.f64(t.max_condition);
   w.f64(t.worst_x);
   w.f64(t.worst_y);
+  w.f64(t.worst_z);  // since 3D (earlier checkpoints end above)
   return std::move(w.bytes());
 }
 
@@ -578,6 +588,7 @@ void MovingLeastSquaresMapping<Improved>::load_totals(std::string_view bytes,
   t.max_condition = r.f64();
   t.worst_x = r.f64();
   t.worst_y = r.f64();
+  if (!r.done()) t.worst_z = r.f64();
   r.expect_done();
   totals_ = t;
 }

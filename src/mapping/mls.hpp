@@ -1,7 +1,7 @@
 #pragma once
 // Moving least squares (MLS, 001 eq. 6-17) and improved moving least squares (IMLS, 003
-// eq. 1-17) reconstruction in one and two dimensions, and the particle-to-grid mappings built on
-// them (001 eq. 18-37, 003 eq. 23-40).
+// eq. 1-17) reconstruction in one, two and three dimensions, and the particle-to-grid mappings
+// built on them (001 eq. 18-37, 003 eq. 23-40).
 //
 // MovingLeastSquares<Dim> fits, at each evaluation point x, a polynomial of degree 1 or 2 to the
 // scattered data within the support of a weight w(x - x_p) and evaluates it at x (eq. 13).
@@ -15,7 +15,8 @@
 // 1D), are those of s = (x_p - x) / l per direction (l_d the cell size): the same polynomial
 // space as in x (so the same reconstruction, and the same dropped spans in IMLS) but scaled to
 // O(1) and centred at the evaluation point, where p(x) = (1, 0, ..., 0).
-// In 2D the weight is the tensor product w(x - x_p) = w(r_x) w(r_y) (001 eq. 16).
+// In 2D the weight is the tensor product w(x - x_p) = w(r_x) w(r_y) (001 eq. 16); in 3D the same
+// product over the three directions (001 and 003 are 2D; 3D is their direct extension).
 //
 // The reconstruction is linear in the data: at each evaluation point the shape functions
 // phi_p(x) (eq. 14) are computed once and stored (ShapeTable), then every field is a dot product.
@@ -60,7 +61,7 @@ inline double mls_support(MlsWeight kind, double cell, double dilation = kMlsDil
   return kind == MlsWeight::QuadraticSpline ? 1.5 * dilation * cell : cell;
 }
 // Number of monomials of total degree <= degree (1 or 2) in dim variables: 2, 3 in 1D;
-// 3, 6 in 2D (001 eq. 15, 003 eq. 15).
+// 3, 6 in 2D (001 eq. 15, 003 eq. 15); 4, 10 in 3D.
 constexpr int mls_terms(int dim, int degree) {
   return degree == 1 ? dim + 1 : (dim + 1) * (dim + 2) / 2;
 }
@@ -74,7 +75,8 @@ struct MlsReport {
   Index widened = 0;           // linear weight without data: quadratic-spline weight used instead
   double max_condition = 0.0;  // MLS: largest cond(A) (infinite when singular)
   double worst_x = 0.0;        // MLS: where it occurred, first coordinate [m]
-  double worst_y = 0.0;        // MLS: second coordinate (2D; 0 in 1D) [m]
+  double worst_y = 0.0;        // MLS: second coordinate (2D, 3D; 0 in 1D) [m]
+  double worst_z = 0.0;        // MLS: third coordinate (3D; 0 otherwise) [m]
 };
 
 void accumulate(MlsReport& total, const MlsReport& step);
@@ -131,7 +133,7 @@ struct ShapeTables {
 
 template <int Dim = 1>
 class MovingLeastSquares {
-  static_assert(Dim == 1 || Dim == 2, "MLS is implemented in 1D and 2D");
+  static_assert(Dim >= 1 && Dim <= 3, "MLS is implemented in 1D, 2D and 3D");
 
  public:
   // Relative tolerance on <p_i, p_i> / <p_1, p_1> below which IMLS drops p_i (003 eq. 17). The
@@ -279,6 +281,7 @@ class MovingLeastSquares {
 
 extern template class MovingLeastSquares<1>;
 extern template class MovingLeastSquares<2>;
+extern template class MovingLeastSquares<3>;
 
 struct MlsSettings {
   int degree = 1;        // method.mls_degree: 1 (001 eq. 15) or 2
@@ -294,7 +297,7 @@ struct MlsSettings {
 };
 
 // The MLS (Improved = false, 001 eq. 18-33) and IMLS (Improved = true, 003 eq. 23-36) mappings
-// in 1D and 2D. map_mass, the first mapping call of a step, bins the particles, places n Gauss
+// in 1D, 2D and 3D. map_mass, the first mapping call of a step, bins the particles, places n Gauss
 // points per direction in every element holding a particle (n^Dim per element, 001: 2 x 2) and
 // stores the shape functions there (quadratic-spline weight); map_forces and map_momentum reuse
 // them. Every vector and tensor component is reconstructed with the same shape functions.
@@ -335,14 +338,14 @@ class MovingLeastSquaresMapping {
           ? "improved MLS: Gram-Schmidt orthogonal basis, no moment-matrix inverse (003 eq. 1-40)"
           : "moving least squares at Gauss points, quadratic-spline weight (001 eq. 6-37)";
   using Settings = MlsSettings;
-  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
   static constexpr bool kFusedScatter = false, kRunTotals = true;
 
   MovingLeastSquaresMapping() : MovingLeastSquaresMapping(Settings{}) {}
   // Throws InputError for a degree other than 1, 2 or negative Gauss points.
   explicit MovingLeastSquaresMapping(const Settings& s)
-      : settings_(s), work_(Work<1>(s), Work<2>(s)) {
+      : settings_(s), work_(Work<1>(s), Work<2>(s), Work<3>(s)) {
     if (s.gauss_points < 0) throw InputError("method.gauss_points must be >= 0");
     rule_ = gauss_legendre(s.gauss_points_used());
   }
@@ -354,7 +357,9 @@ class MovingLeastSquaresMapping {
   }
   // The last step (Gauss points and, IMLS, nodes) and the sums over the run.
   const MlsReport& last_report() const {
-    return dim_ == 2 ? reconstruction<2>().report() : reconstruction<1>().report();
+    return dim_ == 3   ? reconstruction<3>().report()
+           : dim_ == 2 ? reconstruction<2>().report()
+                       : reconstruction<1>().report();
   }
   const MlsReport& totals() const { return totals_; }
   // Checkpoint restart: the sums continue from a saved run. save_totals() gives the bytes that
@@ -373,7 +378,7 @@ class MovingLeastSquaresMapping {
   template <class Sim>
   void map_mass(Sim& sim) {
     constexpr int Dim = Sim::kDim;
-    static_assert(Dim == 1 || Dim == 2, "the MLS/IMLS mappings are one- and two-dimensional");
+    static_assert(Dim >= 1 && Dim <= 3, "the MLS/IMLS mappings are 1D, 2D and 3D");
     auto& q = quad_.prepare<Sim>();
     fit_mass<Dim>(sim, q);
     q.evaluate(sim.basis, sim.step, sim.time);
@@ -411,7 +416,7 @@ class MovingLeastSquaresMapping {
 
  private:
   // The reconstruction and the Gauss-point fields of one dimension (the mapping is chosen before
-  // the dimension is known, so it holds both; the unused one stays empty).
+  // the dimension is known, so it holds all three; the unused ones stay empty).
   template <int Dim>
   struct Work {
     explicit Work(const Settings& s) : mls(Improved, s.degree, s.max_condition, s.dilation) {}
@@ -421,7 +426,7 @@ class MovingLeastSquaresMapping {
     std::vector<Vec<Dim>> node_x;  // IMLS: positions of the DOFs node_dof_
   };
 
-  // mls.cpp, for Dim 1 and 2. fit_mass: bins the particles, places the Gauss points in q, their
+  // mls.cpp, for Dim 1 to 3. fit_mass: bins the particles, places the Gauss points in q, their
   // shape functions and rho^ there (rho_). finish_mass: the IMLS nodal rows (node_x) and the
   // report, stopping the run on a singular moment matrix. fit_momentum: (rho v)^ at the Gauss
   // points (vec), or for IMLS the nodal momenta m_i v_i. fit_forces: sigma^ (sig) and (rho b)^
@@ -440,7 +445,7 @@ class MovingLeastSquaresMapping {
   void conserve_with_density(const GaussPoints<Dim>& q, std::vector<V>& f, const V& total) const;
 
   Settings settings_;
-  std::tuple<Work<1>, Work<2>> work_;
+  std::tuple<Work<1>, Work<2>, Work<3>> work_;
   int dim_ = 1;  // dimension of the last map_mass
   GaussRule rule_;
   QuadratureStore quad_;

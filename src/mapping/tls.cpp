@@ -1,4 +1,4 @@
-// Taylor least-squares reconstruction in 1D and 2D (D 5.2-5.3, 6.1-6.2, 000 sec. 2, 004 4.4.1):
+// Taylor least-squares reconstruction in 1D to 3D (D 5.2-5.3, 6.1-6.2, 000 sec. 2, 004 4.4.1):
 // element systems, completion of deficient elements (D 5.2.3, 6.3.2) and the per-field fits.
 #include "mapping/tls.hpp"
 
@@ -118,10 +118,17 @@ void add_outer(Eigen::Matrix<double, K, K>& D, const Eigen::Matrix<double, K, 1>
   D.noalias() += psi * psi.transpose();
 }
 
-// Polynomial degree of n_b Taylor terms: 1D n_b - 1; 2D 0, 1, 2 for 1, 3, 6 terms.
+// Polynomial degree of n_b Taylor terms: 1D n_b - 1; 2D 0, 1, 2 for 1, 3, 6 terms; 3D for 1, 4,
+// 10 terms.
 int taylor_degree(int terms, int dim) {
   if (dim == 1) return terms - 1;
-  return terms == 1 ? 0 : terms == 3 ? 1 : 2;
+  return terms == 1 ? 0 : terms == dim + 1 ? 1 : 2;
+}
+
+// The next smaller complete space (Reduce): 1D 3 -> 2 -> 1, 2D 6 -> 3 -> 1, 3D 10 -> 4 -> 1.
+int fewer_terms(int terms, int dim) {
+  if (dim == 1) return terms - 1;
+  return terms > dim + 1 ? dim + 1 : 1;
 }
 
 }  // namespace
@@ -158,14 +165,19 @@ std::string_view tls_completion_name(TlsCompletion c) {
 }
 
 void validate(const TlsSettings& s, int dim) {
-  if (dim != 1 && dim != 2)
-    throw InputError(fmt::format("the TLS reconstruction is available in 1D and 2D, not {}D", dim));
+  if (dim < 1 || dim > 3)
+    throw InputError(
+        fmt::format("the TLS reconstruction is available in 1D, 2D and 3D, not {}D", dim));
   if (dim == 1 && (s.terms < 0 || s.terms > 3))
     throw InputError(fmt::format(
         "method.tls_terms = {} must be 1, 2 or 3 in 1D (0: quadratic, 3 terms)", s.terms));
   if (dim == 2 && s.terms != 0 && s.terms != 1 && s.terms != 3 && s.terms != 6)
     throw InputError(fmt::format(
         "method.tls_terms = {} must be 1 (constant), 3 (linear) or 6 (quadratic) in 2D (0: 6)",
+        s.terms));
+  if (dim == 3 && s.terms != 0 && s.terms != 1 && s.terms != 4 && s.terms != 10)
+    throw InputError(fmt::format(
+        "method.tls_terms = {} must be 1 (constant), 4 (linear) or 10 (quadratic) in 3D (0: 10)",
         s.terms));
   if (!(s.max_condition > 1.0) || !(s.max_condition <= 1e14))
     throw InputError(fmt::format(
@@ -232,17 +244,23 @@ BasicTlsReconstruction<Dim>::BasicTlsReconstruction(const TlsSettings& s)
   // 2D virtual points (D 6.3.2 leaves their placement open): on each face, at the Gauss-Legendre
   // nodes of as many points as the face trace of a neighbour's reconstruction has coefficients
   // (2 for the linear basis, 3 for the quadratic one), so that the trace is passed on whole. The
-  // nodes lie inside the face, so the faces share no virtual point at a corner.
-  if constexpr (Dim == 2) face_xi_ = gauss_legendre(nb_ == 6 ? 3 : 2).xi;
+  // nodes lie inside the face, so the faces share no virtual point at a corner. 3D: the tensor
+  // product of these nodes on each face (9 for the quadratic basis, whose face trace is a
+  // quadratic in two variables with 6 coefficients, unisolvent on the 3 x 3 nodes; 4 for the
+  // linear one).
+  if constexpr (Dim >= 2) face_xi_ = gauss_legendre(nb_ == kTaylorTerms<Dim> ? 3 : 2).xi;
 }
 
 template <int Dim>
 std::string BasicTlsReconstruction<Dim>::describe(Index e) const {
   if constexpr (Dim == 1) {
     return fmt::format("{}", e);
-  } else {
+  } else if constexpr (Dim == 2) {
     const IVec<Dim> c = cell(e);
     return fmt::format("{} at cell ({}, {})", e, c[0], c[1]);
+  } else {
+    const IVec<Dim> c = cell(e);
+    return fmt::format("{} at cell ({}, {}, {})", e, c[0], c[1], c[2]);
   }
 }
 
@@ -271,7 +289,7 @@ const TlsReport& BasicTlsReconstruction<Dim>::set_points(const Grid<Dim>& g,
 }
 
 // Counting sort into the cells, as ElementBins, with the optional further owners of a point on
-// interior faces (the lower neighbours across those faces; in 2D also the one across the corner).
+// interior faces (the lower neighbours across those faces, edges and corners).
 template <int Dim>
 void BasicTlsReconstruction<Dim>::bin_points(bool share_face_points) {
   const auto ne_s = static_cast<std::size_t>(grid_.num_cells());
@@ -344,8 +362,11 @@ const typename BasicTlsReconstruction<Dim>::Taylor& BasicTlsReconstruction<Dim>:
     Taylor v;
     if constexpr (Dim == 1)
       v << 1.0, std::sqrt(3.0), std::sqrt(45.0);
-    else
+    else if constexpr (Dim == 2)
       v << 1.0, std::sqrt(3.0), std::sqrt(3.0), std::sqrt(45.0), std::sqrt(45.0), 3.0;
+    else
+      v << 1.0, std::sqrt(3.0), std::sqrt(3.0), std::sqrt(3.0), std::sqrt(45.0), std::sqrt(45.0),
+          std::sqrt(45.0), 3.0, 3.0, 3.0;
     return v;
   }();
   return l;
@@ -388,13 +409,14 @@ bool BasicTlsReconstruction<Dim>::well_posed(const Matrix& D, int distinct, int 
 
 // D 5.2.3: virtual points on each face whose neighbour fits all n_b terms from its own points,
 // valued by that neighbour's reconstruction there (at fit time). 1D: one point, the face itself;
-// 2D: the face nodes face_xi_ (see the constructor). A virtual point coinciding with a point of
-// the element adds nothing and is skipped.
+// 2D: the face nodes face_xi_; 3D: their tensor product on the face (see the constructor). A
+// virtual point coinciding with a point of the element adds nothing and is skipped.
 template <int Dim>
 void BasicTlsReconstruction<Dim>::add_virtual_points(Index e, System& sys, Matrix& D,
                                                      int& distinct) {
   const IVec<Dim> c = cell(e);
-  const std::size_t per_face = Dim == 1 ? 1 : face_xi_.size();
+  const std::size_t nxi = face_xi_.size();
+  const std::size_t per_face = Dim == 1 ? 1 : Dim == 2 ? nxi : nxi * nxi;
   Index stride = 1;
   for (int d = 0; d < Dim; stride *= grid_.cells[d], ++d) {
     for (int side : {-1, +1}) {
@@ -404,7 +426,12 @@ void BasicTlsReconstruction<Dim>::add_virtual_points(Index e, System& sys, Matri
       for (std::size_t k = 0; k < per_face; ++k) {
         Vec<Dim> s;
         s[d] = static_cast<double>(side);
-        if constexpr (Dim == 2) s[1 - d] = face_xi_[k];
+        // The other directions of the face, in increasing order: node k % nxi, then k / nxi.
+        for (int o = 0, r = static_cast<int>(k); o < Dim; ++o)
+          if (o != d) {
+            s[o] = face_xi_[static_cast<std::size_t>(r) % nxi];
+            r /= static_cast<int>(nxi);
+          }
         Vec<Dim> s_source = s;  // the same point in the neighbour's coordinates
         s_source[d] = -s[d];
         if (coincides(sys, s)) continue;
@@ -419,10 +446,10 @@ void BasicTlsReconstruction<Dim>::add_virtual_points(Index e, System& sys, Matri
 
 // D 5.2.3, 6.3.2: the nearest points of the adjacent elements (Euclidean distance to this
 // element, ties by index), one at a time until n_b terms are well posed or max_borrowed points
-// were taken. In 2D the elements across the faces are searched first, those across the corners
-// only when the face neighbours have nothing left. Points coinciding with the element's data are
-// passed over. No allocation: each search scans the neighbours for the next candidate after the
-// last one taken in (distance, index) order.
+// were taken. The elements across the faces are searched first, then (2D, 3D) those across the
+// edges (3D) and the corners, each group only when the nearer ones have nothing left. Points
+// coinciding with the element's data are passed over. No allocation: each search scans the
+// neighbours for the next candidate after the last one taken in (distance, index) order.
 template <int Dim>
 void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D, int& distinct) {
   const int nb = nb_;
@@ -437,18 +464,22 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
   int taken = 0;
   double cond = 0.0;
   for (int corners = 0; corners < Dim; ++corners) {
-    // The neighbours of this round: across the faces (1D: the two sides), then the corners.
-    std::array<Index, 4> nbrs{};
+    // The neighbours of this round: those 1 + corners steps away (across a face, an edge, a
+    // corner), in the order of the offsets (x fastest).
+    std::array<Index, 12> nbrs{};  // at most 12: the edges of a hexahedron
     int count = 0;
-    for (int dy = Dim == 2 ? -1 : 0; dy <= (Dim == 2 ? 1 : 0); ++dy)
-      for (int dx0 = -1; dx0 <= 1; ++dx0) {
-        const int offsets = (dx0 != 0) + (dy != 0);
-        if (offsets != 1 + corners) continue;
-        IVec<Dim> nc = c;
-        nc[0] += dx0;
-        if constexpr (Dim == 2) nc[1] += dy;
-        if (grid_.has_cell(nc)) nbrs[static_cast<std::size_t>(count++)] = grid_.cell_index(nc);
+    int around = 1;
+    for (int d = 0; d < Dim; ++d) around *= 3;
+    for (int k = 0; k < around; ++k) {
+      IVec<Dim> nc = c;
+      int offsets = 0;
+      for (int d = 0, r = k; d < Dim; ++d, r /= 3) {
+        nc[d] += r % 3 - 1;
+        offsets += r % 3 != 1;
       }
+      if (offsets != 1 + corners) continue;
+      if (grid_.has_cell(nc)) nbrs[static_cast<std::size_t>(count++)] = grid_.cell_index(nc);
+    }
     double last_d = -1.0;
     Index last_p = -1;
     while (taken < max_taken && !well_posed(D, distinct, nb, cond)) {
@@ -585,7 +616,8 @@ void BasicTlsReconstruction<Dim>::build_systems() {
   // Every element gets a slot in data_ for its own points and the most completion points it can
   // add, at a fixed offset, so that pass 2 can fill the slots in parallel (unused entries stay
   // unused; sys.begin .. sys.end is what an element filled).
-  const std::size_t virtual_max = 2 * Dim * (Dim == 1 ? 1 : face_xi_.size());
+  const std::size_t nxi = face_xi_.size();
+  const std::size_t virtual_max = 2 * Dim * (Dim == 1 ? 1 : Dim == 2 ? nxi : nxi * nxi);
   const std::size_t extra = settings_.completion == TlsCompletion::Virtual ? virtual_max
                             : settings_.completion == TlsCompletion::Neighbour
                                 ? static_cast<std::size_t>(settings_.max_borrowed_used(Dim))
@@ -638,13 +670,13 @@ void BasicTlsReconstruction<Dim>::build_systems() {
       }
     }
     // Reduce (also the fallback of the completions): drop terms until well posed, 1D 3 -> 2 -> 1,
-    // 2D 6 -> 3 -> 1 (complete polynomial spaces). One term is always well posed in an active
-    // element (D = number of data > 0). An element that was well posed from its own points
-    // keeps D, so its pass-1 condition number stands (the same eigenvalues, not recomputed).
+    // 2D 6 -> 3 -> 1, 3D 10 -> 4 -> 1 (complete polynomial spaces). One term is always well posed
+    // in an active element (D = number of data > 0). An element that was well posed from its own
+    // points keeps D, so its pass-1 condition number stands (the same eigenvalues, not recomputed).
     int t = nb;
     double cond = o.condition;
     if (!o.ok)
-      while (!well_posed(D, distinct, t, cond) && t > 1) t = Dim == 1 ? t - 1 : (t == 6 ? 3 : 1);
+      while (!well_posed(D, distinct, t, cond) && t > 1) t = fewer_terms(t, Dim);
     sys.terms = t;
     // An element well posed from its own points has D = o.D and t = n_b: its inverse from the
     // condition bound serves.
@@ -809,5 +841,6 @@ double BasicTlsReconstruction<Dim>::evaluate(const Coefficients& a, const Point&
 
 template class BasicTlsReconstruction<1>;
 template class BasicTlsReconstruction<2>;
+template class BasicTlsReconstruction<3>;
 
 }  // namespace mpm

@@ -1,9 +1,11 @@
 #pragma once
-// Taylor least-squares (TLS) reconstruction in one and two dimensions and the TLS
+// Taylor least-squares (TLS) reconstruction in one, two and three dimensions and the TLS
 // particle-to-grid mapping (D 5.2-5.3 and ch. 6, 000 sec. 2-4, 004 4.4).
 //
 // BasicTlsReconstruction<Dim> fits, per cell of a uniform Grid<Dim> (an element: an interval in
-// 1D, a rectangle in 2D), a short Taylor expansion to scattered data (D eq. 5.1-5.5, 6.1-6.13).
+// 1D, a rectangle in 2D, a hexahedron in 3D), a short Taylor expansion to scattered data (D eq.
+// 5.1-5.5, 6.1-6.13; 3D is the same construction with the ten terms of the complete quadratic,
+// the analogue of D 6.1.1 that D does not write down).
 // Fields are either plain least squares (all coefficients free, D eq. 5.1) or conservative:
 // a_1 = c_e / |Omega_e| is fixed by the element integral c_e and the other coefficients fit
 // f - a_1 (D eq. 5.8-5.9, 5.3.1). The least-squares matrices depend only on the point
@@ -40,9 +42,9 @@ namespace mpm {
 // registry::kTlsCompletions holds the user-facing names).
 enum class TlsCompletion {
   None,       // report failure (the MPM mapping stops the run, exit code 6)
-  Reduce,     // fewer Taylor terms (1D: 3 -> 2 -> 1; 2D: 6 -> 3 -> 1) until well posed
+  Reduce,     // fewer Taylor terms (1D: 3 -> 2 -> 1; 2D: 6 -> 3 -> 1; 3D: 10 -> 4 -> 1)
   Virtual,    // virtual points on the faces, valued by the neighbours' reconstructions
-  Neighbour,  // borrow the nearest points of the adjacent elements (2D: faces, then corners)
+  Neighbour,  // borrow the nearest points of the adjacent elements (faces, edges, corners)
   // Triangles only (mapping/tls_triangle.hpp, TlsTriangleStrategy): truncated SVD of the data
   // matrix with the minimum-norm coefficients, or resolved towards the lowest degree (graded).
   MinimumNorm,
@@ -54,26 +56,30 @@ enum class TlsCompletion {
 TlsCompletion parse_tls_completion(std::string_view name);
 std::string_view tls_completion_name(TlsCompletion c);
 
-// Taylor terms of the complete quadratic basis: 3 in 1D (D 5.2.2), 6 in 2D (D eq. 6.1-6.6).
+// Taylor terms of the complete quadratic basis: 3 in 1D (D 5.2.2), 6 in 2D (D eq. 6.1-6.6), 10
+// in 3D (1, 3 linear, 3 squares, 3 products).
 template <int Dim>
-inline constexpr int kTaylorTerms = Dim == 1 ? 3 : 6;
+inline constexpr int kTaylorTerms = Dim == 1   ? 3
+                                    : Dim == 2 ? 6
+                                               : 10;
 template <int Dim>
 using TaylorVector = Eigen::Matrix<double, kTaylorTerms<Dim>, 1>;
 
 struct TlsSettings {
   // n_b: Taylor basis functions per element. 1D: 1..3; 2D: 1 (constant), 3 (linear) or 6
-  // (quadratic), the complete polynomial spaces. 0: the quadratic basis of the dimension (3 in 1D
-  // as in D 5.3.1, 6 in 2D as in D 6.2).
+  // (quadratic); 3D: 1, 4 or 10; the complete polynomial spaces. 0: the quadratic basis of the
+  // dimension (3 in 1D as in D 5.3.1, 6 in 2D as in D 6.2, 10 in 3D).
   int terms = 0;
   TlsCompletion completion = TlsCompletion::Virtual;
   // Largest cond(D) accepted before an element counts as deficient (D 5.2.3). D is the normal
   // matrix sum phi phi^T of the Taylor basis made orthonormal over the element (phi_k = psi_k /
   // ||psi_k||, the mean-square norms over [-1, 1]^Dim: 1, 1/3 per linear term, 1/45 per square,
-  // 1/9 for s t; the psi_k are already orthogonal there), as on triangles (tls_triangle.hpp):
+  // 1/9 for s t, s u, t u; the psi_k are already orthogonal there), as on triangles
+  // (tls_triangle.hpp):
   // cond = 1 for points that sample the element as well as uniformly spread ones, whatever the
   // element's size, and 1 / lambda_min bounds how much a fit can grow from the points to the
   // element (Cohen, Davenport and Leviatan 2013). The raw basis gives 45 for such points.
-  // The run set-up's default: 1e8 in 1D, 10 in 2D (method.tls_max_condition).
+  // The run set-up's default: 1e8 in 1D, 10 in 2D and 3D (method.tls_max_condition).
   double max_condition = 1e8;
   // Positivity of the conservative fields (Zhang and Shu 2010, J. Comput. Phys. 229:3091): in an
   // element whose density reconstruction is negative at a Gauss point, the terms beyond a_1 of
@@ -97,10 +103,10 @@ struct TlsSettings {
   // sum_p value_p (each particle's fractions sum to one).
   bool domain_integrals = false;
   // Gauss points per direction of every active element for the mapping; 0: 2, exact for
-  // quadratic TLS (D 5.3.1; 2 x 2 in 2D).
+  // quadratic TLS (D 5.3.1; 2 x 2 in 2D, 2 x 2 x 2 in 3D).
   int gauss_points = 0;
   // Neighbour completion: most points borrowed by one element; 0: the terms of the quadratic
-  // basis (3 in 1D, 6 in 2D).
+  // basis (3 in 1D, 6 in 2D, 10 in 3D).
   int max_borrowed = 0;
   // The point sets serve conservative fits only (a_1 given, D eq. 5.9): well-posedness is then
   // judged on the fitted terms 2..n_b alone, and fit_plain is unavailable. D 6.2.1 needs this:
@@ -116,16 +122,17 @@ struct TlsSettings {
   bool exact_condition = true;
 
   int gauss_points_used() const { return gauss_points > 0 ? gauss_points : 2; }
-  int terms_used(int dim) const { return terms > 0 ? terms : (dim == 1 ? 3 : 6); }
+  int terms_used(int dim) const { return terms > 0 ? terms : quadratic_terms(dim); }
   int max_borrowed_used(int dim) const {
-    return max_borrowed > 0 ? max_borrowed : (dim == 1 ? 3 : 6);
+    return max_borrowed > 0 ? max_borrowed : quadratic_terms(dim);
   }
+  static constexpr int quadratic_terms(int dim) { return dim == 1 ? 3 : dim == 2 ? 6 : 10; }
 };
 
-// Throws InputError for settings outside the documented ranges of dimension `dim` (1 or 2),
+// Throws InputError for settings outside the documented ranges of dimension `dim` (1 to 3),
 // including Gauss rules that do not integrate the Taylor basis exactly (D 5.3.2: n Gauss points
 // per direction integrate degree 2n - 1, the basis must be integrated exactly, otherwise mass and
-// momentum are not conserved; in 2D, 6 terms need 2 points per direction).
+// momentum are not conserved; in 2D and 3D the quadratic terms need 2 points per direction).
 void validate(const TlsSettings& s, int dim = 1);
 
 // What one point set (one MPM step) needed. An element can count in several of reduced,
@@ -192,14 +199,27 @@ inline TaylorVector<2> taylor_basis(double s, double t) {
   return psi;
 }
 
+// The 3D basis on a hexahedron, the 2D one extended by the third coordinate u = (x_3 - x_3c) /
+// dx_3: 1, s, t, u, the three centred squares, s t, s u, t u (the products' means vanish by
+// symmetry). psi_2..psi_10 integrate to zero over the element. psi_2..psi_{1+Dim} are the
+// coordinates in every dimension (coincides() relies on it).
+inline TaylorVector<3> taylor_basis(double s, double t, double u) {
+  TaylorVector<3> psi;
+  psi << 1.0, s, t, u, 0.5 * (s * s - 1.0 / 3.0), 0.5 * (t * t - 1.0 / 3.0),
+      0.5 * (u * u - 1.0 / 3.0), s * t, s * u, t * u;
+  return psi;
+}
+
 // The basis of dimension Dim at the element coordinates s.
 template <int Dim>
 TaylorVector<Dim> taylor_basis_at(const Vec<Dim>& s) {
-  static_assert(Dim == 1 || Dim == 2, "TLS is implemented in 1D and 2D (rectangles)");
+  static_assert(Dim >= 1 && Dim <= 3, "TLS is implemented in 1D to 3D (grid cells)");
   if constexpr (Dim == 1)
     return taylor_basis(s[0]);
-  else
+  else if constexpr (Dim == 2)
     return taylor_basis(s[0], s[1]);
+  else
+    return taylor_basis(s[0], s[1], s[2]);
 }
 
 // Taylor coefficients a_1..a_K of every element (zero beyond the element's terms; zero in
@@ -208,13 +228,14 @@ template <int Dim>
 using BasicTlsCoefficients = std::vector<TaylorVector<Dim>>;
 using TlsCoefficients = BasicTlsCoefficients<1>;
 using TlsCoefficients2D = BasicTlsCoefficients<2>;
+using TlsCoefficients3D = BasicTlsCoefficients<3>;
 
 template <int Dim>
 class BasicTlsReconstruction {
  public:
   static constexpr int kDim = Dim;
   static constexpr int K = kTaylorTerms<Dim>;  // storage size of the coefficient vectors
-  // A position: a number in 1D, a vector in 2D.
+  // A position: a number in 1D, a vector in 2D and 3D.
   using Point = std::conditional_t<Dim == 1, double, Vec<Dim>>;
   using Taylor = TaylorVector<Dim>;
   using Coefficients = BasicTlsCoefficients<Dim>;
@@ -249,7 +270,9 @@ class BasicTlsReconstruction {
     const unsigned char* conservative = nullptr;
     Coefficients* a = nullptr;
   };
-  static constexpr int kMaxFields = 6;
+  // The stress components and the body-force density of TlsMapping::fit_forces: 6 in 1D and 2D
+  // (as before 3D), 9 in 3D.
+  static constexpr int kMaxFields = Dim == 3 ? 9 : 6;
   // Up to kMaxFields fields of the same points in one pass over the element data: field j's
   // value at point p is f[p * fields.size() + j]. The same numbers as one fit per field (each
   // field's sums run in the same order); it reads the data once instead of once per field.
@@ -287,7 +310,7 @@ class BasicTlsReconstruction {
     }
     return c;
   }
-  // "e" in 1D, "e at cell (i, j)" in 2D: for messages.
+  // "e" in 1D, "e at cell (i, j)" in 2D, "(i, j, k)" in 3D: for messages.
   std::string describe(Index e) const;
   Point centre(Index e) const { return from_vec(centre_vec(e)); }
   Point half_width() const { return from_vec(half_width_vec()); }
@@ -326,7 +349,7 @@ class BasicTlsReconstruction {
   }
 
   // One least-squares datum of an element: a point (own or borrowed) or a virtual face point
-  // (its source in from_, at the same index). 56 bytes in 2D: what a fit reads.
+  // (its source in from_, at the same index). 56 bytes in 2D, 88 in 3D: what a fit reads.
   struct Datum {
     Taylor psi;   // Taylor basis of the fitted element at the datum (psi_2.. = position)
     Index point;  // index of the value in f; -1 for a virtual point
@@ -386,8 +409,9 @@ class BasicTlsReconstruction {
   void fit(std::span<const double> f, std::span<const Field> fields) const;
 
   TlsSettings settings_;
-  int nb_ = 0;                   // terms requested
-  std::vector<double> face_xi_;  // positions of the virtual points along a face (2D)
+  int nb_ = 0;  // terms requested
+  // Positions of the virtual points along a face, per face direction (2D, 3D: tensor product).
+  std::vector<double> face_xi_;
   Grid<Dim> grid_;
   std::vector<Vec<Dim>> x_;  // positions of the current point set [m]
   ElementBins<Dim> bins_;
@@ -402,8 +426,10 @@ class BasicTlsReconstruction {
 
 extern template class BasicTlsReconstruction<1>;
 extern template class BasicTlsReconstruction<2>;
+extern template class BasicTlsReconstruction<3>;
 using TlsReconstruction = BasicTlsReconstruction<1>;
 using TlsReconstruction2D = BasicTlsReconstruction<2>;
+using TlsReconstruction3D = BasicTlsReconstruction<3>;
 
 // What the TLS mapping keeps per dimension: the reconstruction, the Gauss rule of an element in
 // its coordinates (n^Dim points, x fastest) with the Taylor basis there, and the fields at the
@@ -475,7 +501,8 @@ struct TlsTriangleMappingState {
 // Taylor basis exactly (n = 1 with linear or quadratic terms).
 TlsTriangleSettings tls_triangle_settings(const TlsSettings& s);
 
-// The TLS particle-to-grid mapping (D 5.3.1, 6.3, 004 4.4.3) in 1D and 2D (rectangles). map_mass,
+// The TLS particle-to-grid mapping (D 5.3.1, 6.3, 004 4.4.3) in 1D, 2D and 3D (the grid's cells;
+// 2D also triangles). map_mass,
 // the first mapping call of every step, bins the particles, factorises the element systems and
 // places the Gauss points; map_momentum and map_forces of the same step reuse them (positions do
 // not change within a step, only the particle values). The mapping is not a template on the
@@ -487,7 +514,7 @@ class TlsMapping {
   static constexpr std::string_view kDescription =
       "Taylor least squares per element, mass and momentum conservative (D 5.3, 000, 004 4.4)";
   // The run set-up rejects other dimensions with a clear message before instantiating.
-  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
   static constexpr bool kFusedScatter = false, kRunTotals = true;
 
@@ -495,7 +522,9 @@ class TlsMapping {
   // Validates s for dimension dim (throws InputError).
   explicit TlsMapping(const TlsSettings& s, int dim = 1) : settings_(s), dim_(dim) {
     validate(s, dim);
-    if (dim == 2)
+    if (dim == 3)
+      state3_.emplace(s);
+    else if (dim == 2)
       state2_.emplace(s);
     else
       state1_.emplace(s);
@@ -508,8 +537,10 @@ class TlsMapping {
     const auto& st = [this]() -> const auto& {
       if constexpr (Dim == 1)
         return state1_;
-      else
+      else if constexpr (Dim == 2)
         return state2_;
+      else
+        return state3_;
     }
     ();
     if (!st) throw std::logic_error(fmt::format("TlsMapping: no {}D reconstruction yet", Dim));
@@ -517,7 +548,9 @@ class TlsMapping {
   }
   const TlsReport& last_report() const {
     if (triangles_) return triangle_report_;
-    return dim_ == 2 ? reconstruction<2>().report() : reconstruction<1>().report();
+    return dim_ == 3   ? reconstruction<3>().report()
+           : dim_ == 2 ? reconstruction<2>().report()
+                       : reconstruction<1>().report();
   }
   // Whether the last step ran on a triangular mesh, and its reconstruction there.
   bool on_triangles() const { return triangles_.has_value(); }
@@ -598,21 +631,22 @@ class TlsMapping {
   // The state of dimension Dim, created (and the settings validated for Dim) on first use.
   template <int Dim>
   TlsMappingState<Dim>& state() {
-    static_assert(Dim == 1 || Dim == 2, "the TLS mapping is implemented in 1D and 2D");
+    static_assert(Dim >= 1 && Dim <= 3, "the TLS mapping is implemented in 1D to 3D");
     dim_ = Dim;
-    if constexpr (Dim == 1) {
-      if (!state1_) {
-        validate(settings_, 1);
-        state1_.emplace(settings_);
-      }
-      return *state1_;
-    } else {
-      if (!state2_) {
-        validate(settings_, 2);
-        state2_.emplace(settings_);
-      }
-      return *state2_;
+    auto& st = [this]() -> auto& {
+      if constexpr (Dim == 1)
+        return state1_;
+      else if constexpr (Dim == 2)
+        return state2_;
+      else
+        return state3_;
     }
+    ();
+    if (!st) {
+      validate(settings_, Dim);
+      st.emplace(settings_);
+    }
+    return *st;
   }
   // For the n fields j: integrals_[j * E + e] = sum over the element's particles of value(p, j)
   // (E elements); with TlsSettings::domain_integrals (on the grid's cells), sum over the
@@ -623,7 +657,7 @@ class TlsMapping {
     const auto& bins = recon.bins();
     const auto ne = static_cast<std::size_t>(recon.num_elements());
     integrals_.resize(ne * static_cast<std::size_t>(n));
-    constexpr int kMax = 8;
+    constexpr int kMax = 9;  // the stress and body-force density in 3D (fit_forces)
     if (n > kMax) throw std::logic_error("TlsMapping::element_sums: too many fields");
     auto sum = [&](Index e, auto&& each) {
       std::array<double, kMax> c{};
@@ -690,7 +724,7 @@ class TlsMapping {
     });
   }
 
-  // tls_mapping.cpp, for Dim 1 and 2: the fits of map_mass (binning, element systems, Gauss
+  // tls_mapping.cpp, for Dim 1 to 3: the fits of map_mass (binning, element systems, Gauss
   // points placed in q, rho^ there), map_momentum ((rho v)^) and map_forces (sigma^, (rho b)^).
   template <int Dim>
   void fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q);
@@ -716,6 +750,7 @@ class TlsMapping {
   int dim_ = 1;  // dimension of the last step
   std::optional<TlsMappingState<1>> state1_;
   std::optional<TlsMappingState<2>> state2_;
+  std::optional<TlsMappingState<3>> state3_;
   std::optional<TlsTriangleMappingState> triangles_;  // on a triangular mesh
   TlsReport triangle_report_;                         // of the last step there
   QuadratureStore quad_;

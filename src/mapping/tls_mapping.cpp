@@ -89,7 +89,7 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
   const auto& bins = recon.bins();
   auto& list = split_.scratch;
   list.clear();
-  list.reserve(bins.order.size() * (Dim == 1 ? 2 : 4));
+  list.reserve(bins.order.size() * (std::size_t{1} << Dim));
   Vec<Dim> inv_h;
   for (int d = 0; d < Dim; ++d) inv_h[d] = 1.0 / g.h[d];
   for (Index e = 0; e < ne; ++e)
@@ -219,8 +219,14 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   constexpr int ns = Dim * (Dim + 1) / 2, nf = ns + Dim;
   // Field j < ns: the stress component (r, c) = comp[j]; field ns + d: (rho b)_d.
   auto rc = [](int j) {
-    constexpr std::array<std::array<int, 2>, 3> comp{{{0, 0}, {0, 1}, {1, 1}}};
-    return comp[static_cast<std::size_t>(j)];
+    if constexpr (Dim == 3) {
+      constexpr std::array<std::array<int, 2>, 6> comp{
+          {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}}};
+      return comp[static_cast<std::size_t>(j)];
+    } else {
+      constexpr std::array<std::array<int, 2>, 3> comp{{{0, 0}, {0, 1}, {1, 1}}};
+      return comp[static_cast<std::size_t>(j)];
+    }
   };
   fill_values(P.x.size(), nf, [&](std::size_t i, int j) {
     if (j < ns) {
@@ -267,16 +273,22 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
 
 template void TlsMapping::mark_surface<1>(TlsMappingState<1>&);
 template void TlsMapping::mark_surface<2>(TlsMappingState<2>&);
+template void TlsMapping::mark_surface<3>(TlsMappingState<3>&);
 template void TlsMapping::limit_density<1>(TlsMappingState<1>&);
 template void TlsMapping::limit_density<2>(TlsMappingState<2>&);
+template void TlsMapping::limit_density<3>(TlsMappingState<3>&);
 template void TlsMapping::split_domains<1>(const RunState<1>&, const BasicTlsReconstruction<1>&);
 template void TlsMapping::split_domains<2>(const RunState<2>&, const BasicTlsReconstruction<2>&);
+template void TlsMapping::split_domains<3>(const RunState<3>&, const BasicTlsReconstruction<3>&);
 template void TlsMapping::fit_mass<1>(RunState<1>&, GaussPoints<1>&);
 template void TlsMapping::fit_mass<2>(RunState<2>&, GaussPoints<2>&);
+template void TlsMapping::fit_mass<3>(RunState<3>&, GaussPoints<3>&);
 template void TlsMapping::fit_momentum<1>(RunState<1>&, const GaussPoints<1>&);
 template void TlsMapping::fit_momentum<2>(RunState<2>&, const GaussPoints<2>&);
+template void TlsMapping::fit_momentum<3>(RunState<3>&, const GaussPoints<3>&);
 template void TlsMapping::fit_forces<1>(RunState<1>&, const GaussPoints<1>&);
 template void TlsMapping::fit_forces<2>(RunState<2>&, const GaussPoints<2>&);
+template void TlsMapping::fit_forces<3>(RunState<3>&, const GaussPoints<3>&);
 
 // The run totals in a checkpoint: eleven counts, then the two condition numbers.
 std::string TlsMapping::save_totals() const {

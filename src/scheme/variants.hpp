@@ -75,9 +75,9 @@ struct BSplineKind {
 struct DdmpmKind {
   static constexpr std::string_view kName = "ddmpm";
   static constexpr std::string_view kDescription =
-      "dual domain MPM: P1 values, smoothed gradients (D 2.6.4; 1D and 2D)";
-  // 1D as in D; 2D with the tensor-product weight alpha derived in basis/ddmpm.hpp.
-  static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
+      "dual domain MPM: P1 values, smoothed gradients (D 2.6.4)";
+  // 1D as in D; 2D and 3D with the tensor-product weight alpha derived in basis/ddmpm.hpp.
+  static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;  // not a B-spline
   template <int Dim>
   using type = DdmpmBasis<Dim>;

@@ -186,15 +186,16 @@ std::vector<KeySpec> declare() {
       choice("method.sort", "auto", kSortModes,
              "re-sorting of the particles by cell between steps (locality of the parallel "
              "scatters; changes results by round-off only)"),
-      integer("method.tls_terms", 0, closed(0, 6),
-              "Taylor basis functions per element of the TLS mapping (1D: 1-3; 2D: 1, 3 or 6; 0: "
-              "the quadratic basis, 3 in 1D and 6 in 2D)"),
+      integer("method.tls_terms", 0, closed(0, 10),
+              "Taylor basis functions per element of the TLS mapping (1D: 1-3; 2D: 1, 3 or 6; 3D: "
+              "1, 4 or 10; 0: the quadratic basis, 3 in 1D, 6 in 2D, 10 in 3D)"),
       choice("method.tls_completion", "auto", kTlsCompletions,
              "what TLS does in an element with too few or badly placed particles (D 5.2.3)"),
       real("method.tls_max_condition", "", 0.0, at_least(0),
            "largest condition number of an element's least-squares matrix in the L2-orthonormal "
            "Taylor basis (1: as well sampled as by uniform points) before completion (the grid's "
-           "cells; 0: 1e8 in 1D as D 5.2.3, 10 in 2D from the study of docs/verification.md)"),
+           "cells; 0: 1e8 in 1D as D 5.2.3, 10 in 2D from the study of docs/verification.md and in "
+           "3D)"),
       choice("method.tls_positivity", "auto", kTlsPositivity,
              "TLS: scale the higher Taylor terms of an element's conservative fields so that its "
              "density is non-negative at the Gauss points (the grid's cells)"),

@@ -1,22 +1,25 @@
 // The domain-averaged bases in 3D on hexahedral grids (issue 20; D 2.6.4): uGIMP, cpGIMP and
-// CPDI (parallelepiped domains). For each, at random points and domains: partition of unity,
-// non-negative weights, zero gradient sum and linear completeness (sum w_i x_i = x_p, sum x_i
-// grad_i^T = I; D 2.5, P.1-P.3), and uGIMP's weights against 1D midpoint integrals of the hat
+// CPDI (parallelepiped domains), and DDMPM. For each, at random points and domains: partition of
+// unity, non-negative weights, zero gradient sum and linear completeness (sum w_i x_i = x_p, sum
+// x_i grad_i^T = I; D 2.5, P.1-P.3), and uGIMP's weights against 1D midpoint integrals of the hat
 // functions (the tensor product of the box averages); a CPDI domain clipped by the grid is
-// refused by fits(). Then every basis available in 3D (P1, the B-splines, GIMP, CPDI) moves a
-// body in uniform translation rigidly through the compiled 3D steppers in every scheme. The
+// refused by fits(). Then every basis available in 3D (P1, the B-splines, GIMP, CPDI, DDMPM) moves
+// a body in uniform translation rigidly through the compiled 3D steppers in every scheme. The
 // B-splines' and P1's own properties in 3D are in tests/basis/test_bspline.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "../support/stepper.hpp"
 #include "basis/cpdi.hpp"
+#include "basis/ddmpm.hpp"
 #include "basis/gimp.hpp"
+#include "basis/linear.hpp"
 #include "model/problem.hpp"
 #include "scheme/variants.hpp"
 
@@ -155,6 +158,65 @@ TEST(Bases3D, CpGimpAndCpdiProperties) {
   EXPECT_FALSE(cpdi.fits(corner, 0));
 }
 
+// DDMPM in 3D (basis/ddmpm.hpp: alpha = prod_d 2 xi_d (1 - xi_d), the smoothed gradient from
+// the 27 neighbours of each node) on particles seeded 3 per cell and direction over the whole
+// grid, so that every node carries volume: at the particles and at random points, partition of
+// unity, non-negative weights, zero gradient sum and sum x_i grad_bar phi_i^T = I; the values
+// are P1's (D 2.6.4: only the gradients are smoothed); at a cell face, where alpha vanishes,
+// the gradient is the smoothed one alone and so continuous, where P1's jumps.
+TEST(Bases3D, DdmpmProperties) {
+  const Grid<3> g = test_grid();
+  const auto P = seed_particles<3>(g, g.origin, g.upper(), 3, 1.0);
+  DdmpmBasis<3> basis(g);
+  basis.prepare(P);
+  const LinearBasis<3> p1(g);
+  DdmpmBasis<3>::StencilT st;
+  LinearBasis<3>::StencilT sp;
+  for (Index p = 0; p < P.size(); p += 7) {
+    basis.evaluate(P, p, st);
+    check_properties(basis, st, P.x[static_cast<std::size_t>(p)]);
+  }
+  for (const Vec<3>& x : random_points(g, 60, 31, 0.0)) {
+    basis.evaluate_point(x, st);
+    check_properties(basis, st, x);
+    p1.evaluate_point(x, sp);
+    // Per node (a node may fill several slots near the grid's sides, the outer ones with zero
+    // weight): the summed weights against P1's.
+    std::map<Index, double> dd, lin;
+    for (int a = 0; a < st.kSize; ++a)
+      dd[st.dof[static_cast<std::size_t>(a)]] += st.w[static_cast<std::size_t>(a)];
+    for (int a = 0; a < sp.kSize; ++a)
+      lin[sp.dof[static_cast<std::size_t>(a)]] += sp.w[static_cast<std::size_t>(a)];
+    for (const auto& [dof, w] : dd) EXPECT_NEAR(w, lin.count(dof) ? lin[dof] : 0.0, 1e-15);
+    for (const auto& [dof, w] : lin) EXPECT_TRUE(dd.count(dof) > 0 || w == 0.0);
+  }
+  // Across the face x = node 3 inside cell (.., 2, 1): the largest gradient jump over the nodes.
+  const Vec<3> x = g.origin + Vec<3>(3.0, 2.4, 1.7).cwiseProduct(g.h);
+  auto jump = [&](const auto& b, auto& lo, auto& hi) {
+    const Vec<3> e(1e-10, 0.0, 0.0);
+    b.evaluate_point(x - e, lo);
+    b.evaluate_point(x + e, hi);
+    double m = 0.0;
+    std::map<Index, Vec<3>> gl, gh;  // summed per node, as the weights above
+    for (int a = 0; a < lo.kSize; ++a) {
+      const auto k = static_cast<std::size_t>(a);
+      gl.try_emplace(lo.dof[k], Vec<3>::Zero()).first->second += lo.grad[k];
+      gh.try_emplace(lo.dof[k], Vec<3>::Zero());
+    }
+    for (int a = 0; a < hi.kSize; ++a) {
+      const auto k = static_cast<std::size_t>(a);
+      gh.try_emplace(hi.dof[k], Vec<3>::Zero()).first->second += hi.grad[k];
+      gl.try_emplace(hi.dof[k], Vec<3>::Zero());
+    }
+    for (const auto& [dof, gr] : gl) m = std::max(m, (gr - gh[dof]).cwiseProduct(g.h).norm());
+    return m;
+  };
+  DdmpmBasis<3>::StencilT lo, hi;
+  LinearBasis<3>::StencilT plo, phi;
+  EXPECT_LT(jump(basis, lo, hi), 1e-8);
+  EXPECT_GT(jump(p1, plo, phi), 0.5);
+}
+
 // A body in uniform translation moves rigidly with every basis available in 3D: velocity
 // unchanged, x = x0 + v t, F = I, no stress (each basis reproduces constants, so
 // L = sum v grad phi_i = 0 while every node the body touches takes part). Every scheme with P1
@@ -178,7 +240,7 @@ TEST(Bases3D, RigidTranslationWithEveryBasis) {
   const Vec<3> vel(0.57, -0.43, 0.51);
   const ElasticParameters ep{1000.0, 1e6, 0.3};
   const std::vector<BasisKind> kinds = test::basis_kinds<3>();
-  ASSERT_EQ(kinds.size(), 9u);  // linear, uGIMP, cpGIMP, CPDI, B-splines of degree 1-5
+  ASSERT_EQ(kinds.size(), 10u);  // linear, uGIMP, cpGIMP, CPDI, B-splines of degree 1-5, DDMPM
   for (const BasisKind& basis : kinds)
     for (const Scheme& scheme : {Scheme(Musl{}), Scheme(Usl{}), Scheme(Usf{}), Scheme(Usavg{})}) {
       const int degree = driver::basis_degree(basis);

@@ -359,7 +359,8 @@ TEST(MlsMapping2d, DimensionsAndGaussPoints) {
   EXPECT_TRUE(MlsMapping::supports_dimension(1));
   EXPECT_TRUE(MlsMapping::supports_dimension(2));
   EXPECT_TRUE(ImlsMapping::supports_dimension(2));
-  EXPECT_FALSE(ImlsMapping::supports_dimension(3));
+  EXPECT_TRUE(ImlsMapping::supports_dimension(3));
+  EXPECT_FALSE(ImlsMapping::supports_dimension(4));
   // method.gauss_points counts per direction: 3 -> 9 per cell.
   const Grid<2> g = kGrid;
   auto P = seed_particles<2>(g, Vec<2>(0.5, 0.1), Vec<2>(1.0, 0.3), 2, 1000.0);

@@ -630,10 +630,12 @@ TEST(TlsMapping2D, CompletionNoneNamesTheElement) {
 TEST(TlsMapping2D, SettingsAreValidatedPerDimension) {
   EXPECT_TRUE(TlsMapping::supports_dimension(1));
   EXPECT_TRUE(TlsMapping::supports_dimension(2));
-  EXPECT_FALSE(TlsMapping::supports_dimension(3));
+  EXPECT_TRUE(TlsMapping::supports_dimension(3));
+  EXPECT_FALSE(TlsMapping::supports_dimension(4));
   TlsSettings s;
   EXPECT_EQ(s.terms_used(1), 3);
   EXPECT_EQ(s.terms_used(2), 6);
+  EXPECT_EQ(s.terms_used(3), 10);
   s.terms = 2;  // not a complete polynomial space in 2D
   EXPECT_NO_THROW(TlsMapping(s, 1));
   EXPECT_THROW(TlsMapping(s, 2), InputError);
@@ -644,7 +646,10 @@ TEST(TlsMapping2D, SettingsAreValidatedPerDimension) {
   EXPECT_THROW(TlsMapping(s, 2), InputError);
   s.terms = 3;  // the linear basis: one point per direction is exact
   EXPECT_NO_THROW(TlsMapping(s, 2));
-  EXPECT_THROW(validate(s, 3), InputError);
+  EXPECT_THROW(validate(s, 3), InputError);  // 3D's linear basis has 4 terms
+  s.terms = 4;
+  EXPECT_NO_THROW(validate(s, 3));
+  EXPECT_THROW(validate(s, 4), InputError);
 }
 
 }  // namespace
