@@ -79,8 +79,10 @@ TEST(Cli, VersionListKeys) {
     EXPECT_NE(l.out.find(name), std::string::npos) << name;
   auto k = sh("keys");
   EXPECT_EQ(k.code, 0);
-  for (const char* key : {"grid.cells", "particles.per_cell", "time.dt", "time.end",
-                          "method.scheme", "method.basis", "method.mapping", "method.mass"})
+  for (const char* key :
+       {"grid.cells", "particles.per_cell", "time.dt", "time.end", "method.scheme", "method.basis",
+        "method.mapping", "method.mass", "grid.cells_z", "boundary.back", "boundary.front",
+        "traction.back", "traction.front", "pressure.back", "pressure.front"})
     EXPECT_NE(k.out.find(key), std::string::npos) << key;
   auto h = sh("--help");
   EXPECT_EQ(h.code, 0);
@@ -192,6 +194,30 @@ TEST(Cli, Custom2DVectorKeyErrorsNameFileLineAndKey) {
   EXPECT_EQ(s.code, 2) << s.out;
   EXPECT_NE(s.out.find("--set initial.velocity="), std::string::npos) << s.out;
   EXPECT_NE(s.out.find("needs 2 expressions"), std::string::npos) << s.out;
+}
+
+// `mpm run` of the 3D custom example writes its outputs: a 3D summary with error norms against
+// the exact.* expressions, history, particle frames with three components, the grid.
+TEST(Cli, Custom3DExampleRunsAndWritesOutput) {
+  const auto out = temp_dir("custom3d");
+  auto r = sh("run " + src("examples/custom_3d.toml") + " -q --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream f(out / "summary.json");
+  ASSERT_TRUE(f.good());
+  const auto j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["status"], "ok");
+  EXPECT_EQ(j["dim"], 3);
+  EXPECT_EQ(j["particles"], 320);
+  EXPECT_LT(j["errors"]["stress_rel_l2"].get<double>(), 0.05);
+  for (const char* file : {"history.csv", "particles_00000.csv", "particles_00004.vtu",
+                           "particles.pvd", "grid.vtu", "config.toml"})
+    EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
+  std::ifstream csv(out / "particles_00000.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_NE(header.find("x0_3"), std::string::npos) << header;
+  EXPECT_NE(header.find("stress_33"), std::string::npos) << header;
+  std::filesystem::remove_all(out);
 }
 
 TEST(Cli, BodyOutsideTheGridAndUnsupportedReconstructionAreRefusedBeforeTheFirstStep) {
