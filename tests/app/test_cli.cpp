@@ -134,9 +134,10 @@ TEST(Cli, RunThreadsFollowTheProblemSize) {
 }
 
 TEST(Cli, CommandLineErrorsExitTwo) {
-  for (const char* args : {"run", "run --no-such-flag x.toml", "frobnicate", "bench --dim 4",
-                           "bench --particles 0", "bench --particles -5", "bench --steps 0",
-                           "bench --repeats -1", "bench --per-cell 0", "bench --threads 0"}) {
+  for (const char* args :
+       {"run", "run --no-such-flag x.toml", "frobnicate", "bench --dim 4", "bench --particles 0",
+        "bench --particles -5", "bench --steps 0", "bench --repeats -1", "bench --per-cell 0",
+        "bench --threads 0", "bench --dim 1 --problem refkernel", "bench --dim 3 --problem cube"}) {
     const auto r = sh(args);
     EXPECT_EQ(r.code, 2) << args << ": " << r.out;
     EXPECT_FALSE(r.out.empty()) << args;
@@ -197,7 +198,8 @@ TEST(Cli, Custom2DVectorKeyErrorsNameFileLineAndKey) {
 }
 
 // `mpm run` of the 3D custom example writes its outputs: a 3D summary with error norms against
-// the exact.* expressions, history, particle frames with three components, the grid.
+// the exact.* expressions, history, particle frames with three components, the grid; `mpm bench
+// --dim 3 --problem refkernel` names its problem.
 TEST(Cli, Custom3DExampleRunsAndWritesOutput) {
   const auto out = temp_dir("custom3d");
   auto r = sh("run " + src("examples/custom_3d.toml") + " -q --out " + out.string());
@@ -218,6 +220,12 @@ TEST(Cli, Custom3DExampleRunsAndWritesOutput) {
   EXPECT_NE(header.find("x0_3"), std::string::npos) << header;
   EXPECT_NE(header.find("stress_33"), std::string::npos) << header;
   std::filesystem::remove_all(out);
+  auto b =
+      sh("bench --dim 3 --problem refkernel --particles 512 --steps 1 --repeats 1 "
+         "--threads 1");
+  EXPECT_EQ(b.code, 0) << b.out;
+  EXPECT_NE(b.out.find("3D musl step (refkernel problem)"), std::string::npos) << b.out;
+  EXPECT_NE(b.out.find("512 particles, 4 cells per direction"), std::string::npos) << b.out;
 }
 
 TEST(Cli, BodyOutsideTheGridAndUnsupportedReconstructionAreRefusedBeforeTheFirstStep) {

@@ -9,7 +9,8 @@
 //   impulse; the stress components come in the order xx, yy, zz, yz, xz, xy;
 // - examples/custom_3d.toml against its quasi-static solution;
 // - input errors: wrong counts name the key and the count, 3D-only keys are refused in 1D and 2D,
-//   mesh-file keys and an initial stress in 3D.
+//   mesh-file keys and an initial stress in 3D;
+// - `mpm bench --dim 3 --problem refkernel`.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -23,6 +24,7 @@
 
 #include "../support/examples.hpp"
 #include "../support/stepper.hpp"
+#include "app/perf.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "model/problem.hpp"
 
@@ -509,6 +511,33 @@ max = [1.0, 1.0]
                           "0.8]\n[boundary]\nback = \"fixed\"\nfront = \"fixed\"\n[traction]\n"
                           "back = \"0\"\n[pressure]\nfront = \"0\"\n",
                     "defaults.toml")));
+}
+
+// `mpm bench --dim 3 --problem refkernel`: n^3 cells of the unit cube in a grid padded by two
+// cells per side (n + 4 per direction), 2 x 2 x 2 particles per cell, free sides, no body force;
+// the cube stays the default problem.
+TEST(Custom3D, BenchRunsTheRefkernelProblem) {
+  BenchOptions opt;
+  opt.dim = 3;
+  opt.particles = 4000;
+  opt.steps = 2;
+  opt.repeats = 1;
+  opt.basis = "bspline";
+  opt.degree = 2;
+  opt.threads = 1;
+  EXPECT_EQ(opt.problem, "plate");
+  const BenchResult cube = bench_3d(opt);
+  opt.problem = "refkernel";
+  const BenchResult r = bench_3d(opt);
+  EXPECT_EQ(r.cells, 8);  // round(cbrt(4000) / 2)
+  EXPECT_EQ(r.particles, 8 * 8 * 8 * 8);
+  EXPECT_EQ(r.steps, 2);
+  EXPECT_GT(r.best_ns_per_particle_step, 0.0);
+  // The padded grid's share: (8 + 4 + 2)^3 quadratic B-spline DOFs against the cube's
+  // (8 + 2)^3, over the same particles.
+  EXPECT_EQ(cube.particles, r.particles);
+  EXPECT_GT(r.bytes_per_particle, cube.bytes_per_particle);
+  EXPECT_GT(r.sort_bytes_per_particle, cube.sort_bytes_per_particle);
 }
 
 }  // namespace
