@@ -24,6 +24,7 @@
 
 #include "../support/examples.hpp"
 #include "../support/stepper.hpp"
+#include "../support/threads.hpp"
 #include "app/perf.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "model/problem.hpp"
@@ -50,8 +51,13 @@ std::unique_ptr<Setup<Dim>> set_up(const Config& cfg,
   return r;
 }
 
+// On one thread: these problems are a few hundred particles, below what `mpm run` gives a second
+// thread (run_threads), and OpenMP's spinning waits on a busy machine made a step of them take
+// milliseconds (3 s per test under ctest -j2 against 25 ms); the thread counts are compared in
+// tests/scheme/test_parallel.cpp.
 template <int Dim>
 void steps(driver::Stepper<Dim>& s, double dt, int n) {
+  const test::Threads one(1);
   RunState<Dim>& sim = s.state();
   for (int k = 0; k < n; ++k) {
     s.step(dt);
