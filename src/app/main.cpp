@@ -156,6 +156,12 @@ int cmd_verify(bool quick, bool long_runs, const std::string& out, int jobs, con
 }
 
 int cmd_bench(const mpm::BenchOptions& opt) {
+  // (Checked here rather than ignored: the 1D bench has one problem, the vibrating bar.)
+  if (opt.dim == 1 && opt.problem != "plate")
+    throw mpm::InputError(fmt::format(
+        "mpm bench: --problem {} is a 2D and 3D problem; --dim 1 times the vibrating bar "
+        "(leave --problem out, or give --dim 2 or 3)",
+        opt.problem));
   const auto r = opt.dim == 3   ? mpm::bench_3d(opt)
                  : opt.dim == 2 ? mpm::bench_2d(opt)
                                 : mpm::bench_1d(opt);
@@ -166,7 +172,10 @@ int cmd_bench(const mpm::BenchOptions& opt) {
       "{} thread(s), best of {}\n  {:.2f} ns per particle-step (median {:.2f})\n  {:.1f} bytes "
       "per particle (particle state, cached stencil, grid share)\n",
       opt.dim, opt.solver != "mpm" ? opt.solver : opt.scheme,
-      opt.dim == 2 ? fmt::format(" ({} problem)", opt.problem) : "", basis, opt.mapping,
+      opt.dim >= 2 ? fmt::format(" ({} problem)",
+                                 opt.dim == 3 && opt.problem == "plate" ? "cube" : opt.problem)
+                   : "",
+      basis, opt.mapping,
       opt.mass == "consistent" ? fmt::format("consistent ({} solve)", opt.mass_solver) : opt.mass,
       r.particles, r.cells, opt.dim >= 2 ? " per direction" : "", r.steps, r.threads, opt.repeats,
       r.best_ns_per_particle_step, r.median_ns_per_particle_step, r.bytes_per_particle);
@@ -243,7 +252,7 @@ int main(int argc, char** argv) {
   bench
       ->add_option("--dim", bopt.dim,
                    "1: vibrating bar; 2: neo-Hookean plate (--problem); 3: the cube of "
-                   "cube_mms_3d")
+                   "cube_mms_3d (--problem)")
       ->check(CLI::IsMember({1, 2, 3}))
       ->capture_default_str();
   bench->add_option("--particles", bopt.particles, "number of particles (about, in 2D)")
@@ -277,9 +286,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench
       ->add_option("--problem", bopt.problem,
-                   "2D problem: plate (plate_mms_2d, body force b(X, t)) or refkernel (the "
-                   "problem of ../shared/tools/refkernel.cpp: padded unit square, no body "
-                   "force, dt = 1e-6 s)")
+                   "2D and 3D problem: plate (2D plate_mms_2d, 3D the cube of cube_mms_3d: "
+                   "body force b(X, t)) or refkernel (the problem of "
+                   "../shared/tools/refkernel.cpp, in 3D of scripts/refkernel3d.cpp: padded "
+                   "unit square or cube, no body force, free sides, dt = 1e-6 s)")
       ->check(CLI::IsMember({"plate", "refkernel"}))
       ->capture_default_str();
   bench->add_flag("--shuffle", bopt.shuffle,

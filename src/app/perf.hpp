@@ -20,8 +20,9 @@ struct BenchOptions {
   std::string solver = "mpm";          // method.solver: mpm, otm or unified (1D)
   std::string mass = "lumped";         // method.mass
   std::string mass_solver = "direct";  // method.mass_solver (consistent mass)
-  // 2D problem: "plate" (plate_mms_2d) or "refkernel" (the problem of the yardstick
-  // ../shared/tools/refkernel.cpp through the custom benchmark).
+  // 2D and 3D problem: "plate" (2D plate_mms_2d, 3D the cube of cube_mms_3d) or "refkernel"
+  // (the problem of the yardstick ../shared/tools/refkernel.cpp, in 3D scripts/refkernel3d.cpp,
+  // through the custom benchmark). 1D has its bar only.
   std::string problem = "plate";
   bool shuffle = false;       // start from the particles in random order (RunOptions::shuffle_seed)
   std::string sort = "auto";  // method.sort
@@ -55,9 +56,12 @@ BenchResult bench_1d(const BenchOptions& opt);
 // -0.1 sin(2 pi y)) m/s, no body force, free sides, dt = 1e-6 s.
 BenchResult bench_2d(const BenchOptions& opt);
 
-// 3D: the cube of cube_mms_3d (issue 20), about `particles` particles, per_cell per direction
-// (default 2), the 2D plate's material, amplitude 1e-3 m, rollers, its body force every step,
-// dt = 0.1 h / c with the P-wave speed.
+// 3D, about `particles` particles, per_cell per direction (default 2), the 2D plate's material,
+// lumped mass. problem "plate": the cube of cube_mms_3d (issue 20), amplitude 1e-3 m, rollers,
+// its body force every step, dt = 0.1 h / c with the P-wave speed. problem "refkernel": the 2D
+// refkernel problem in 3D (scripts/refkernel3d.cpp), the unit cube body in a grid padded by two
+// cells per side, v = (0.1 sin(2 pi x), -0.1 sin(2 pi y), 0.1 sin(2 pi z)) m/s, no body force,
+// free sides, dt = 1e-6 s.
 BenchResult bench_3d(const BenchOptions& opt);
 
 }  // namespace mpm

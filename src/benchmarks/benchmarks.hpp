@@ -134,6 +134,12 @@ Problem<1> make_custom_1d(const Config& cfg);
 // four body faces through the particles next to them (Traction), exact.* by expressions.
 Problem<2> make_custom_2d(const Config& cfg);
 
+// The same in 3D (grid.dimension = 3): vector keys with three values or expressions of x, y, z
+// (and t), initial.stress and exact.stress as [xx, yy, zz, yz, xz, xy], per-side conditions on
+// the six sides (boundary.back: z = grid.min, boundary.front: z = grid.max), tractions and
+// pressures on the six body faces; no mesh file, so no named boundaries.
+Problem<3> make_custom_3d(const Config& cfg);
+
 // A bar on [0, L] filling a grid of grid.cells cells with particles.per_cell particles per
 // cell, density rho, fixed at both ends, released with velocity v(X) (vibrating bar, mms_1d).
 void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,

@@ -16,7 +16,9 @@
 namespace mpm {
 namespace {
 
-constexpr const char* kSideKeys[2][2] = {{"left", "right"}, {"bottom", "top"}};
+// The sides of the grid (boundary.*) and faces of the body (traction.*, pressure.*) by direction:
+// x, y, then z (back: z = min, front: z = max).
+constexpr const char* kSideKeys[3][2] = {{"left", "right"}, {"bottom", "top"}, {"back", "front"}};
 
 // The values of a RealVector key, one per direction; InputError naming its line otherwise.
 template <int Dim>
@@ -24,8 +26,12 @@ Vec<Dim> per_direction(const Config& cfg, const char* key) {
   const std::vector<double> v = cfg.get_reals(key);
   if (v.size() != static_cast<std::size_t>(Dim))
     throw InputError(fmt::format(
-        "{}: key '{}' needs {} values (one per direction, x{}) for grid.dimension = {}, got {}",
-        cfg.where(key), key, Dim, Dim > 1 ? ", y" : "", Dim, v.size()));
+        "{}: key '{}' needs {} values (one per direction, {}) for grid.dimension = {}, got {}",
+        cfg.where(key), key, Dim,
+        Dim == 1   ? "x"
+        : Dim == 2 ? "x, y"
+                   : "x, y, z",
+        Dim, v.size()));
   Vec<Dim> out;
   for (int d = 0; d < Dim; ++d) out[d] = v[static_cast<std::size_t>(d)];
   return out;
@@ -56,27 +62,44 @@ std::vector<Expression> expressions(const Config& cfg, const char* key, std::siz
   return out;
 }
 
-// Stress components in the order of initial.stress and exact.stress: 1D xx; 2D xx, yy, xy.
+// Stress components in the order of initial.stress and exact.stress (Voigt's): 1D xx; 2D xx, yy,
+// xy; 3D xx, yy, zz, yz, xz, xy (which drops to the 2D order without the z components).
 template <int Dim>
-Mat<Dim> stress_from(const std::vector<Expression>& s, double x, double y, double t) {
+Mat<Dim> stress_from(const std::vector<Expression>& s, double x, double y, double z, double t) {
   Mat<Dim> m = Mat<Dim>::Zero();
-  m(0, 0) = s[0](x, y, 0.0, t);
+  m(0, 0) = s[0](x, y, z, t);
   if constexpr (Dim == 2) {
-    m(1, 1) = s[1](x, y, 0.0, t);
-    m(0, 1) = m(1, 0) = s[2](x, y, 0.0, t);
+    m(1, 1) = s[1](x, y, z, t);
+    m(0, 1) = m(1, 0) = s[2](x, y, z, t);
+  }
+  if constexpr (Dim == 3) {
+    m(1, 1) = s[1](x, y, z, t);
+    m(2, 2) = s[2](x, y, z, t);
+    m(1, 2) = m(2, 1) = s[3](x, y, z, t);
+    m(0, 2) = m(2, 0) = s[4](x, y, z, t);
+    m(0, 1) = m(1, 0) = s[5](x, y, z, t);
   }
   return m;
 }
 
 template <int Dim>
-Vec<Dim> vector_from(const std::vector<Expression>& e, double x, double y, double t) {
+Vec<Dim> vector_from(const std::vector<Expression>& e, double x, double y, double z, double t) {
   Vec<Dim> v;
-  for (int d = 0; d < Dim; ++d) v[d] = e[static_cast<std::size_t>(d)](x, y, 0.0, t);
+  for (int d = 0; d < Dim; ++d) v[d] = e[static_cast<std::size_t>(d)](x, y, z, t);
   return v;
 }
 
-constexpr const char* kComponents[] = {"", "x", "x, y"};
-constexpr const char* kStressComponents[] = {"", "xx", "xx, yy, xy"};
+// The coordinates of a point as the expressions' x, y, z (zero beyond Dim).
+template <int Dim>
+std::array<double, 3> xyz(const Vec<Dim>& X) {
+  std::array<double, 3> c{0.0, 0.0, 0.0};
+  for (int d = 0; d < Dim; ++d) c[static_cast<std::size_t>(d)] = X[d];
+  return c;
+}
+
+constexpr const char* kComponents[] = {"", "x", "x, y", "x, y, z"};
+constexpr const char* kStressComponents[] = {"", "xx", "xx, yy, xy", "xx, yy, zz, yz, xz, xy"};
+constexpr std::size_t kStressCount[] = {0, 1, 3, 6};
 
 // Dirichlet conditions of the grid sides (boundary.*) and tractions on the body faces
 // (traction.*), in Dim directions.
@@ -126,7 +149,7 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
       pb.tractions.push_back(
           body_face_traction<Dim>(pb.grid, pb.particles, b0, b1, per_cell, d, side == 0 ? -1 : +1,
                                   [tau, p, d, sign](double t) {
-                                    Vec<Dim> v = vector_from<Dim>(tau, 0.0, 0.0, t);
+                                    Vec<Dim> v = vector_from<Dim>(tau, 0.0, 0.0, 0.0, t);
                                     v[d] -= sign * p(0.0, 0.0, 0.0, t);
                                     return v;
                                   }));
@@ -321,7 +344,7 @@ void named_loads(Problem<2>& pb, const Config& cfg) {
   }
   const auto cells_at = cells_at_vertices(mesh);
   Traction<2> tr;
-  tr.value = [tau](double t) { return vector_from<2>(tau, 0.0, 0.0, t); };
+  tr.value = [tau](double t) { return vector_from<2>(tau, 0.0, 0.0, 0.0, t); };
   if (pressure) tr.pressure = [p](double t) { return p(0.0, 0.0, 0.0, t); };
   for (const auto& name : names) {
     check_boundary_name(mesh, cfg, name, "boundary.loaded");
@@ -370,16 +393,52 @@ ExactSolution<Dim> exact_from_config(const Config& cfg) {
   if (is_zero(cfg, "exact.displacement") && is_zero(cfg, "exact.velocity") &&
       is_zero(cfg, "exact.stress"))
     return {};
-  constexpr std::size_t ns = Dim == 1 ? 1 : 3;
   auto u = expressions(cfg, "exact.displacement", Dim, kComponents[Dim]);
   auto v = expressions(cfg, "exact.velocity", Dim, kComponents[Dim]);
-  auto s = expressions(cfg, "exact.stress", ns, kStressComponents[Dim]);
-  // Evaluated at the material position X (x, y in the expressions), only for outputs and norms.
+  auto s = expressions(cfg, "exact.stress", kStressCount[Dim], kStressComponents[Dim]);
+  // Evaluated at the material position X (x, y, z in the expressions), only for outputs and
+  // norms.
   return [u, v, s](const Vec<Dim>& X, double t) {
-    const double y = Dim > 1 ? X[Dim > 1 ? 1 : 0] : 0.0;
-    return ExactState<Dim>{vector_from<Dim>(u, X[0], y, t), vector_from<Dim>(v, X[0], y, t),
-                           stress_from<Dim>(s, X[0], y, t)};
+    const auto [x, y, z] = xyz<Dim>(X);
+    return ExactState<Dim>{vector_from<Dim>(u, x, y, z, t), vector_from<Dim>(v, x, y, z, t),
+                           stress_from<Dim>(s, x, y, z, t)};
   };
+}
+
+// Keys that only a custom problem of more dimensions reads are refused, naming the key, when
+// their value is not the default: traction.* "0", pressure.* "0", grid.cells_y and cells_z 0,
+// boundary.* "fixed" (a restarted run's stored configuration holds every key, so a default
+// value cannot tell a given key from an absent one; boundary.bottom and top are not refused in
+// 1D, as before 3D). `dim` is the problem's dimension.
+void refuse_keys_of_more_dimensions(const Config& cfg, int dim) {
+  struct Only {
+    const char* key;
+    int from;  // the lowest dimension that reads it
+  };
+  static constexpr Only kOnly[] = {
+      {"grid.cells_y", 2},  {"traction.bottom", 2}, {"traction.top", 2},  {"pressure.bottom", 2},
+      {"pressure.top", 2},  {"grid.cells_z", 3},    {"traction.back", 3}, {"traction.front", 3},
+      {"pressure.back", 3}, {"pressure.front", 3},  {"boundary.back", 3}, {"boundary.front", 3},
+  };
+  for (const Only& o : kOnly) {
+    if (o.from <= dim) continue;
+    const std::string_view key = o.key;
+    bool given = false;
+    if (key.starts_with("traction."))
+      given = !is_zero(cfg, o.key);
+    else if (key.starts_with("pressure."))
+      given = cfg.get_string(o.key) != "0";
+    else if (key.starts_with("grid."))
+      given = cfg.get_int(o.key) != 0;
+    else
+      given = cfg.get_string(o.key) != "fixed";
+    if (given)
+      throw InputError(fmt::format(
+          "{}: key '{}' applies to {} custom problem only (set grid.dimension = {}); this one "
+          "is {}D",
+          cfg.where(o.key), o.key, o.from == 2 ? "a 2D or 3D" : "a 3D",
+          o.from == 2 ? "2 or 3" : "3", dim));
+  }
 }
 
 }  // namespace
@@ -449,25 +508,7 @@ Problem<1> make_custom_1d(const Config& cfg) {
     for (std::size_t i = 0; i < P.x.size(); ++i) out[i][0] = b(P.x[i][0], 0.0, 0.0, t);
   };
 
-  // Values that only a 2D problem reads (boundary.bottom/top: their default, "fixed", is
-  // indistinguishable from a given one in a restarted run's stored configuration).
-  for (const char* key : {"traction.bottom", "traction.top"})
-    if (!is_zero(cfg, key))
-      throw InputError(
-          fmt::format("{}: key '{}' applies to a 2D custom problem only (set "
-                      "grid.dimension = 2)",
-                      cfg.where(key), key));
-  for (const char* key : {"pressure.bottom", "pressure.top"})
-    if (cfg.get_string(key) != "0")
-      throw InputError(
-          fmt::format("{}: key '{}' applies to a 2D custom problem only (set "
-                      "grid.dimension = 2)",
-                      cfg.where(key), key));
-  if (cfg.get_int("grid.cells_y") != 0)
-    throw InputError(
-        fmt::format("{}: key 'grid.cells_y' applies to a 2D custom problem only "
-                    "(set grid.dimension = 2)",
-                    cfg.where("grid.cells_y")));
+  refuse_keys_of_more_dimensions(cfg, 1);
   sides_from_config<1>(pb, cfg, Vec<1>(b0), Vec<1>(b1),
                        static_cast<int>(cfg.get_int("particles.per_cell")));
   pb.exact = exact_from_config<1>(cfg);
@@ -477,6 +518,7 @@ Problem<1> make_custom_1d(const Config& cfg) {
 Problem<2> make_custom_2d(const Config& cfg) {
   Problem<2> pb;
   pb.benchmark = "custom";
+  refuse_keys_of_more_dimensions(cfg, 2);
   // With a mesh file the grid is its bounding box unless given (and then checked against it),
   // and the body the grid unless given.
   pb.mesh = mesh_from_config(cfg);
@@ -513,8 +555,8 @@ Problem<2> make_custom_2d(const Config& cfg) {
 
   const auto v0 = expressions(cfg, "initial.velocity", 2, kComponents[2]);
   const auto s0 = expressions(cfg, "initial.stress", 3, kStressComponents[2]);
-  pb.initial_velocity = [v0](const Vec<2>& X) { return vector_from<2>(v0, X[0], X[1], 0.0); };
-  pb.initial_stress = [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0); };
+  pb.initial_velocity = [v0](const Vec<2>& X) { return vector_from<2>(v0, X[0], X[1], 0.0, 0.0); };
+  pb.initial_stress = [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0, 0.0); };
   const bool incremental_law = std::holds_alternative<Elastic1DSmall>(pb.material) ||
                                std::holds_alternative<Elastic1DLarge>(pb.material);
   auto& P = pb.particles;
@@ -541,18 +583,113 @@ Problem<2> make_custom_2d(const Config& cfg) {
   pb.body_force.fill = [b, uniform = !pb.body_force.position_dependent](
                            const Particles<2>& P, double t, std::vector<Vec<2>>& out) {
     if (uniform) {
-      const Vec<2> value = vector_from<2>(b, 0.0, 0.0, t);
+      const Vec<2> value = vector_from<2>(b, 0.0, 0.0, 0.0, t);
       for (auto& o : out) o = value;
       return;
     }
     for (std::size_t i = 0; i < P.x.size(); ++i)
-      out[i] = vector_from<2>(b, P.x[i][0], P.x[i][1], t);
+      out[i] = vector_from<2>(b, P.x[i][0], P.x[i][1], 0.0, t);
   };
 
   sides_from_config<2>(pb, cfg, b0, b1, per_cell);
   named_boundaries(pb, cfg);
   named_loads(pb, cfg);
   pb.exact = exact_from_config<2>(cfg);
+  return pb;
+}
+
+Problem<3> make_custom_3d(const Config& cfg) {
+  Problem<3> pb;
+  pb.benchmark = "custom";
+  // Named boundaries and their loads are the physical groups of a Gmsh file of triangles, which
+  // only the 2D problem reads (grid.mesh); the six faces of a 3D grid take boundary.left, right,
+  // bottom, top, back, front and the body's faces traction.* and pressure.*.
+  for (const char* key : {"boundary.fixed", "boundary.roller", "boundary.loaded"})
+    if (!cfg.get_string(key).empty())
+      throw InputError(fmt::format(
+          "{}: {} names boundaries of a 2D mesh file (grid.mesh: triangles); a 3D custom "
+          "problem has no mesh file: its grid's six sides take boundary.left, right, bottom, "
+          "top, back, front",
+          cfg.where(key), key));
+  for (const char* key : {"traction.loaded", "pressure.loaded"})
+    if (key[0] == 't' ? !is_zero(cfg, key) : cfg.get_string(key) != "0")
+      throw InputError(fmt::format(
+          "{}: {} loads the named boundaries of a 2D mesh file (grid.mesh, boundary.loaded); a "
+          "3D custom problem loads its body's faces with traction.left ... front and "
+          "pressure.left ... front",
+          cfg.where(key), key));
+  const Vec<3> g0 = per_direction<3>(cfg, "grid.min"), g1 = per_direction<3>(cfg, "grid.max");
+  const Vec<3> b0 = per_direction<3>(cfg, "body.min"), b1 = per_direction<3>(cfg, "body.max");
+  for (int d = 0; d < 3; ++d) {
+    const char axis = "xyz"[d];
+    if (!(g1[d] > g0[d]))
+      throw InputError(fmt::format("{}: grid.max = {} must exceed grid.min = {} in {}",
+                                   cfg.where("grid.max"), g1[d], g0[d], axis));
+    if (!(b1[d] > b0[d]))
+      throw InputError(fmt::format("{}: body.max = {} must exceed body.min = {} in {}",
+                                   cfg.where("body.max"), b1[d], b0[d], axis));
+    if (b0[d] < g0[d] || b1[d] > g1[d])
+      throw InputError(fmt::format(
+          "{}: the body [{}, {}] must lie inside the grid [{}, {}] in {} (grid.min, grid.max)",
+          cfg.where(b0[d] < g0[d] ? "body.min" : "body.max"), b0[d], b1[d], g0[d], g1[d], axis));
+  }
+  pb.material = material_from_config(cfg, 3);
+  const double rho = cfg.get_real("material.density");
+  // Cells in y and z: given, or (0) the count closest to the cell width in x (cubic cells).
+  const auto cx = static_cast<Index>(cfg.get_int("grid.cells"));
+  auto cells_along = [&](const char* key, int d) {
+    const auto given = static_cast<Index>(cfg.get_int(key));
+    if (given != 0) return given;
+    return std::max<Index>(1, std::llround((g1[d] - g0[d]) / ((g1[0] - g0[0]) / cx)));
+  };
+  pb.grid =
+      Grid<3>(g0, g1, IVec<3>{cx, cells_along("grid.cells_y", 1), cells_along("grid.cells_z", 2)});
+  // particles.per_cell per cell and direction, as in 2D and cube_mms_3d (x fastest, then y, z).
+  const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
+  pb.particles = seed_particles<3>(pb.grid, b0, b1, per_cell, rho);
+  pb.body_min = b0;
+  pb.body_max = b1;
+
+  const auto v0 = expressions(cfg, "initial.velocity", 3, kComponents[3]);
+  const auto s0 = expressions(cfg, "initial.stress", kStressCount[3], kStressComponents[3]);
+  pb.initial_velocity = [v0](const Vec<3>& X) { return vector_from<3>(v0, X[0], X[1], X[2], 0.0); };
+  pb.initial_stress = [s0](const Vec<3>& X) { return stress_from<3>(s0, X[0], X[1], X[2], 0.0); };
+  auto& P = pb.particles;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    P.v[i] = pb.initial_velocity(P.x0[i]);
+    P.stress[i] = pb.initial_stress(P.x0[i]);
+    for (const auto& [key, finite] : {std::pair{"initial.velocity", P.v[i].allFinite()},
+                                      std::pair{"initial.stress", P.stress[i].allFinite()}})
+      if (!finite)
+        throw InputError(fmt::format(
+            "{}: {} is not finite at (x, y, z) = ({:.6g}, {:.6g}, {:.6g}) (particle {})",
+            cfg.where(key), key, P.x0[i][0], P.x0[i][1], P.x0[i][2], i));
+    // The 3D laws (linear_elastic, neo_hookean) compute the stress from F, which is I here.
+    if (P.stress[i] != Mat<3>::Zero())
+      throw InputError(fmt::format(
+          "{}: an initial stress needs an incremental law; material.model = \"{}\" computes "
+          "the stress from F = I (no 3D law is incremental: leave initial.stress at 0)",
+          cfg.where("initial.stress"), material_name(pb.material)));
+  }
+
+  const auto b = expressions(cfg, "loading.body_force", 3, kComponents[3]);
+  pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time() || b[2].uses_time();
+  pb.body_force.position_dependent =
+      b[0].uses_position() || b[1].uses_position() || b[2].uses_position();
+  // Serial: an Expression is not thread-safe (one parser per copy); the fill is once a step.
+  pb.body_force.fill = [b, uniform = !pb.body_force.position_dependent](
+                           const Particles<3>& P, double t, std::vector<Vec<3>>& out) {
+    if (uniform) {
+      const Vec<3> value = vector_from<3>(b, 0.0, 0.0, 0.0, t);
+      for (auto& o : out) o = value;
+      return;
+    }
+    for (std::size_t i = 0; i < P.x.size(); ++i)
+      out[i] = vector_from<3>(b, P.x[i][0], P.x[i][1], P.x[i][2], t);
+  };
+
+  sides_from_config<3>(pb, cfg, b0, b1, per_cell);
+  pb.exact = exact_from_config<3>(cfg);
   return pb;
 }
 

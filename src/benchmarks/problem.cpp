@@ -322,7 +322,9 @@ AnyProblem make_any_problem(const Config& cfg) {
   if (name == "traction_bar") return make_traction_bar(cfg);
   if (name == "mms_1d") return make_mms_1d(cfg);
   if (name == "custom") {
-    if (cfg.get_int("grid.dimension") == 2) return make_custom_2d(cfg);
+    const auto dim = cfg.get_int("grid.dimension");
+    if (dim == 3) return make_custom_3d(cfg);
+    if (dim == 2) return make_custom_2d(cfg);
     return make_custom_1d(cfg);
   }
   if (name == "plate_mms_2d") return make_plate_mms_2d(cfg);

@@ -111,15 +111,18 @@ std::vector<KeySpec> declare() {
       choice("benchmark", kRequired, kBenchmarks, "benchmark problem to run"),
 
       integer("grid.cells", 20, at_least(1), "number of cells (knot spans) per direction"),
-      integer("grid.dimension", 1, closed(1, 2),
+      integer("grid.dimension", 1, closed(1, 3),
               "spatial dimension of the custom benchmark (the other benchmarks fix their own)"),
       real_vector("grid.min", "m", 0.0,
                   "lower corner of the background grid, one value per direction (custom)"),
       real_vector("grid.max", "m", 1.0,
                   "upper corner of the background grid, one value per direction (custom)"),
       integer("grid.cells_y", 0, at_least(0),
-              "cells in y of a 2D custom grid (0: round((max_y - min_y) / h_x), at least 1, the "
-              "cells closest to square)"),
+              "cells in y of a 2D or 3D custom grid (0: round((max_y - min_y) / h_x), at least "
+              "1, the cells closest to square)"),
+      integer("grid.cells_z", 0, at_least(0),
+              "cells in z of a 3D custom grid (0: round((max_z - min_z) / h_x), at least 1, the "
+              "cells closest to cubic)"),
 
       choice("grid.mesh", "", {},
              "Gmsh mesh file (.msh 4.1 or 2.2, linear triangles) whose triangles carry "
@@ -267,23 +270,27 @@ std::vector<KeySpec> declare() {
                   "upper corner of the material body, one value per direction (custom)"),
 
       expression_vector("initial.velocity", "m/s", "0",
-                        "initial velocity, one expression of the position x, y per component "
-                        "(custom; a single \"0\": all zero)"),
+                        "initial velocity, one expression of the position x, y, z per "
+                        "component (custom; a single \"0\": all zero)"),
       expression_vector("initial.stress", "Pa", "0",
-                        "initial Cauchy stress as expressions of x, y (custom; 1D: one, 2D: "
-                        "[xx, yy, xy]; incremental laws only)"),
+                        "initial Cauchy stress as expressions of x, y, z (custom; 1D: one, 2D: "
+                        "[xx, yy, xy], 3D: [xx, yy, zz, yz, xz, xy]; incremental laws only)"),
       expression_vector("loading.body_force", "m/s^2", "0",
-                        "body force per unit mass, one expression of the current position x, y "
-                        "and t per component (custom)"),
+                        "body force per unit mass, one expression of the current position x, y, "
+                        "z and t per component (custom)"),
 
       choice("boundary.left", "fixed", kBoundaryTypes,
              "condition on the grid side x = grid.min (custom)"),
       choice("boundary.right", "fixed", kBoundaryTypes,
              "condition on the grid side x = grid.max (custom)"),
       choice("boundary.bottom", "fixed", kBoundaryTypes,
-             "condition on the grid side y = grid.min (2D custom)"),
+             "condition on the grid side y = grid.min (2D and 3D custom)"),
       choice("boundary.top", "fixed", kBoundaryTypes,
-             "condition on the grid side y = grid.max (2D custom)"),
+             "condition on the grid side y = grid.max (2D and 3D custom)"),
+      choice("boundary.back", "fixed", kBoundaryTypes,
+             "condition on the grid side z = grid.min (3D custom)"),
+      choice("boundary.front", "fixed", kBoundaryTypes,
+             "condition on the grid side z = grid.max (3D custom)"),
       choice("boundary.fixed", "", {},
              "named boundaries of grid.mesh (its physical groups of lines; `mpm mesh FILE` "
              "lists them) whose velocity is zero, separated by commas, e.g. \"inlet, base\" "
@@ -309,27 +316,39 @@ std::vector<KeySpec> declare() {
       expression_vector("traction.right", "Pa", "0",
                         "traction on the body face x = body.max, as traction.left (custom)"),
       expression_vector("traction.bottom", "Pa", "0",
-                        "traction on the body face y = body.min, as traction.left (2D custom)"),
+                        "traction on the body face y = body.min, as traction.left (2D and 3D "
+                        "custom)"),
       expression_vector("traction.top", "Pa", "0",
-                        "traction on the body face y = body.max, as traction.left (2D custom)"),
+                        "traction on the body face y = body.max, as traction.left (2D and 3D "
+                        "custom)"),
+      expression_vector("traction.back", "Pa", "0",
+                        "traction on the body face z = body.min, as traction.left (3D custom)"),
+      expression_vector("traction.front", "Pa", "0",
+                        "traction on the body face z = body.max, as traction.left (3D custom)"),
       expression("pressure.left", "Pa", "0",
                  "normal pressure p(t) on the body face x = body.min, positive in compression: "
                  "adds -p n (reference outward normal n) to traction.left (custom)"),
       expression("pressure.right", "Pa", "0",
                  "normal pressure on the body face x = body.max, as pressure.left (custom)"),
       expression("pressure.bottom", "Pa", "0",
-                 "normal pressure on the body face y = body.min, as pressure.left (2D custom)"),
+                 "normal pressure on the body face y = body.min, as pressure.left (2D and 3D "
+                 "custom)"),
       expression("pressure.top", "Pa", "0",
-                 "normal pressure on the body face y = body.max, as pressure.left (2D custom)"),
+                 "normal pressure on the body face y = body.max, as pressure.left (2D and 3D "
+                 "custom)"),
+      expression("pressure.back", "Pa", "0",
+                 "normal pressure on the body face z = body.min, as pressure.left (3D custom)"),
+      expression("pressure.front", "Pa", "0",
+                 "normal pressure on the body face z = body.max, as pressure.left (3D custom)"),
       expression_vector("exact.displacement", "m", "0",
                         "exact displacement u(X, t) for error norms, one expression of the "
-                        "material position x, y and t per component (custom; all exact.* \"0\": "
-                        "none)"),
+                        "material position x, y, z and t per component (custom; all exact.* "
+                        "\"0\": none)"),
       expression_vector("exact.velocity", "m/s", "0",
                         "exact velocity v(X, t), as exact.displacement (\"0\": zero)"),
       expression_vector("exact.stress", "Pa", "0",
-                        "exact Cauchy stress sigma(X, t) (1D: one; 2D: [xx, yy, xy]; \"0\": "
-                        "zero)"),
+                        "exact Cauchy stress sigma(X, t) (1D: one; 2D: [xx, yy, xy]; 3D: [xx, "
+                        "yy, zz, yz, xz, xy]; \"0\": zero)"),
 
       integer("output.frames", 10, at_least(0),
               "frames evenly spaced in time after the initial one, the final state always "

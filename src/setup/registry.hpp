@@ -70,7 +70,7 @@ inline constexpr Entry kBenchmarks[] = {
     {"mms_1d",
      "1D neo-Hookean manufactured solution, body force from the exact displacement (003)"},
     {"custom",
-     "1D or 2D (grid.dimension) problem built from the config alone: extents, fields and "
+     "1D, 2D or 3D (grid.dimension) problem built from the config alone: extents, fields and "
      "forces by expression, side conditions, face tractions, optional exact solution"},
     {"plate_mms_2d",
      "2D axis-aligned vibration of a unit square, neo-Hookean manufactured solution (001, D "

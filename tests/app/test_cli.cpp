@@ -79,8 +79,10 @@ TEST(Cli, VersionListKeys) {
     EXPECT_NE(l.out.find(name), std::string::npos) << name;
   auto k = sh("keys");
   EXPECT_EQ(k.code, 0);
-  for (const char* key : {"grid.cells", "particles.per_cell", "time.dt", "time.end",
-                          "method.scheme", "method.basis", "method.mapping", "method.mass"})
+  for (const char* key :
+       {"grid.cells", "particles.per_cell", "time.dt", "time.end", "method.scheme", "method.basis",
+        "method.mapping", "method.mass", "grid.cells_z", "boundary.back", "boundary.front",
+        "traction.back", "traction.front", "pressure.back", "pressure.front"})
     EXPECT_NE(k.out.find(key), std::string::npos) << key;
   auto h = sh("--help");
   EXPECT_EQ(h.code, 0);
@@ -132,9 +134,10 @@ TEST(Cli, RunThreadsFollowTheProblemSize) {
 }
 
 TEST(Cli, CommandLineErrorsExitTwo) {
-  for (const char* args : {"run", "run --no-such-flag x.toml", "frobnicate", "bench --dim 4",
-                           "bench --particles 0", "bench --particles -5", "bench --steps 0",
-                           "bench --repeats -1", "bench --per-cell 0", "bench --threads 0"}) {
+  for (const char* args :
+       {"run", "run --no-such-flag x.toml", "frobnicate", "bench --dim 4", "bench --particles 0",
+        "bench --particles -5", "bench --steps 0", "bench --repeats -1", "bench --per-cell 0",
+        "bench --threads 0", "bench --dim 1 --problem refkernel", "bench --dim 3 --problem cube"}) {
     const auto r = sh(args);
     EXPECT_EQ(r.code, 2) << args << ": " << r.out;
     EXPECT_FALSE(r.out.empty()) << args;
@@ -192,6 +195,37 @@ TEST(Cli, Custom2DVectorKeyErrorsNameFileLineAndKey) {
   EXPECT_EQ(s.code, 2) << s.out;
   EXPECT_NE(s.out.find("--set initial.velocity="), std::string::npos) << s.out;
   EXPECT_NE(s.out.find("needs 2 expressions"), std::string::npos) << s.out;
+}
+
+// `mpm run` of the 3D custom example writes its outputs: a 3D summary with error norms against
+// the exact.* expressions, history, particle frames with three components, the grid; `mpm bench
+// --dim 3 --problem refkernel` names its problem.
+TEST(Cli, Custom3DExampleRunsAndWritesOutput) {
+  const auto out = temp_dir("custom3d");
+  auto r = sh("run " + src("examples/custom_3d.toml") + " -q --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream f(out / "summary.json");
+  ASSERT_TRUE(f.good());
+  const auto j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["status"], "ok");
+  EXPECT_EQ(j["dim"], 3);
+  EXPECT_EQ(j["particles"], 320);
+  EXPECT_LT(j["errors"]["stress_rel_l2"].get<double>(), 0.05);
+  for (const char* file : {"history.csv", "particles_00000.csv", "particles_00004.vtu",
+                           "particles.pvd", "grid.vtu", "config.toml"})
+    EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
+  std::ifstream csv(out / "particles_00000.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_NE(header.find("x0_3"), std::string::npos) << header;
+  EXPECT_NE(header.find("stress_33"), std::string::npos) << header;
+  std::filesystem::remove_all(out);
+  auto b =
+      sh("bench --dim 3 --problem refkernel --particles 512 --steps 1 --repeats 1 "
+         "--threads 1");
+  EXPECT_EQ(b.code, 0) << b.out;
+  EXPECT_NE(b.out.find("3D musl step (refkernel problem)"), std::string::npos) << b.out;
+  EXPECT_NE(b.out.find("512 particles, 4 cells per direction"), std::string::npos) << b.out;
 }
 
 TEST(Cli, BodyOutsideTheGridAndUnsupportedReconstructionAreRefusedBeforeTheFirstStep) {

@@ -203,6 +203,12 @@ TEST(Checkpoint, RestartIsBitwise2DCustomWithTraction) {
   check_bitwise_restart({"custom_plate_2d", {"traction.top=[\"1e3*t\", \"-1e3\"]"}, 50});
 }
 
+TEST(Checkpoint, RestartIsBitwise3DCustomWithPressure) {
+  // 3D custom problem: three-value arrays in the stored configuration, the z faces' keys
+  // (boundary.back/front, pressure.front), a face load in 3D.
+  check_bitwise_restart({"custom_3d", {"pressure.front=1e4*t"}, 20});
+}
+
 TEST(Checkpoint, RestartIsBitwiseLargeBarWithFemReference) {
   check_bitwise_restart({"vibrating_bar_large", {}, 100});
 }

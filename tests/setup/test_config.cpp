@@ -178,7 +178,8 @@ TEST(ConfigErrors, UnknownKeySuggestsAndListsTheSection) {
   const std::string msg = error_of(kBase + "[grid]\ncell = 10\n");  // line 9
   EXPECT_CONTAINS(msg, "test.toml:9:1: unknown key 'grid.cell'");
   EXPECT_CONTAINS(msg, "(did you mean 'grid.cells'?)");
-  EXPECT_CONTAINS(msg, "; valid keys in [grid]: cells, cells_y, dimension, max, mesh, min");
+  EXPECT_CONTAINS(msg,
+                  "; valid keys in [grid]: cells, cells_y, cells_z, dimension, max, mesh, min");
 }
 
 // A megabyte-long unknown key (issue 16, 11: the suggestion took 43 s and the message quoted the
@@ -483,7 +484,7 @@ TEST(ConfigOverrides, ErrorsNameTheArgument) {
   EXPECT_CONTAINS(error_of(kBase, {"grid.cells"}), "--set grid.cells: expected KEY=VALUE");
   EXPECT_CONTAINS(error_of(kBase, {"grid.cell=10"}),
                   "--set grid.cell=10: unknown key 'grid.cell' (did you mean 'grid.cells'?); "
-                  "valid keys in [grid]: cells, cells_y, dimension, max, mesh, min");
+                  "valid keys in [grid]: cells, cells_y, cells_z, dimension, max, mesh, min");
   EXPECT_CONTAINS(error_of(kBase, {"grid.cells=ten"}),
                   "--set grid.cells=ten: key 'grid.cells' expects an integer, got a string "
                   "(\"ten\")");
