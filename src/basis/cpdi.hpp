@@ -51,7 +51,9 @@
 // segment between the clamped corners. In 2D it is the quadrilateral of the clamped corners (the
 // exact intersection of parallelogram and grid can be a pentagon; the quadrilateral is the
 // natural CPDI2 approximation of it); fits() requires that quadrilateral to be strictly convex.
-// In 3D a corner outside the grid does not fit (hexahedral clipping is not implemented).
+// In 3D it is the trilinear hexahedron of the clamped corners (detail::hex_corner_weights), by
+// the same reasoning; fits() requires its Jacobian to be positive at the corners and the Gauss
+// points.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -99,6 +101,73 @@ inline bool quad_corner_weights(const std::array<Vec<2>, 4>& x, std::array<doubl
     wq[c] = 0.25 + (J1 * xi + J2 * eta) / (12.0 * J0);
     const Vec<2> e = x[static_cast<std::size_t>(kNext[c])] - x[static_cast<std::size_t>(kPrev[c])];
     gq[c] = Vec<2>(e[1], -e[0]) * inv_2V;
+  }
+  return true;
+}
+
+// Corner weights wq_c and gradient vectors gq_c [1/m] of a hexahedral domain, the 3D analogue
+// of quad_corner_weights for the trilinear map x(xi) = sum_c M_c(xi) x_c (corner c at
+// xi_d = +1 where bit d of c is set, -1 otherwise; M_c = prod_d (1 + xi_cd xi_d) / 8):
+//   wq_c = (1/V) int M_c det J dxi,   gq_c = (1/V) int cof(J) grad_xi M_c dxi,
+//   V = int det J dxi over [-1, 1]^3,  J = dx/dxi,  cof(J) = det(J) J^-T = [b x c, c x a, a x b]
+// for the columns a, b, c of J (gq_c = (1/V) int grad_x M_c dOmega, D eq. 2.62). Each column of J
+// is bilinear in the other two coordinates, so det J has degree <= 2 in every xi_d, M_c det J
+// and cof(J) grad_xi M_c degree <= 3: the 2 x 2 x 2 Gauss rule integrates all of them exactly.
+// Hence sum_c wq_c = 1, sum_c gq_c = 0 (sum_c M_c = 1) and sum_c gq_c x_c^T = (1/V) int cof(J)
+// J^T = I to round-off. For a parallelepiped wq_c = 1/8 and gq_c = J^-T xi_c / 8. Returns false,
+// with wq and gq zero, unless det J is positive and finite at the eight corners and the eight
+// Gauss points (a positive corner Jacobian alone does not exclude a folded trilinear map; no
+// finite test does, but these sixteen points cover the clipped shapes of a convex domain).
+inline bool hex_corner_weights(const std::array<Vec<3>, 8>& x, std::array<double, 8>& wq,
+                               std::array<Vec<3>, 8>& gq) {
+  auto sign = [](std::size_t c, int d) { return ((c >> d) & 1) ? 1.0 : -1.0; };
+  // J at xi, and the derivatives dM_c/dxi at xi (into dM).
+  auto jacobian = [&](const Vec<3>& xi, std::array<Vec<3>, 8>& dM) {
+    Mat<3> J = Mat<3>::Zero();
+    for (std::size_t c = 0; c < 8; ++c) {
+      Vec<3> f;  // the 1D factors (1 + xi_cd xi_d) / 2
+      for (int d = 0; d < 3; ++d) f[d] = 0.5 * (1.0 + sign(c, d) * xi[d]);
+      dM[c] = 0.5 *
+              Vec<3>(sign(c, 0) * f[1] * f[2], sign(c, 1) * f[0] * f[2], sign(c, 2) * f[0] * f[1]);
+      J += x[c] * dM[c].transpose();
+    }
+    return J;
+  };
+  auto fail = [&] {
+    wq.fill(0.0);
+    gq.fill(Vec<3>::Zero());
+    return false;
+  };
+  std::array<Vec<3>, 8> dM;
+  for (std::size_t c = 0; c < 8; ++c) {
+    const double det = jacobian(Vec<3>(sign(c, 0), sign(c, 1), sign(c, 2)), dM).determinant();
+    if (!(det > 0.0) || !std::isfinite(det)) return fail();
+  }
+  const double g = 1.0 / std::sqrt(3.0);  // 2-point Gauss-Legendre nodes, weights 1
+  double V = 0.0;
+  std::array<double, 8> w{};
+  std::array<Vec<3>, 8> gr;
+  gr.fill(Vec<3>::Zero());
+  for (std::size_t q = 0; q < 8; ++q) {
+    const Vec<3> xi(g * sign(q, 0), g * sign(q, 1), g * sign(q, 2));
+    const Mat<3> J = jacobian(xi, dM);
+    const double det = J.determinant();
+    if (!(det > 0.0) || !std::isfinite(det)) return fail();
+    Mat<3> cof;
+    cof.col(0) = J.col(1).cross(J.col(2));
+    cof.col(1) = J.col(2).cross(J.col(0));
+    cof.col(2) = J.col(0).cross(J.col(1));
+    V += det;
+    for (std::size_t c = 0; c < 8; ++c) {
+      double M = 0.125;
+      for (int d = 0; d < 3; ++d) M *= 1.0 + sign(c, d) * xi[d];
+      w[c] += M * det;
+      gr[c] += cof * dM[c];
+    }
+  }
+  for (std::size_t c = 0; c < 8; ++c) {
+    wq[c] = w[c] / V;
+    gq[c] = gr[c] / V;
   }
   return true;
 }
@@ -230,7 +299,8 @@ class CpdiBasis : public detail::NodalDomainBasis<Dim> {
 
   // Whether the stencil can hold the domain: extent <= 2 h_d along every direction, x_p in the
   // grid, a non-degenerate, non-inverted domain (det J > 0), and, where corners were clamped to
-  // the grid in 2D, a strictly convex clipped quadrilateral. False for NaN. No allocation, no
+  // the grid, a strictly convex clipped quadrilateral (2D) or a clipped hexahedron with positive
+  // Jacobian (3D). False for NaN. No allocation, no
   // exceptions.
   bool fits(const Particles<Dim>& P, Index p) const {
     const auto i = static_cast<std::size_t>(p);
@@ -251,13 +321,12 @@ class CpdiBasis : public detail::NodalDomainBasis<Dim> {
       const double det = J.determinant();
       if (!(det > 0.0 && std::isfinite(det))) return false;
       if (!clipped) return true;
-      if constexpr (Dim == 2) {
-        std::array<double, 4> wq;
-        std::array<Vec<2>, 4> gq;
+      std::array<double, kCorners> wq;
+      std::array<Vec<Dim>, kCorners> gq;
+      if constexpr (Dim == 2)
         return detail::quad_corner_weights(x, wq, gq);
-      } else {
-        return false;  // hexahedral clipping not implemented (file comment)
-      }
+      else
+        return detail::hex_corner_weights(x, wq, gq);
     }
   }
 
@@ -269,9 +338,17 @@ class CpdiBasis : public detail::NodalDomainBasis<Dim> {
     std::array<double, kCorners> wc;
     std::array<Vec<Dim>, kCorners> gc;
     wc.fill(kAvg);
-    if constexpr (Dim == 2) {
-      // A clipped domain is the quadrilateral of its clamped corners (file comment).
-      if (clipped && detail::quad_corner_weights(x, wc, gc)) {
+    if constexpr (Dim >= 2) {
+      // A clipped domain is the quadrilateral (2D) or hexahedron (3D) of its clamped corners
+      // (file comment).
+      bool ok = false;
+      if (clipped) {
+        if constexpr (Dim == 2)
+          ok = detail::quad_corner_weights(x, wc, gc);
+        else
+          ok = detail::hex_corner_weights(x, wc, gc);
+      }
+      if (ok) {
         detail::corner_sum_stencil<Dim, kCorners>(this->grid_, this->inv_h_, this->n_, x, wc, gc,
                                                   s);
         return;

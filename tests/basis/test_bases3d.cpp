@@ -2,10 +2,10 @@
 // CPDI (parallelepiped domains), and DDMPM. For each, at random points and domains: partition of
 // unity, non-negative weights, zero gradient sum and linear completeness (sum w_i x_i = x_p, sum
 // x_i grad_i^T = I; D 2.5, P.1-P.3), and uGIMP's weights against 1D midpoint integrals of the hat
-// functions (the tensor product of the box averages); a CPDI domain clipped by the grid is
-// refused by fits(). Then every basis available in 3D (P1, the B-splines, GIMP, CPDI, DDMPM) moves
-// a body in uniform translation rigidly through the compiled 3D steppers in every scheme. The
-// B-splines' and P1's own properties in 3D are in tests/basis/test_bspline.cpp.
+// functions (the tensor product of the box averages); CPDI domains clipped by the grid. Then every
+// basis available in 3D (P1, the B-splines, GIMP, CPDI, DDMPM) moves a body in uniform translation
+// rigidly through the compiled 3D steppers in every scheme. The B-splines' and P1's own properties
+// in 3D are in tests/basis/test_bspline.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -152,10 +152,62 @@ TEST(Bases3D, CpGimpAndCpdiProperties) {
       }
     }
   EXPECT_GT(tested, 60);
-  // A domain that the grid would clip: hexahedral clipping is not implemented, so the domain
-  // does not fit (the run stops naming the particle) instead of losing part of its weight.
-  const Particles<3> corner = particle(g, g.origin + 0.1 * g.h, 0.6, Fs[2]);
-  EXPECT_FALSE(cpdi.fits(corner, 0));
+}
+
+// CPDI domains that pass the grid's sides are clipped: their corners are clamped onto the sides
+// and the domain is the trilinear hexahedron of the clamped corners (basis/cpdi.hpp,
+// detail::hex_corner_weights, 2 x 2 x 2 Gauss, exact for its polynomials). Unclipped, that
+// construction gives the parallelepiped's closed form (wq_c = 1/8, gq_c = J^-T xi_c / 8);
+// clipped, the basis keeps partition of unity, the zero gradient sum and sum x_i grad^T = I,
+// with sum w_i x_i the clipped domain's centroid sum_c wq_c x_c.
+TEST(Bases3D, CpdiClippedAtTheGridSides) {
+  Mat<3> F;
+  F << 1.2, 0.3, -0.1, -0.4, 0.9, 0.2, 0.1, -0.2, 1.1;
+  const Mat<3> J = 0.5 * 0.6 * F;  // half edges of a domain of 0.6 h per direction (h = 1)
+  std::array<Vec<3>, 8> x;
+  for (std::size_t c = 0; c < 8; ++c) {
+    x[c] = Vec<3>(0.3, -0.2, 0.7);
+    for (int d = 0; d < 3; ++d) x[c] += (((c >> d) & 1) ? 1.0 : -1.0) * J.col(d);
+  }
+  std::array<double, 8> wq;
+  std::array<Vec<3>, 8> gq;
+  ASSERT_TRUE(detail::hex_corner_weights(x, wq, gq));
+  const Mat<3> JinvT = J.inverse().transpose();
+  for (std::size_t c = 0; c < 8; ++c) {
+    const Vec<3> sc(((c >> 0) & 1) ? 1.0 : -1.0, ((c >> 1) & 1) ? 1.0 : -1.0,
+                    ((c >> 2) & 1) ? 1.0 : -1.0);
+    EXPECT_NEAR(wq[c], 0.125, 1e-15);
+    EXPECT_LT((gq[c] - 0.125 * JinvT * sc).norm(), 1e-14 * JinvT.norm());
+  }
+
+  const Grid<3> g = test_grid();
+  const CpdiBasis<3> cpdi(g);
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int clipped = 0;
+  for (int k = 0; k < 200; ++k) {
+    // Centres within a third of a cell of a side, edge or corner of the grid.
+    Vec<3> xp;
+    for (int d = 0; d < 3; ++d) {
+      const double off = (0.02 + 0.3 * u(rng)) * g.h[d];
+      xp[d] = u(rng) < 0.5 ? g.origin[d] + off : g.upper()[d] - off;
+      if (u(rng) < 0.3) xp[d] = g.origin[d] + (1.0 + 3.0 * u(rng)) * g.h[d];  // an inner one
+    }
+    const Particles<3> P =
+        particle(g, xp, 0.6 + 0.3 * u(rng), u(rng) < 0.5 ? Mat<3>(F) : Mat<3>::Identity());
+    bool was_clipped = false;
+    const auto corners = cpdi.corners(P, 0, &was_clipped);
+    if (!was_clipped) continue;
+    ASSERT_TRUE(cpdi.fits(P, 0)) << xp.transpose();
+    ++clipped;
+    ASSERT_TRUE(detail::hex_corner_weights(corners, wq, gq));
+    Vec<3> centroid = Vec<3>::Zero();
+    for (std::size_t c = 0; c < 8; ++c) centroid += wq[c] * corners[c];
+    CpdiBasis<3>::StencilT s;
+    cpdi.evaluate(P, 0, s);
+    check_properties(cpdi, s, centroid);
+  }
+  EXPECT_GT(clipped, 100);
 }
 
 // DDMPM in 3D (basis/ddmpm.hpp: alpha = prod_d 2 xi_d (1 - xi_d), the smoothed gradient from
