@@ -89,6 +89,21 @@ void time_runs(const Config& cfg, const BenchOptions& opt, BenchResult& r) {
   r.median_ns_per_particle_step = ns[ns.size() / 2];
 }
 
+// The plate's material in the 2D and 3D benchmarks (001's plate: neo-Hookean, E = 1e7 Pa,
+// nu = 0.3, rho0 = 1000 kg/m^3), and its P-wave speed sqrt((lambda + 2 mu) / rho0) [m/s] for
+// the stable step dt = 0.1 h / c on the unit square or cube.
+constexpr double kBenchE = 1e7, kBenchNu = 0.3, kBenchRho = 1000.0;
+const double kBenchWaveSpeed =
+    std::sqrt((kBenchE * kBenchNu / ((1.0 + kBenchNu) * (1.0 - 2.0 * kBenchNu)) +
+               kBenchE / (1.0 + kBenchNu)) /
+              kBenchRho);
+std::string bench_material_toml() {
+  return fmt::format(
+      "[material]\nmodel = \"neo_hookean\"\ndensity = {}\nyoungs_modulus = {}\n"
+      "poisson_ratio = {}\n",
+      kBenchRho, kBenchE, kBenchNu);
+}
+
 }  // namespace
 
 BenchResult bench_1d(const BenchOptions& opt) {
@@ -119,11 +134,7 @@ BenchResult bench_2d(const BenchOptions& opt) {
                                             static_cast<double>(per_cell)));
   r.particles = r.cells * r.cells * per_cell * per_cell;
   r.steps = opt.steps;
-  const double E = 1e7, nu = 0.3, rho = 1000.0;
-  const std::string material = fmt::format(
-      "[material]\nmodel = \"neo_hookean\"\ndensity = {}\nyoungs_modulus = {}\n"
-      "poisson_ratio = {}\n",
-      rho, E, nu);
+  const std::string material = bench_material_toml();
   std::string toml;
   if (opt.problem == "refkernel") {
     // refkernel.cpp: n x n cells on the unit square plus two padding cells per side, so every
@@ -141,9 +152,7 @@ BenchResult bench_2d(const BenchOptions& opt) {
         dt * static_cast<double>(opt.steps), method_toml(opt), material);
   } else {
     // A stable step: dt = 0.1 h / c with the P-wave speed c = sqrt((lambda + 2 mu) / rho).
-    const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = E / (2.0 * (1.0 + nu));
-    const double h = 1.0 / static_cast<double>(r.cells);
-    const double dt = 0.1 * h / std::sqrt((lambda + 2.0 * mu) / rho);
+    const double dt = 0.1 / static_cast<double>(r.cells) / kBenchWaveSpeed;
     toml = fmt::format(
         "benchmark = \"plate_mms_2d\"\n"
         "[grid]\ncells = {}\n[particles]\nper_cell = {}\n"
@@ -165,11 +174,7 @@ BenchResult bench_3d(const BenchOptions& opt) {
   const Index per = static_cast<Index>(per_cell);
   r.particles = r.cells * r.cells * r.cells * per * per * per;
   r.steps = opt.steps;
-  const double E = 1e7, nu = 0.3, rho = 1000.0;
-  const std::string material = fmt::format(
-      "[material]\nmodel = \"neo_hookean\"\ndensity = {}\nyoungs_modulus = {}\n"
-      "poisson_ratio = {}\n",
-      rho, E, nu);
+  const std::string material = bench_material_toml();
   std::string toml;
   if (opt.problem == "refkernel") {
     // The 2D refkernel problem in 3D (the yardstick scripts/refkernel3d.cpp): n^3 cells on the
@@ -192,9 +197,7 @@ BenchResult bench_3d(const BenchOptions& opt) {
   } else {
     // The cube of cube_mms_3d, the plate's material, amplitude 1e-3 m (no grid crossing to
     // speak of), its body force every step; dt = 0.1 h / c with the P-wave speed.
-    const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu = E / (2.0 * (1.0 + nu));
-    const double h = 1.0 / static_cast<double>(r.cells);
-    const double dt = 0.1 * h / std::sqrt((lambda + 2.0 * mu) / rho);
+    const double dt = 0.1 / static_cast<double>(r.cells) / kBenchWaveSpeed;
     toml = fmt::format(
         "benchmark = \"cube_mms_3d\"\n"
         "[grid]\ncells = {}\n[particles]\nper_cell = {}\n"

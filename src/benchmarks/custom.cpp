@@ -441,6 +441,26 @@ void refuse_keys_of_more_dimensions(const Config& cfg, int dim) {
   }
 }
 
+// The grid [g0, g1] and the body [b0, b1] of a 2D or 3D custom problem: non-empty, the body
+// inside the grid; InputError naming the key and the direction otherwise.
+template <int Dim>
+void check_boxes(const Config& cfg, const Vec<Dim>& g0, const Vec<Dim>& g1, const Vec<Dim>& b0,
+                 const Vec<Dim>& b1) {
+  for (int d = 0; d < Dim; ++d) {
+    const char axis = "xyz"[d];
+    if (!(g1[d] > g0[d]))
+      throw InputError(fmt::format("{}: grid.max = {} must exceed grid.min = {} in {}",
+                                   cfg.where("grid.max"), g1[d], g0[d], axis));
+    if (!(b1[d] > b0[d]))
+      throw InputError(fmt::format("{}: body.max = {} must exceed body.min = {} in {}",
+                                   cfg.where("body.max"), b1[d], b0[d], axis));
+    if (b0[d] < g0[d] || b1[d] > g1[d])
+      throw InputError(fmt::format(
+          "{}: the body [{}, {}] must lie inside the grid [{}, {}] in {} (grid.min, grid.max)",
+          cfg.where(b0[d] < g0[d] ? "body.min" : "body.max"), b0[d], b1[d], g0[d], g1[d], axis));
+  }
+}
+
 }  // namespace
 
 Problem<1> make_custom_1d(const Config& cfg) {
@@ -528,19 +548,7 @@ Problem<2> make_custom_2d(const Config& cfg) {
   const Vec<2> g0 = given_or("grid.min", pb.mesh ? pb.mesh->lower() : Vec<2>::Zero());
   const Vec<2> g1 = given_or("grid.max", pb.mesh ? pb.mesh->upper() : Vec<2>::Zero());
   const Vec<2> b0 = given_or("body.min", g0), b1 = given_or("body.max", g1);
-  for (int d = 0; d < 2; ++d) {
-    const char* axis = d == 0 ? "x" : "y";
-    if (!(g1[d] > g0[d]))
-      throw InputError(fmt::format("{}: grid.max = {} must exceed grid.min = {} in {}",
-                                   cfg.where("grid.max"), g1[d], g0[d], axis));
-    if (!(b1[d] > b0[d]))
-      throw InputError(fmt::format("{}: body.max = {} must exceed body.min = {} in {}",
-                                   cfg.where("body.max"), b1[d], b0[d], axis));
-    if (b0[d] < g0[d] || b1[d] > g1[d])
-      throw InputError(fmt::format(
-          "{}: the body [{}, {}] must lie inside the grid [{}, {}] in {} (grid.min, grid.max)",
-          cfg.where(b0[d] < g0[d] ? "body.min" : "body.max"), b0[d], b1[d], g0[d], g1[d], axis));
-  }
+  check_boxes<2>(cfg, g0, g1, b0, b1);
   pb.material = material_from_config(cfg, 2);
   const double rho = cfg.get_real("material.density");
   const auto cx = static_cast<Index>(cfg.get_int("grid.cells"));
@@ -620,19 +628,7 @@ Problem<3> make_custom_3d(const Config& cfg) {
           cfg.where(key), key));
   const Vec<3> g0 = per_direction<3>(cfg, "grid.min"), g1 = per_direction<3>(cfg, "grid.max");
   const Vec<3> b0 = per_direction<3>(cfg, "body.min"), b1 = per_direction<3>(cfg, "body.max");
-  for (int d = 0; d < 3; ++d) {
-    const char axis = "xyz"[d];
-    if (!(g1[d] > g0[d]))
-      throw InputError(fmt::format("{}: grid.max = {} must exceed grid.min = {} in {}",
-                                   cfg.where("grid.max"), g1[d], g0[d], axis));
-    if (!(b1[d] > b0[d]))
-      throw InputError(fmt::format("{}: body.max = {} must exceed body.min = {} in {}",
-                                   cfg.where("body.max"), b1[d], b0[d], axis));
-    if (b0[d] < g0[d] || b1[d] > g1[d])
-      throw InputError(fmt::format(
-          "{}: the body [{}, {}] must lie inside the grid [{}, {}] in {} (grid.min, grid.max)",
-          cfg.where(b0[d] < g0[d] ? "body.min" : "body.max"), b0[d], b1[d], g0[d], g1[d], axis));
-  }
+  check_boxes<3>(cfg, g0, g1, b0, b1);
   pb.material = material_from_config(cfg, 3);
   const double rho = cfg.get_real("material.density");
   // Cells in y and z: given, or (0) the count closest to the cell width in x (cubic cells).
