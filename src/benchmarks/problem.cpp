@@ -69,7 +69,6 @@ Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<
     const auto i = static_cast<std::size_t>(p);
     P.x[i] = P.x0[i] = x;
     P.volume[i] = P.volume0[i] = vol;
-    P.density[i] = rho0;
     P.mass[i] = rho0 * vol;
   }
   return P;
@@ -187,7 +186,6 @@ Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_trian
       const Vec<2>& r = ref[static_cast<std::size_t>(a)];
       P.x[i] = P.x0[i] = x0 + r[0] * e1 + r[1] * e2;
       P.volume[i] = P.volume0[i] = vol;
-      P.density[i] = rho0;
       P.mass[i] = rho0 * vol;
     }
   }

@@ -43,7 +43,6 @@ Particles<2> seed_annulus(const Grid<2>& g, double inner, double outer, int per_
     P.x[i] = P.x0[i] = x[i];
     P.volume[i] = P.volume0[i] = volume[i];
     P.mass[i] = rho0 * volume[i];
-    P.density[i] = rho0;
   }
   return P;
 }

@@ -30,7 +30,7 @@ ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
   double iu = 0, ivs = 0, is = 0, in = 0;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     const auto ex = exact(P.x0[i], t);
-    const double eu = (ex.u - P.u[i]).squaredNorm();
+    const double eu = (ex.u - P.displacement(i)).squaredNorm();
     sv += (ex.v - P.v[i]).squaredNorm();
     svm += (exact(P.x0[i], t - 0.5 * dt).v - P.v[i]).squaredNorm();
     const double evs = (exact(P.x0[i], t + velocity_time * dt).v - P.v[i]).squaredNorm();

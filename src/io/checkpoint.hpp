@@ -12,7 +12,7 @@
 //   str config (Config::to_toml() of the run), str solver ("mpm" or "ulfem"), i64 dim,
 //   i64 step, f64 time,
 //   particles: i64 dim, i64 count, then one f64[] per real field of Particles::for_each_field
-//     (x, x0, u, v, mass, volume, volume0, density, F, stress, body; vectors Dim values per
+//     (x, x0, v, mass, volume, volume0, F, stress, body; vectors Dim values per
 //     particle, tensors Dim x Dim column-major), i64[] id (version 3: the stable ids in the
 //     stored order, which re-sorting may have changed),
 //   i64[] cell of each particle at the last basis evaluation,
@@ -41,7 +41,9 @@
 namespace mpm::io {
 
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
-inline constexpr std::uint32_t kCheckpointVersion = 3;
+// Version 4 (2026-11-27): the displacement and density are derived (Particles::displacement,
+// density), no longer stored; a version-3 file is refused by its version.
+inline constexpr std::uint32_t kCheckpointVersion = 4;
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 

@@ -130,8 +130,8 @@ void check_fields(const std::vector<ScalarField>& fields, std::size_t n, std::se
 template <int Dim>
 void check_particles(const Particles<Dim>& p) {
   const auto n = static_cast<std::size_t>(p.size());
-  if (p.x0.size() != n || p.u.size() != n || p.v.size() != n || p.mass.size() != n ||
-      p.volume.size() != n || p.density.size() != n || p.F.size() != n || p.stress.size() != n) {
+  if (p.x0.size() != n || p.v.size() != n || p.mass.size() != n || p.volume.size() != n ||
+      p.F.size() != n || p.stress.size() != n) {
     throw std::invalid_argument("particle arrays have inconsistent sizes");
   }
 }
@@ -462,9 +462,9 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
     };
     vec(p.x0[i]);
     vec(p.x[i]);
-    vec(p.u[i]);
+    vec(p.displacement(i));
     vec(p.v[i]);
-    for (const double s : {p.mass[i], p.volume[i], p.density[i]}) {
+    for (const double s : {p.mass[i], p.volume[i], p.density(i)}) {
       put(b, ",");
       put_num(b, s);
     }
@@ -506,12 +506,19 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
   std::vector<std::int64_t> ids(n);
   for (std::size_t i = 0; i < n; ++i) ids[i] = particle_id(p, i);
   data_array(b, d, "id", 1, ids);
+  // The derived fields (Particles::displacement, density), formed for the output only.
+  std::vector<Vec<Dim>> u(n);
+  std::vector<double> rho(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    u[i] = p.displacement(i);
+    rho[i] = p.density(i);
+  }
   vector_array<Dim>(b, d, "x0", p.x0);
-  vector_array<Dim>(b, d, "u", p.u);
+  vector_array<Dim>(b, d, "u", u);
   vector_array<Dim>(b, d, "v", p.v);
   scalar_array(b, d, "mass", p.mass);
   scalar_array(b, d, "volume", p.volume);
-  scalar_array(b, d, "density", p.density);
+  scalar_array(b, d, "density", rho);
   tensor_array<Dim>(b, d, "F", p.F, 1.0);
   tensor_array<Dim>(b, d, "stress", p.stress, 0.0);
   for (const auto& f : extra) scalar_array(b, d, f.name, *f.values);

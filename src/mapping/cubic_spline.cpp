@@ -235,14 +235,14 @@ void CubicSplineMapping::fit_mass(const RunState<1>& sim, GaussPoints<1>& q) {
     }
   }
   spline_.sample_all(xg_, samples_);
-  spline_.fit([&](std::size_t i) { return P.density[i]; });
+  spline_.fit([&](std::size_t i) { return P.density(i); });
   rho_g_.resize(samples_.size());
   at_points([&](std::size_t g, double v) { rho_g_[g] = v; });
 }
 
 void CubicSplineMapping::fit_momentum(const RunState<1>& sim) {
   const auto& P = sim.particles;
-  spline_.fit([&](std::size_t i) { return P.density[i] * P.v[i][0]; });
+  spline_.fit([&](std::size_t i) { return P.density(i) * P.v[i][0]; });
   vec_g_.resize(samples_.size());
   at_points([&](std::size_t g, double v) { vec_g_[g][0] = v; });
 }
@@ -253,7 +253,7 @@ void CubicSplineMapping::fit_forces(const RunState<1>& sim) {
   spline_.fit([&](std::size_t i) { return P.stress[i](0, 0); });
   sig_g_.resize(ng);
   at_points([&](std::size_t g, double v) { sig_g_[g](0, 0) = v; });
-  spline_.fit([&](std::size_t i) { return P.density[i] * P.body[i][0]; });
+  spline_.fit([&](std::size_t i) { return P.density(i) * P.body[i][0]; });
   vec_g_.resize(ng);
   at_points([&](std::size_t g, double v) { vec_g_[g][0] = v; });
 }

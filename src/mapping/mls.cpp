@@ -423,7 +423,7 @@ void MovingLeastSquaresMapping<Improved>::fit_mass(RunState<Dim>& sim, GaussPoin
       MlsWeight::QuadraticSpline, gauss_);
   rho_.resize(q.size());
   gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
-    rho_[g] = t.apply(r, [&](std::size_t p) { return P.density[p]; });
+    rho_[g] = t.apply(r, [&](std::size_t p) { return P.density(p); });
   });
   if (settings_.conservative) {
     // rho~ = rho^ M / sum_g w_g rho^_g (mls.hpp).
@@ -510,7 +510,7 @@ void MovingLeastSquaresMapping<Improved>::fit_momentum(RunState<Dim>& sim,
     auto& vec = std::get<Dim - 1>(work_).vec;
     vec.resize(q.size());
     gauss_.for_each_row([&](std::size_t g, const ShapeTable& t, std::size_t r) {
-      vec[g] = t.apply<V>(r, [&](std::size_t p) -> V { return P.density[p] * P.v[p]; });
+      vec[g] = t.apply<V>(r, [&](std::size_t p) -> V { return P.density(p) * P.v[p]; });
     });
     if (settings_.conservative) {
       V total = V::Zero();

@@ -183,7 +183,8 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   }
   split_domains(sim, st.recon);
   element_sums(st.recon, 1, [&](std::size_t i, int) { return P.mass[i]; });
-  st.recon.fit_conservative(P.density, integrals_, st.coef);
+  fill_values(P.x.size(), 1, [&](std::size_t i, int) { return P.density(i); });
+  st.recon.fit_conservative(values_, integrals_, st.coef);
   mark_surface(st);
   limit_density(st);
   st.rho.resize(q.size());
@@ -196,7 +197,7 @@ void TlsMapping::fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   auto& st = state<Dim>();
   const auto& P = sim.particles;
   const Index ne = st.recon.num_elements();
-  fill_values(P.x.size(), Dim, [&](std::size_t i, int d) { return P.density[i] * P.v[i][d]; });
+  fill_values(P.x.size(), Dim, [&](std::size_t i, int d) { return P.density(i) * P.v[i][d]; });
   element_sums(st.recon, Dim, [&](std::size_t i, int d) { return P.mass[i] * P.v[i][d]; });
   std::array<typename BasicTlsReconstruction<Dim>::Field, Dim> fields;
   for (int d = 0; d < Dim; ++d)
@@ -233,7 +234,7 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
       const auto [r, c] = rc(j);
       return P.stress[i](r, c);
     }
-    return P.density[i] * P.body[i][j - ns];
+    return P.density(i) * P.body[i][j - ns];
   });
   // Surface elements (surface_volume): the stress of their material, int_e sigma^ =
   // sum_p V_p sigma_p (fitted conservatively there, plain elsewhere).

@@ -151,7 +151,9 @@ void TlsMapping::fit_mass_triangles(RunState<2>& sim, GaussPoints<2>& q) {
     }
   }
   triangle_sums(st, [&](std::size_t i) { return P.mass[i]; });
-  st.recon.fit_conservative(P.density, st.integrals, st.coef);
+  st.values.resize(P.x.size());
+  triangle_values(st, [&](std::size_t i) { return P.density(i); });
+  st.recon.fit_conservative(st.values, st.integrals, st.coef);
   st.rho.resize(q.size());
   triangle_at_gauss(st, q, [&](std::size_t g, double v) { st.rho[g] = v; });
 }
@@ -162,7 +164,7 @@ void TlsMapping::fit_momentum_triangles(RunState<2>& sim, const GaussPoints<2>& 
   st.rhov.resize(q.size());
   st.values.resize(P.x.size());
   for (int d = 0; d < 2; ++d) {
-    triangle_values(st, [&](std::size_t i) { return P.density[i] * P.v[i][d]; });
+    triangle_values(st, [&](std::size_t i) { return P.density(i) * P.v[i][d]; });
     triangle_sums(st, [&](std::size_t i) { return P.mass[i] * P.v[i][d]; });
     st.recon.fit_conservative(st.values, st.integrals, st.coef);
     triangle_at_gauss(st, q, [&](std::size_t g, double v) { st.rhov[g][d] = v; });
@@ -182,7 +184,7 @@ void TlsMapping::fit_forces_triangles(RunState<2>& sim, const GaussPoints<2>& q)
     }
   st.rhob.resize(q.size());
   for (int d = 0; d < 2; ++d) {
-    triangle_values(st, [&](std::size_t i) { return P.density[i] * P.body[i][d]; });
+    triangle_values(st, [&](std::size_t i) { return P.density(i) * P.body[i][d]; });
     triangle_sums(st, [&](std::size_t i) { return P.mass[i] * P.body[i][d]; });
     st.recon.fit_conservative(st.values, st.integrals, st.coef);
     triangle_at_gauss(st, q, [&](std::size_t g, double v) { st.rhob[g][d] = v; });

@@ -12,12 +12,10 @@ template <int Dim>
 struct Particles {
   std::vector<Vec<Dim>> x;       // current position x_p^s [m]
   std::vector<Vec<Dim>> x0;      // initial (material) position x_p^0 [m]
-  std::vector<Vec<Dim>> u;       // displacement u_p = x_p - x_p^0 accumulated from grid [m]
   std::vector<Vec<Dim>> v;       // velocity v_p [m/s]
   std::vector<double> mass;      // m_p [kg] (per unit area in 1D), constant in time
   std::vector<double> volume;    // V_p [m^Dim]
   std::vector<double> volume0;   // V_p^0 [m^Dim]
-  std::vector<double> density;   // rho_p = m_p / V_p [kg/m^3]
   std::vector<Mat<Dim>> F;       // deformation gradient F_p
   std::vector<Mat<Dim>> stress;  // Cauchy stress sigma_p [Pa]
   std::vector<Vec<Dim>> body;    // body force per unit mass b_p [m/s^2], refreshed every step
@@ -26,17 +24,19 @@ struct Particles {
   std::vector<CompactIndex> id;
 
   Index size() const { return static_cast<Index>(x.size()); }
+  // Derived, not stored (issue 20's memory budget: 32 bytes per particle in 3D): the displacement
+  // u_p = x_p - x_p^0 [m] and the density rho_p = m_p / V_p [kg/m^3].
+  Vec<Dim> displacement(std::size_t i) const { return x[i] - x0[i]; }
+  double density(std::size_t i) const { return mass[i] / volume[i]; }
 
   void resize(Index n) {
     const auto s = static_cast<std::size_t>(n);
     x.resize(s, Vec<Dim>::Zero());
     x0.resize(s, Vec<Dim>::Zero());
-    u.resize(s, Vec<Dim>::Zero());
     v.resize(s, Vec<Dim>::Zero());
     mass.resize(s, 0.0);
     volume.resize(s, 0.0);
     volume0.resize(s, 0.0);
-    density.resize(s, 0.0);
     F.resize(s, Mat<Dim>::Identity());
     stress.resize(s, Mat<Dim>::Zero());
     body.resize(s, Vec<Dim>::Zero());
@@ -87,10 +87,10 @@ struct Particles {
     fields(*this, [&](const char*, auto& field) { f(field); });
   }
 
-  // Bytes of particle state per particle (for the benchmark's memory figure): x, x0, u, v, body;
-  // mass, volume, volume0, density; F, stress; id.
+  // Bytes of particle state per particle (for the benchmark's memory figure): x, x0, v, body;
+  // mass, volume, volume0; F, stress; id.
   static constexpr std::size_t bytes_per_particle() {
-    return 5 * sizeof(Vec<Dim>) + 4 * sizeof(double) + 2 * sizeof(Mat<Dim>) + sizeof(CompactIndex);
+    return 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + 2 * sizeof(Mat<Dim>) + sizeof(CompactIndex);
   }
 
  private:
@@ -98,12 +98,10 @@ struct Particles {
   static void fields(Self& p, Fn&& f) {
     f("x", p.x);
     f("x0", p.x0);
-    f("u", p.u);
     f("v", p.v);
     f("mass", p.mass);
     f("volume", p.volume);
     f("volume0", p.volume0);
-    f("density", p.density);
     f("F", p.F);
     f("stress", p.stress);
     f("body", p.body);

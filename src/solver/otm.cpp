@@ -541,7 +541,6 @@ void Otm<Dim>::step(double dt) {
             }
             dx *= dt;
             P.x[i] += dx;
-            P.u[i] += dx;
             if (s_.unified) {
               // USL's velocity update (D eq. 4.88).
               Vec<Dim> acc = Vec<Dim>::Zero();

@@ -73,11 +73,9 @@ Ulfem1D::Ulfem1D(const Problem<1>& pb, Index elements)
     m_[e + 1] += 0.5 * mass;
     const double Xm = 0.5 * (X_[e] + X_[e + 1]);
     el_.x0[e][0] = el_.x[e][0] = Xm;
-    el_.u[e][0] = 0.0;
     el_.v[e][0] = 0.5 * (v_[e] + v_[e + 1]);
     el_.mass[e] = mass;
     el_.volume[e] = el_.volume0[e] = L0;
-    el_.density[e] = rho0;
     el_.F[e](0, 0) = 1.0;
     el_.stress[e] = pb.initial_stress ? pb.initial_stress(Vec<1>(Xm)) : Mat<1>::Zero();
   }
@@ -135,9 +133,7 @@ void Ulfem1D::step(double dt) {
           dtL(0, 0) = F_new / F_old - 1.0;
           el_.F[e](0, 0) = F_new;
           el_.volume[e] = l;
-          el_.density[e] = el_.mass[e] / l;
           el_.x[e][0] = 0.5 * (x_[e] + x_[e + 1]);
-          el_.u[e][0] = el_.x[e][0] - el_.x0[e][0];
           el_.v[e][0] = 0.5 * (v_[e] + v_[e + 1]);
           el_.body[e] = 0.5 * (nodes_.body[e] + nodes_.body[e + 1]);
           law.update(el_.stress[e], el_.F[e], dtL);

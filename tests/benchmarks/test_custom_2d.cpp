@@ -138,9 +138,9 @@ TEST(Traction2D, PlaneStrainColumnMatchesTheTractionBarRowByRow) {
       ASSERT_EQ(P2.x0[k][0], P1.x0[i][0]);
       max_ds = std::max(max_ds, std::abs(P2.stress[k](0, 0) - P1.stress[i](0, 0)));
       max_dv = std::max(max_dv, std::abs(P2.v[k][0] - P1.v[i][0]));
-      max_du = std::max(max_du, std::abs(P2.u[k][0] - P1.u[i][0]));
+      max_du = std::max(max_du, std::abs(P2.displacement(k)[0] - P1.displacement(i)[0]));
       // Uniaxial strain: no y motion, no shear; sigma_yy = 0 with lambda = 0 (nu = 0).
-      max_off = std::max({max_off, std::abs(P2.v[k][1]), std::abs(P2.u[k][1]),
+      max_off = std::max({max_off, std::abs(P2.v[k][1]), std::abs(P2.displacement(k)[1]),
                           std::abs(P2.stress[k](0, 1)), std::abs(P2.stress[k](1, 1))});
       const double se = ex(Vec<1>(P1.x0[i][0]), T).stress(0, 0);
       err2 += std::pow(P2.stress[k](0, 0) - se, 2);

@@ -185,7 +185,7 @@ TEST(Custom3D, CubeMmsWrittenAsExpressionsIsTheBuiltInCube) {
     dvel = std::max(dvel, (Pu.v[i] - Pc.v[i]).norm());
     dsig = std::max(dsig, (Pu.stress[i] - Pc.stress[i]).norm());
     dF = std::max(dF, (Pu.F[i] - Pc.F[i]).norm());
-    umax = std::max(umax, Pc.u[i].norm());
+    umax = std::max(umax, Pc.displacement(i).norm());
     sig = std::max(sig, Pc.stress[i].norm());
   }
   std::printf(
@@ -254,7 +254,7 @@ TEST(Custom3D, UniformInZWithRollersIsThe2DProblem) {
     for (std::size_t q = 0; q < n2; ++q) {
       vmax = std::max(vmax, P2.v[q].norm());
       smax = std::max(smax, P2.stress[q].norm());
-      umax = std::max(umax, P2.u[q].norm());
+      umax = std::max(umax, P2.displacement(q).norm());
     }
     for (std::size_t i = 0; i < P3.x.size(); ++i) {
       const std::size_t q = i % n2;

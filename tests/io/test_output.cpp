@@ -163,12 +163,10 @@ Particles<1> make_particles_1d() {
   for (Index i = 0; i < 3; ++i) {
     const auto k = static_cast<std::size_t>(i);
     p.x0[k][0] = 0.1 * static_cast<double>(i) + 1.0 / 3.0;
-    p.u[k][0] = 1e-7 * static_cast<double>(i + 1) / 7.0;
-    p.x[k] = p.x0[k] + p.u[k];
+    p.x[k][0] = p.x0[k][0] + 1e-7 * static_cast<double>(i + 1) / 7.0;
     p.v[k][0] = -2.0 / 3.0 * static_cast<double>(i);
     p.mass[k] = 0.1 / 3.0;
     p.volume[k] = 0.1;
-    p.density[k] = p.mass[k] / p.volume[k];
     p.F[k](0, 0) = 1.0 + 1e-9 / 3.0;
     p.stress[k](0, 0) = -1234.5678901234567 * static_cast<double>(i);
   }
@@ -181,12 +179,10 @@ Particles<2> make_particles_2d() {
   for (std::size_t k = 0; k < 4; ++k) {
     const double s = static_cast<double>(k);
     p.x0[k] = Vec<2>(0.25 * s + 0.1, 1.0 / (s + 3.0));
-    p.u[k] = Vec<2>(1e-3 / 3.0, -2e-4 * s);
-    p.x[k] = p.x0[k] + p.u[k];
+    p.x[k] = p.x0[k] + Vec<2>(1e-3 / 3.0, -2e-4 * s);
     p.v[k] = Vec<2>(0.5 * s, -1.0 / 7.0);
     p.mass[k] = 2.0 / 3.0;
     p.volume[k] = 0.0625;
-    p.density[k] = p.mass[k] / p.volume[k];
     p.F[k] << 1.01, 0.02 * s, -0.03, 0.99;
     p.stress[k] << 1e5 * s, 3.3e3, 3.3e3, -2e4 / 3.0;
   }
@@ -228,12 +224,13 @@ TEST(OutputCsv, ValuesRoundTripExactly2D) {
     ASSERT_EQ(f.size(), 21u);
     std::size_t c = 0;
     EXPECT_EQ(std::stol(f[c++]), static_cast<long>(k));
-    for (const auto* vec : {&p.x0, &p.x, &p.u, &p.v}) {
-      for (int d = 0; d < 2; ++d) EXPECT_EQ(std::stod(f[c++]), (*vec)[k][d]);
+    // u and density are derived (Particles::displacement, density): x - x0 and m / V.
+    for (const Vec<2>& vec : {p.x0[k], p.x[k], p.displacement(k), p.v[k]}) {
+      for (int d = 0; d < 2; ++d) EXPECT_EQ(std::stod(f[c++]), vec[d]);
     }
     EXPECT_EQ(std::stod(f[c++]), p.mass[k]);
     EXPECT_EQ(std::stod(f[c++]), p.volume[k]);
-    EXPECT_EQ(std::stod(f[c++]), p.density[k]);
+    EXPECT_EQ(std::stod(f[c++]), p.density(k));
     for (const auto* mat : {&p.F, &p.stress}) {
       for (int r = 0; r < 2; ++r) {
         for (int s = 0; s < 2; ++s) EXPECT_EQ(std::stod(f[c++]), (*mat)[k](r, s));
@@ -252,9 +249,9 @@ TEST(OutputCsv, ValuesRoundTripExactly1D) {
     ASSERT_EQ(f.size(), 10u);
     EXPECT_EQ(std::stod(f[1]), p.x0[k][0]);
     EXPECT_EQ(std::stod(f[2]), p.x[k][0]);
-    EXPECT_EQ(std::stod(f[3]), p.u[k][0]);
+    EXPECT_EQ(std::stod(f[3]), p.displacement(k)[0]);
     EXPECT_EQ(std::stod(f[4]), p.v[k][0]);
-    EXPECT_EQ(std::stod(f[7]), p.density[k]);
+    EXPECT_EQ(std::stod(f[7]), p.density(k));
     EXPECT_EQ(std::stod(f[8]), p.F[k](0, 0));
     EXPECT_EQ(std::stod(f[9]), p.stress[k](0, 0));
   }
@@ -380,9 +377,11 @@ TEST(OutputVtu, BinaryFramesReadBackByMeshio) {
     q.resize(2000);
     for (std::size_t k = 0; k < 2000; ++k) {
       const double t = 1.0 / (static_cast<double>(k) + 3.0);
-      q.x0[k] = q.x[k] = Vec<2>(t, 1.0 - t);
-      q.u[k] = q.v[k] = Vec<2>(t / 7.0, -t / 9.0);
-      q.mass[k] = q.volume[k] = q.density[k] = t / 11.0;
+      q.x0[k] = Vec<2>(t, 1.0 - t);
+      q.v[k] = Vec<2>(t / 7.0, -t / 9.0);
+      q.x[k] = q.x0[k] + q.v[k];  // u = v: full-length numbers, as the stored u was
+      q.mass[k] = t / 11.0;
+      q.volume[k] = t / 13.0;  // density 13/11
       q.F[k] << 1.0 + t / 13.0, t / 17.0, -t / 19.0, 1.0 - t / 23.0;
       q.stress[k] = q.F[k] * 1e5 / 3.0;
     }

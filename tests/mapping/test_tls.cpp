@@ -340,7 +340,6 @@ Particles<1> rough_body(const Grid<1>& g, double lo, double hi, int ppc, unsigne
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.x[i][0] += 0.3 * spacing * u(rng);
     P.mass[i] *= 1.0 + 0.2 * u(rng);
-    P.density[i] = P.mass[i] / P.volume[i];
     P.v[i][0] = 0.5 + u(rng);
     P.stress[i](0, 0) = 1e4 * u(rng);
     P.body[i][0] = -9.81 + u(rng);
@@ -367,8 +366,7 @@ Particles<1> stretched_body(unsigned seed) {
     const double right = i + 1 == x.size() ? 0.7 : 0.5 * (x[i] + x[i + 1]);
     P.x[i][0] = P.x0[i][0] = x[i];
     P.volume[i] = P.volume0[i] = right - left;
-    P.density[i] = 1000.0 * (1.0 + 0.1 * u(rng));
-    P.mass[i] = P.density[i] * P.volume[i];
+    P.mass[i] = 1000.0 * (1.0 + 0.1 * u(rng)) * P.volume[i];
     P.v[i][0] = 0.5 + u(rng);
     P.stress[i](0, 0) = 1e4 * u(rng);
     P.body[i][0] = -9.81 + u(rng);

@@ -431,7 +431,6 @@ Particles<2> rough_body(const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi, un
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.x[i] += 0.01 * Vec<2>(u(rng), u(rng));
     P.mass[i] *= 1.0 + 0.2 * u(rng);
-    P.density[i] = P.mass[i] / P.volume[i];
     P.v[i] = Vec<2>(0.5 + u(rng), -0.3 + u(rng));
     const double sxy = 1e4 * u(rng);
     P.stress[i] << 1e4 * u(rng), sxy, sxy, 1e4 * u(rng);

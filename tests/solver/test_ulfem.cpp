@@ -80,7 +80,7 @@ Errors errors(const Ulfem1D& fem, const Problem<1>& pb) {
   double eu = 0.0, es = 0.0, ns = 0.0;
   for (std::size_t i = 0; i < E.x0.size(); ++i) {
     const auto ex = pb.exact(E.x0[i], fem.time());
-    eu += std::pow(E.u[i][0] - ex.u[0], 2);
+    eu += std::pow(E.displacement(i)[0] - ex.u[0], 2);
     es += std::pow(E.stress[i](0, 0) - ex.stress(0, 0), 2);
     ns += std::pow(ex.stress(0, 0), 2);
   }
@@ -257,7 +257,7 @@ TEST(Ulfem, LargeDeformationBarConservesMassAndMomentum) {
         std::max(worst_momentum, std::abs(fem.momentum() - P0 - dt * reaction) / (0.8 * total));
     double m = 0.0;
     for (std::size_t i = 0; i < E.mass.size(); ++i) {
-      m += E.density[i] * E.volume[i];
+      m += E.density(i) * E.volume[i];
       Fmin = std::min(Fmin, E.F[i](0, 0));
     }
     worst_mass = std::max(worst_mass, std::abs(m - total) / total);
