@@ -83,6 +83,16 @@ struct RunState {
   ScatterBuffers<Dim> scatter;     // per-chunk grid buffers of the parallel scatters
   SortState sorting;               // re-sorting by cell between steps (scheme/sort.hpp)
 
+  // Adds the constrained directions range(c) (c symmetric positive semi-definite) to those of
+  // `dofs`: each DOF's constrained subspace is the span of all its conditions (two rollers
+  // meeting at a corner at an angle fix it; a roller and a parallel one do not add up). A
+  // subspace spanned by axes is kept as nodes.fixed bits, any other as a nodes.projected
+  // projector. The callers then call refresh_per_component, once per condition. Per-run set-up,
+  // defined in scheme/run_state.cpp and compiled once per dimension, not in every stepper unit
+  // (its eigensolver was a third of a stepper unit's template instantiation).
+  void constrain(const std::vector<Index>& dofs, const Mat<Dim>& c);
+  void refresh_per_component();
+
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s
   Diagnostics diag;
@@ -134,10 +144,10 @@ struct BasisState : RunState<Dim> {
   // DOFs whose functions do not vanish there (what boundary_dofs lists).
   void fix_boundary_normal(std::string_view name, const Vec<Dim>& n) {
     if constexpr (Basis::kTriangleMesh)
-      constrain(basis.boundary_dofs(name), n * n.transpose());
+      this->constrain(basis.boundary_dofs(name), n * n.transpose());
     else
       throw std::logic_error("fix_boundary_normal: named boundaries belong to bases on triangles");
-    refresh_per_component();
+    this->refresh_per_component();
   }
   // A roller on a bent named boundary of a P1 mesh (DOF i is vertex i): v_i . n = 0 for each
   // (vertex, unit normal) of FixedSide::vertex_normals.
@@ -148,12 +158,12 @@ struct BasisState : RunState<Dim> {
       for (const auto& [v, a] : normals) {
         Vec<Dim> n;
         for (int d = 0; d < Dim; ++d) n[d] = a[static_cast<std::size_t>(d)];
-        constrain({v}, n * n.transpose());
+        this->constrain({v}, n * n.transpose());
       }
     } else {
       throw std::logic_error("fix_vertex_normals: named boundaries belong to bases on triangles");
     }
-    refresh_per_component();
+    this->refresh_per_component();
   }
 
  private:
@@ -161,62 +171,8 @@ struct BasisState : RunState<Dim> {
     Mat<Dim> c = Mat<Dim>::Zero();
     for (int d = 0; d < Dim; ++d)
       if (components & (1u << d)) c(d, d) = 1.0;
-    constrain(dofs, c);
-    refresh_per_component();
-  }
-
-  void refresh_per_component() {
-    constexpr std::uint8_t kAll = (1u << Dim) - 1u;
-    const auto& fixed = this->nodes.fixed;
-    this->consistent_per_component =
-        std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0 && f != kAll; });
-  }
-
-  // Adds the constrained directions range(c) (c symmetric positive semi-definite) to those of
-  // `dofs`: each DOF's constrained subspace is the span of all its conditions (two rollers
-  // meeting at a corner at an angle fix it; a roller and a parallel one do not add up). A
-  // subspace spanned by axes is kept as nodes.fixed bits, any other as a nodes.projected
-  // projector.
-  // (The callers then refresh consistent_per_component, once per condition.)
-  void constrain(const std::vector<Index>& dofs, const Mat<Dim>& c) {
-    auto& nd = this->nodes;
-    auto& proj = nd.projected;
-    for (Index i : dofs) {
-      auto& bits = nd.fixed[static_cast<std::size_t>(i)];
-      const auto it = std::lower_bound(proj.begin(), proj.end(), i,
-                                       [](const auto& e, Index k) { return e.dof < k; });
-      const bool has = it != proj.end() && it->dof == i;
-      Mat<Dim> sum = c;
-      if (has) sum += Mat<Dim>::Identity() - it->free;
-      for (int d = 0; d < Dim; ++d)
-        if (bits & (1u << d)) sum(d, d) += 1.0;
-      // The orthogonal projector onto range(sum): its eigenvectors of non-zero eigenvalue
-      // (eigenvalues are 0 or at least 1 - 1e-12 here: sums of unit projectors).
-      const Eigen::SelfAdjointEigenSolver<Mat<Dim>> eig(sum);
-      Mat<Dim> con = Mat<Dim>::Zero();
-      for (int k = 0; k < Dim; ++k)
-        if (eig.eigenvalues()[k] > 1e-9)
-          con += eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose();
-      std::uint8_t axes = 0;
-      bool axis_aligned = true;
-      for (int a = 0; a < Dim; ++a)
-        for (int b = 0; b < Dim; ++b) {
-          const double want = a == b && std::abs(con(a, a) - 1.0) < 1e-12 ? 1.0 : 0.0;
-          if (std::abs(con(a, b) - want) > 1e-12) axis_aligned = false;
-          if (a == b && want == 1.0) axes |= static_cast<std::uint8_t>(1u << a);
-        }
-      if (axis_aligned) {
-        bits = axes;
-        if (has) proj.erase(it);
-      } else {
-        bits = 0;
-        const Mat<Dim> free = Mat<Dim>::Identity() - con;
-        if (has)
-          it->free = free;
-        else
-          proj.insert(it, {i, free});
-      }
-    }
+    this->constrain(dofs, c);
+    this->refresh_per_component();
   }
 };
 
