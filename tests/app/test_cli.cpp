@@ -20,6 +20,7 @@
 #include "driver/run.hpp"
 #include "setup/gmsh_mesh.hpp"
 
+namespace MPM_UNITY_ID {
 namespace {
 
 struct Result {
@@ -696,3 +697,4 @@ TEST(Cli, MeshCommandSummarisesAndWritesTheMesh) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID

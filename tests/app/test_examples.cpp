@@ -8,6 +8,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TEST(Examples, EveryExampleRunsToItsEnd) {
@@ -25,4 +26,5 @@ TEST(Examples, EveryExampleRunsToItsEnd) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -7,6 +7,7 @@
 #include "app/reconstruct.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TEST(Reconstruct, TlsKeepsTheIntegralToRoundOff) {
@@ -135,4 +136,5 @@ TEST(Reconstruct, TrianglesReproduceQuadraticsAndKeepTheIntegral) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

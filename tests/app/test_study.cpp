@@ -13,6 +13,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using Keys = std::vector<std::pair<std::string, std::string>>;
@@ -95,4 +96,5 @@ TEST(StudyRuns, ARunTooLargeForMemoryIsAnInputErrorInParallel) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -27,6 +27,7 @@
 #include "scheme/variants.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // Offset origin, unequal cell sizes that are not powers of two.
@@ -723,4 +724,5 @@ TEST(Bases2D, KindsDeclareTheirDimensions) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

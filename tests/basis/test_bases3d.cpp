@@ -24,6 +24,7 @@
 #include "scheme/variants.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // Offset origin, unequal cell sizes that are not powers of two.
@@ -330,4 +331,5 @@ TEST(Bases3D, RigidTranslationWithEveryBasis) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -16,6 +16,7 @@
 #include "basis/linear.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 template <int D, int P>
@@ -363,4 +364,5 @@ TEST(BSplineBasis, QuadraticExampleOf004Fig41) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

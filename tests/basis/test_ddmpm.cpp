@@ -8,6 +8,7 @@
 #include "model/problem.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 struct DdmpmSetup {
@@ -80,4 +81,5 @@ TEST(Ddmpm, InteriorNodesGiveCentralDifferenceGradients) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -17,6 +17,7 @@
 #include "basis/linear.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // Grid with ends off the origin and a cell size that is not a power of two.
@@ -446,4 +447,5 @@ TEST(GimpCpdiBasis, TwoDimensionalReproduction) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -7,6 +7,7 @@
 #include "basis/linear.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 template <int Dim>
@@ -79,4 +80,5 @@ TEST(Grid, CellOfHandlesBoundsAndNaN) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

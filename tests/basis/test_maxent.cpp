@@ -21,6 +21,7 @@
 #include "setup/run_settings.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 template <int Dim>
@@ -349,4 +350,5 @@ youngs_modulus = 1e7
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -9,6 +9,7 @@
 #include "setup/gmsh_mesh.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 void check_p1(const TriangleMesh& m) {
@@ -80,4 +81,5 @@ TEST(P1Triangle, PartitionOfUnityLinearReproductionAndContinuityGmsh) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

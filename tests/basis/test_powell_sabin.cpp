@@ -19,6 +19,7 @@
 #include "setup/gmsh_mesh.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using StencilT = PowellSabinBasis::StencilT;
@@ -522,4 +523,5 @@ TEST(PowellSabin, LocalSupport) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

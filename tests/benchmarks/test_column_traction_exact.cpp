@@ -8,6 +8,7 @@
 #include "benchmarks/benchmarks.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TEST(ColumnExact, SatisfiesEquilibriumKinematicsAndTheLargeDeformationLaw) {
@@ -61,4 +62,5 @@ TEST(TractionBarExact, SatisfiesTheWaveEquationsAndBoundaryConditions) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

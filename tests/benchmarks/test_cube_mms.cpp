@@ -12,6 +12,7 @@
 #include "material/materials.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 ElasticParameters params() {
@@ -74,4 +75,5 @@ TEST(CubeMmsExact, BodyForceIsTheFiniteDifferenceResidual) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -24,6 +24,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 void expect_input_error(const std::string& toml, const std::vector<std::string>& needles);
@@ -459,4 +460,5 @@ TEST(Custom2D, ScalarKeysStillReadAsBefore) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -30,6 +30,7 @@
 #include "model/problem.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // A problem set up as `mpm run` does (make_problem, run_settings, the stepper of its method).
@@ -547,4 +548,5 @@ TEST(Custom3D, BenchRunsTheRefkernelProblem) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

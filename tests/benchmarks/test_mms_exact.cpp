@@ -10,6 +10,7 @@
 #include "material/materials.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 Mms1DExact make_exact(double A = 0.1) {
@@ -109,4 +110,5 @@ TEST(Mms1DExact, BoundaryAndInitialConditions) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -11,6 +11,7 @@
 #include "material/materials.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 ElasticParameters params() {
@@ -99,4 +100,5 @@ TEST(PlateMms2DExact, NormalComponentVanishesOnEverySide) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

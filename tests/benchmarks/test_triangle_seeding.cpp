@@ -15,6 +15,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TEST(TriangleSeeding, CountsAreMTimesKSquared) {
@@ -119,4 +120,5 @@ TEST(TriangleSeeding, BadInputNamesTheKey) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

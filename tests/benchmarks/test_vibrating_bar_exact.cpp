@@ -8,6 +8,7 @@
 #include "benchmarks/benchmarks.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TEST(VibratingBarExact, SatisfiesPdeInitialAndBoundaryConditions) {
@@ -40,4 +41,5 @@ TEST(VibratingBarExact, SatisfiesPdeInitialAndBoundaryConditions) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -14,6 +14,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 ElasticParameters params() {
@@ -182,4 +183,5 @@ TEST(Vortex2D, QuadraticBsplinesConvergeInDisplacementAndStress) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -9,6 +9,7 @@
 #include "grid/grid.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TEST(Mesh, GridCellVerticesBracketEveryPointInside) {
@@ -62,4 +63,5 @@ TEST(Mesh, GridBoundaryVertexSetsByName) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -8,6 +8,7 @@
 #include "grid/triangle_mesh.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 double total_area(const TriangleMesh& m) {
@@ -134,9 +135,11 @@ TEST(TriangleMesh, PointLocationMatchesBruteForceOnADistortedMesh) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // The smallest altitude is the CFL length of the structured patterns' stability factors
@@ -170,4 +173,5 @@ TEST(TriangleMesh, BoxSidesAreTheBoundaryEdgesOnTheBoundingBox) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

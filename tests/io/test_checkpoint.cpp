@@ -22,6 +22,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 namespace fs = std::filesystem;
@@ -502,4 +503,5 @@ TEST(Checkpoint, CommandLineRestart) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

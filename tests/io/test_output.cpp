@@ -20,6 +20,7 @@
 #include <vector>
 
 namespace mpm::io {
+namespace MPM_UNITY_ID {
 namespace {
 
 namespace fs = std::filesystem;
@@ -652,4 +653,5 @@ TEST_F(AtomicWrite, RenameOntoDirectoryThrowsAndCleansUp) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm::io

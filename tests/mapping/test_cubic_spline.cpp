@@ -28,6 +28,7 @@
 #include "setup/method_settings.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -786,4 +787,5 @@ TEST(CubicSplineMapping, VibratingBarConservationAsInDTable53) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

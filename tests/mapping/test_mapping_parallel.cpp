@@ -23,6 +23,7 @@
 #include "scheme/variants.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using test::same_bits;
@@ -198,4 +199,5 @@ TEST(MappingParallel, AddRowsMatchesSerialRows) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -17,6 +17,7 @@
 #include "scheme/variants.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 const Grid<1> kGrid(Vec<1>(0.0), Vec<1>(2.0), IVec<1>{8});  // l = 0.25
@@ -273,4 +274,5 @@ TEST(MlsPlayground, ReproducesLine) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -23,6 +23,7 @@
 #include "scheme/variants.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // Cells of different size per direction (l_x = 0.25, l_y = 0.2), so that a mix-up of the
@@ -497,4 +498,5 @@ TEST(MlsMapping2d, VibrationEnergyBounded) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

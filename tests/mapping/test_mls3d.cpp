@@ -17,6 +17,7 @@
 #include "model/problem.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // Cells of a different size per direction, so that a mix-up of the directions shows.
@@ -147,4 +148,5 @@ TEST(MlsMapping3d, ConservativeVariantConservesMassAndMomentum) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -12,6 +12,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using test::run_example_ok;
@@ -51,4 +52,5 @@ TEST(MlsConservative, FreeBodyIn2DConservesWhereTheDefinitionDoesNot) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -21,6 +21,7 @@
 #include "scheme/schemes.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -565,4 +566,5 @@ TEST(TlsMapping, RejectsSettingsThatBreakConservation) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -21,6 +21,7 @@
 #include "scheme/schemes.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TlsSettings settings(int terms, TlsCompletion c) {
@@ -652,4 +653,5 @@ TEST(TlsMapping2D, SettingsAreValidatedPerDimension) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

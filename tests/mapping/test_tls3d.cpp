@@ -20,6 +20,7 @@
 #include "model/problem.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TlsSettings settings(int terms, TlsCompletion c) {
@@ -411,4 +412,5 @@ TEST(TlsMapping3D, ConsistentMassOnTheCubeConserves) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -15,6 +15,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using test::run_example;
@@ -98,4 +99,5 @@ TEST(TlsDomains, PlateStressErrorBelowDsSums) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -14,6 +14,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 Grid<2> unit_cells(int nx, int ny) {
@@ -164,4 +165,5 @@ TEST(TlsRobust, RectangleMeasuresAreRefusedOnTriangles) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -19,6 +19,7 @@
 #include "mapping/tls_triangle.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 constexpr std::array<TlsTriangleStrategy, 4> kStrategies{
@@ -700,4 +701,5 @@ TEST(TlsTriangle, RejectsBadSettingsAndNames) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

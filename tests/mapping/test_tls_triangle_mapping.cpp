@@ -18,6 +18,7 @@
 #include "setup/run_settings.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // The plate with TLS and `sets`; `free_sides`: no rollers and (amplitude 0) no body force.
@@ -177,4 +178,5 @@ TEST(TlsOnTriangles, SettingsThatDoNotApplyAreRefused) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

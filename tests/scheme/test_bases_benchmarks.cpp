@@ -19,6 +19,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using test::example_config;
@@ -157,4 +158,5 @@ boundary = {{ left = "free", right = "free" }}
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -18,6 +18,7 @@
 #include "model/problem.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // The cube of examples/cube_mms_3d.toml with `sets`, set up as `mpm run` does.
@@ -253,4 +254,5 @@ TEST(Cube3D, LinearVelocityFieldsExactWithConsistentMass) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -8,6 +8,7 @@
 #include "scheme/variants.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 void rigid_translation_2d(const Scheme& scheme) {
@@ -46,9 +47,11 @@ TEST(GenericDimension, RigidTranslation2DUsavg) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // A 2D body that leaves the grid stops the run with the whole box in the message (not only the
@@ -71,4 +74,5 @@ TEST(GenericDimension, LeavingTheGridIn2DNamesTheBox) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -30,6 +30,7 @@
 #include "setup/run_settings.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 Mat<2> rotation(double angle) {
@@ -390,4 +391,5 @@ TEST(MeshBoundaries, LoadsThatDoNotFitAreRefused) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -29,6 +29,7 @@
 #include "setup/run_settings.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // The triangles of `square` outside its upper right quarter (an L-shaped mesh).
@@ -310,4 +311,5 @@ TEST(MeshFileRun, NamedBoundariesThatDoNotFitAreRefused) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

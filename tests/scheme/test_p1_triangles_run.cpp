@@ -16,6 +16,7 @@
 #include "setup/run_settings.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // The plate with `sets`, its sides free (no rollers) and, with amplitude 0, no body force.
@@ -100,4 +101,5 @@ TEST(P1TrianglesRun, PairingsThatDoNotExistAreRefused) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -22,6 +22,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using test::same_bits;
@@ -218,4 +219,5 @@ TEST(Parallel, GridAccumulatorMatchesSerialSum) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -17,6 +17,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 Config plate(std::vector<std::string> sets) {
@@ -190,4 +191,5 @@ TEST(Plate2D, BenchRunsTheRefkernelProblem) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -15,6 +15,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using test::run_example_ok;
@@ -153,9 +154,11 @@ TEST(ReconstructionMpm, NoCompletionIsRefusedUpFrontOrStopsWithExitCode6) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // 003 Figs. 4-6 on the 1D neo-Hookean manufactured solution: MPM does not converge, MPM+IMLS
@@ -183,9 +186,11 @@ TEST(ManufacturedSolution1D, ImlsKeepsSecondOrderWhereMpmDoesNotConverge) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 TEST(MlsInTheStep, BothMappingsRunInEverySchemeWithLinearAndBSplineBases) {
@@ -205,4 +210,5 @@ TEST(MlsInTheStep, BothMappingsRunInEverySchemeWithLinearAndBSplineBases) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -32,6 +32,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using test::same_bits;
@@ -410,4 +411,5 @@ TEST(Sort, BadSortModeIsRefusedWithTheChoices) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

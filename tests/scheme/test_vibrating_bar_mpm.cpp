@@ -12,6 +12,7 @@
 #include "setup/config.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 Config bar(int cells, const std::string& scheme, const std::string& mass = "lumped") {
@@ -111,4 +112,5 @@ TEST(VibratingBarMpm, ConsistentMassRunsAndConverges) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -17,6 +17,7 @@
 #include "setup/registry.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // The required keys, one per line (lines 1-7), so that positions in messages are predictable.
@@ -596,4 +597,5 @@ TEST(Config, ToTomlWithStringsThatNeedEscaping) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -11,6 +11,7 @@
 #include "core/types.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 using std::numbers::pi;
@@ -143,4 +144,5 @@ TEST(Expression, ReservedNames) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

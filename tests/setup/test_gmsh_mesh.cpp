@@ -9,6 +9,7 @@
 #include "setup/gmsh_mesh.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 std::string mesh_path(const std::string& name) {
@@ -78,4 +79,5 @@ TEST(GmshMesh, RefusalsNameTheFileAndTheReason) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

@@ -19,6 +19,7 @@
 #include "solver/spline_matrices.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 Grid<1> unit1(Index n) {
@@ -317,4 +318,5 @@ TEST(MassSolver, InputsAreRefused) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

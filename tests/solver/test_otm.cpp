@@ -20,6 +20,7 @@
 #include "solver/otm.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 // D 4.6.1 (examples/bar_fixed_ends_otm.toml) with `cells` elements.
@@ -497,4 +498,5 @@ TEST(Otm, InputsAreRefused) {
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm

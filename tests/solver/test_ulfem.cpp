@@ -16,6 +16,7 @@
 #include "solver/ulfem.hpp"
 
 namespace mpm {
+namespace MPM_UNITY_ID {
 namespace {
 
 Problem<1> problem(const std::string& toml) {
@@ -409,4 +410,5 @@ boundary.right = "free"
 }
 
 }  // namespace
+}  // namespace MPM_UNITY_ID
 }  // namespace mpm
