@@ -1,10 +1,13 @@
 #include "driver/stepper.hpp"
 
+#include <fmt/format.h>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <type_traits>
 #include <utility>
+
+#include "mpm/stepper_units.hpp"
 
 namespace mpm::driver {
 
@@ -15,10 +18,38 @@ static_assert(std::variant_size_v<BasisKind> == MPM_BASIS_KINDS,
 
 // In 3D the units exist for the kinds that support it only (CMakeLists.txt, MPM_KINDS_3D): a kind
 // that declares 3D without its unit fails to link, and run_settings refuses the others before.
+// CMakeLists.txt generates a unit for each kind of its lists MPM_KINDS_1D/2D/3D: they must be
+// the kinds whose supports_dimension holds.
+template <std::size_t... I>
+constexpr bool kinds_match_units(std::index_sequence<I...>) {
+  return (
+      (kStepperKinds[0][I] == supports_dimension<std::variant_alternative_t<I, BasisKind>>(1) &&
+       kStepperKinds[1][I] == supports_dimension<std::variant_alternative_t<I, BasisKind>>(2) &&
+       kStepperKinds[2][I] == supports_dimension<std::variant_alternative_t<I, BasisKind>>(3)) &&
+      ...);
+}
+static_assert(kinds_match_units(std::make_index_sequence<std::variant_size_v<BasisKind>>{}),
+              "CMakeLists.txt: MPM_KINDS_1D/2D/3D must list the kinds whose supports_dimension "
+              "holds (scheme/variants.hpp)");
+
+bool stepper_compiled(int dim, std::size_t kind) {
+  return dim >= 1 && dim <= 3 && kind < std::variant_size_v<BasisKind> &&
+         kStepperUnits[dim - 1][kind];
+}
+
 template <int Dim, std::size_t I>
 std::unique_ptr<Stepper<Dim>> stepper_of_kind(const StepperInput<Dim>& in) {
-  if constexpr (Dim == 3 && !supports_dimension<std::variant_alternative_t<I, BasisKind>>(Dim))
-    throw std::logic_error("make_stepper: basis not available in 3D");
+  using Kind = std::variant_alternative_t<I, BasisKind>;
+  if constexpr (!supports_dimension<Kind>(Dim))
+    throw std::logic_error("make_stepper: basis not available in this dimension");
+  else if constexpr (!kStepperUnits[Dim - 1][I])
+    throw InputError(fmt::format(
+        "method.basis = \"{}\"{} in {}D is not compiled into this build of mpm: it was "
+        "configured with CMake option MPM_STEPPERS_{}D leaving out basis kind {} "
+        "(scripts/sanitize.sh compiles only the units its tests run); build with the default "
+        "options (scripts/build.sh) to run it",
+        Kind::kName, Kind::kDegree > 0 ? fmt::format(" (degree {})", Kind::kDegree) : "", Dim, Dim,
+        I));
   else
     return make_stepper_for<Dim, I>(in);
 }

@@ -66,6 +66,11 @@ struct StepperInput {
 template <int Dim>
 std::unique_ptr<Stepper<Dim>> make_stepper(const BasisKind& basis, const StepperInput<Dim>& in);
 
+// Whether this build compiled the stepper unit of basis kind `kind` (its index in BasisKind) in
+// `dim` dimensions: every kind of the dimension unless CMake's MPM_STEPPERS_1D/2D/3D left it out
+// (make_stepper then refuses it with an input error naming those options).
+bool stepper_compiled(int dim, std::size_t kind);
+
 // method.solver = "otm" or "unified": the stepper of solver/otm.hpp with the basis kind's
 // functions on the advected nodes (OTM: linear or max-ent; unified: B-splines; run_settings has
 // checked). 1D only (logic_error in 2D, which run_settings refuses).
