@@ -6,8 +6,12 @@
 # clang, not g++: on this 2-core machine clang at -O0 with the sanitizers compiled a stepper
 # unit in 12.6 s against 30.4 s for g++ (the same flags), the whole tree in about 7 minutes
 # against 12, and the instrumented tests ran in 235 s against about 500 s (BENCHMARKS.md, "CI").
-# -gline-tables-only: reports keep file and line; a stepper unit compiles in 7.7 s against
-# 8.7 s with full -g. -O0: the instrumented library at -O1 took about three times as long to
+# No debug information by default: line tables (-gline-tables-only) took about 14 % of this
+# build's compile time (four stepper units 38.7-40.3 s against 33.5-34.1 s without, alternating;
+# BENCHMARKS.md, "CI back under 20 minutes"), and CI must stay within its 20 minutes. UBSan's
+# reports keep file and line (its checks carry their source location); ASan's name the functions
+# of the stack. SANITIZE_LINES=1 builds with line tables for file and line in ASan's reports too
+# (full -g took 8.7 s per stepper unit against 7.7 s with line tables). -O0: the instrumented library at -O1 took about three times as long to
 # compile (g++; clang 29 s per stepper unit against 12.6 s). The slow tests (SLOW below; under a second to a few
 # seconds each in Release, up to 80 s here) are left out here and run in the Release suite of
 # scripts/test.sh. SANITIZE_ALL=1 runs every test.
@@ -36,13 +40,15 @@ fi
 # functions. A test kept here that needs a left-out unit fails with an input error naming
 # MPM_STEPPERS_2D or _3D: add the kind below. Configured on every run, so a changed list applies;
 # SANITIZE_ALL=1 (every test) compiles every unit.
+debug_flags="-O0"
+[ "${SANITIZE_LINES:-0}" = 1 ] && debug_flags="-gline-tables-only -O0"
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
   units=(-UMPM_STEPPERS_1D -UMPM_STEPPERS_2D -UMPM_STEPPERS_3D)
 else
   units=(-DMPM_STEPPERS_2D="0;1;2;3;4;5;6;7;10;11;12;13" -DMPM_STEPPERS_3D="0;6")
 fi
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
-  -DCMAKE_CXX_FLAGS_DEBUG="-gline-tables-only -O0" -DCMAKE_EXE_LINKER_FLAGS=-fuse-ld=lld \
+  -DCMAKE_CXX_FLAGS_DEBUG="$debug_flags" -DCMAKE_EXE_LINKER_FLAGS=-fuse-ld=lld \
   -DCMAKE_CXX_COMPILER=clang++ -DMPM_SANITIZE=ON "${units[@]}" >/dev/null
 cmake --build build-asan -j "$(nproc)"
 # Tests that take more than about 4 s under the sanitizers at -O0 (refinement studies, bitwise
