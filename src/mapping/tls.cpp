@@ -45,8 +45,9 @@ double condition_number(const Eigen::Matrix<double, K, K>& D, int first, int t) 
     lo = hi = D(first, first);
   } else {
     // One solver per K, of run-time size n <= K on the stack: a solver per size n (with_size)
-    // made this unit compile in 167 s instead of 58 (g++ -O3); it runs only when the cheap bound
-    // of condition() does not settle the test.
+    // made this unit compile in 167 s instead of 58 (g++ -O3). It runs for every fit in 1D
+    // (TlsSettings::exact_condition) and in 2D and 3D only where the cheap bound of
+    // condition() does not settle the test.
     using Block = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, K, K>;
     const Eigen::SelfAdjointEigenSolver<Block> es(Block(D.block(first, first, n, n)),
                                                   Eigen::EigenvaluesOnly);
