@@ -11,8 +11,8 @@
 # BENCHMARKS.md, "CI back under 20 minutes"), and CI must stay within its 20 minutes. UBSan's
 # reports keep file and line (its checks carry their source location); ASan's name the functions
 # of the stack. SANITIZE_LINES=1 builds with line tables for file and line in ASan's reports too
-# (full -g took 8.7 s per stepper unit against 7.7 s with line tables). -O0: the instrumented library at -O1 took about three times as long to
-# compile (g++; clang 29 s per stepper unit against 12.6 s). The slow tests (SLOW below; under a second to a few
+# (full -g took 8.7 s per stepper unit against 7.7 s with line tables). -O0: the instrumented
+# library at -O1 took about three times as long to compile (g++; clang 29 s per stepper unit against 12.6 s). The slow tests (SLOW below; under a second to a few
 # seconds each in Release, up to 80 s here) are left out here and run in the Release suite of
 # scripts/test.sh. SANITIZE_ALL=1 runs every test.
 set -euo pipefail
@@ -28,8 +28,8 @@ export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 if [ -f build-asan/CMakeCache.txt ] && ! grep -q '^CMAKE_CXX_COMPILER:[A-Z]*=.*clang++' build-asan/CMakeCache.txt; then
   rm -rf build-asan
 fi
-# Linked by lld: the instrumented test executable (450 MB with its line tables) links in about
-# 3 s against 15 s with the default linker, at the end of the build where nothing else runs.
+# Linked by lld: the instrumented test executable (450 MB when built with line tables) linked in
+# about 3 s against 15 s with the default linker, at the end of the build where nothing else runs.
 #
 # The stepper units the instrumented tests run, and only those (CMakeLists.txt, MPM_STEPPERS_*):
 # a run of the tests kept here with every unit compiled, logging the (dimension, basis kind) of

@@ -17,14 +17,9 @@ namespace {
 
 template <int Dim>
 void check_units() {
-  Vec<Dim> lo, hi;
   IVec<Dim> cells;
-  for (int d = 0; d < Dim; ++d) {
-    lo[d] = 0.0;
-    hi[d] = 1.0;
-    cells[d] = 8;  // max-ent needs 5 or more
-  }
-  const Grid<Dim> g(lo, hi, cells);
+  cells.fill(8);  // max-ent needs 5 or more
+  const Grid<Dim> g(Vec<Dim>::Zero(), Vec<Dim>::Ones(), cells);
   const auto P =
       seed_particles<Dim>(g, Vec<Dim>::Constant(0.25), Vec<Dim>::Constant(0.75), 2, 1000.0);
   const Material law = Dim == 1 ? Material(Elastic1DSmall{ElasticParameters{1000.0, 1e6, 0.0}})
