@@ -16,6 +16,7 @@
 #include "app/perf.hpp"
 #include "app/reconstruct.hpp"
 #include "app/study.hpp"
+#include "core/comm.hpp"
 #include "core/interrupt.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
@@ -71,7 +72,12 @@ int cmd_run(const std::string& config, const std::vector<std::string>& sets, std
   }
   if (out.empty()) out = default_out("runs", config);
   ro.out_dir = out;
+  // Under mpirun: the processes share the run (driver/run_mpm.cpp); rank 0 reports.
+  const mpm::Comm& comm = mpm::Comm::world();
+  if (comm.distributed()) ro.comm = &comm;
+  ro.quiet = quiet || !comm.root();
   const auto r = mpm::run(*cfg, ro);
+  if (!comm.root()) return r.exit_code;
   if (!quiet) {
     std::cout << fmt::format(
         "{}: {} particles, {} cells, {} steps in {:.3f} s ({:.1f} ns per "
@@ -201,8 +207,41 @@ void prefer_passive_waiting(char** argv) {
   ::execv("/proc/self/exe", argv);
 }
 
+namespace {
+int run_main(int argc, char** argv);
+}  // namespace
+
 int main(int argc, char** argv) {
   prefer_passive_waiting(argv);
+  // Under mpirun every process runs this program: MPI starts here (core/comm.hpp), errors that
+  // every process meets alike are printed once (by rank 0), and one process's internal error
+  // ends them all (Comm::abort) rather than leaving the others waiting.
+  try {
+    mpm::Comm::init(&argc, &argv);
+  } catch (const mpm::InputError& e) {
+    std::cerr << "mpm: error: " << e.what() << "\n";
+    return mpm::exit_code::kInput;
+  }
+  const int rc = run_main(argc, argv);
+  mpm::Comm::finalize();
+  return rc;
+}
+
+namespace {
+// The message of an error every process met (rank 0 prints it), or of one this process alone met
+// (printed with its rank, then every process ends).
+void report_error(const std::string& text, bool all_ranks) {
+  const mpm::Comm& comm = mpm::Comm::world();
+  if (!comm.distributed()) {
+    std::cerr << text << "\n";
+  } else if (!all_ranks) {
+    std::cerr << fmt::format("[rank {} of {}] {}\n", comm.rank(), comm.size(), text);
+  } else if (comm.root()) {
+    std::cerr << text << "\n";
+  }
+}
+
+int run_main(int argc, char** argv) {
   CLI::App app{"mpmlab: material point methods, verified side by side"};
   app.set_version_flag("--version", fmt::format("mpm (mpmlab) {}", mpm::kVersion));
   app.require_subcommand(1);
@@ -510,22 +549,27 @@ int main(int argc, char** argv) {
       return 0;
     }
   } catch (const mpm::InputError& e) {
-    std::cerr << "mpm: error: " << e.what() << "\n";
+    report_error(fmt::format("mpm: error: {}", e.what()), true);
     return mpm::exit_code::kInput;
   } catch (const mpm::RunError& e) {
     // Outside the time loop: an output that could not be written (exit_code::kOutput).
-    std::cerr << "mpm: error: " << e.what() << "\n";
+    report_error(fmt::format("mpm: error: {}", e.what()), true);
     return e.exit_code();
   } catch (const std::bad_alloc&) {
     // Sizes that cannot fit are refused before allocation (grid.cells, particles.per_cell);
     // this is what is left: the machine ran out while the run was growing or was busy.
-    std::cerr << "mpm: error: out of memory (std::bad_alloc): the run needs more memory than "
-                 "this machine could give it; use fewer cells (grid.cells) or particles "
-                 "(particles.per_cell), fewer threads (OMP_NUM_THREADS), or free memory\n";
+    report_error(
+        "mpm: error: out of memory (std::bad_alloc): the run needs more memory than "
+        "this machine could give it; use fewer cells (grid.cells) or particles "
+        "(particles.per_cell), fewer threads (OMP_NUM_THREADS), or free memory",
+        false);
+    mpm::Comm::abort(mpm::exit_code::kInternal);
     return mpm::exit_code::kInternal;
   } catch (const std::exception& e) {
-    std::cerr << "mpm: internal error: " << e.what() << "\n";
+    report_error(fmt::format("mpm: internal error: {}", e.what()), false);
+    mpm::Comm::abort(mpm::exit_code::kInternal);
     return mpm::exit_code::kInternal;
   }
   return 0;
 }
+}  // namespace

@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <span>
 #include <utility>
 
 #include "io/checkpoint.hpp"
@@ -15,9 +16,11 @@ namespace mpm::driver {
 template <int Dim>
 ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
                        const ExactSolution<Dim>& exact, double t, double dt, double velocity_time,
-                       int boundary_cells) {
+                       int boundary_cells, const Comm* comm) {
   ErrorNorms e;
-  if (!exact || P.x.empty()) return e;
+  if (!exact) return e;
+  // (A rank of a distributed run without particles still takes part in the sums.)
+  if (comm == nullptr && P.x.empty()) return e;
   IVec<Dim> first = grid.cells, last;
   last.fill(-1);
   for (const auto& X : P.x0)
@@ -25,6 +28,11 @@ ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
       const Index c = grid.cell_of(X[d], d);
       first[d] = std::min(first[d], c);
       last[d] = std::max(last[d], c);
+    }
+  if (comm)
+    for (int d = 0; d < Dim; ++d) {
+      first[d] = static_cast<Index>(comm->min(static_cast<double>(first[d])));
+      last[d] = static_cast<Index>(comm->max(static_cast<double>(last[d])));
     }
   double su = 0, sv = 0, svm = 0, svs = 0, ss = 0, num = 0, den = 0;
   double iu = 0, ivs = 0, is = 0, in = 0;
@@ -52,7 +60,16 @@ ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
       in += 1.0;
     }
   }
-  const double n = static_cast<double>(P.x.size());
+  double n = static_cast<double>(P.x.size());
+  double computed = 0.0;
+  for (std::size_t i = 0; i < P.x.size(); ++i) computed += P.volume0[i] * P.stress[i].squaredNorm();
+  if (comm) {
+    std::array<double, 13> v{su, sv, svm, svs, ss, num, den, iu, ivs, is, in, n, computed};
+    comm->sum(std::span<double>(v));
+    su = v[0], sv = v[1], svm = v[2], svs = v[3], ss = v[4], num = v[5], den = v[6];
+    iu = v[7], ivs = v[8], is = v[9], in = v[10], n = v[11], computed = v[12];
+    if (n == 0.0) return e;
+  }
   e.displacement_rms = std::sqrt(su / n);
   e.velocity_rms = std::sqrt(sv / n);
   e.velocity_rms_midstep = std::sqrt(svm / n);
@@ -60,8 +77,6 @@ ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
   e.stress_rms = std::sqrt(ss / n);
   // A relative norm needs a reference of some size: none when the exact stress vanishes at T
   // (below 1e-8 of the computed one, e.g. mms_1d at a full period).
-  double computed = 0.0;
-  for (std::size_t i = 0; i < P.x.size(); ++i) computed += P.volume0[i] * P.stress[i].squaredNorm();
   if (den > 1e-16 * computed && den > 0.0) e.stress_rel_l2 = std::sqrt(num / den);
   if (in > 0.0) {
     e.displacement_rms_interior = std::sqrt(iu / in);
@@ -75,7 +90,16 @@ template <int Dim>
 OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
                                   const std::string& config_text, const Problem<Dim>& pb)
     : dir_(opt.out_dir), exact_(pb.exact) {
+  if (opt.comm != nullptr && opt.comm->distributed()) {
+    comm_ = opt.comm;
+    writer_ = comm_->root();
+  }
   if (dir_.empty()) return;
+  csv_ = s.output.csv;
+  vtk_ = s.output.vtk;
+  vtk_binary_ = s.output.vtk_binary;
+  mapping_errors_ = s.method.solver == Solver::Mpm;
+  if (!writer_) return;
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec)
@@ -104,9 +128,6 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
                                      rm.message()));
     }
   }
-  csv_ = s.output.csv;
-  vtk_ = s.output.vtk;
-  vtk_binary_ = s.output.vtk_binary;
   io::write_file_atomic(dir_ / "config.toml", config_text);
   if (vtk_) {
     // The background the basis lives on: the grid's cells, or their triangles.
@@ -129,7 +150,6 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
   // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
   // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
   // report their maxima, which summary.json has).
-  mapping_errors_ = s.method.solver == Solver::Mpm;
   if (mapping_errors_) history_header_ += ",mass_error,momentum_error";
   history_header_ += "\n";
 }
@@ -150,6 +170,18 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
         }
       },
       sim.material);
+  if (comm_) {
+    // The sums over every rank's particles (rank order: the same bits in every run).
+    comm_->check();
+    std::array<double, 3 + Dim> v{kin, strain, mass};
+    for (int d = 0; d < Dim; ++d) v[3 + static_cast<std::size_t>(d)] = mom[d];
+    comm_->sum(std::span<double>(v));
+    kin = v[0];
+    strain = v[1];
+    mass = v[2];
+    for (int d = 0; d < Dim; ++d) mom[d] = v[3 + static_cast<std::size_t>(d)];
+    if (!writer_) return;
+  }
   std::string row = fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", sim.time, kin, strain,
                                 kin + strain, mass);
   for (int d = 0; d < Dim; ++d) row += fmt::format(",{:.17g}", mom[d]);
@@ -167,9 +199,23 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
 template <int Dim>
 void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
   if (!enabled()) return;
-  // In id order, whatever order re-sorting (scheme/sort.hpp) left them in.
+  // In id order, whatever order re-sorting (scheme/sort.hpp) left them in. A distributed run
+  // gathers every rank's particles at rank 0 first.
   std::optional<Particles<Dim>> ordered;
-  if (!sim.particles.in_id_order()) ordered = particles_in_id_order(sim.particles);
+  if (comm_) {
+    comm_->check();
+    std::vector<std::byte> mine;
+    mine.reserve(static_cast<std::size_t>(sim.particles.size()) *
+                 Particles<Dim>::bytes_per_particle());
+    for (std::size_t i = 0; i < sim.particles.x.size(); ++i) sim.particles.pack(i, mine);
+    const auto all = comm_->gather(mine, 0);
+    if (!writer_) return;
+    Particles<Dim> gathered;
+    for (const auto& buf : all) gathered.unpack_append(buf);
+    ordered = particles_in_id_order(gathered);
+  } else if (!sim.particles.in_id_order()) {
+    ordered = particles_in_id_order(sim.particles);
+  }
   const Particles<Dim>& P = ordered ? *ordered : sim.particles;
   // The exact solution at the particles: u_exact, v_exact, stress_exact in 1D; per component
   // (u_exact_1, ..., stress_exact_12, ...) in more dimensions, like the particle columns.
@@ -210,7 +256,7 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
 
 template <int Dim>
 void OutputSession<Dim>::summary(const nlohmann::ordered_json& j) {
-  if (enabled()) io::write_file_atomic(dir_ / "summary.json", j.dump(2) + "\n");
+  if (enabled() && writer_) io::write_file_atomic(dir_ / "summary.json", j.dump(2) + "\n");
 }
 
 template <int Dim>
@@ -242,7 +288,7 @@ void OutputSession<Dim>::resume(const io::Checkpoint& c) {
 }
 template <int Dim>
 void OutputSession<Dim>::checkpoint(const io::Checkpoint& c) {
-  if (enabled()) io::write_checkpoint(dir_ / io::kCheckpointFile, c);
+  if (enabled() && writer_) io::write_checkpoint(dir_ / io::kCheckpointFile, c);
 }
 
 // Stops before the first step when dt exceeds the limit, unless time.allow_unstable.
@@ -341,11 +387,11 @@ void reference_errors(const Particles<1>& P, const Ulfem1D& ref, ErrorNorms& e) 
 }
 
 template ErrorNorms error_norms<1>(const Particles<1>&, const Grid<1>&, const ExactSolution<1>&,
-                                   double, double, double, int);
+                                   double, double, double, int, const Comm*);
 template ErrorNorms error_norms<2>(const Particles<2>&, const Grid<2>&, const ExactSolution<2>&,
-                                   double, double, double, int);
+                                   double, double, double, int, const Comm*);
 template ErrorNorms error_norms<3>(const Particles<3>&, const Grid<3>&, const ExactSolution<3>&,
-                                   double, double, double, int);
+                                   double, double, double, int, const Comm*);
 template class OutputSession<1>;
 template class OutputSession<2>;
 template class OutputSession<3>;

@@ -4,6 +4,8 @@
 // stability check and summary.json. The steppers (driver/stepper.hpp) are the only typed part.
 #include <unistd.h>
 
+#include <csignal>
+
 #include <fmt/format.h>
 #include <chrono>
 #include <cmath>
@@ -75,10 +77,12 @@ class Progress {
 // some bases concentrate (D Fig. 5.10): one cell for nodal bases, p cells for B-splines of degree
 // p, whose asymmetric end functions phi_0 .. phi_{p-1} of the open knot vector reach p cells into
 // the domain.
+// comm: a distributed run's processes, each passing its particles (the sums are over all of
+// them, collective), or null.
 template <int Dim>
 ErrorNorms error_norms(const Particles<Dim>& P, const Grid<Dim>& grid,
                        const ExactSolution<Dim>& exact, double t, double dt, double velocity_time,
-                       int boundary_cells);
+                       int boundary_cells, const Comm* comm = nullptr);
 
 inline nlohmann::ordered_json opt_json(const std::optional<double>& v) {
   return v ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
@@ -95,7 +99,10 @@ struct StateView {
   const Diagnostics* diag = nullptr;
 };
 
-// Everything written into the output directory during a run.
+// Everything written into the output directory during a run. In a distributed run
+// (RunOptions::comm) every process takes part in each history row and frame (their sums and the
+// gathering of the particles are collective) and rank 0 writes the files: the same files as a
+// run on one process.
 template <int Dim>
 class OutputSession {
  public:
@@ -103,6 +110,8 @@ class OutputSession {
   OutputSession(const RunOptions& opt, const RunSettings& s, const std::string& config_text,
                 const Problem<Dim>& pb);
   bool enabled() const { return !dir_.empty(); }
+  // The processes of a distributed run, or null.
+  const Comm* comm() const { return comm_; }
   void history_row(const StateView<Dim>& s);
   void frame(const StateView<Dim>& s);
   void summary(const nlohmann::ordered_json& j);
@@ -120,6 +129,8 @@ class OutputSession {
 
  private:
   std::filesystem::path dir_;
+  const Comm* comm_ = nullptr;
+  bool writer_ = true;      // this process writes the files (rank 0)
   io::DirectoryLock lock_;  // one run at a time in dir_
   ExactSolution<Dim> exact_;
   bool csv_ = true, vtk_ = true, vtk_binary_ = true;
@@ -182,7 +193,13 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
       }
       if (checkpoint) save(step);
       progress.update(step, view().time);
-      if (const int sig = interrupt_signal(); sig != 0 && !last) {
+      int sig = interrupt_signal();
+      if (const Comm* comm = out.comm()) {
+        // Every rank ends after the same step: a signal that reached any of them ends them all.
+        comm->check();
+        if (comm->any(sig != 0) && sig == 0) sig = SIGINT;
+      }
+      if (sig != 0 && !last) {
         // A signal (core/interrupt.hpp): the state after this step, complete, ends the run: its
         // history row, a frame and, when checkpoints are on, a checkpoint to restart from,
         // each unless this step has written it already.
@@ -198,6 +215,14 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
   } catch (const RunError& e) {
     res.exit_code = e.exit_code();
     res.failure = e.what();
+    // A distributed run: a failure met on this rank is told to the others, which wait for it at
+    // their next collective operation (Comm::check); every rank reports the lowest failing one.
+    if (const Comm* comm = out.comm(); comm && !dynamic_cast<const RemoteRunError*>(&e)) {
+      const Comm::Failure mine{comm->rank(), e.exit_code(), e.what()};
+      const Comm::Failure first = *comm->agree(&mine);
+      res.exit_code = first.exit_code;
+      res.failure = fmt::format("rank {} of {}: {}", first.rank, comm->size(), first.message);
+    }
     try {
       out.history_row(view());
       out.frame(view());  // the state the failure was detected in, for diagnosis

@@ -27,6 +27,9 @@ class OtmStepper final : public Stepper<Dim> {
   void load(const io::Checkpoint& c, const std::string& what) override {
     otm_.set_nodes(c.basis_state, what);
   }
+  // OTM runs on one process (run_mpm refuses it on several), and its particles never move
+  // between processes.
+  void resize_particle_caches() override {}
   void report(nlohmann::ordered_json& summary) const override {
     const auto& x = otm_.nodes();
     const OtmSettings& s = otm_.settings();

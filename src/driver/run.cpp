@@ -93,12 +93,22 @@ RunResult run(const Config& cfg, const RunOptions& opt) {
   const int dim =
       std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);
   const Index particles = std::visit([](const auto& pb) { return pb.particles.size(); }, problem);
-  const ScopedThreads threads(run_threads(opt.threads, particles, dim, omp_get_max_threads()));
+  // A distributed run shares the cores of a machine among its processes there, and each holds
+  // about its share of the particles.
+  const int ranks = opt.comm ? opt.comm->size() : 1;
+  const int available =
+      std::max(1, omp_get_max_threads() / (opt.comm ? opt.comm->local_size() : 1));
+  const ScopedThreads threads(run_threads(opt.threads, particles / ranks, dim, available));
   const RunSettings settings = run_settings(cfg, dim);
   const std::string config_text = cfg.to_toml();
   // MPM and OTM (which shares the driver through its Stepper; driver/otm_stepper.cpp).
-  if (settings.method.solver == Solver::Ulfem)
+  if (settings.method.solver == Solver::Ulfem) {
+    if (ranks > 1)
+      throw InputError(
+          fmt::format("{}: method.solver = \"ulfem\" runs on one process; start it without mpirun",
+                      settings.method.where_solver));
     return run_ulfem(std::get<Problem<1>>(problem), settings, config_text, opt);
+  }
   return std::visit(
       [&](auto& pb) {
         constexpr int Dim = std::decay_t<decltype(pb)>::kDim;

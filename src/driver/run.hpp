@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/comm.hpp"
 #include "core/types.hpp"
 #include "scheme/simulation.hpp"
 
@@ -37,6 +38,9 @@ struct RunOptions {
   // --threads or OMP_NUM_THREADS says otherwise); n > 0 runs n threads. The results do not
   // depend on it (core/parallel.hpp).
   int threads = -1;
+  // The processes of a distributed run (mpirun; core/comm.hpp), or null: one process. Every
+  // process calls run() with the same configuration and options.
+  const Comm* comm = nullptr;
 };
 
 // Below this many particles per thread a second thread costs more than it saves: measured with

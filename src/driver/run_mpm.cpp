@@ -1,6 +1,8 @@
 #include "driver/run_mpm.hpp"
 
 #include <algorithm>
+#include <array>
+#include <span>
 
 #include <fmt/format.h>
 #include <optional>
@@ -8,6 +10,7 @@
 #include "driver/driver.hpp"
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
+#include "scheme/distribution.hpp"
 #include "scheme/sort.hpp"
 #include "setup/variant_name.hpp"
 
@@ -148,23 +151,67 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 
   if (opt.shuffle_seed != 0 && !opt.restart)
     shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
+
+  // A distributed run (issue 21): every process has built the whole problem; each keeps the
+  // particles of its slab (scheme/distribution.hpp), cut so that each holds about as many.
+  const Comm* comm = opt.comm != nullptr && opt.comm->distributed() ? opt.comm : nullptr;
+  SlabPartition<Dim> part;
+  if (comm) {
+    constexpr std::string_view kHow = "run it on one process (without mpirun)";
+    if (otm || unified)
+      throw InputError(
+          fmt::format("{}: method.solver = \"{}\" does not run on several "
+                      "processes yet (issue 21); {}",
+                      method.where_solver, otm ? "otm" : "unified", kHow));
+    if (pb.mesh)
+      throw InputError(
+          fmt::format("grid.mesh: a mesh from a file does not run on several "
+                      "processes yet (issue 21); {}",
+                      kHow));
+    if (opt.restart || settings.output.checkpoint_every > 0)
+      throw InputError(fmt::format(
+          "{}checkpoints and restarts do not run on several processes yet (issue 21); set "
+          "output.checkpoint_every = 0 or {}",
+          opt.restart ? "" : settings.output.where_checkpoint_every + ": ", kHow));
+    part = SlabPartition<Dim>::balanced(
+        SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/true),
+        comm->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
+    const int me = comm->rank();
+    pb.particles.keep_with_ids([&](const Particles<Dim>& P, std::size_t i) {
+      return part.owner(pb.grid, P.x[i], 0) == me;
+    });
+  }
   // OTM and the unified solver are one- and two-dimensional (run_settings refuses them in 3D).
   const auto stepper = [&]() -> std::unique_ptr<Stepper<Dim>> {
     if constexpr (Dim <= 2)
       if (otm || unified) return make_otm_stepper<Dim>({pb, method, !opt.restart});
-    return make_stepper<Dim>(basis, {pb, method, !opt.restart});
+    return make_stepper<Dim>(basis, {pb, method, !opt.restart, comm});
   }();
   RunState<Dim>& sim = stepper->state();
 
-  // Outputs start once the input has passed every check above.
-  OutputSession<Dim> out(opt, settings, config_text, pb);
+  // Outputs start once the input has passed every check above. Only rank 0 writes: when it
+  // cannot (its directory), every rank stops with its message.
+  std::optional<OutputSession<Dim>> out_session;
+  {
+    std::optional<Comm::Failure> failed;
+    try {
+      out_session.emplace(opt, settings, config_text, pb);
+    } catch (const InputError& e) {
+      if (!comm) throw;
+      failed = Comm::Failure{comm->rank(), exit_code::kInput, e.what()};
+    }
+    if (comm)
+      if (const auto f = comm->agree(failed ? &*failed : nullptr)) throw InputError(f->message);
+  }
+  OutputSession<Dim>& out = *out_session;
   RunResult res;
   res.benchmark = pb.benchmark;
   res.dim = Dim;
   res.cells = sim.grid.num_cells();
   res.h = sim.grid.h.maxCoeff();
   res.cell_size.assign(sim.grid.h.data(), sim.grid.h.data() + Dim);
-  res.particles = sim.particles.size();
+  res.particles = comm ? comm->sum(sim.particles.size()) : sim.particles.size();
+  Index migrated = 0;  // particles this rank sent to another
   const Index start =
       opt.restart ? restore<Dim>(opt, ts.dt, *stepper, mapping_name, reference, out) : 0;
   drive<Dim>(
@@ -173,6 +220,10 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         stepper->step(ts.dt);
         sim.step = s + 1;
         sim.time = static_cast<double>(sim.step) * ts.dt;
+        if (comm) {
+          migrated += migrate(sim, part, *comm);
+          stepper->resize_particle_caches();
+        }
         // Re-sorting for the next step, timed with this one. Here rather than before the step:
         // the decision reads this step's chunk ranges, and a checkpoint written after the step
         // (also the last one of a shortened run) holds the sorted state, so a restart repeats it.
@@ -196,12 +247,30 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 
   if (res.exit_code == exit_code::kOk) {
     res.errors = error_norms<Dim>(sim.particles, sim.grid, pb.exact, sim.time, ts.dt,
-                                  scheme_velocity_time, boundary_cells(basis));
+                                  scheme_velocity_time, boundary_cells(basis), comm);
     if constexpr (Dim == 1)
       if (reference) reference_errors(sim.particles, *reference, res.errors);
     check_error_norms(res);
   }
   res.diag = sim.diag;
+  nlohmann::ordered_json mpi_json;
+  if (comm) {
+    res.diag.grid_crossings = comm->sum(res.diag.grid_crossings);
+    const std::vector<Index> counts = comm->allgather(
+        std::span<const Index>(std::array<Index, 2>{sim.particles.size(), migrated}));
+    std::vector<Index> per_rank, sent;
+    for (std::size_t r = 0; r < counts.size(); r += 2) {
+      per_rank.push_back(counts[r]);
+      sent.push_back(counts[r + 1]);
+    }
+    mpi_json = {{"processes", comm->size()},
+                {"decomposition", fmt::format("slabs of whole cell layers along {}, cut to "
+                                              "balance the initial particles",
+                                              SlabPartition<Dim>::axis_name())},
+                {"cuts", part.cuts},
+                {"particles_per_process", per_rank},
+                {"particles_sent_per_process", sent}};
+  }
   res.wall_seconds = seconds_since(t_start);
 
   nlohmann::ordered_json method_json = {
@@ -231,6 +300,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   res.summary = make_summary(res, settings, sim.material, sim.time, std::move(method_json),
                              scheme_velocity_time);
   stepper->report(res.summary);
+  if (comm) res.summary["mpi"] = std::move(mpi_json);
   if (reference)
     res.summary["reference"] = {{"solver", "ulfem"},
                                 {"dofs", settings.reference_dofs},

@@ -49,6 +49,9 @@ class Stepper {
   virtual void load(const io::Checkpoint& c, const std::string& what) = 0;
   // The mapping's report over the run (TLS completions, MLS conditioning) into summary.json.
   virtual void report(nlohmann::ordered_json& summary) const = 0;
+  // After particles have arrived or left (a distributed run's migration, scheme/distribution.hpp):
+  // sizes the per-particle caches to the particles (the next step's evaluate_basis fills them).
+  virtual void resize_particle_caches() = 0;
 };
 
 // What a stepper is built from: the problem (its particles are moved into the stepper) and the
@@ -59,6 +62,8 @@ struct StepperInput {
   Problem<Dim>& problem;
   const MethodSettings& method;
   bool check_input = true;
+  // A distributed run's processes (the problem then holds this rank's particles), or null.
+  const Comm* comm = nullptr;
 };
 
 // The stepper of basis kind `basis` (and the input's mapping and scheme) in Dim dimensions.

@@ -62,6 +62,37 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
   }
 }
 
+// What a distributed run (issue 21) does not do yet, refused before the first step with the
+// key to change: the exchange shares the direct mapping's particle-to-grid sums of bases whose
+// stencils depend on one particle alone, with lumped mass.
+template <class Basis, class Mapping>
+void check_distributed_run(const MethodSettings& method, bool tractions) {
+  constexpr std::string_view kHow = "run it on one process (without mpirun)";
+  if constexpr (!std::is_same_v<Mapping, DirectMapping>)
+    throw InputError(fmt::format(
+        "{}: method.mapping = \"{}\" does not run on several processes yet (its "
+        "reconstructions read the particles of neighbouring cells, which a process does not "
+        "hold; issue 21); use method.mapping = \"direct\" or {}",
+        method.where_mapping, Mapping::kName, kHow));
+  if constexpr (Basis::kPrepare || Basis::kTrackedCorners || Basis::kTriangleMesh)
+    throw InputError(fmt::format(
+        "{}: the {} basis does not run on several processes yet ({}; issue 21); {}",
+        method.where_basis, Basis::kName,
+        Basis::kTriangleMesh ? "its mesh is not cut into slabs"
+                             : "it keeps state built from the particles of several cells",
+        kHow));
+  if (method.mass == MassType::Consistent)
+    throw InputError(fmt::format(
+        "{}: method.mass = \"consistent\" does not run on several processes yet (the mass "
+        "matrix is solved on one process; issue 21); use \"lumped\" or {}",
+        method.where_mass, kHow));
+  if (tractions)
+    throw InputError(fmt::format(
+        "the problem's tractions do not run on several processes yet (their particle lists "
+        "belong to one process; issue 21); {}",
+        kHow));
+}
+
 template <int Dim, class Basis, class Mapping>
 class TypedStepper final : public Stepper<Dim> {
  public:
@@ -100,6 +131,10 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.body_force = pb.body_force;
     sim_.tractions = pb.tractions;
     if (sim_.body_force.fill) sim_.body_force.fill(sim_.particles, 0.0, sim_.particles.body);
+    if (in.comm != nullptr && in.comm->distributed()) {
+      check_distributed(method, pb);
+      sim_.comm = in.comm;
+    }
   }
 
   void step(double dt) override {
@@ -147,7 +182,15 @@ class TypedStepper final : public Stepper<Dim> {
     report_mapping(summary, sim_.mapping, Dim);
   }
 
+  void resize_particle_caches() override {
+    sim_.stencils.resize(static_cast<std::size_t>(sim_.particles.size()));
+  }
+
  private:
+  void check_distributed(const MethodSettings& method, const Problem<Dim>& pb) const {
+    check_distributed_run<Basis, Mapping>(method, !pb.tractions.empty());
+  }
+
   Scheme scheme_;
   Sim sim_;
 };

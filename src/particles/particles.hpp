@@ -1,6 +1,9 @@
 #pragma once
 // Material points as a struct of arrays (one contiguous array per field), D Algorithm 2 input.
+#include <cstddef>
+#include <cstring>
 #include <numeric>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -60,6 +63,46 @@ struct Particles {
       field.resize(kept.size());
     });
     std::iota(id.begin(), id.end(), CompactIndex{0});
+  }
+
+  // Keeps the particles i with keep(*this, i), in order, with their ids: the particles one
+  // process owns in a distributed run, or those that stay when others migrate (ids stay those of
+  // the whole body).
+  template <class Keep>
+  void keep_with_ids(Keep&& keep) {
+    std::size_t n = 0;
+    std::vector<std::size_t> kept;
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (keep(std::as_const(*this), i)) kept.push_back(i);
+    n = kept.size();
+    for_each_field([&](auto& field) {
+      for (std::size_t k = 0; k < n; ++k) field[k] = field[kept[k]];
+      field.resize(n);
+    });
+  }
+
+  // Particle i's fields appended to `out` as raw bytes, in the order of for_each_field
+  // (bytes_per_particle() of them): migration and gathering between processes of one run, whose
+  // machines share the representation.
+  void pack(std::size_t i, std::vector<std::byte>& out) const {
+    fields(*this, [&](const char*, const auto& field) {
+      const std::size_t at = out.size();
+      out.resize(at + sizeof(field[i]));
+      std::memcpy(out.data() + at, &field[i], sizeof(field[i]));
+    });
+  }
+  // Appends the particles of a buffer written by pack(); returns the bytes read.
+  std::size_t unpack_append(std::span<const std::byte> in) {
+    const std::size_t n = in.size() / bytes_per_particle();
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < n; ++k)
+      fields(*this, [&](const char*, auto& field) {
+        field.emplace_back();
+        // (Eigen's fixed-size vectors and matrices are plain arrays of doubles.)
+        std::memcpy(static_cast<void*>(&field.back()), in.data() + at, sizeof(field.back()));
+        at += sizeof(field.back());
+      });
+    return at;
   }
 
   // Whether the particles are in id order (never re-sorted, or sorted back).

@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "core/parallel.hpp"
@@ -120,22 +122,153 @@ void throw_particle_failure(const RunState<Dim>& sim) {
                              sim.step, sim.time, inverted.size(), describe_particles(P, inverted)));
 }
 
+// The DOF range [lo, hi] this rank's particle stencils touch: the union of the chunk ranges
+// evaluate_basis recorded (empty, lo > hi, without particles).
+template <int Dim>
+std::array<Index, 2> touched_dofs(const RunState<Dim>& sim) {
+  const auto& r = sim.scatter.ranges;
+  Index lo = std::numeric_limits<Index>::max(), hi = -1;
+  for (int c = 0; c < ParticleChunks::count(r.particles); ++c) {
+    const auto cc = static_cast<std::size_t>(c);
+    if (r.hi[cc] < r.lo[cc]) continue;
+    lo = std::min(lo, r.lo[cc]);
+    hi = std::max(hi, r.hi[cc]);
+  }
+  return {lo, hi};
+}
+
+template <int Dim>
+void share_grid_sums(RunState<Dim>& sim, unsigned what) {
+  const Comm* comm = sim.comm;
+  if (comm == nullptr || !comm->distributed()) return;
+  comm->check();  // a rank that failed in this step stops every rank here
+  const auto [lo, hi] = touched_dofs(sim);
+  const std::array<Index, 2> mine{lo, hi};
+  const std::vector<Index> all = comm->allgather(std::span<const Index>(mine));
+  const int n = comm->size(), me = comm->rank();
+  auto& sh = sim.shared;
+  sh.lo.resize(static_cast<std::size_t>(n));
+  sh.hi.resize(static_cast<std::size_t>(n));
+  for (int r = 0; r < n; ++r) {
+    sh.lo[static_cast<std::size_t>(r)] = all[2 * static_cast<std::size_t>(r)];
+    sh.hi[static_cast<std::size_t>(r)] = all[2 * static_cast<std::size_t>(r) + 1];
+  }
+  using namespace grid_sum;
+  auto& nd = sim.nodes;
+  const bool M = (what & kMass) != 0, Q = (what & kMomentum) != 0, F = (what & kForces) != 0;
+  const std::size_t width = (M ? 1 : 0) + (Q ? Dim : 0) + (F ? Dim : 0);
+  // The values of DOFs [a, b] as doubles, `width` per DOF.
+  auto pack = [&](Index a, Index b) {
+    std::vector<std::byte> out(static_cast<std::size_t>(b - a + 1) * width * sizeof(double));
+    auto* v = reinterpret_cast<double*>(out.data());
+    for (Index i = a; i <= b; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (M) *v++ = nd.mass[k];
+      if (Q)
+        for (int d = 0; d < Dim; ++d) *v++ = nd.momentum[k][d];
+      if (F)
+        for (int d = 0; d < Dim; ++d) *v++ = nd.force[k][d];
+    }
+    return out;
+  };
+  // Adds the values of DOFs [a, b] from a buffer of pack().
+  auto add = [&](const std::byte* data, Index a, Index b) {
+    const auto* v = reinterpret_cast<const double*>(data);
+    for (Index i = a; i <= b; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (M) nd.mass[k] += *v++;
+      if (Q)
+        for (int d = 0; d < Dim; ++d) nd.momentum[k][d] += *v++;
+      if (F)
+        for (int d = 0; d < Dim; ++d) nd.force[k][d] += *v++;
+    }
+  };
+  std::vector<int> peers;
+  std::vector<std::vector<std::byte>> send;
+  for (int r = 0; r < n; ++r) {
+    const Index a = std::max(lo, sh.lo[static_cast<std::size_t>(r)]);
+    const Index b = std::min(hi, sh.hi[static_cast<std::size_t>(r)]);
+    if (r == me || a > b) continue;
+    peers.push_back(r);
+    send.push_back(pack(a, b));
+  }
+  const auto recv = comm->exchange(peers, send, 100);
+  if (lo > hi) return;
+  // Every rank that holds a DOF adds the same partial sums in the same (rank) order: the same
+  // bits everywhere.
+  const std::vector<std::byte> own = pack(lo, hi);
+  for (Index i = lo; i <= hi; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (M) nd.mass[k] = 0.0;
+    if (Q) nd.momentum[k].setZero();
+    if (F) nd.force[k].setZero();
+  }
+  std::size_t next = 0;
+  for (int r = 0; r < n; ++r) {
+    if (r == me) {
+      add(own.data(), lo, hi);
+    } else if (next < peers.size() && peers[next] == r) {
+      add(recv[next].data(), std::max(lo, sh.lo[static_cast<std::size_t>(r)]),
+          std::min(hi, sh.hi[static_cast<std::size_t>(r)]));
+      ++next;
+    }
+  }
+}
+
+// sum over the DOFs of a grid array, each DOF counted once over the ranks of a distributed run
+// (by the lowest rank whose range holds it), combined in rank order. T: double or Vec<Dim>.
+template <int Dim, class T>
+T grid_total(const RunState<Dim>& sim, const std::vector<T>& a, const T& zero) {
+  const Comm* comm = sim.comm;
+  if (comm == nullptr || !comm->distributed())
+    return deterministic_sum(static_cast<Index>(a.size()), zero,
+                             [&](Index i) { return a[static_cast<std::size_t>(i)]; });
+  const auto me = static_cast<std::size_t>(comm->rank());
+  const auto& sh = sim.shared;
+  const Index lo = sh.lo[me], hi = sh.hi[me];
+  T local = zero;
+  if (lo <= hi)
+    local = deterministic_sum(hi - lo + 1, zero, [&](Index k) {
+      const Index i = lo + k;
+      for (std::size_t r = 0; r < me; ++r)
+        if (sh.lo[r] <= i && i <= sh.hi[r]) return zero;
+      return a[static_cast<std::size_t>(i)];
+    });
+  if constexpr (std::is_same_v<T, double>) {
+    return comm->sum(local);
+  } else {
+    comm->sum(std::span<double>(local.data(), static_cast<std::size_t>(local.size())));
+    return local;
+  }
+}
+
+// A particle sum of this rank, summed over the ranks (rank order).
+template <class T>
+T over_ranks(const Comm* comm, T v) {
+  if (comm == nullptr || !comm->distributed()) return v;
+  if constexpr (std::is_same_v<T, double>)
+    return comm->sum(v);
+  else
+    comm->sum(std::span<double>(v.data(), static_cast<std::size_t>(v.size())));
+  return v;
+}
+
 // The active set and the mass conservation check, and the consistent matrix if requested,
 // from the nodal masses of the mapping.
 template <int Dim>
 void after_mass(RunState<Dim>& sim) {
   const auto& m = sim.nodes.mass;
   const auto& mp = sim.particles.mass;
-  const double total = deterministic_sum(static_cast<Index>(m.size()), 0.0,
-                                         [&](Index i) { return m[static_cast<std::size_t>(i)]; });
-  const double largest = m.empty() ? 0.0 : *std::max_element(m.begin(), m.end());
+  const double total = grid_total(sim, m, 0.0);
+  double largest = m.empty() ? 0.0 : *std::max_element(m.begin(), m.end());
+  if (sim.comm) largest = sim.comm->max(largest);
   // sum m_p: taken by the mapping's scatter when it has one (the same bits), else a pass here.
   auto& sc = sim.scatter;
-  const double particle_mass =
-      sc.has_particle_mass ? sc.particle_mass.total(static_cast<Index>(mp.size()), 0.0)
-                           : deterministic_sum(static_cast<Index>(mp.size()), 0.0, [&](Index p) {
-                               return mp[static_cast<std::size_t>(p)];
-                             });
+  const double particle_mass = over_ranks(
+      sim.comm, sc.has_particle_mass
+                    ? sc.particle_mass.total(static_cast<Index>(mp.size()), 0.0)
+                    : deterministic_sum(static_cast<Index>(mp.size()), 0.0,
+                                        [&](Index p) { return mp[static_cast<std::size_t>(p)]; }));
   sc.has_particle_mass = false;
   if (particle_mass > 0.0) {
     sim.diag.rel_mass_error = std::abs(total - particle_mass) / particle_mass;
@@ -237,23 +370,22 @@ void after_mass(RunState<Dim>& sim) {
 template <int Dim>
 void after_momentum(RunState<Dim>& sim) {
   const auto& q = sim.nodes.momentum;
-  const Vec<Dim> grid_p =
-      deterministic_sum(static_cast<Index>(q.size()), Vec<Dim>::Zero().eval(),
-                        [&](Index i) { return q[static_cast<std::size_t>(i)]; });
+  const Vec<Dim> grid_p = grid_total(sim, q, Vec<Dim>::Zero().eval());
   // (sum m_p v_p, sum m_p |v_p|) as one vector: taken by the mapping's scatter when it has one
   // (the same bits), else one pass over the particles here.
   using Sums = Eigen::Matrix<double, Dim + 1, 1>;
   const auto& P = sim.particles;
   auto& sc = sim.scatter;
-  const Sums sums = sc.has_particle_momentum
-                        ? sc.particle_momentum.total(P.size(), Sums::Zero().eval())
-                        : deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
-                            const auto i = static_cast<std::size_t>(p);
-                            Sums r;
-                            r.template head<Dim>() = P.mass[i] * P.v[i];
-                            r[Dim] = P.mass[i] * P.v[i].norm();
-                            return r;
-                          });
+  const Sums sums =
+      over_ranks(sim.comm, sc.has_particle_momentum
+                               ? sc.particle_momentum.total(P.size(), Sums::Zero().eval())
+                               : deterministic_sum(P.size(), Sums::Zero().eval(), [&](Index p) {
+                                   const auto i = static_cast<std::size_t>(p);
+                                   Sums r;
+                                   r.template head<Dim>() = P.mass[i] * P.v[i];
+                                   r[Dim] = P.mass[i] * P.v[i].norm();
+                                   return r;
+                                 }));
   sc.has_particle_momentum = false;
   const Vec<Dim> part_p = sums.template head<Dim>();
   const double scale = sums[Dim];
@@ -379,6 +511,9 @@ void advance_grid_velocity(RunState<Dim>& sim, double dt) {
   });
 }
 
+template void detail::share_grid_sums<1>(RunState<1>&, unsigned);
+template void detail::share_grid_sums<2>(RunState<2>&, unsigned);
+template void detail::share_grid_sums<3>(RunState<3>&, unsigned);
 template void detail::after_mass<1>(RunState<1>&);
 template void detail::after_momentum<1>(RunState<1>&);
 template void solve_acceleration<1>(RunState<1>&);

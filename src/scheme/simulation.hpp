@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "basis/stencil.hpp"
+#include "core/comm.hpp"
 #include "core/parallel.hpp"
 #include "grid/grid.hpp"
 #include "grid/grid_state.hpp"
@@ -92,6 +93,17 @@ struct RunState {
   // (its eigensolver was a third of a stepper unit's template instantiation).
   void constrain(const std::vector<Index>& dofs, const Mat<Dim>& c);
   void refresh_per_component();
+
+  // A distributed run (issue 21; core/comm.hpp): the processes, each holding the particles of
+  // its slab of the grid (scheme/distribution.hpp) and the grid quantities of the DOFs its
+  // particles touch. Null for a run on one process. After each particle-to-grid sum the ranks
+  // add their partial sums on the DOFs they share (stages::detail::share_grid_sums), so every
+  // rank's grid holds the totals on its DOFs; `shared` holds each rank's DOF range [lo, hi] of
+  // the last exchange (for the conservation totals, which count each DOF once).
+  const Comm* comm = nullptr;
+  struct SharedRanges {
+    std::vector<Index> lo, hi;  // per rank
+  } shared;
 
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s

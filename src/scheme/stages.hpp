@@ -169,6 +169,13 @@ void refresh_body_force(RunState<Dim>& sim) {
 }
 
 namespace detail {
+// A distributed run (sim.comm): each rank's partial sums of What (grid_sum bits kMass, kMomentum,
+// kForces) on the DOFs its particles touched are added to those of the ranks that share them,
+// in rank order, so that every rank holds the same totals (scheme/grid_stages.cpp). Nothing on
+// one process.
+template <int Dim>
+void share_grid_sums(RunState<Dim>& sim, unsigned what);
+
 // The active set and the mass conservation check, and the consistent matrix if requested,
 // from the nodal masses of the mapping (scheme/grid_stages.cpp).
 template <int Dim>
@@ -227,9 +234,11 @@ void map_to_grid(Sim& sim) {
     if constexpr ((What & kMomentum) != 0) sim.mapping.map_momentum(sim);
     if constexpr ((What & kForces) != 0) sim.mapping.map_forces(sim);
   }
+  // The tractions first, so that a distributed run shares the whole forces.
+  if constexpr ((What & kForces) != 0) detail::after_forces(sim);
+  if (sim.comm) detail::share_grid_sums(sim, What & (kMass | kMomentum | kForces));
   if constexpr ((What & kMass) != 0) detail::after_mass(sim);
   if constexpr ((What & kMomentum) != 0) detail::after_momentum(sim);
-  if constexpr ((What & kForces) != 0) detail::after_forces(sim);
 }
 
 // Nodal (lumped) masses, the consistent matrix if requested, the active set, and the mass
@@ -345,6 +354,7 @@ void update_velocity_map_momentum(Sim& sim, double dt) {
   using namespace grid_sum;
   if constexpr (Sim::MappingT::kFusedScatter) {
     sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt);
+    if (sim.comm) detail::share_grid_sums(sim, kMomentum);
     detail::after_momentum(sim);
   } else {
     update_particle_velocity(sim, dt);

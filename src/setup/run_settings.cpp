@@ -84,6 +84,8 @@ RunSettings run_settings(const Config& cfg, int dim) {
     throw InputError(
         fmt::format("{}: method.solver = \"{}\" runs in 1D and 2D (so far); in 3D choose \"mpm\"",
                     cfg.where("method.solver"), solver));
+  m.where_solver = cfg.where("method.solver");
+  m.where_mass = cfg.where("method.mass");
   m.where_basis = cfg.where("method.basis");
   m.where_mapping = cfg.where("method.mapping");
   m.where_tls_completion = cfg.where("method.tls_completion");
@@ -138,6 +140,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.output.frames = static_cast<int>(cfg.get_int("output.frames"));
   s.output.history_every = cfg.get_int("output.history_every");
   s.output.checkpoint_every = cfg.get_int("output.checkpoint_every");
+  s.output.where_checkpoint_every = cfg.where("output.checkpoint_every");
   s.output.csv = cfg.get_bool("output.csv");
   s.output.vtk = cfg.get_bool("output.vtk");
   s.output.vtk_binary = cfg.get_string("output.vtk_format") == "binary";

@@ -29,6 +29,7 @@ struct OutputSettings {
   Index checkpoint_every = 0;  // 0: no checkpoints
   bool csv = true, vtk = true;
   bool vtk_binary = true;  // output.vtk_format
+  std::string where_checkpoint_every;
 };
 
 enum class Solver { Mpm, Ulfem, Otm, Unified };
@@ -46,7 +47,7 @@ struct MethodSettings {
   MassSolverSettings mass_solver;  // method.mass_solver and its keys (consistent mass)
   double conservation_limit = 0.5;
   SortMode sort = SortMode::Auto;
-  std::string where_basis, where_mapping, where_tls_completion;
+  std::string where_solver, where_basis, where_mapping, where_tls_completion, where_mass;
 };
 
 struct RunSettings {

@@ -1,0 +1,241 @@
+#!/usr/bin/env python3
+"""Distributed runs against the run on one process (issue 21), for the test suite.
+
+For each case, runs `mpm run` on one process and under `mpirun -n N` for every N of --ranks, and
+checks:
+  * every particle field of every frame (CSV, gathered at rank 0 in id order), every history.csv
+    column and every error norm of summary.json equal the one-process run's to 1e-12 relative
+    (relative to the largest magnitude of the field, so that a value near zero is held to the
+    field's scale);
+  * the run on N processes again gives the same bytes (frames, history);
+  * particles moved between processes (summary.json "mpi"), in both directions where the case
+    says so.
+Then a failing distributed run (a body thrown out of the grid) must end every process with one
+message naming the rank and the particles, the documented exit code (4), and no hang; and a
+feature not yet distributed must be refused before the first step (exit code 2).
+
+  python3 scripts/mpi_check.py --mpm build/mpm [--ranks 1,2,4] [--quick]
+"""
+import argparse
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+TOL = 1e-12
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+# (name, config, --set overrides, how particles move between 2 processes: "both" ways, "any",
+# or "none" required (a body that need not cross a cut))
+CASES = [
+    ("1d_linear_musl", "examples/vibrating_bar_crossing.toml",
+     ["grid.cells=60", "time.end=4e-3", "output.frames=2"], "both"),
+    ("1d_bspline3_usl", "examples/vibrating_bar_crossing.toml",
+     ["grid.cells=60", "time.end=2e-3", "method.basis=bspline", "method.degree=3",
+      "method.scheme=usl", "output.frames=2"], "any"),
+    ("1d_ugimp_usavg", "examples/vibrating_bar_crossing.toml",
+     ["grid.cells=60", "time.end=2e-3", "method.basis=ugimp", "method.scheme=usavg",
+      "output.frames=1"], "any"),
+    ("2d_vortex_bspline2_musl", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.end=0.3", "time.dt=2e-3", "output.frames=2"], "both"),
+    ("2d_vortex_linear_usf", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.end=0.2", "time.dt=2e-3", "method.basis=linear",
+      "method.scheme=usf", "output.frames=1"], "both"),
+    ("2d_vortex_cpgimp_musl", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.end=0.2", "time.dt=2e-3", "method.basis=cpgimp",
+      "output.frames=1"], "both"),
+    ("2d_vortex_cpdi_usl", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.end=0.2", "time.dt=2e-3", "method.basis=cpdi",
+      "method.scheme=usl", "output.frames=1"], "both"),
+    ("2d_plate_maxent", "examples/plate_mms_2d.toml",
+     ["grid.cells=8", "time.end=2e-3", "method.basis=maxent", "output.frames=1"], "none"),
+    ("3d_cube_bspline2", "examples/cube_mms_3d.toml",
+     ["grid.cells=6", "time.end=4e-3", "output.frames=1"], "none"),
+    # A bar of a quarter of the grid thrown at 50 m/s (and stretched a little, so that its stress
+    # is not round-off): it crosses every cut of 4 processes.
+    ("1d_thrown_bar_bspline2", "examples/custom_bar.toml",
+     ["grid.max=2.0", "grid.cells=40", "body.max=0.5", "initial.velocity=50+sin(2*pi*x)",
+      "boundary.left=free", "loading.body_force=0", "time.end=0.02", "method.basis=bspline",
+      "method.degree=2", "output.frames=2"], "any"),
+]
+QUICK = {"1d_linear_musl", "2d_vortex_bspline2_musl", "3d_cube_bspline2"}
+
+MPIRUN_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+              "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMP_NUM_THREADS": "1",
+              "OMPI_MCA_btl_vader_single_copy_mechanism": "none"}
+
+
+def run(cmd, timeout=120, env=None):
+    e = dict(os.environ)
+    e.update(MPIRUN_ENV)
+    if env:
+        e.update(env)
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=e, cwd=ROOT)
+
+
+def mpm_cmd(mpm, ranks, config, sets, out):
+    cmd = [mpm, "run", config, "--out", out, "--quiet"]
+    for s in sets:
+        cmd += ["--set", s]
+    if ranks is None:
+        return cmd
+    return ["mpirun", "-n", str(ranks), "--oversubscribe"] + cmd
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return rows[0], [[float(x) for x in r] for r in rows[1:]]
+
+
+def compare_tables(what, a, b, failures):
+    (ha, ra), (hb, rb) = a, b
+    if ha != hb or len(ra) != len(rb):
+        failures.append(f"{what}: columns or rows differ ({len(ra)} against {len(rb)} rows)")
+        return 0.0
+    worst = 0.0
+    # history.csv: the total momentum of a symmetric body is zero up to round-off, so its scale
+    # is sqrt(2 K m) (|sum m v| <= sqrt(2 K sum m), Cauchy-Schwarz), not its own size; the
+    # mapping's conservation errors are round-off measures, held below 1e-12 rather than equal.
+    momentum_scale = 0.0
+    if "kinetic_energy" in ha and "mass" in ha:
+        k, m = ha.index("kinetic_energy"), ha.index("mass")
+        momentum_scale = max((2.0 * r[k] * r[m]) ** 0.5 for r in ra + rb)
+    for c, name in enumerate(ha):
+        if name in ("mass_error", "momentum_error"):
+            bad = [r[c] for r in ra + rb if not abs(r[c]) <= TOL]
+            if bad:
+                failures.append(f"{what}: {name} up to {max(bad):.3g}, above {TOL}")
+            continue
+        scale = max([abs(r[c]) for r in ra] + [abs(r[c]) for r in rb] + [0.0])
+        if name.startswith("momentum_"):
+            scale = max(scale, momentum_scale)
+        if scale == 0.0:
+            continue
+        for x, y in zip(ra, rb):
+            d = abs(x[c] - y[c]) / scale
+            worst = max(worst, d)
+            if d > TOL:
+                failures.append(f"{what}: column {name} differs by {d:.3g} of its scale")
+                return worst
+    return worst
+
+
+def outputs(d):
+    frames = sorted(f for f in os.listdir(d) if f.startswith("particles_") and f.endswith(".csv"))
+    return frames
+
+
+def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
+    serial = os.path.join(tmp, name + "_serial")
+    r = run(mpm_cmd(mpm, None, config, sets, serial))
+    if r.returncode != 0:
+        failures.append(f"{name}: the one-process run failed ({r.returncode}): {r.stderr.strip()}")
+        return
+    ref_summary = json.load(open(os.path.join(serial, "summary.json")))
+    frames = outputs(serial)
+    report = []
+    for n in ranks:
+        d = os.path.join(tmp, f"{name}_n{n}")
+        r = run(mpm_cmd(mpm, n, config, sets, d))
+        if r.returncode != 0:
+            failures.append(f"{name}: mpirun -n {n} failed ({r.returncode}): {r.stderr.strip()}")
+            continue
+        s = json.load(open(os.path.join(d, "summary.json")))
+        if s["status"] != "ok" or s["particles"] != ref_summary["particles"]:
+            failures.append(f"{name} -n {n}: status {s['status']}, {s['particles']} particles")
+        worst = 0.0
+        if outputs(d) != frames:
+            failures.append(f"{name} -n {n}: frames {outputs(d)} against {frames}")
+            continue
+        for f in frames:
+            worst = max(worst, compare_tables(f"{name} -n {n} {f}", read_csv(os.path.join(serial, f)),
+                                              read_csv(os.path.join(d, f)), failures))
+        worst = max(worst, compare_tables(f"{name} -n {n} history.csv",
+                                          read_csv(os.path.join(serial, "history.csv")),
+                                          read_csv(os.path.join(d, "history.csv")), failures))
+        for k, v in ref_summary["errors"].items():
+            w = s["errors"].get(k)
+            if (v is None) != (w is None) or (v is not None and abs(v - w) > TOL * max(abs(v), 1e-300)):
+                failures.append(f"{name} -n {n}: errors.{k} {w} against {v}")
+            elif v:
+                worst = max(worst, abs(v - w) / abs(v))
+        moved = ""
+        if n > 1:
+            mpi = s.get("mpi", {})
+            sent = mpi.get("particles_sent_per_process", [])
+            if both_ways != "none" and sum(sent) == 0:
+                failures.append(f"{name} -n {n}: no particle moved between processes")
+            if both_ways == "both" and n == 2 and not all(x > 0 for x in sent):
+                failures.append(f"{name} -n 2: particles moved one way only ({sent})")
+            moved = f", particles sent per process {sent}, cuts {mpi.get('cuts')}"
+            # The same rank count again: the same bytes.
+            d2 = d + "_again"
+            r = run(mpm_cmd(mpm, n, config, sets, d2))
+            for f in frames + ["history.csv"]:
+                if r.returncode != 0 or open(os.path.join(d, f), "rb").read() != open(
+                        os.path.join(d2, f), "rb").read():
+                    failures.append(f"{name} -n {n}: a second run differs in {f}")
+                    break
+        report.append(f"-n {n}: largest relative difference {worst:.2e}{moved}")
+    print(f"{name}: " + "; ".join(report))
+
+
+def check_failure(mpm, tmp, failures):
+    # A bar thrown out of the grid at 50 m/s: the process of its right end (rank 1) meets it, every process stops with exit code 4 (particle left the
+    # grid), rank 0 prints one message, and nothing hangs (the timeout).
+    d = os.path.join(tmp, "fail")
+    sets = ["initial.velocity=50", "boundary.left=free", "loading.body_force=0", "time.end=0.02",
+            "output.frames=1"]
+    try:
+        r = run(mpm_cmd(mpm, 2, "examples/custom_bar.toml", sets, d), timeout=60)
+    except subprocess.TimeoutExpired:
+        failures.append("a failing run on 2 processes hung (no end within 60 s)")
+        return
+    msgs = [l for l in r.stderr.splitlines() if "run failed" in l]
+    if r.returncode != 4 or len(msgs) != 1 or "rank " not in msgs[0] or "particle" not in msgs[0]:
+        failures.append(f"failing run: exit {r.returncode}, messages {msgs}, stderr {r.stderr!r}")
+    else:
+        s = json.load(open(os.path.join(d, "summary.json")))
+        if s["status"] != "failed" or s["exit_code"] != 4:
+            failures.append(f"failing run: summary status {s['status']}")
+        print(f"failure: exit 4 and one message: {msgs[0][:160]}")
+    # Not distributed yet: refused before the first step.
+    d = os.path.join(tmp, "refused")
+    r = run(mpm_cmd(mpm, 2, "examples/plate_mms_2d.toml", ["method.mapping=tls", "time.end=1e-4"],
+                    d))
+    lines = [l for l in r.stderr.splitlines() if "error" in l]
+    if r.returncode != 2 or len(lines) != 1 or "method.mapping" not in lines[0]:
+        failures.append(f"refusal: exit {r.returncode}, stderr {r.stderr!r}")
+    else:
+        print(f"refused: {lines[0][:160]}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--mpm", required=True)
+    ap.add_argument("--ranks", default="1,2,4")
+    ap.add_argument("--quick", action="store_true", help="three cases (1D, 2D, 3D) only")
+    a = ap.parse_args()
+    if shutil.which("mpirun") is None:
+        print("mpirun not found: install openmpi-bin (scripts/deps.sh)")
+        return 1
+    ranks = [int(x) for x in a.ranks.split(",")]
+    failures = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, config, sets, both in CASES:
+            if a.quick and name not in QUICK:
+                continue
+            check_case(os.path.abspath(a.mpm), name, config, sets, both, ranks, tmp, failures)
+        check_failure(os.path.abspath(a.mpm), tmp, failures)
+    for f in failures:
+        print("FAILED:", f)
+    print("distributed runs: " + ("FAILED" if failures else "all equal to the one-process runs"))
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

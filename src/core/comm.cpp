@@ -1,0 +1,308 @@
+#include "core/comm.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#ifdef MPM_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace mpm {
+namespace {
+
+Comm g_world;
+bool g_mpi_running = false;
+
+// Started by an MPI launcher: Open MPI's mpirun sets OMPI_COMM_WORLD_SIZE, PMI and PMIx
+// launchers (MPICH's hydra, srun) PMI_SIZE or PMIX_RANK.
+bool launched_by_mpi() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+
+#ifdef MPM_HAVE_MPI
+void check_mpi(int rc, const char* what) {
+  if (rc != MPI_SUCCESS) throw std::runtime_error(fmt::format("MPI error {} in {}", rc, what));
+}
+int to_int(std::size_t n) {
+  if (n > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw std::runtime_error(fmt::format("an MPI message of {} bytes exceeds 2^31", n));
+  return static_cast<int>(n);
+}
+#endif
+
+}  // namespace
+
+bool mpi_available() {
+#ifdef MPM_HAVE_MPI
+  return true;
+#else
+  return false;
+#endif
+}
+
+void Comm::init([[maybe_unused]] int* argc, [[maybe_unused]] char*** argv) {
+  if (!launched_by_mpi()) return;
+#ifdef MPM_HAVE_MPI
+  int provided = 0;
+  // Only the main thread calls MPI (OpenMP regions never do).
+  check_mpi(MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  g_mpi_running = true;
+  MPI_Comm_rank(MPI_COMM_WORLD, &g_world.rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &g_world.size_);
+  MPI_Comm local;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local);
+  MPI_Comm_size(local, &g_world.local_size_);
+  MPI_Comm_free(&local);
+#else
+  // A build without MPI started by mpirun: every process would run the whole problem alone.
+  if (const char* n = std::getenv("OMPI_COMM_WORLD_SIZE"); n && std::atoi(n) > 1)
+    throw InputError(
+        "this mpm was built without MPI (CMake MPM_MPI=OFF or no MPI library found) but was "
+        "started by mpirun with several processes; rebuild with libopenmpi-dev installed");
+#endif
+}
+
+void Comm::finalize() {
+#ifdef MPM_HAVE_MPI
+  if (g_mpi_running) {
+    int done = 0;
+    MPI_Finalized(&done);
+    if (!done) MPI_Finalize();
+    g_mpi_running = false;
+  }
+#endif
+}
+
+void Comm::abort([[maybe_unused]] int code) {
+#ifdef MPM_HAVE_MPI
+  if (g_mpi_running && g_world.size_ > 1) MPI_Abort(MPI_COMM_WORLD, code);
+#endif
+}
+
+const Comm& Comm::world() {
+  return g_world;
+}
+
+std::optional<Comm::Failure> Comm::agree(const Failure* mine) const {
+  if (!distributed()) return mine ? std::optional<Failure>(*mine) : std::nullopt;
+  // The lowest failing rank (size_ when none), then its code and message from it.
+  const Index me = mine ? rank_ : size_;
+  const std::vector<Index> all = allgather(std::span<const Index>(&me, 1));
+  const Index first = *std::min_element(all.begin(), all.end());
+  if (first == size_) return std::nullopt;
+  const auto r = static_cast<int>(first);
+  std::vector<std::byte> buf;
+  if (rank_ == r) {
+    const std::string text = fmt::format("{} {}", mine->exit_code, mine->message);
+    buf.resize(text.size());
+    std::memcpy(buf.data(), text.data(), text.size());
+  }
+  broadcast(buf, r);
+  const std::string text(reinterpret_cast<const char*>(buf.data()), buf.size());
+  const auto space = text.find(' ');
+  Failure f;
+  f.rank = r;
+  f.exit_code = std::atoi(text.substr(0, space).c_str());
+  f.message = space == std::string::npos ? std::string() : text.substr(space + 1);
+  return f;
+}
+
+void Comm::check() const {
+  if (!distributed()) return;
+  if (const auto f = agree(nullptr))
+    throw RemoteRunError(f->exit_code,
+                         fmt::format("rank {} of {}: {}", f->rank, size_, f->message));
+}
+
+bool Comm::any(bool flag) const {
+  if (!distributed()) return flag;
+  const Index v = flag ? 1 : 0;
+  const auto all = allgather(std::span<const Index>(&v, 1));
+  return std::any_of(all.begin(), all.end(), [](Index x) { return x != 0; });
+}
+
+double Comm::sum(double v) const {
+  sum(std::span<double>(&v, 1));
+  return v;
+}
+
+Index Comm::sum(Index v) const {
+  if (!distributed()) return v;
+  const auto all = allgather(std::span<const Index>(&v, 1));
+  Index s = 0;
+  for (Index x : all) s += x;
+  return s;
+}
+
+void Comm::sum(std::span<double> v) const {
+  if (!distributed() || v.empty()) return;
+  const std::vector<double> all = allgather(std::span<const double>(v.data(), v.size()));
+  const std::size_t n = v.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    double s = 0.0;  // rank order: the same bits on every rank and in every run
+    for (int r = 0; r < size_; ++r) s += all[static_cast<std::size_t>(r) * n + k];
+    v[k] = s;
+  }
+}
+
+double Comm::max(double v) const {
+  if (!distributed()) return v;
+  const auto all = allgather(std::span<const double>(&v, 1));
+  double m = all[0];
+  for (double x : all) m = std::max(m, x);
+  return m;
+}
+
+double Comm::min(double v) const {
+  if (!distributed()) return v;
+  const auto all = allgather(std::span<const double>(&v, 1));
+  double m = all[0];
+  for (double x : all) m = std::min(m, x);
+  return m;
+}
+
+std::vector<Index> Comm::allgather(std::span<const Index> mine) const {
+  std::vector<Index> out(mine.size() * static_cast<std::size_t>(size_));
+  if (!distributed()) {
+    std::copy(mine.begin(), mine.end(), out.begin());
+    return out;
+  }
+#ifdef MPM_HAVE_MPI
+  static_assert(sizeof(Index) == sizeof(std::int64_t));
+  check_mpi(MPI_Allgather(mine.data(), to_int(mine.size()), MPI_INT64_T, out.data(),
+                          to_int(mine.size()), MPI_INT64_T, MPI_COMM_WORLD),
+            "MPI_Allgather");
+#endif
+  return out;
+}
+
+std::vector<double> Comm::allgather(std::span<const double> mine) const {
+  std::vector<double> out(mine.size() * static_cast<std::size_t>(size_));
+  if (!distributed()) {
+    std::copy(mine.begin(), mine.end(), out.begin());
+    return out;
+  }
+#ifdef MPM_HAVE_MPI
+  check_mpi(MPI_Allgather(mine.data(), to_int(mine.size()), MPI_DOUBLE, out.data(),
+                          to_int(mine.size()), MPI_DOUBLE, MPI_COMM_WORLD),
+            "MPI_Allgather");
+#endif
+  return out;
+}
+
+std::vector<std::vector<std::byte>> Comm::gather(const std::vector<std::byte>& mine,
+                                                 int root) const {
+  std::vector<std::vector<std::byte>> out;
+  if (!distributed()) {
+    out.push_back(mine);
+    return out;
+  }
+#ifdef MPM_HAVE_MPI
+  const Index n = static_cast<Index>(mine.size());
+  const auto counts = allgather(std::span<const Index>(&n, 1));
+  std::vector<int> c(static_cast<std::size_t>(size_)), displ(static_cast<std::size_t>(size_));
+  std::size_t total = 0;
+  for (int r = 0; r < size_; ++r) {
+    c[static_cast<std::size_t>(r)] =
+        to_int(static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]));
+    displ[static_cast<std::size_t>(r)] = to_int(total);
+    total += static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]);
+  }
+  std::vector<std::byte> all(rank_ == root ? total : 0);
+  check_mpi(MPI_Gatherv(mine.data(), to_int(mine.size()), MPI_BYTE, all.data(), c.data(),
+                        displ.data(), MPI_BYTE, root, MPI_COMM_WORLD),
+            "MPI_Gatherv");
+  if (rank_ == root) {
+    out.resize(static_cast<std::size_t>(size_));
+    for (int r = 0; r < size_; ++r) {
+      const auto b = all.begin() + displ[static_cast<std::size_t>(r)];
+      out[static_cast<std::size_t>(r)].assign(b, b + c[static_cast<std::size_t>(r)]);
+    }
+  }
+#endif
+  return out;
+}
+
+void Comm::broadcast([[maybe_unused]] std::vector<std::byte>& buf,
+                     [[maybe_unused]] int root) const {
+  if (!distributed()) return;
+#ifdef MPM_HAVE_MPI
+  Index n = static_cast<Index>(buf.size());
+  check_mpi(MPI_Bcast(&n, 1, MPI_INT64_T, root, MPI_COMM_WORLD), "MPI_Bcast");
+  buf.resize(static_cast<std::size_t>(n));
+  check_mpi(MPI_Bcast(buf.data(), to_int(buf.size()), MPI_BYTE, root, MPI_COMM_WORLD), "MPI_Bcast");
+#endif
+}
+
+std::vector<std::vector<std::byte>> Comm::alltoall(
+    const std::vector<std::vector<std::byte>>& send) const {
+  std::vector<std::vector<std::byte>> recv(static_cast<std::size_t>(size_));
+  if (!distributed()) {
+    recv[0] = send.at(0);
+    return recv;
+  }
+#ifdef MPM_HAVE_MPI
+  const auto n = static_cast<std::size_t>(size_);
+  std::vector<int> sc(n), rc(n), sd(n), rd(n);
+  std::size_t st = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    sc[r] = to_int(send[r].size());
+    sd[r] = to_int(st);
+    st += send[r].size();
+  }
+  check_mpi(MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, MPI_COMM_WORLD),
+            "MPI_Alltoall");
+  std::size_t rt = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    rd[r] = to_int(rt);
+    rt += static_cast<std::size_t>(rc[r]);
+  }
+  std::vector<std::byte> sb(st), rb(rt);
+  for (std::size_t r = 0; r < n; ++r) std::copy(send[r].begin(), send[r].end(), sb.begin() + sd[r]);
+  check_mpi(MPI_Alltoallv(sb.data(), sc.data(), sd.data(), MPI_BYTE, rb.data(), rc.data(),
+                          rd.data(), MPI_BYTE, MPI_COMM_WORLD),
+            "MPI_Alltoallv");
+  for (std::size_t r = 0; r < n; ++r)
+    recv[r].assign(rb.begin() + rd[r], rb.begin() + rd[r] + rc[r]);
+#endif
+  return recv;
+}
+
+std::vector<std::vector<std::byte>> Comm::exchange(const std::vector<int>& peers,
+                                                   const std::vector<std::vector<std::byte>>& send,
+                                                   [[maybe_unused]] int tag) const {
+  std::vector<std::vector<std::byte>> recv(peers.size());
+  if (peers.empty()) return recv;
+#ifdef MPM_HAVE_MPI
+  // Sizes first, then the data: every request completes before the buffers go out of scope.
+  const std::size_t n = peers.size();
+  std::vector<Index> out_size(n), in_size(n);
+  std::vector<MPI_Request> req(2 * n);
+  for (std::size_t k = 0; k < n; ++k) {
+    out_size[k] = static_cast<Index>(send[k].size());
+    MPI_Irecv(&in_size[k], 1, MPI_INT64_T, peers[k], tag, MPI_COMM_WORLD, &req[k]);
+    MPI_Isend(&out_size[k], 1, MPI_INT64_T, peers[k], tag, MPI_COMM_WORLD, &req[n + k]);
+  }
+  check_mpi(MPI_Waitall(to_int(2 * n), req.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+  for (std::size_t k = 0; k < n; ++k) {
+    recv[k].resize(static_cast<std::size_t>(in_size[k]));
+    MPI_Irecv(recv[k].data(), to_int(recv[k].size()), MPI_BYTE, peers[k], tag + 1, MPI_COMM_WORLD,
+              &req[k]);
+    MPI_Isend(send[k].data(), to_int(send[k].size()), MPI_BYTE, peers[k], tag + 1, MPI_COMM_WORLD,
+              &req[n + k]);
+  }
+  check_mpi(MPI_Waitall(to_int(2 * n), req.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+#else
+  throw std::logic_error("Comm::exchange with peers in a build without MPI");
+#endif
+  return recv;
+}
+
+}  // namespace mpm

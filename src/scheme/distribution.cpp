@@ -1,0 +1,117 @@
+#include "scheme/distribution.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <span>
+
+namespace mpm {
+
+template <int Dim>
+int SlabPartition<Dim>::owner_of_layer(Index layer) const {
+  // The last cut at or below the layer.
+  const auto it = std::upper_bound(cuts.begin(), cuts.end(), layer);
+  return std::clamp(static_cast<int>(it - cuts.begin()) - 1, 0, ranks() - 1);
+}
+
+template <int Dim>
+int SlabPartition<Dim>::owner(const Grid<Dim>& grid, const Vec<Dim>& x, int current) const {
+  if (!grid.inside(x)) return current;
+  return owner_of_layer(grid.cell_of(x[kAxis], kAxis));
+}
+
+template <int Dim>
+SlabPartition<Dim> SlabPartition<Dim>::balanced(const std::vector<double>& per_layer, int ranks,
+                                                const std::string& where) {
+  const auto layers = static_cast<Index>(per_layer.size());
+  if (layers < ranks)
+    throw InputError(fmt::format(
+        "{}: the grid has {} cell layer(s) along {} and this run {} processes; a process owns "
+        "whole layers (a slab), so use more cells along {} or fewer processes",
+        where, layers, axis_name(), ranks, axis_name()));
+  double total = 0.0;
+  for (double c : per_layer) total += c;
+  SlabPartition p;
+  p.cuts.assign(static_cast<std::size_t>(ranks) + 1, 0);
+  p.cuts.back() = layers;
+  // Cut r after the layer where the running count first reaches r / ranks of the particles,
+  // keeping at least one layer for each rank on either side.
+  double running = 0.0;
+  Index layer = 0;
+  for (int r = 1; r < ranks; ++r) {
+    const double target = total * static_cast<double>(r) / static_cast<double>(ranks);
+    while (layer < layers && running + per_layer[static_cast<std::size_t>(layer)] <= target) {
+      running += per_layer[static_cast<std::size_t>(layer)];
+      ++layer;
+    }
+    const Index lowest = p.cuts[static_cast<std::size_t>(r) - 1] + 1;
+    const Index highest = layers - (ranks - r);
+    const Index cut = std::clamp(layer, lowest, highest);
+    p.cuts[static_cast<std::size_t>(r)] = cut;
+    while (layer < cut) running += per_layer[static_cast<std::size_t>(layer++)];
+  }
+  return p;
+}
+
+template <int Dim>
+std::vector<double> SlabPartition<Dim>::layer_counts(const Grid<Dim>& grid, const Particles<Dim>& P,
+                                                     const Comm& comm, bool replicated) {
+  std::vector<double> count(static_cast<std::size_t>(grid.cells[kAxis]), 0.0);
+  for (const auto& x : P.x) {
+    const Index c = grid.cell_of(x[kAxis], kAxis);
+    if (c >= 0 && c < grid.cells[kAxis]) count[static_cast<std::size_t>(c)] += 1.0;
+  }
+  if (!replicated) comm.sum(std::span<double>(count));
+  return count;
+}
+
+template <int Dim>
+Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& comm) {
+  comm.check();
+  auto& P = sim.particles;
+  const int me = comm.rank();
+  const auto n = static_cast<std::size_t>(P.size());
+  std::vector<int> owner(n);
+  Index leaving = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    owner[i] = part.owner(sim.grid, P.x[i], me);
+    leaving += owner[i] != me;
+  }
+  std::vector<std::vector<std::byte>> send(static_cast<std::size_t>(comm.size()));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (owner[i] == me) continue;
+    auto& buf = send[static_cast<std::size_t>(owner[i])];
+    P.pack(i, buf);
+    const std::size_t at = buf.size();
+    buf.resize(at + sizeof(CompactIndex));
+    std::memcpy(buf.data() + at, &sim.cell[i], sizeof(CompactIndex));
+  }
+  const auto recv = comm.alltoall(send);
+  if (leaving > 0) {
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      if (owner[i] == me) sim.cell[k++] = sim.cell[i];
+    sim.cell.resize(k);
+    P.keep_with_ids([&](const Particles<Dim>&, std::size_t i) { return owner[i] == me; });
+  }
+  constexpr std::size_t kRecord = Particles<Dim>::bytes_per_particle() + sizeof(CompactIndex);
+  for (const auto& buf : recv) {
+    for (std::size_t at = 0; at + kRecord <= buf.size(); at += kRecord) {
+      P.unpack_append(std::span<const std::byte>(buf.data() + at, kRecord - sizeof(CompactIndex)));
+      CompactIndex c;
+      std::memcpy(&c, buf.data() + at + kRecord - sizeof(CompactIndex), sizeof(CompactIndex));
+      sim.cell.push_back(c);
+    }
+  }
+  return leaving;
+}
+
+template struct SlabPartition<1>;
+template struct SlabPartition<2>;
+template struct SlabPartition<3>;
+template Index migrate<1>(RunState<1>&, const SlabPartition<1>&, const Comm&);
+template Index migrate<2>(RunState<2>&, const SlabPartition<2>&, const Comm&);
+template Index migrate<3>(RunState<3>&, const SlabPartition<3>&, const Comm&);
+
+}  // namespace mpm

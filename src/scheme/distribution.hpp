@@ -1,0 +1,54 @@
+#pragma once
+// Distributed runs (issue 21): the grid's cells are cut into slabs of whole cell layers along
+// its last axis (x in 1D, y in 2D, z in 3D), one slab per process; a process owns the particles
+// in its slab. Slabs, not a Cartesian grid of blocks or a graph partition: with the DOFs
+// numbered x fastest, a slab's particles touch one contiguous DOF range, so the DOFs two
+// neighbouring processes share are one contiguous segment (the layers their stencils reach
+// across the cut), and the exchange after each particle-to-grid sum is one message per
+// neighbour (stages::detail::share_grid_sums); the cuts are chosen to give each process the same
+// number of particles. BENCHMARKS.md ("Distributed runs") has the communication model and where
+// slabs stop scaling.
+#include <string>
+#include <vector>
+
+#include "core/comm.hpp"
+#include "scheme/simulation.hpp"
+
+namespace mpm {
+
+template <int Dim>
+struct SlabPartition {
+  static constexpr int kAxis = Dim - 1;
+  // Rank r owns the cell layers [cuts[r], cuts[r + 1]) along kAxis; cuts[0] = 0 and
+  // cuts[ranks] = the grid's layers.
+  std::vector<Index> cuts;
+
+  int ranks() const { return static_cast<int>(cuts.size()) - 1; }
+  // The rank owning cell layer `layer` (in [0, layers)).
+  int owner_of_layer(Index layer) const;
+  // The rank owning a particle at x: that of its cell's layer; `current` for a point outside the
+  // grid (its process then stops the run, naming it: stages::evaluate_basis).
+  int owner(const Grid<Dim>& grid, const Vec<Dim>& x, int current) const;
+
+  // Cuts that give every rank about the same number of particles, each rank at least one layer.
+  // `per_layer`: the particles in each cell layer (of all ranks). InputError when the grid has
+  // fewer layers than ranks (`where`: the key to change).
+  static SlabPartition balanced(const std::vector<double>& per_layer, int ranks,
+                                const std::string& where);
+  // The particles in each cell layer along kAxis, over all ranks (collective when comm is
+  // distributed; `replicated`: every rank holds every particle, as at set-up, so no sum).
+  static std::vector<double> layer_counts(const Grid<Dim>& grid, const Particles<Dim>& P,
+                                          const Comm& comm, bool replicated);
+  // "y" etc.: the axis of the cuts.
+  static char axis_name() { return "xyz"[kAxis]; }
+};
+
+// Moves every particle whose owner (part.owner) is another rank there, with its fields and its
+// cell of the last evaluation (sim.cell); the particles that stay keep their order, and those
+// that arrive follow in the order of their source ranks. Collective; starts with comm.check().
+// The caller resizes the typed per-particle caches (Stepper::resize_particle_caches). Returns
+// the number of particles this rank sent.
+template <int Dim>
+Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& comm);
+
+}  // namespace mpm

@@ -1,0 +1,110 @@
+// Distributed runs (issue 21), the parts that do not need several processes: the slab cuts
+// balance the particles and give every process a layer, a particle's owner follows its cell,
+// particles travel between processes as bytes that restore every field, and the collective
+// operations are plain copies on one process. The runs on several processes are checked in
+// Mpi.SameAnswersAsOneProcess (scripts/mpi_check.py, under mpirun).
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "core/comm.hpp"
+#include "scheme/distribution.hpp"
+
+namespace mpm {
+namespace MPM_UNITY_ID {
+namespace {
+
+TEST(SlabPartition, CutsBalanceTheParticles) {
+  // 10 layers: the body fills layers 2-7 with 100 particles each.
+  std::vector<double> per_layer(10, 0.0);
+  for (int l = 2; l < 8; ++l) per_layer[static_cast<std::size_t>(l)] = 100.0;
+  const auto p = SlabPartition<2>::balanced(per_layer, 3, "grid.cells");
+  ASSERT_EQ(p.cuts.size(), 4u);
+  EXPECT_EQ(p.cuts.front(), 0);
+  EXPECT_EQ(p.cuts.back(), 10);
+  std::vector<double> per_rank(3, 0.0);
+  for (Index l = 0; l < 10; ++l)
+    per_rank[static_cast<std::size_t>(p.owner_of_layer(l))] +=
+        per_layer[static_cast<std::size_t>(l)];
+  for (double c : per_rank) EXPECT_EQ(c, 200.0);
+}
+
+TEST(SlabPartition, EveryProcessGetsALayer) {
+  // All particles in one layer: the other processes still own one layer each.
+  std::vector<double> per_layer(4, 0.0);
+  per_layer[3] = 50.0;
+  const auto p = SlabPartition<1>::balanced(per_layer, 4, "grid.cells");
+  EXPECT_EQ(p.cuts, (std::vector<Index>{0, 1, 2, 3, 4}));
+  EXPECT_THROW(SlabPartition<1>::balanced(per_layer, 5, "grid.cells"), InputError);
+}
+
+TEST(SlabPartition, OwnerFollowsTheCellAlongTheLastAxis) {
+  const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{4, 4});
+  SlabPartition<2> p;
+  p.cuts = {0, 1, 3, 4};
+  EXPECT_EQ(p.owner(g, Vec<2>(0.9, 0.1), 2), 0);
+  EXPECT_EQ(p.owner(g, Vec<2>(0.1, 0.3), 0), 1);
+  EXPECT_EQ(p.owner(g, Vec<2>(0.1, 0.74), 0), 1);
+  EXPECT_EQ(p.owner(g, Vec<2>(0.1, 1.0), 0), 2);  // the upper side belongs to the last cell
+  EXPECT_EQ(p.owner(g, Vec<2>(0.1, 1.5), 1), 1);  // outside: stays where it is
+}
+
+TEST(Particles, PackedParticlesRestoreEveryField) {
+  Particles<3> a;
+  a.resize(3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double s = static_cast<double>(i) + 0.25;
+    a.x[i] = Vec<3>(s, 2 * s, 3 * s);
+    a.x0[i] = Vec<3>(-s, 0.5, 1.0);
+    a.v[i] = Vec<3>(s * s, 0.0, -1.0);
+    a.mass[i] = 1.5 * s;
+    a.volume[i] = 0.1 * s;
+    a.volume0[i] = 0.2 * s;
+    a.F[i] = Mat<3>::Identity() * (1.0 + s);
+    a.stress[i] = Mat<3>::Constant(s);
+    a.body[i] = Vec<3>(0.0, -9.81, s);
+  }
+  std::vector<std::byte> buf;
+  a.pack(2, buf);
+  a.pack(0, buf);
+  EXPECT_EQ(buf.size(), 2 * Particles<3>::bytes_per_particle());
+  Particles<3> b;
+  EXPECT_EQ(b.unpack_append(buf), buf.size());
+  ASSERT_EQ(b.size(), 2);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const std::size_t i = k == 0 ? 2 : 0;
+    EXPECT_EQ(b.id[k], a.id[i]);
+    EXPECT_EQ(b.x[k], a.x[i]);
+    EXPECT_EQ(b.x0[k], a.x0[i]);
+    EXPECT_EQ(b.v[k], a.v[i]);
+    EXPECT_EQ(b.mass[k], a.mass[i]);
+    EXPECT_EQ(b.volume[k], a.volume[i]);
+    EXPECT_EQ(b.volume0[k], a.volume0[i]);
+    EXPECT_EQ(b.F[k], a.F[i]);
+    EXPECT_EQ(b.stress[k], a.stress[i]);
+    EXPECT_EQ(b.body[k], a.body[i]);
+  }
+  // keep_with_ids keeps the ids of the whole body.
+  a.keep_with_ids([](const Particles<3>&, std::size_t i) { return i != 1; });
+  EXPECT_EQ(a.id, (std::vector<CompactIndex>{0, 2}));
+}
+
+TEST(Comm, OneProcessIsAPlainCopy) {
+  const Comm& c = Comm::world();  // the test binary never starts MPI
+  EXPECT_EQ(c.size(), 1);
+  EXPECT_FALSE(c.distributed());
+  EXPECT_EQ(c.sum(2.5), 2.5);
+  EXPECT_EQ(c.max(-1.0), -1.0);
+  const Index v[2] = {3, 4};
+  EXPECT_EQ(c.allgather(std::span<const Index>(v)), (std::vector<Index>{3, 4}));
+  EXPECT_FALSE(c.agree(nullptr).has_value());
+  const Comm::Failure f{0, 4, "left the grid"};
+  ASSERT_TRUE(c.agree(&f).has_value());
+  EXPECT_EQ(c.agree(&f)->exit_code, 4);
+  EXPECT_NO_THROW(c.check());
+  EXPECT_TRUE(c.any(true));
+}
+
+}  // namespace
+}  // namespace MPM_UNITY_ID
+}  // namespace mpm
