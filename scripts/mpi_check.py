@@ -28,8 +28,9 @@ import tempfile
 TOL = 1e-12
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-# (name, config, --set overrides, how particles move between 2 processes: "both" ways, "any",
-# or "none" required (a body that need not cross a cut))
+# (name, config, --set overrides, how particles move between processes: "both" ways with 2,
+# "any", "none" required (a body that need not cross a cut), or "rebalance": the slabs are cut
+# anew (parallel.rebalance))
 CASES = [
     ("1d_linear_musl", "examples/vibrating_bar_crossing.toml",
      ["grid.cells=60", "time.end=4e-3", "output.frames=2"], "both"),
@@ -59,7 +60,13 @@ CASES = [
     ("1d_thrown_bar_bspline2", "examples/custom_bar.toml",
      ["grid.max=2.0", "grid.cells=40", "body.max=0.5", "initial.velocity=50+sin(2*pi*x)",
       "boundary.left=free", "loading.body_force=0", "time.end=0.02", "method.basis=bspline",
-      "method.degree=2", "output.frames=2"], "any"),
+      "method.degree=2", "output.frames=2"], "rebalance"),
+    # The same without re-cutting the slabs (parallel.rebalance = 0): one process ends up
+    # with the whole bar, and the answers are the same.
+    ("1d_thrown_bar_no_rebalance", "examples/custom_bar.toml",
+     ["grid.max=2.0", "grid.cells=40", "body.max=0.5", "initial.velocity=50+sin(2*pi*x)",
+      "boundary.left=free", "loading.body_force=0", "time.end=0.02", "method.basis=bspline",
+      "method.degree=2", "output.frames=1", "parallel.rebalance=0"], "any"),
 ]
 QUICK = {"1d_linear_musl", "2d_vortex_bspline2_musl", "3d_cube_bspline2"}
 
@@ -169,9 +176,13 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
             sent = mpi.get("particles_sent_per_process", [])
             if both_ways != "none" and sum(sent) == 0:
                 failures.append(f"{name} -n {n}: no particle moved between processes")
+            if both_ways == "rebalance" and mpi.get("rebalances", 0) == 0:
+                failures.append(f"{name} -n {n}: the slabs were never cut anew "
+                                f"(largest imbalance {mpi.get('largest_imbalance')})")
             if both_ways == "both" and n == 2 and not all(x > 0 for x in sent):
                 failures.append(f"{name} -n 2: particles moved one way only ({sent})")
-            moved = f", particles sent per process {sent}, cuts {mpi.get('cuts')}"
+            moved = (f", particles sent per process {sent}, final cuts {mpi.get('cuts')}, "
+                     f"{mpi.get('rebalances')} re-cuts")
             # The same rank count again: the same bytes.
             d2 = d + "_again"
             r = run(mpm_cmd(mpm, n, config, sets, d2))

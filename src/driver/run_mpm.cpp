@@ -212,6 +212,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   res.cell_size.assign(sim.grid.h.data(), sim.grid.h.data() + Dim);
   res.particles = comm ? comm->sum(sim.particles.size()) : sim.particles.size();
   Index migrated = 0;  // particles this rank sent to another
+  Index rebalances = 0;
+  double worst_imbalance = comm ? imbalance(sim, *comm) : 0.0;
   const Index start =
       opt.restart ? restore<Dim>(opt, ts.dt, *stepper, mapping_name, reference, out) : 0;
   drive<Dim>(
@@ -222,6 +224,11 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         sim.time = static_cast<double>(sim.step) * ts.dt;
         if (comm) {
           migrated += migrate(sim, part, *comm);
+          if (settings.parallel.rebalance > 0.0) {
+            // The imbalance the run has reached before any re-cut, for the summary.
+            worst_imbalance = std::max(worst_imbalance, imbalance(sim, *comm));
+            rebalances += rebalance_if_due(sim, part, *comm, settings.parallel.rebalance, migrated);
+          }
           stepper->resize_particle_caches();
         }
         // Re-sorting for the next step, timed with this one. Here rather than before the step:
@@ -269,7 +276,10 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
                                               SlabPartition<Dim>::axis_name())},
                 {"cuts", part.cuts},
                 {"particles_per_process", per_rank},
-                {"particles_sent_per_process", sent}};
+                {"particles_sent_per_process", sent},
+                {"rebalance_threshold", settings.parallel.rebalance},
+                {"rebalances", rebalances},
+                {"largest_imbalance", worst_imbalance}};
   }
   res.wall_seconds = seconds_since(t_start);
 

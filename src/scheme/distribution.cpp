@@ -107,11 +107,55 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
   return leaving;
 }
 
+template <int Dim>
+double imbalance(const RunState<Dim>& sim, const Comm& comm, std::vector<Index>* per_rank) {
+  comm.check();
+  const Index n = sim.particles.size();
+  const std::vector<Index> counts = comm.allgather(std::span<const Index>(&n, 1));
+  Index total = 0, most = 0;
+  for (Index c : counts) {
+    total += c;
+    most = std::max(most, c);
+  }
+  if (per_rank) *per_rank = counts;
+  if (total == 0) return 0.0;
+  return static_cast<double>(most) * static_cast<double>(counts.size()) /
+             static_cast<double>(total) -
+         1.0;
+}
+
+template <int Dim>
+bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& comm,
+                      double threshold, Index& sent) {
+  if (!(threshold > 0.0)) return false;
+  std::vector<Index> counts;
+  if (imbalance(sim, comm, &counts) <= threshold) return false;
+  const std::vector<double> per_layer =
+      SlabPartition<Dim>::layer_counts(sim.grid, sim.particles, comm, /*replicated=*/false);
+  SlabPartition<Dim> next =
+      SlabPartition<Dim>::balanced(per_layer, comm.size(), "parallel.rebalance");
+  // The most particles of one process with the new cuts, against now.
+  std::vector<double> predicted(static_cast<std::size_t>(comm.size()), 0.0);
+  for (std::size_t l = 0; l < per_layer.size(); ++l)
+    predicted[static_cast<std::size_t>(next.owner_of_layer(static_cast<Index>(l)))] += per_layer[l];
+  const double now = static_cast<double>(*std::max_element(counts.begin(), counts.end()));
+  if (!(*std::max_element(predicted.begin(), predicted.end()) < now)) return false;
+  part = std::move(next);
+  sent += migrate(sim, part, comm);
+  return true;
+}
+
 template struct SlabPartition<1>;
 template struct SlabPartition<2>;
 template struct SlabPartition<3>;
 template Index migrate<1>(RunState<1>&, const SlabPartition<1>&, const Comm&);
 template Index migrate<2>(RunState<2>&, const SlabPartition<2>&, const Comm&);
 template Index migrate<3>(RunState<3>&, const SlabPartition<3>&, const Comm&);
+template double imbalance<1>(const RunState<1>&, const Comm&, std::vector<Index>*);
+template double imbalance<2>(const RunState<2>&, const Comm&, std::vector<Index>*);
+template double imbalance<3>(const RunState<3>&, const Comm&, std::vector<Index>*);
+template bool rebalance_if_due<1>(RunState<1>&, SlabPartition<1>&, const Comm&, double, Index&);
+template bool rebalance_if_due<2>(RunState<2>&, SlabPartition<2>&, const Comm&, double, Index&);
+template bool rebalance_if_due<3>(RunState<3>&, SlabPartition<3>&, const Comm&, double, Index&);
 
 }  // namespace mpm

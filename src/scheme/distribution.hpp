@@ -51,4 +51,18 @@ struct SlabPartition {
 template <int Dim>
 Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& comm);
 
+// The particles of each process and max / mean - 1 (0 without particles). Collective.
+template <int Dim>
+double imbalance(const RunState<Dim>& sim, const Comm& comm,
+                 std::vector<Index>* per_rank = nullptr);
+
+// Load balance (parallel.rebalance): when the imbalance exceeds `threshold` (> 0), cuts the
+// slabs anew from the particles' current layers (SlabPartition::balanced) and migrates the
+// particles, if the new cuts hold fewer particles on the most loaded process. Every process
+// takes the same decision from the same gathered counts. Collective; true when it re-cut.
+// `sent`: adds the particles this rank sent.
+template <int Dim>
+bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& comm,
+                      double threshold, Index& sent);
+
 }  // namespace mpm

@@ -50,9 +50,16 @@ struct MethodSettings {
   std::string where_solver, where_basis, where_mapping, where_tls_completion, where_mass;
 };
 
+// parallel.*: a run on several processes (RunOptions::comm; scheme/distribution.hpp).
+struct ParallelSettings {
+  // Re-cut the slabs when max particles per process / mean - 1 exceeds this (0: never).
+  double rebalance = 0.25;
+};
+
 struct RunSettings {
   TimeSettings time;
   OutputSettings output;
+  ParallelSettings parallel;
   MethodSettings method;
   ElasticParameters material;       // material.* (the problem holds the law built from them)
   std::int64_t reference_dofs = 0;  // reference.dofs: the ULFEM reference of benchmarks without
