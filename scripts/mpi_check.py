@@ -9,7 +9,9 @@ checks:
     field's scale);
   * the run on N processes again gives the same bytes (frames, history);
   * particles moved between processes (summary.json "mpi"), in both directions where the case
-    says so.
+    says so, and the slabs were cut anew where it says so (parallel.rebalance).
+A run on 2 processes shortened and restarted from its checkpoint on 2 processes ends in the same
+bytes as the whole run, and restarted on 4 or 1 in the same answers to 1e-12.
 Then a failing distributed run (a body thrown out of the grid) must end every process with one
 message naming the rank and the particles, the documented exit code (4), and no hang; and a
 feature not yet distributed must be refused before the first step (exit code 2).
@@ -195,6 +197,53 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
     print(f"{name}: " + "; ".join(report))
 
 
+def last_frame(d):
+    # The frame of the latest time (a restart numbers its frames on from the checkpoint's).
+    frames = outputs(d)
+    times = {f: read_csv(os.path.join(d, f))[1] for f in frames}
+    return max(frames, key=lambda f: (len(times[f]) > 0, f))
+
+
+def check_restart(mpm, tmp, failures):
+    # A run on 2 processes with checkpoints, against one shortened to t = 0.2 s and restarted to
+    # 0.3 s on 2 processes (the same bytes), on 4 and on 1 (1e-12).
+    config = "examples/vortex_2d.toml"
+    sets = ["grid.cells=16", "time.dt=2e-3", "output.frames=2", "output.checkpoint_every=50"]
+    whole = os.path.join(tmp, "restart_whole")
+    r = run(mpm_cmd(mpm, 2, config, sets + ["time.end=0.3"], whole))
+    short = os.path.join(tmp, "restart_short")
+    r2 = run(mpm_cmd(mpm, 2, config, sets + ["time.end=0.2"], short))
+    if r.returncode or r2.returncode:
+        failures.append(f"restart: the runs failed: {r.stderr} {r2.stderr}")
+        return
+    copies = {}
+    for n in (4, 1):
+        copies[n] = short + f"_n{n}"
+        shutil.copytree(short, copies[n])
+    results = []
+    for n, d in [(2, short), (4, copies[4]), (1, copies[1])]:
+        cmd = [mpm, "run", "--restart", os.path.join(d, "checkpoint.bin"), "--set", "time.end=0.3",
+               "--quiet"]
+        if n > 1:
+            cmd = ["mpirun", "-n", str(n), "--oversubscribe"] + cmd
+        r = run(cmd)
+        if r.returncode:
+            failures.append(f"restart on {n}: exit {r.returncode}: {r.stderr.strip()}")
+            continue
+        a, b = read_csv(os.path.join(whole, last_frame(whole))), read_csv(
+            os.path.join(d, last_frame(d)))
+        if n == 2:
+            same = a == b and open(os.path.join(whole, "history.csv"), "rb").read() == open(
+                os.path.join(d, "history.csv"), "rb").read()
+            if not same:
+                failures.append("restart on 2 processes from a checkpoint of 2: not the same bytes")
+            results.append("on 2: the same bytes")
+        else:
+            w = compare_tables(f"restart on {n}", a, b, failures)
+            results.append(f"on {n}: largest relative difference {w:.2e}")
+    print("restart from a checkpoint of 2 processes: " + "; ".join(results))
+
+
 def check_failure(mpm, tmp, failures):
     # A bar thrown out of the grid at 50 m/s: the process of its right end (rank 1) meets it, every process stops with exit code 4 (particle left the
     # grid), rank 0 prints one message, and nothing hangs (the timeout).
@@ -241,6 +290,7 @@ def main():
             if a.quick and name not in QUICK:
                 continue
             check_case(os.path.abspath(a.mpm), name, config, sets, both, ranks, tmp, failures)
+        check_restart(os.path.abspath(a.mpm), tmp, failures)
         check_failure(os.path.abspath(a.mpm), tmp, failures)
     for f in failures:
         print("FAILED:", f)

@@ -265,7 +265,7 @@ void OutputSession<Dim>::resume(const io::Checkpoint& c) {
   // run killed after its last checkpoint may have written later ones), and the restarted run
   // appends the steps after it, so the file is that of an uninterrupted run. A file with another
   // header (another run, another version) or none is started anew, from the checkpoint's row.
-  if (enabled()) {
+  if (enabled() && writer_) {
     std::string kept = history_header_;
     std::ifstream in(dir_ / "history.csv");
     std::string line;
@@ -280,6 +280,8 @@ void OutputSession<Dim>::resume(const io::Checkpoint& c) {
     }
     history_.open(dir_ / "history.csv", kept);
   }
+  // Whether the next row is written is decided by every rank alike (history_row is collective).
+  if (comm_ && enabled()) history_continues_ = comm_->any(history_continues_);
   frames_ = static_cast<int>(c.frames);
   frame_times_ = c.frame_times;
   if (vtk_)

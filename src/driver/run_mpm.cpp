@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstring>
 #include <span>
 
 #include <fmt/format.h>
@@ -23,10 +24,14 @@ double velocity_time(const Scheme& scheme) {
 
 // Checkpoints (io/checkpoint.hpp). The state of an MPM run with its FEM reference: everything a
 // step reads that an earlier step wrote (the grid quantities and stencils are rebuilt per step).
+// A distributed run (comm, part) gathers its ranks' particles at rank 0, rank after rank, each in
+// its own order, with the cuts and each rank's count, re-sorting state and grid crossings
+// (Checkpoint::distribution): a restart on as many processes continues bit for bit.
 template <int Dim>
 io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
                        const std::optional<Ulfem1D>& reference, const OutputSession<Dim>& out,
-                       const std::string& config) {
+                       const std::string& config, const Comm* comm,
+                       const SlabPartition<Dim>& part) {
   const RunState<Dim>& sim = stepper.state();
   io::Checkpoint c;
   c.config = config;
@@ -34,11 +39,49 @@ io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
   c.dim = Dim;
   c.step = sim.step;
   c.time = sim.time;
-  c.particles = io::pack_particles(sim.particles);
-  c.cells.assign(sim.cell.begin(), sim.cell.end());
-  c.sort_reference = sim.sorting.reference;
-  c.sorts = sim.sorting.sorts;
   c.diag = sim.diag;
+  if (comm) {
+    comm->check();
+    const auto& P = sim.particles;
+    const std::array<Index, 4> mine{P.size(), sim.sorting.reference, sim.sorting.sorts,
+                                    sim.diag.grid_crossings};
+    const std::vector<Index> info = comm->allgather(std::span<const Index>(mine));
+    std::vector<std::byte> bytes;
+    for (std::size_t i = 0; i < P.x.size(); ++i) P.pack(i, bytes);
+    const std::size_t at = bytes.size();
+    bytes.resize(at + sim.cell.size() * sizeof(CompactIndex));
+    if (!sim.cell.empty())
+      std::memcpy(bytes.data() + at, sim.cell.data(), sim.cell.size() * sizeof(CompactIndex));
+    const auto all = comm->gather(bytes, 0);
+    if (!comm->root()) return c;  // rank 0 writes
+    Particles<Dim> gathered;
+    for (std::size_t r = 0; r < all.size(); ++r) {
+      const std::size_t n = static_cast<std::size_t>(info[4 * r]);
+      const std::size_t pb = n * Particles<Dim>::bytes_per_particle();
+      gathered.unpack_append(std::span<const std::byte>(all[r].data(), pb));
+      for (std::size_t k = 0; k < n; ++k) {
+        CompactIndex cell;
+        std::memcpy(&cell, all[r].data() + pb + k * sizeof(CompactIndex), sizeof(CompactIndex));
+        c.cells.push_back(cell);
+      }
+    }
+    c.particles = io::pack_particles(gathered);
+    c.distribution.push_back(comm->size());
+    c.distribution.insert(c.distribution.end(), part.cuts.begin(), part.cuts.end());
+    c.distribution.insert(c.distribution.end(), info.begin(), info.end());
+    c.diag.grid_crossings = 0;
+    c.sorts = 0;
+    for (std::size_t r = 0; r < all.size(); ++r) {
+      c.diag.grid_crossings += info[4 * r + 3];
+      c.sorts += info[4 * r + 2];
+    }
+    c.sort_reference = -1;
+  } else {
+    c.particles = io::pack_particles(sim.particles);
+    c.cells.assign(sim.cell.begin(), sim.cell.end());
+    c.sort_reference = sim.sorting.reference;
+    c.sorts = sim.sorting.sorts;
+  }
   if (reference) c.fem = io::pack_fem(reference->save());
   c.mapping = std::string(mapping);
   c.frames = out.frames();
@@ -47,10 +90,47 @@ io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
   return c;
 }
 
-// Puts the checkpoint's state into a freshly set-up run; returns the step it is at.
+// The checkpoint's distribution (Checkpoint::distribution) read back and checked: ranks, cuts
+// and per rank (count, re-sorting reference, sorts, grid crossings).
+struct StoredDistribution {
+  Index ranks = 0;
+  std::vector<Index> cuts, info;
+};
+StoredDistribution stored_distribution(const io::Checkpoint& c, Index particles, Index layers,
+                                       const std::string& what) {
+  StoredDistribution d;
+  const auto& v = c.distribution;
+  if (v.empty()) return d;
+  const Index r = v[0];
+  bool ok = r >= 1 && r <= (1 << 24) && static_cast<Index>(v.size()) == 1 + (r + 1) + 4 * r &&
+            v[1] == 0 && v[static_cast<std::size_t>(r) + 1] == layers;
+  Index total = 0;
+  for (Index k = 0; ok && k < r; ++k) {
+    const auto at = static_cast<std::size_t>(1 + (r + 1) + 4 * k);
+    ok = v[static_cast<std::size_t>(k) + 2] > v[static_cast<std::size_t>(k) + 1] && v[at] >= 0 &&
+         v[at + 1] >= -1 && v[at + 2] >= 0 && v[at + 3] >= 0;
+    total += v[at];
+  }
+  if (!ok || total != particles)
+    throw InputError(
+        fmt::format("{} is not a state of this run: its distribution over "
+                    "processes does not fit {} particles and {} cell layers",
+                    what, particles, layers));
+  d.ranks = r;
+  d.cuts.assign(v.begin() + 1, v.begin() + 2 + r);
+  d.info.assign(v.begin() + 2 + r, v.end());
+  return d;
+}
+
+// Puts the checkpoint's state into a freshly set-up run; returns the step it is at. A
+// distributed run (comm) restarting from a checkpoint of as many processes takes its rank's
+// particles and state as they were (bit for bit); from another count (or from a run on one
+// process) it cuts the slabs anew and keeps the particles of its slab (the answers then change
+// by round-off, the order of the sums being another). `particles`: the run's particles in all.
 template <int Dim>
 Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::string_view mapping,
-              std::optional<Ulfem1D>& reference, OutputSession<Dim>& out) {
+              std::optional<Ulfem1D>& reference, OutputSession<Dim>& out, const Comm* comm,
+              SlabPartition<Dim>& part, Index particles) {
   const io::Checkpoint& c = *opt.restart;
   RunState<Dim>& sim = stepper.state();
   const std::string what = fmt::format("checkpoint '{}'", opt.restart_name);
@@ -60,13 +140,16 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
                     "mapping {}",
                     what, c.solver, c.dim, c.mapping, Dim, mapping));
   auto p = io::unpack_particles<Dim>(c.particles, what);
-  if (p.size() != sim.particles.size() || c.cells.size() != sim.cell.size() ||
+  // (Each particle's cell: OTM keeps none. A distributed run holds a part of them.)
+  const std::size_t cells = comm ? static_cast<std::size_t>(p.size()) : sim.cell.size();
+  if (p.size() != particles || c.cells.size() != cells ||
       reference.has_value() != c.fem.has_value())
-    throw InputError(fmt::format("{} does not fit the problem: {} particles ({} set up){}", what,
-                                 p.size(), sim.particles.size(),
-                                 reference.has_value() != c.fem.has_value()
-                                     ? ", FEM reference state missing or unexpected"
-                                     : ""));
+    throw InputError(fmt::format(
+        "{} does not fit the problem: {} particles ({} set up){}", what, p.size(), particles,
+        reference.has_value() != c.fem.has_value() ? ", FEM reference state missing or unexpected"
+                                                   : ""));
+  const StoredDistribution dist =
+      stored_distribution(c, p.size(), sim.grid.cells[SlabPartition<Dim>::kAxis], what);
   // A checkpoint's hash only proves the bytes are those written; a crafted or foreign one could
   // still hold a state no run reaches (issue 16, 9): the step and time must be those of this
   // run's time loop (t = step dt exactly, as the driver sets it), the counters non-negative and
@@ -100,15 +183,53 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
       for (auto& q : tr.particles)
         q = at[static_cast<std::size_t>(sim.particles.id[static_cast<std::size_t>(q)])];
   }
-  sim.particles = std::move(p);
-  sim.cell.assign(c.cells.begin(), c.cells.end());
+  std::vector<CompactIndex> cell(c.cells.begin(), c.cells.end());
+  sim.diag = c.diag;
   sim.sorting.reference = c.sort_reference;
   sim.sorting.sorts = c.sorts;
-  sim.diag = c.diag;
+  if (comm && dist.ranks == comm->size()) {
+    // As many processes: this rank's slice, as it was.
+    const auto me = static_cast<std::size_t>(comm->rank());
+    std::size_t first = 0;
+    for (std::size_t r = 0; r < me; ++r) first += static_cast<std::size_t>(dist.info[4 * r]);
+    const std::size_t n = static_cast<std::size_t>(dist.info[4 * me]);
+    p.keep_with_ids(
+        [&](const Particles<Dim>&, std::size_t i) { return i >= first && i < first + n; });
+    cell = std::vector<CompactIndex>(cell.begin() + static_cast<std::ptrdiff_t>(first),
+                                     cell.begin() + static_cast<std::ptrdiff_t>(first + n));
+    part.cuts = dist.cuts;
+    sim.sorting.reference = dist.info[4 * me + 1];
+    sim.sorting.sorts = dist.info[4 * me + 2];
+    sim.diag.grid_crossings = dist.info[4 * me + 3];
+  } else if (comm) {
+    // Another number of processes: new slabs; the counters go to rank 0, the re-sorting starts
+    // afresh.
+    part = SlabPartition<Dim>::balanced(
+        SlabPartition<Dim>::layer_counts(sim.grid, p, *comm, /*replicated=*/true), comm->size(),
+        fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
+    const int me = comm->rank();
+    std::vector<CompactIndex> kept;
+    for (std::size_t i = 0; i < cell.size(); ++i)
+      if (part.owner(sim.grid, p.x[i], 0) == me) kept.push_back(cell[i]);
+    cell = std::move(kept);
+    p.keep_with_ids([&](const Particles<Dim>& P, std::size_t i) {
+      return part.owner(sim.grid, P.x[i], 0) == me;
+    });
+    sim.sorting.reference = -1;
+    if (!comm->root()) {
+      sim.sorting.sorts = 0;
+      sim.diag.grid_crossings = 0;
+    }
+  } else if (dist.ranks > 0) {
+    sim.sorting.reference = -1;  // one process after several: re-sorting starts afresh
+  }
+  sim.particles = std::move(p);
+  sim.cell.assign(cell.begin(), cell.end());
   sim.step = c.step;
   sim.time = c.time;
   if (reference) reference->restore(io::unpack_fem(*c.fem, what));
   stepper.load(c, what);  // mapping totals, basis state
+  stepper.resize_particle_caches();
   out.resume(c);
   return c.step;
 }
@@ -168,11 +289,6 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
           fmt::format("grid.mesh: a mesh from a file does not run on several "
                       "processes yet (issue 21); {}",
                       kHow));
-    if (opt.restart || settings.output.checkpoint_every > 0)
-      throw InputError(fmt::format(
-          "{}checkpoints and restarts do not run on several processes yet (issue 21); set "
-          "output.checkpoint_every = 0 or {}",
-          opt.restart ? "" : settings.output.where_checkpoint_every + ": ", kHow));
     part = SlabPartition<Dim>::balanced(
         SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/true),
         comm->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
@@ -214,8 +330,9 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   Index migrated = 0;  // particles this rank sent to another
   Index rebalances = 0;
   double worst_imbalance = comm ? imbalance(sim, *comm) : 0.0;
-  const Index start =
-      opt.restart ? restore<Dim>(opt, ts.dt, *stepper, mapping_name, reference, out) : 0;
+  const Index start = opt.restart ? restore<Dim>(opt, ts.dt, *stepper, mapping_name, reference, out,
+                                                 comm, part, res.particles)
+                                  : 0;
   drive<Dim>(
       settings, opt, out, start,
       [&](Index s) {
@@ -248,7 +365,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         return StateView<Dim>{sim.particles, sim.time, sim.material, &sim.diag};
       },
       [&](Index) {
-        out.checkpoint(capture<Dim>(*stepper, mapping_name, reference, out, config_text));
+        out.checkpoint(
+            capture<Dim>(*stepper, mapping_name, reference, out, config_text, comm, part));
       },
       res);
 

@@ -196,6 +196,7 @@ std::string encode_checkpoint(const Checkpoint& c) {
   p.i64(c.frames);
   p.reals(c.frame_times);
   p.reals(c.basis_state);
+  p.ints(c.distribution);
 
   ByteWriter out;
   out.bytes().append(kCheckpointMagic);
@@ -269,6 +270,7 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
   c.frames = r.i64();
   c.frame_times = r.reals();
   c.basis_state = r.reals();
+  c.distribution = r.ints();
   if (!r.done())
     throw InputError(fmt::format("checkpoint '{}': unexpected bytes after the payload", name));
   return c;

@@ -25,7 +25,11 @@
 //     of TLS and MLS/IMLS; empty for the other mappings),
 //   i64 frames written, f64[] frame times,
 //   f64[] basis state (version 2: the tracked corners of CPDI2, 2^Dim x Dim values per particle;
-//     empty for the other bases).
+//     empty for the other bases),
+//   i64[] distribution (version 5; empty for a run on one process): a run on R processes
+//     stores the particles and cells of rank 0, then rank 1, ..., each in its own order, and
+//     here R, the R + 1 slab cuts, then per rank its particle count, re-sorting reference span,
+//     sorts and grid crossings (4 R values; the diagnostics above hold the total crossings).
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -42,8 +46,9 @@ namespace mpm::io {
 
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
 // Version 4 (2026-11-27): the displacement and density are derived (Particles::displacement,
-// density), no longer stored; a version-3 file is refused by its version.
-inline constexpr std::uint32_t kCheckpointVersion = 4;
+// density), no longer stored; a version-3 file is refused by its version. Version 5
+// (2026-11-27): the distribution of a run on several processes.
+inline constexpr std::uint32_t kCheckpointVersion = 5;
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 
@@ -97,6 +102,8 @@ struct Checkpoint {
   std::int64_t frames = 0;       // particle frames written so far
   std::vector<double> frame_times;
   std::vector<double> basis_state;  // state a basis carries between steps (CPDI2 corners)
+  // A run on several processes (the layout above); empty for one process.
+  std::vector<std::int64_t> distribution;
 };
 
 std::string encode_checkpoint(const Checkpoint& c);

@@ -140,7 +140,6 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.output.frames = static_cast<int>(cfg.get_int("output.frames"));
   s.output.history_every = cfg.get_int("output.history_every");
   s.output.checkpoint_every = cfg.get_int("output.checkpoint_every");
-  s.output.where_checkpoint_every = cfg.where("output.checkpoint_every");
   s.parallel.rebalance = cfg.get_real("parallel.rebalance");
   s.output.csv = cfg.get_bool("output.csv");
   s.output.vtk = cfg.get_bool("output.vtk");

@@ -29,7 +29,6 @@ struct OutputSettings {
   Index checkpoint_every = 0;  // 0: no checkpoints
   bool csv = true, vtk = true;
   bool vtk_binary = true;  // output.vtk_format
-  std::string where_checkpoint_every;
 };
 
 enum class Solver { Mpm, Ulfem, Otm, Unified };
