@@ -94,6 +94,24 @@ T deterministic_sum(Index n, const T& zero, F&& f) {
 struct ChunkDofRanges {
   Index particles = -1;  // the particle count they were recorded for; -1: none yet
   std::array<Index, ParticleChunks::kMax> lo{}, hi{};
+  // The scatters write only the DOFs between the lowest and highest of the ranges; the others
+  // keep what they held. Set by a distributed run (issue 21), whose grid stages read only the
+  // DOFs its particles touch (RunState::dof_window): the grid work of a process then scales
+  // with its slab, not with the whole grid. Otherwise every DOF outside the ranges is set to zero.
+  bool bounded = false;
+
+  // [first, end) of the DOFs the scatters write: all of them unless `bounded`.
+  std::array<Index, 2> written(Index dofs) const {
+    if (!bounded) return {0, dofs};
+    Index first = dofs, end = 0;
+    for (int c = 0; c < ParticleChunks::count(particles); ++c) {
+      const auto cc = static_cast<std::size_t>(c);
+      if (hi[cc] < lo[cc]) continue;
+      first = std::min(first, lo[cc]);
+      end = std::max(end, hi[cc] + 1);
+    }
+    return first < end ? std::array<Index, 2>{first, end} : std::array<Index, 2>{0, 0};
+  }
 
   // Scans the stencils (fallback when evaluate_basis did not record them).
   // stride: the DOF strides of a tensor-product basis (for its compact stencils). dof_bounds
@@ -188,9 +206,10 @@ void scatter_fused(const ChunkDofRanges& r, F&& scatter, ScatterTarget<T>... t) 
   const Index n = r.particles;
   const int k = ParticleChunks::count(n);
   (t.acc.reserve(r), ...);
-  const auto nodes = static_cast<Index>(std::get<0>(std::tie(t.out...)).size());
+  const auto written = r.written(static_cast<Index>(std::get<0>(std::tie(t.out...)).size()));
+  const Index first = written[0], end = written[1];
   constexpr Index kBlock = 4096;  // DOFs per reduction task
-  const Index blocks = (nodes + kBlock - 1) / kBlock;
+  const Index blocks = (end - first + kBlock - 1) / kBlock;
 #pragma omp parallel if (n >= kParallelMin)
   {
 #pragma omp for schedule(static)
@@ -205,7 +224,7 @@ void scatter_fused(const ChunkDofRanges& r, F&& scatter, ScatterTarget<T>... t) 
     // The implicit barrier above: every slice is complete before any is added.
 #pragma omp for schedule(static)
     for (Index blk = 0; blk < blocks; ++blk) {
-      const Index b = blk * kBlock, e = std::min(nodes, b + kBlock);
+      const Index b = first + blk * kBlock, e = std::min(end, b + kBlock);
       (t.acc.reduce(t.out, t.zero, r, b, e), ...);
     }
   }

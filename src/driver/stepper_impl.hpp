@@ -64,7 +64,7 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
 
 // What a distributed run (issue 21) does not do yet, refused before the first step with the
 // key to change: the exchange shares the direct mapping's particle-to-grid sums of bases whose
-// stencils depend on one particle alone, with lumped mass.
+// stencils depend on one particle alone; consistent mass is solved by distributed CG.
 template <class Basis, class Mapping>
 void check_distributed_run(const MethodSettings& method, bool tractions) {
   constexpr std::string_view kHow = "run it on one process (without mpirun)";
@@ -81,11 +81,12 @@ void check_distributed_run(const MethodSettings& method, bool tractions) {
         Basis::kTriangleMesh ? "its mesh is not cut into slabs"
                              : "it keeps state built from the particles of several cells",
         kHow));
-  if (method.mass == MassType::Consistent)
+  if (method.mass == MassType::Consistent && method.mass_solver.kind != MassSolver::Cg)
     throw InputError(fmt::format(
-        "{}: method.mass = \"consistent\" does not run on several processes yet (the mass "
-        "matrix is solved on one process; issue 21); use \"lumped\" or {}",
-        method.where_mass, kHow));
+        "{}: method.mass = \"consistent\" runs on several processes with method.mass_solver = "
+        "\"cg\" (distributed conjugate gradients); the {} solver needs the whole matrix on one "
+        "process (issue 21); choose \"cg\" or {}",
+        method.where_mass, method.mass_solver.kind == MassSolver::Direct ? "direct" : "pmg", kHow));
   if (tractions)
     throw InputError(fmt::format(
         "the problem's tractions do not run on several processes yet (their particle lists "
@@ -134,6 +135,7 @@ class TypedStepper final : public Stepper<Dim> {
     if (in.comm != nullptr && in.comm->distributed()) {
       check_distributed(method, pb);
       sim_.comm = in.comm;
+      sim_.scatter.ranges.bounded = true;  // the grid work of this rank's slab only
     }
   }
 

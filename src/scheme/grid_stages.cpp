@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <span>
 #include <string>
@@ -260,7 +261,9 @@ void after_mass(RunState<Dim>& sim) {
   const auto& m = sim.nodes.mass;
   const auto& mp = sim.particles.mass;
   const double total = grid_total(sim, m, 0.0);
-  double largest = m.empty() ? 0.0 : *std::max_element(m.begin(), m.end());
+  const auto [first, end] = sim.dof_window();
+  double largest = 0.0;
+  if (first < end) largest = *std::max_element(m.begin() + first, m.begin() + end);
   if (sim.comm) largest = sim.comm->max(largest);
   // sum m_p: taken by the mapping's scatter when it has one (the same bits), else a pass here.
   auto& sc = sim.scatter;
@@ -289,10 +292,14 @@ void after_mass(RunState<Dim>& sim) {
                             "carry (for MLS/IMLS, method.mls_conservative = true rescales it)"));
   }
   const double threshold = sim.mass_tolerance * largest;
-  parallel_for(static_cast<Index>(m.size()), [&](Index k) {
-    const auto i = static_cast<std::size_t>(k);
+  const Index offset = first;
+  parallel_for(end - first, [&](Index k) {
+    const auto i = static_cast<std::size_t>(offset + k);
     sim.nodes.active[i] = m[i] > threshold ? 1 : 0;
   });
+  // A distributed run solves with CG on the matrices of the ranks' particles (solve_grid):
+  // nothing to factorise.
+  if (sim.mass_type == MassType::Consistent && sim.comm != nullptr) return;
   if (sim.mass_type == MassType::Consistent) {
     constexpr std::uint8_t kAll = (1u << Dim) - 1u;
     const auto& act = sim.nodes.active;
@@ -433,16 +440,111 @@ template <int Dim>
                   s.max_iterations, hist));
 }
 
+// v on the DOFs of this rank's window: the sum over the ranks that share each DOF, in rank order
+// (as share_grid_sums, for one array).
+template <int Dim>
+void share_vector(const RunState<Dim>& sim, Eigen::VectorXd& v) {
+  const Comm& comm = *sim.comm;
+  const auto& sh = sim.shared;
+  const int me = comm.rank();
+  const Index lo = sh.lo[static_cast<std::size_t>(me)], hi = sh.hi[static_cast<std::size_t>(me)];
+  std::vector<int> peers;
+  std::vector<std::vector<std::byte>> send;
+  for (int r = 0; r < comm.size(); ++r) {
+    const Index a = std::max(lo, sh.lo[static_cast<std::size_t>(r)]);
+    const Index b = std::min(hi, sh.hi[static_cast<std::size_t>(r)]);
+    if (r == me || a > b) continue;
+    peers.push_back(r);
+    std::vector<std::byte> buf(static_cast<std::size_t>(b - a + 1) * sizeof(double));
+    std::memcpy(buf.data(), v.data() + a, buf.size());
+    send.push_back(std::move(buf));
+  }
+  const auto recv = comm.exchange(peers, send, 200);
+  if (lo > hi) return;
+  const Eigen::VectorXd own = v.segment(lo, hi - lo + 1);
+  v.segment(lo, hi - lo + 1).setZero();
+  std::size_t next = 0;
+  for (int r = 0; r < comm.size(); ++r) {
+    if (r == me) {
+      v.segment(lo, hi - lo + 1) += own;
+    } else if (next < peers.size() && peers[next] == r) {
+      const Index a = std::max(lo, sh.lo[static_cast<std::size_t>(r)]);
+      const auto* in = reinterpret_cast<const double*>(recv[next].data());
+      for (Index i = a; i <= std::min(hi, sh.hi[static_cast<std::size_t>(r)]); ++i)
+        v[i] += in[i - a];
+      ++next;
+    }
+  }
+}
+
+// y = M^{-1} r with consistent mass in a distributed run: CG (method.mass_solver = "cg") on
+// the operator x -> sum over ranks of M_rank (P x), shared like the grid sums, plus (I - P) x
+// for the eliminated DOFs (P: the kept DOFs, active and not fixed in the component); the
+// inner products over the DOFs each rank owns, summed in rank order, so every rank takes the
+// same iterations. The same system as the one process's CG on the assembled matrix.
+template <int Dim, class V>
+void solve_distributed(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) {
+  const auto& nd = sim.nodes;
+  const auto n = static_cast<Index>(r.size());
+  const auto [first, end] = sim.dof_window();
+  const Index lo = first, count = end - first;
+  const auto me = static_cast<std::size_t>(sim.comm->rank());
+  std::vector<unsigned char> owned(static_cast<std::size_t>(count), 1);
+  for (Index k = 0; k < count; ++k)
+    for (std::size_t q = 0; q < me; ++q)
+      if (sim.shared.lo[q] <= lo + k && lo + k <= sim.shared.hi[q])
+        owned[static_cast<std::size_t>(k)] = 0;
+  const InnerProduct dot = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+    return sim.comm->sum(deterministic_sum(count, 0.0, [&](Index k) {
+      return owned[static_cast<std::size_t>(k)] ? a[lo + k] * b[lo + k] : 0.0;
+    }));
+  };
+  const SparseMatrixD& M = sim.consistent.assembled();
+  const MassSolverSettings& s = sim.consistent.settings();
+  constexpr std::uint8_t kAll = (1u << Dim) - 1u;
+  std::vector<unsigned char> keep(static_cast<std::size_t>(count));
+  Eigen::VectorXd t(n), b(n), x(n);
+  for (int d = 0; d < Dim; ++d) {
+    const auto bit = static_cast<std::uint8_t>(sim.consistent_per_component ? 1u << d : kAll);
+    for (Index k = 0; k < count; ++k) {
+      const auto i = static_cast<std::size_t>(lo + k);
+      keep[static_cast<std::size_t>(k)] = nd.active[i] && !(nd.fixed[i] & bit);
+    }
+    b.setZero();
+    for (Index k = 0; k < count; ++k)
+      if (keep[static_cast<std::size_t>(k)]) b[lo + k] = r[static_cast<std::size_t>(lo + k)][d];
+    const LinearOperator A = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+      t.setZero();
+      for (Index k = 0; k < count; ++k)
+        if (keep[static_cast<std::size_t>(k)]) t[lo + k] = v[lo + k];
+      out.noalias() = M * t;
+      share_vector(sim, out);
+      for (Index k = 0; k < count; ++k)
+        if (!keep[static_cast<std::size_t>(k)]) out[lo + k] = v[lo + k];
+    };
+    x.setZero();
+    const IterationReport rep = conjugate_gradient(A, b, x, s.tolerance, s.max_iterations, dot);
+    sim.diag.mass_solver_iterations += rep.iterations;
+    sim.diag.max_mass_solver_iterations =
+        std::max(sim.diag.max_mass_solver_iterations, rep.iterations);
+    if (!rep.converged) throw_mass_solver_failure(sim, d, rep);
+    for (Index k = 0; k < count; ++k) y[static_cast<std::size_t>(lo + k)][d] = x[lo + k];
+  }
+}
+
 // y = M^{-1} r on the active, unconstrained DOFs; zero elsewhere (D eq. 2.46 / 2.49).
 template <int Dim, class V>
 void solve_grid(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) {
   const auto& nd = sim.nodes;
   const auto n = r.size();
   if (sim.mass_type == MassType::Lumped) {
-    parallel_for(static_cast<Index>(n), [&](Index k) {
-      const auto i = static_cast<std::size_t>(k);
+    const Index offset = sim.dof_window()[0], count = sim.dof_window()[1] - offset;
+    parallel_for(count, [&](Index k) {
+      const auto i = static_cast<std::size_t>(offset + k);
       y[i] = nd.active[i] ? V(r[i] / nd.mass[i]) : V::Zero();
     });
+  } else if (sim.comm != nullptr) {
+    solve_distributed(sim, r, y);
   } else if (!nd.projected.empty()) {
     // The coupled system of the inclined rollers (ConsistentMass::factorize_coupled).
     const auto& proj = sim.coupled_projector;
@@ -476,7 +578,8 @@ void solve_grid(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) 
       for (std::size_t i = 0; i < n; ++i) y[i][d] = sol[static_cast<Index>(i)];
     }
   }
-  for (std::size_t i = 0; i < n; ++i)
+  const auto [first, end] = sim.dof_window();
+  for (auto i = static_cast<std::size_t>(first); i < static_cast<std::size_t>(end); ++i)
     if (nd.fixed[i])
       for (int d = 0; d < Dim; ++d)
         if (nd.fixed[i] & (1u << d)) y[i][d] = 0.0;
@@ -505,8 +608,10 @@ void solve_velocity(RunState<Dim>& sim) {
 template <int Dim>
 void advance_grid_velocity(RunState<Dim>& sim, double dt) {
   auto& nd = sim.nodes;
-  parallel_for(nd.size(), [&](Index k) {
-    const auto i = static_cast<std::size_t>(k);
+  const auto [first, end] = sim.dof_window();
+  const Index offset = first;
+  parallel_for(end - first, [&](Index k) {
+    const auto i = static_cast<std::size_t>(offset + k);
     nd.velocity[i] += dt * nd.accel[i];
   });
 }

@@ -104,6 +104,15 @@ struct RunState {
   struct SharedRanges {
     std::vector<Index> lo, hi;  // per rank
   } shared;
+  // [first, end) of the DOFs the grid stages work on: all of them on one process; in a
+  // distributed run the range this rank's particles touched at the last exchange (the other
+  // DOFs hold stale values that nothing reads: ChunkDofRanges::bounded).
+  std::array<Index, 2> dof_window() const {
+    if (comm == nullptr || shared.lo.empty()) return {0, nodes.size()};
+    const auto me = static_cast<std::size_t>(comm->rank());
+    return shared.lo[me] <= shared.hi[me] ? std::array<Index, 2>{shared.lo[me], shared.hi[me] + 1}
+                                          : std::array<Index, 2>{0, 0};
+  }
 
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s

@@ -25,28 +25,36 @@ IterationReport conjugate_gradient(const SparseMatrixD& A, const Eigen::VectorXd
 
 IterationReport conjugate_gradient(const LinearOperator& A, const Eigen::VectorXd& b,
                                    Eigen::VectorXd& x, double tolerance, int max_iterations) {
+  return conjugate_gradient(
+      A, b, x, tolerance, max_iterations,
+      [](const Eigen::VectorXd& u, const Eigen::VectorXd& v) { return u.dot(v); });
+}
+
+IterationReport conjugate_gradient(const LinearOperator& A, const Eigen::VectorXd& b,
+                                   Eigen::VectorXd& x, double tolerance, int max_iterations,
+                                   const InnerProduct& dot) {
   IterationReport rep;
   if (x.size() != b.size()) x = Eigen::VectorXd::Zero(b.size());
   Eigen::VectorXd Ax(b.size());
   A(x, Ax);
   Eigen::VectorXd r = b - Ax;
-  const double r0 = r.norm();
+  const double r0 = std::sqrt(dot(r, r));
   rep.history.push_back(1.0);
   if (r0 == 0.0) {
     rep.converged = true;
     return rep;
   }
   Eigen::VectorXd d = r, Ad(b.size());
-  double rr = r.squaredNorm();
+  double rr = dot(r, r);
   while (rep.iterations < max_iterations) {
     A(d, Ad);
-    const double dAd = d.dot(Ad);
+    const double dAd = dot(d, Ad);
     if (!(dAd > 0.0)) break;  // not positive definite (or a breakdown): not converged
     const double alpha = rr / dAd;
     x += alpha * d;
     r -= alpha * Ad;
     ++rep.iterations;
-    const double rr_new = r.squaredNorm();
+    const double rr_new = dot(r, r);
     rep.relative_residual = std::sqrt(rr_new) / r0;
     rep.history.push_back(rep.relative_residual);
     if (rep.relative_residual < tolerance) {

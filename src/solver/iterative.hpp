@@ -43,6 +43,13 @@ IterationReport conjugate_gradient(const SparseMatrixD& A, const Eigen::VectorXd
 using LinearOperator = std::function<void(const Eigen::VectorXd& x, Eigen::VectorXd& y)>;
 IterationReport conjugate_gradient(const LinearOperator& A, const Eigen::VectorXd& b,
                                    Eigen::VectorXd& x, double tolerance, int max_iterations);
+// The same with the inner product given: a vector distributed over processes (each holds its
+// DOFs and copies of its neighbours') takes the sum over the DOFs it owns, summed over the ranks
+// in a fixed order, so every rank takes the same steps (scheme/grid_stages.cpp).
+using InnerProduct = std::function<double(const Eigen::VectorXd& a, const Eigen::VectorXd& b)>;
+IterationReport conjugate_gradient(const LinearOperator& A, const Eigen::VectorXd& b,
+                                   Eigen::VectorXd& x, double tolerance, int max_iterations,
+                                   const InnerProduct& dot);
 
 enum class Smoother { GaussSeidel, Jacobi };
 enum class Restriction { Transpose, Projection };

@@ -79,6 +79,10 @@ class ConsistentMass {
   // given, receives the iterations and residuals (converged false: the caller stops the run).
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs, int slot = 0,
                         IterationReport* report = nullptr) const;
+  // The sum of the triplets since begin(), over all DOFs, without eliminations: in a
+  // distributed run the matrix of this rank's particles, which the distributed CG applies
+  // (scheme/grid_stages.cpp).
+  const Eigen::SparseMatrix<double>& assembled() { return summed(); }
   const Eigen::SparseMatrix<double>& matrix(int slot = 0) const {
     return M_[static_cast<std::size_t>(slot)];
   }
