@@ -46,6 +46,7 @@ struct SlabPartition {
 // Moves every particle whose owner (part.owner) is another rank there, with its fields and its
 // cell of the last evaluation (sim.cell); the particles that stay keep their order, and those
 // that arrive follow in the order of their source ranks. Collective; starts with comm.check().
+// Messages go to the neighbouring slabs only, unless some particle moves further.
 // The caller resizes the typed per-particle caches (Stepper::resize_particle_caches). Returns
 // the number of particles this rank sent.
 template <int Dim>
