@@ -10,7 +10,8 @@ checks:
   * the run on N processes again gives the same bytes (frames, history);
   * particles moved between processes (summary.json "mpi"), in both directions where the case
     says so, and the slabs were cut anew where it says so (parallel.rebalance).
-A run on 2 processes shortened and restarted from its checkpoint on 2 processes ends in the same
+Each frame of a distributed run is a .pvtu over one VTU piece per process, whose particles are
+those of the CSV frame. A run on 2 processes shortened and restarted from its checkpoint on 2 processes ends in the same
 bytes as the whole run, and restarted on 4 or 1 in the same answers to 1e-12.
 Then a failing distributed run (a body thrown out of the grid) must end every process with one
 message naming the rank and the particles, the documented exit code (4), and no hang; and a
@@ -146,6 +147,35 @@ def outputs(d):
     return frames
 
 
+def check_pieces(what, d, frame_csv, failures):
+    # The frame's .pvtu lists one piece per process; the pieces (read by meshio) hold every
+    # particle once, with the values of the CSV frame (the same doubles).
+    import re
+    import meshio
+    pvtu = frame_csv[:-4] + ".pvtu"
+    text = open(os.path.join(d, pvtu)).read()
+    sources = re.findall(r'<Piece Source="([^"]+)"/>', text)
+    head, rows = read_csv(os.path.join(d, frame_csv))
+    by_id = {int(r[head.index("id")]): r for r in rows}
+    seen = 0
+    xcol = head.index("x") if "x" in head else head.index("x_1")
+    for src in sources:
+        if 'NumberOfPoints="0"' in open(os.path.join(d, src), "rb").read(2000).decode("latin-1"):
+            continue  # a process without particles (meshio reads no empty grid)
+        m = meshio.read(os.path.join(d, src))
+        ids = m.point_data["id"]
+        seen += len(ids)
+        for k, pid in enumerate(ids):
+            r = by_id.get(int(pid))
+            if r is None or m.points[k][0] != r[xcol] or (
+                    m.point_data["mass"][k] != r[head.index("mass")]):
+                failures.append(f"{what}: piece {src} particle {pid} differs from the CSV")
+                return 0
+    if seen != len(rows):
+        failures.append(f"{what}: the pieces of {pvtu} hold {seen} particles, the CSV {len(rows)}")
+    return len(sources)
+
+
 def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
     serial = os.path.join(tmp, name + "_serial")
     r = run(mpm_cmd(mpm, None, config, sets, serial))
@@ -191,6 +221,10 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
             elif v and scale:
                 worst = max(worst, abs(v - w) / max(scale, abs(v)))
         moved = ""
+        if n > 1 and frames:
+            pieces = check_pieces(f"{name} -n {n}", d, frames[-1], failures)
+            if pieces != n:
+                failures.append(f"{name} -n {n}: {pieces} VTU pieces in the last frame")
         if n > 1:
             mpi = s.get("mpi", {})
             sent = mpi.get("particles_sent_per_process", [])

@@ -196,54 +196,88 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
   history_.append(row);
 }
 
+namespace {
+// The exact solution at the particles as extra output columns: u_exact, v_exact, stress_exact in
+// 1D; per component (u_exact_1, ..., stress_exact_12, ...) in more dimensions, like the particle
+// columns. `values` holds the columns the fields point to.
+template <int Dim>
+std::vector<io::ScalarField> exact_fields(
+    const ExactSolution<Dim>& exact, const Particles<Dim>& P, double t,
+    std::array<std::vector<double>, 2 * Dim + Dim * Dim>& values) {
+  std::vector<io::ScalarField> extra;
+  if (!exact) return extra;
+  constexpr int kFields = 2 * Dim + Dim * Dim;
+  std::array<std::string, kFields> names;
+  int k = 0;
+  for (const char* f : {"u_exact", "v_exact"})
+    for (int d = 0; d < Dim; ++d) names[k++] = Dim == 1 ? f : fmt::format("{}_{}", f, d + 1);
+  for (int r = 0; r < Dim; ++r)
+    for (int c = 0; c < Dim; ++c)
+      names[k++] = Dim == 1 ? "stress_exact" : fmt::format("stress_exact_{}{}", r + 1, c + 1);
+  for (auto& v : values) v.resize(P.x.size());
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    const auto ex = exact(P.x0[i], t);
+    for (int d = 0; d < Dim; ++d) {
+      values[d][i] = ex.u[d];
+      values[Dim + d][i] = ex.v[d];
+    }
+    for (int r = 0; r < Dim; ++r)
+      for (int c = 0; c < Dim; ++c) values[2 * Dim + r * Dim + c][i] = ex.stress(r, c);
+  }
+  for (int f = 0; f < kFields; ++f) extra.push_back({names[f], &values[f]});
+  return extra;
+}
+}  // namespace
+
 template <int Dim>
 void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
   if (!enabled()) return;
-  // In id order, whatever order re-sorting (scheme/sort.hpp) left them in. A distributed run
-  // gathers every rank's particles at rank 0 first.
-  std::optional<Particles<Dim>> ordered;
-  if (comm_) {
-    comm_->check();
-    std::vector<std::byte> mine;
-    mine.reserve(static_cast<std::size_t>(sim.particles.size()) *
-                 Particles<Dim>::bytes_per_particle());
-    for (std::size_t i = 0; i < sim.particles.x.size(); ++i) sim.particles.pack(i, mine);
-    const auto all = comm_->gather(mine, 0);
-    if (!writer_) return;
-    Particles<Dim> gathered;
-    for (const auto& buf : all) gathered.unpack_append(buf);
-    ordered = particles_in_id_order(gathered);
-  } else if (!sim.particles.in_id_order()) {
-    ordered = particles_in_id_order(sim.particles);
-  }
-  const Particles<Dim>& P = ordered ? *ordered : sim.particles;
-  // The exact solution at the particles: u_exact, v_exact, stress_exact in 1D; per component
-  // (u_exact_1, ..., stress_exact_12, ...) in more dimensions, like the particle columns.
-  std::vector<io::ScalarField> extra;
-  constexpr int kFields = 2 * Dim + Dim * Dim;
-  std::array<std::vector<double>, kFields> values;
-  if (exact_) {
-    std::array<std::string, kFields> names;
-    int k = 0;
-    for (const char* f : {"u_exact", "v_exact"})
-      for (int d = 0; d < Dim; ++d) names[k++] = Dim == 1 ? f : fmt::format("{}_{}", f, d + 1);
-    for (int r = 0; r < Dim; ++r)
-      for (int c = 0; c < Dim; ++c)
-        names[k++] = Dim == 1 ? "stress_exact" : fmt::format("stress_exact_{}{}", r + 1, c + 1);
-    for (auto& v : values) v.resize(P.x.size());
-    for (std::size_t i = 0; i < P.x.size(); ++i) {
-      const auto ex = exact_(P.x0[i], sim.time);
-      for (int d = 0; d < Dim; ++d) {
-        values[d][i] = ex.u[d];
-        values[Dim + d][i] = ex.v[d];
-      }
-      for (int r = 0; r < Dim; ++r)
-        for (int c = 0; c < Dim; ++c) values[2 * Dim + r * Dim + c][i] = ex.stress(r, c);
-    }
-    for (int f = 0; f < kFields; ++f) extra.push_back({names[f], &values[f]});
-  }
-  frame_times_.push_back(sim.time);
   const std::string stem = fmt::format("particles_{:05d}", frames_);
+  frame_times_.push_back(sim.time);
+  std::array<std::vector<double>, 2 * Dim + Dim * Dim> values;
+  if (comm_) {
+    // A distributed run: the collective part first (the CSV gathers the particles at rank 0),
+    // so that a rank whose write fails below leaves no other waiting in it. Then every rank
+    // writes its VTU piece, and rank 0 the .pvtu over them and the CSV in id order.
+    comm_->check();
+    std::optional<Particles<Dim>> ordered;
+    if (csv_) {
+      std::vector<std::byte> mine;
+      mine.reserve(static_cast<std::size_t>(sim.particles.size()) *
+                   Particles<Dim>::bytes_per_particle());
+      for (std::size_t i = 0; i < sim.particles.x.size(); ++i) sim.particles.pack(i, mine);
+      const auto all = comm_->gather(mine, 0);
+      if (writer_) {
+        Particles<Dim> gathered;
+        for (const auto& buf : all) gathered.unpack_append(buf);
+        ordered = particles_in_id_order(gathered);
+      }
+    }
+    if (vtk_) {
+      const auto extra = exact_fields(exact_, sim.particles, sim.time, values);
+      const std::string piece = io::particles_vtu(sim.particles, sim.time, extra, vtk_binary_);
+      io::write_file_atomic(dir_ / fmt::format("{}_p{:04d}.vtu", stem, comm_->rank()), piece);
+      if (writer_) {
+        std::vector<std::string> sources;
+        for (int r = 0; r < comm_->size(); ++r)
+          sources.push_back(fmt::format("{}_p{:04d}.vtu", stem, r));
+        io::write_file_atomic(dir_ / (stem + ".pvtu"), io::particles_pvtu(piece, sources));
+        pvd_.add(sim.time, stem + ".pvtu");
+        io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
+      }
+    }
+    if (ordered) {
+      const auto extra = exact_fields(exact_, *ordered, sim.time, values);
+      io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(*ordered, extra));
+    }
+    ++frames_;
+    return;
+  }
+  // In id order, whatever order re-sorting (scheme/sort.hpp) left them in.
+  std::optional<Particles<Dim>> ordered;
+  if (!sim.particles.in_id_order()) ordered = particles_in_id_order(sim.particles);
+  const Particles<Dim>& P = ordered ? *ordered : sim.particles;
+  const auto extra = exact_fields(exact_, P, sim.time, values);
   if (csv_) io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(P, extra));
   if (vtk_) {
     io::write_file_atomic(dir_ / (stem + ".vtu"),
@@ -284,9 +318,13 @@ void OutputSession<Dim>::resume(const io::Checkpoint& c) {
   if (comm_ && enabled()) history_continues_ = comm_->any(history_continues_);
   frames_ = static_cast<int>(c.frames);
   frame_times_ = c.frame_times;
+  // (A frame of a distributed run is a .pvtu over its pieces.)
   if (vtk_)
-    for (std::size_t k = 0; k < frame_times_.size(); ++k)
-      pvd_.add(frame_times_[k], fmt::format("particles_{:05d}.vtu", k));
+    for (std::size_t k = 0; k < frame_times_.size(); ++k) {
+      const std::string stem = fmt::format("particles_{:05d}", k);
+      pvd_.add(frame_times_[k],
+               std::filesystem::exists(dir_ / (stem + ".pvtu")) ? stem + ".pvtu" : stem + ".vtu");
+    }
 }
 template <int Dim>
 void OutputSession<Dim>::checkpoint(const io::Checkpoint& c) {

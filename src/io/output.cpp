@@ -343,9 +343,18 @@ std::vector<std::string> run_files(const std::filesystem::path& dir) {
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
-    const bool frame = name.size() == 19 && name.starts_with("particles_") &&
-                       name.substr(10, 5).find_first_not_of("0123456789") == std::string::npos &&
-                       (name.ends_with(".csv") || name.ends_with(".vtu"));
+    const auto digits = [&](std::size_t at, std::size_t n) {
+      return name.size() >= at + n &&
+             name.substr(at, n).find_first_not_of("0123456789") == std::string::npos;
+    };
+    // particles_NNNNN.csv / .vtu / .pvtu, and a distributed run's pieces particles_NNNNN_pR.vtu
+    // (R: the rank, at least 4 digits).
+    const bool numbered = name.starts_with("particles_") && digits(10, 5);
+    const bool frame =
+        numbered && ((name.size() == 19 && (name.ends_with(".csv") || name.ends_with(".vtu"))) ||
+                     (name.size() == 20 && name.ends_with(".pvtu")) ||
+                     (name.size() >= 25 && name.substr(15, 2) == "_p" && name.ends_with(".vtu") &&
+                      digits(17, name.size() - 21)));
     if (kFixed.contains(name) || frame) names.push_back(name);
   }
   std::sort(names.begin(), names.end());
@@ -602,6 +611,45 @@ std::string grid_vtu(const Grid<Dim>& g, const std::vector<ScalarField>& node_fi
 }
 
 // ---- pvd -----------------------------------------------------------------------------------
+
+std::string particles_pvtu(std::string_view piece, const std::vector<std::string>& sources) {
+  // The DataArray tags of a section of the piece, as PDataArray tags (type, name, components).
+  const auto declared = [&](std::string_view open, std::string_view close) {
+    std::string out;
+    const auto b = piece.find(open), e = piece.find(close);
+    if (b == std::string_view::npos || e == std::string_view::npos || e < b)
+      throw std::logic_error("particles_pvtu: the piece has no " + std::string(open));
+    std::string_view section = piece.substr(b, e - b);
+    for (auto at = section.find("<DataArray"); at != std::string_view::npos;
+         at = section.find("<DataArray", at + 1)) {
+      const auto tag = section.substr(at, section.find('>', at) - at);
+      std::string attrs;
+      for (const char* key : {"type", "Name", "NumberOfComponents"}) {
+        const std::string k = std::string(" ") + key + "=\"";
+        const auto v = tag.find(k);
+        if (v == std::string_view::npos) continue;
+        const auto start = v + k.size();
+        attrs += fmt::format(" {}=\"{}\"", key, tag.substr(start, tag.find('"', start) - start));
+      }
+      out += fmt::format("      <PDataArray{}/>\n", attrs);
+    }
+    return out;
+  };
+  std::string out =
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt64\">\n"
+      "  <PUnstructuredGrid GhostLevel=\"0\">\n"
+      "    <PPointData>\n";
+  out += declared("<PointData>", "</PointData>");
+  out += "    </PPointData>\n    <PPoints>\n";
+  out += declared("<Points>", "</Points>");
+  out += "    </PPoints>\n";
+  for (const auto& src : sources)
+    out += fmt::format("    <Piece Source=\"{}\"/>\n", xml_escape(src));
+  out += "  </PUnstructuredGrid>\n</VTKFile>\n";
+  return out;
+}
 
 void PvdSeries::add(double time, const std::string& file) {
   entries_.emplace_back(time, file);

@@ -102,6 +102,12 @@ template <int Dim>
 std::string particles_vtu(const Particles<Dim>& p, double time,
                           const std::vector<ScalarField>& extra = {}, bool binary = false);
 
+// A .pvtu (VTK's parallel unstructured grid) over the pieces `sources` (file names relative to
+// it) of one frame of a distributed run, one piece per process: its PPointData and PPoints are
+// those of `piece`, the .vtu text of any one piece (every piece has the same arrays), so the
+// two cannot disagree. ParaView opens it as one data set.
+std::string particles_pvtu(std::string_view piece, const std::vector<std::string>& sources);
+
 // The background grid as a .vtu: points at the cell corners (x fastest, then y, then z), cells
 // VTK_LINE in 1D, VTK_QUAD in 2D, VTK_HEXAHEDRON in 3D (linear cell index x fastest, like
 // Grid::cell_index). node_fields are PointData scalars with one value per corner node.
