@@ -155,46 +155,39 @@ void Comm::sum(std::span<double> v) const {
 double Comm::max(double v) const {
   if (!distributed()) return v;
   const auto all = allgather(std::span<const double>(&v, 1));
-  double m = all[0];
-  for (double x : all) m = std::max(m, x);
-  return m;
+  return *std::max_element(all.begin(), all.end());
 }
 
 double Comm::min(double v) const {
-  if (!distributed()) return v;
-  const auto all = allgather(std::span<const double>(&v, 1));
-  double m = all[0];
-  for (double x : all) m = std::min(m, x);
-  return m;
+  return -max(-v);
 }
 
-std::vector<Index> Comm::allgather(std::span<const Index> mine) const {
-  std::vector<Index> out(mine.size() * static_cast<std::size_t>(size_));
-  if (!distributed()) {
+namespace {
+// Every rank's values, rank after rank, as raw bytes (Index and double: 8 bytes each, the same
+// representation on every process of a run).
+template <class T>
+std::vector<T> allgather_values(std::span<const T> mine, int size, bool distributed) {
+  static_assert(sizeof(T) == 8);
+  std::vector<T> out(mine.size() * static_cast<std::size_t>(size));
+  if (!distributed) {
     std::copy(mine.begin(), mine.end(), out.begin());
     return out;
   }
 #ifdef MPM_HAVE_MPI
-  static_assert(sizeof(Index) == sizeof(std::int64_t));
-  check_mpi(MPI_Allgather(mine.data(), to_int(mine.size()), MPI_INT64_T, out.data(),
-                          to_int(mine.size()), MPI_INT64_T, MPI_COMM_WORLD),
+  const int n = to_int(mine.size() * sizeof(T));
+  check_mpi(MPI_Allgather(mine.data(), n, MPI_BYTE, out.data(), n, MPI_BYTE, MPI_COMM_WORLD),
             "MPI_Allgather");
 #endif
   return out;
+}
+}  // namespace
+
+std::vector<Index> Comm::allgather(std::span<const Index> mine) const {
+  return allgather_values(mine, size_, distributed());
 }
 
 std::vector<double> Comm::allgather(std::span<const double> mine) const {
-  std::vector<double> out(mine.size() * static_cast<std::size_t>(size_));
-  if (!distributed()) {
-    std::copy(mine.begin(), mine.end(), out.begin());
-    return out;
-  }
-#ifdef MPM_HAVE_MPI
-  check_mpi(MPI_Allgather(mine.data(), to_int(mine.size()), MPI_DOUBLE, out.data(),
-                          to_int(mine.size()), MPI_DOUBLE, MPI_COMM_WORLD),
-            "MPI_Allgather");
-#endif
-  return out;
+  return allgather_values(mine, size_, distributed());
 }
 
 std::vector<std::vector<std::byte>> Comm::gather(const std::vector<std::byte>& mine,
