@@ -315,6 +315,11 @@ def check_failure(mpm, tmp, failures):
         if s["status"] != "failed" or s["exit_code"] != 4:
             failures.append(f"failing run: summary status {s['status']}")
         print(f"failure: exit 4 and one message: {msgs[0][:160]}")
+    # Another command than `mpm run` under mpirun: refused, once.
+    r = run(["mpirun", "-n", "2", "--oversubscribe", mpm, "bench", "--dim", "1", "--steps", "1"])
+    lines = [l for l in r.stderr.splitlines() if "error" in l]
+    if r.returncode != 2 or len(lines) != 1 or "only `mpm run`" not in lines[0]:
+        failures.append(f"mpm bench under mpirun: exit {r.returncode}, stderr {r.stderr!r}")
     # Not distributed yet: refused before the first step.
     d = os.path.join(tmp, "refused")
     r = run(mpm_cmd(mpm, 2, "examples/plate_mms_2d.toml", ["method.mapping=tls", "time.end=1e-4"],

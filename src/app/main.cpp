@@ -473,6 +473,12 @@ int run_main(int argc, char** argv) {
     // A signal ends a run after its current step, with its outputs and an "interrupted"
     // summary (core/interrupt.hpp); a second one ends the process at once.
     if (*run || *study) mpm::install_interrupt_handlers();
+    // Under mpirun every process would run the whole command and write the same files.
+    if (mpm::Comm::world().distributed() && !*run)
+      throw mpm::InputError(fmt::format(
+          "only `mpm run` runs on several processes (this is `mpm {}` under mpirun with {} "
+          "processes); start it without mpirun",
+          app.get_subcommands().front()->get_name(), mpm::Comm::world().size()));
     if (*run) return cmd_run(config, sets, out, quiet, restart, overwrite, threads);
     if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot, overwrite);
     if (*bench) return cmd_bench(bopt);
