@@ -31,6 +31,12 @@ import tempfile
 TOL = 1e-12
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
+# A bar of a quarter of the grid thrown at 50 m/s (and stretched a little, so that its stress is
+# not round-off): it crosses every cut of 4 processes.
+THROWN_BAR = ["grid.max=2.0", "grid.cells=40", "body.max=0.5", "initial.velocity=50+sin(2*pi*x)",
+              "boundary.left=free", "loading.body_force=0", "time.end=0.02",
+              "method.basis=bspline", "method.degree=2"]
+
 # (name, config, --set overrides, how particles move between processes: "both" ways with 2,
 # "any", "none" required (a body that need not cross a cut), or "rebalance": the slabs are cut
 # anew (parallel.rebalance))
@@ -66,18 +72,12 @@ CASES = [
      ["grid.cells=8", "time.end=2e-3", "method.basis=maxent", "output.frames=1"], "none"),
     ("3d_cube_bspline2", "examples/cube_mms_3d.toml",
      ["grid.cells=6", "time.end=4e-3", "output.frames=1"], "none"),
-    # A bar of a quarter of the grid thrown at 50 m/s (and stretched a little, so that its stress
-    # is not round-off): it crosses every cut of 4 processes.
     ("1d_thrown_bar_bspline2", "examples/custom_bar.toml",
-     ["grid.max=2.0", "grid.cells=40", "body.max=0.5", "initial.velocity=50+sin(2*pi*x)",
-      "boundary.left=free", "loading.body_force=0", "time.end=0.02", "method.basis=bspline",
-      "method.degree=2", "output.frames=2"], "rebalance"),
+     THROWN_BAR + ["output.frames=2"], "rebalance"),
     # The same without re-cutting the slabs (parallel.rebalance = 0): one process ends up
     # with the whole bar, and the answers are the same.
     ("1d_thrown_bar_no_rebalance", "examples/custom_bar.toml",
-     ["grid.max=2.0", "grid.cells=40", "body.max=0.5", "initial.velocity=50+sin(2*pi*x)",
-      "boundary.left=free", "loading.body_force=0", "time.end=0.02", "method.basis=bspline",
-      "method.degree=2", "output.frames=1", "parallel.rebalance=0"], "any"),
+     THROWN_BAR + ["output.frames=1", "parallel.rebalance=0"], "any"),
 ]
 QUICK = {"1d_linear_musl", "2d_vortex_bspline2_musl", "3d_cube_bspline2", "2d_plate_consistent_cg"}
 

@@ -39,14 +39,6 @@ int to_int(std::size_t n) {
 
 }  // namespace
 
-bool mpi_available() {
-#ifdef MPM_HAVE_MPI
-  return true;
-#else
-  return false;
-#endif
-}
-
 void Comm::init([[maybe_unused]] int* argc, [[maybe_unused]] char*** argv) {
   if (!launched_by_mpi()) return;
 #ifdef MPM_HAVE_MPI

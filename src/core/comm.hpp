@@ -92,7 +92,4 @@ class Comm {
   int rank_ = 0, size_ = 1, local_size_ = 1;
 };
 
-// Whether this build can run on several processes (MPM_MPI).
-bool mpi_available();
-
 }  // namespace mpm

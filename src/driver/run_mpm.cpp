@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cstring>
 #include <span>
 
 #include <fmt/format.h>
@@ -47,24 +46,13 @@ io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
                                     sim.diag.grid_crossings};
     const std::vector<Index> info = comm->allgather(std::span<const Index>(mine));
     std::vector<std::byte> bytes;
-    for (std::size_t i = 0; i < P.x.size(); ++i) P.pack(i, bytes);
-    const std::size_t at = bytes.size();
-    bytes.resize(at + sim.cell.size() * sizeof(CompactIndex));
-    if (!sim.cell.empty())
-      std::memcpy(bytes.data() + at, sim.cell.data(), sim.cell.size() * sizeof(CompactIndex));
+    for (std::size_t i = 0; i < P.x.size(); ++i) pack_particle(sim, i, bytes);
     const auto all = comm->gather(bytes, 0);
     if (!comm->root()) return c;  // rank 0 writes
     Particles<Dim> gathered;
-    for (std::size_t r = 0; r < all.size(); ++r) {
-      const std::size_t n = static_cast<std::size_t>(info[4 * r]);
-      const std::size_t pb = n * Particles<Dim>::bytes_per_particle();
-      gathered.unpack_append(std::span<const std::byte>(all[r].data(), pb));
-      for (std::size_t k = 0; k < n; ++k) {
-        CompactIndex cell;
-        std::memcpy(&cell, all[r].data() + pb + k * sizeof(CompactIndex), sizeof(CompactIndex));
-        c.cells.push_back(cell);
-      }
-    }
+    std::vector<CompactIndex> cells;
+    for (const auto& buf : all) unpack_particles<Dim>(buf, gathered, cells);
+    c.cells.assign(cells.begin(), cells.end());
     c.particles = io::pack_particles(gathered);
     c.distribution.push_back(comm->size());
     c.distribution.insert(c.distribution.end(), part.cuts.begin(), part.cuts.end());
@@ -342,9 +330,11 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         if (comm) {
           migrated += migrate(sim, part, *comm);
           if (settings.parallel.rebalance > 0.0) {
-            // The imbalance the run has reached before any re-cut, for the summary.
-            worst_imbalance = std::max(worst_imbalance, imbalance(sim, *comm));
-            rebalances += rebalance_if_due(sim, part, *comm, settings.parallel.rebalance, migrated);
+            // (The imbalance the run has reached before any re-cut, for the summary.)
+            double measured = 0.0;
+            rebalances +=
+                rebalance_if_due(sim, part, *comm, settings.parallel.rebalance, migrated, measured);
+            worst_imbalance = std::max(worst_imbalance, measured);
           }
           stepper->resize_particle_caches();
         }

@@ -133,7 +133,7 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.tractions = pb.tractions;
     if (sim_.body_force.fill) sim_.body_force.fill(sim_.particles, 0.0, sim_.particles.body);
     if (in.comm != nullptr && in.comm->distributed()) {
-      check_distributed(method, pb);
+      check_distributed_run<Basis, Mapping>(method, !pb.tractions.empty());
       sim_.comm = in.comm;
       sim_.scatter.ranges.bounded = true;  // the grid work of this rank's slab only
     }
@@ -189,10 +189,6 @@ class TypedStepper final : public Stepper<Dim> {
   }
 
  private:
-  void check_distributed(const MethodSettings& method, const Problem<Dim>& pb) const {
-    check_distributed_run<Basis, Mapping>(method, !pb.tractions.empty());
-  }
-
   Scheme scheme_;
   Sim sim_;
 };

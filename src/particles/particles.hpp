@@ -51,10 +51,11 @@ struct Particles {
                 static_cast<CompactIndex>(old));
   }
 
-  // Keeps the particles i with keep(*this, i), in order, and numbers them 0, 1, ... again: for
-  // set-up only (a body cut out of a seeded box), before any output names an id.
+  // Keeps the particles i with keep(*this, i), in order, with their ids: the particles one
+  // process owns in a distributed run, or those that stay when others migrate (ids stay those of
+  // the whole body).
   template <class Keep>
-  void keep_if(Keep&& keep) {
+  void keep_with_ids(Keep&& keep) {
     std::vector<std::size_t> kept;
     for (std::size_t i = 0; i < x.size(); ++i)
       if (keep(std::as_const(*this), i)) kept.push_back(i);
@@ -62,23 +63,14 @@ struct Particles {
       for (std::size_t k = 0; k < kept.size(); ++k) field[k] = field[kept[k]];
       field.resize(kept.size());
     });
-    std::iota(id.begin(), id.end(), CompactIndex{0});
   }
 
-  // Keeps the particles i with keep(*this, i), in order, with their ids: the particles one
-  // process owns in a distributed run, or those that stay when others migrate (ids stay those of
-  // the whole body).
+  // The same, numbering the kept particles 0, 1, ... again: for set-up only (a body cut out of a
+  // seeded box), before any output names an id.
   template <class Keep>
-  void keep_with_ids(Keep&& keep) {
-    std::size_t n = 0;
-    std::vector<std::size_t> kept;
-    for (std::size_t i = 0; i < x.size(); ++i)
-      if (keep(std::as_const(*this), i)) kept.push_back(i);
-    n = kept.size();
-    for_each_field([&](auto& field) {
-      for (std::size_t k = 0; k < n; ++k) field[k] = field[kept[k]];
-      field.resize(n);
-    });
+  void keep_if(Keep&& keep) {
+    keep_with_ids(std::forward<Keep>(keep));
+    std::iota(id.begin(), id.end(), CompactIndex{0});
   }
 
   // Particle i's fields appended to `out` as raw bytes, in the order of for_each_field

@@ -68,6 +68,27 @@ std::vector<double> SlabPartition<Dim>::layer_counts(const Grid<Dim>& grid, cons
 }
 
 template <int Dim>
+void pack_particle(const RunState<Dim>& sim, std::size_t i, std::vector<std::byte>& out) {
+  sim.particles.pack(i, out);
+  const std::size_t at = out.size();
+  out.resize(at + sizeof(CompactIndex));
+  std::memcpy(out.data() + at, &sim.cell[i], sizeof(CompactIndex));
+}
+
+template <int Dim>
+void unpack_particles(std::span<const std::byte> in, Particles<Dim>& P,
+                      std::vector<CompactIndex>& cells) {
+  constexpr std::size_t kParticle = Particles<Dim>::bytes_per_particle();
+  for (std::size_t at = 0; at + kParticle + sizeof(CompactIndex) <= in.size();
+       at += kParticle + sizeof(CompactIndex)) {
+    P.unpack_append(in.subspan(at, kParticle));
+    CompactIndex c;
+    std::memcpy(&c, in.data() + at + kParticle, sizeof(CompactIndex));
+    cells.push_back(c);
+  }
+}
+
+template <int Dim>
 Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& comm) {
   comm.check();
   auto& P = sim.particles;
@@ -82,11 +103,7 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
   std::vector<std::vector<std::byte>> send(static_cast<std::size_t>(comm.size()));
   for (std::size_t i = 0; i < n; ++i) {
     if (owner[i] == me) continue;
-    auto& buf = send[static_cast<std::size_t>(owner[i])];
-    P.pack(i, buf);
-    const std::size_t at = buf.size();
-    buf.resize(at + sizeof(CompactIndex));
-    std::memcpy(buf.data() + at, &sim.cell[i], sizeof(CompactIndex));
+    pack_particle(sim, i, send[static_cast<std::size_t>(owner[i])]);
   }
   // A particle moves less than a cell per step (the time-step limit), so it goes to a
   // neighbouring slab: one message to each neighbour. After the slabs were cut anew, or should a
@@ -114,15 +131,7 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
     sim.cell.resize(k);
     P.keep_with_ids([&](const Particles<Dim>&, std::size_t i) { return owner[i] == me; });
   }
-  constexpr std::size_t kRecord = Particles<Dim>::bytes_per_particle() + sizeof(CompactIndex);
-  for (const auto& buf : recv) {
-    for (std::size_t at = 0; at + kRecord <= buf.size(); at += kRecord) {
-      P.unpack_append(std::span<const std::byte>(buf.data() + at, kRecord - sizeof(CompactIndex)));
-      CompactIndex c;
-      std::memcpy(&c, buf.data() + at + kRecord - sizeof(CompactIndex), sizeof(CompactIndex));
-      sim.cell.push_back(c);
-    }
-  }
+  for (const auto& buf : recv) unpack_particles(buf, P, sim.cell);
   return leaving;
 }
 
@@ -145,10 +154,10 @@ double imbalance(const RunState<Dim>& sim, const Comm& comm, std::vector<Index>*
 
 template <int Dim>
 bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& comm,
-                      double threshold, Index& sent) {
-  if (!(threshold > 0.0)) return false;
+                      double threshold, Index& sent, double& measured) {
   std::vector<Index> counts;
-  if (imbalance(sim, comm, &counts) <= threshold) return false;
+  measured = imbalance(sim, comm, &counts);
+  if (!(threshold > 0.0) || measured <= threshold) return false;
   const std::vector<double> per_layer =
       SlabPartition<Dim>::layer_counts(sim.grid, sim.particles, comm, /*replicated=*/false);
   SlabPartition<Dim> next =
@@ -168,13 +177,25 @@ template struct SlabPartition<1>;
 template struct SlabPartition<2>;
 template struct SlabPartition<3>;
 template Index migrate<1>(RunState<1>&, const SlabPartition<1>&, const Comm&);
+template void pack_particle<1>(const RunState<1>&, std::size_t, std::vector<std::byte>&);
+template void unpack_particles<1>(std::span<const std::byte>, Particles<1>&,
+                                  std::vector<CompactIndex>&);
 template Index migrate<2>(RunState<2>&, const SlabPartition<2>&, const Comm&);
+template void pack_particle<2>(const RunState<2>&, std::size_t, std::vector<std::byte>&);
+template void unpack_particles<2>(std::span<const std::byte>, Particles<2>&,
+                                  std::vector<CompactIndex>&);
 template Index migrate<3>(RunState<3>&, const SlabPartition<3>&, const Comm&);
+template void pack_particle<3>(const RunState<3>&, std::size_t, std::vector<std::byte>&);
+template void unpack_particles<3>(std::span<const std::byte>, Particles<3>&,
+                                  std::vector<CompactIndex>&);
 template double imbalance<1>(const RunState<1>&, const Comm&, std::vector<Index>*);
 template double imbalance<2>(const RunState<2>&, const Comm&, std::vector<Index>*);
 template double imbalance<3>(const RunState<3>&, const Comm&, std::vector<Index>*);
-template bool rebalance_if_due<1>(RunState<1>&, SlabPartition<1>&, const Comm&, double, Index&);
-template bool rebalance_if_due<2>(RunState<2>&, SlabPartition<2>&, const Comm&, double, Index&);
-template bool rebalance_if_due<3>(RunState<3>&, SlabPartition<3>&, const Comm&, double, Index&);
+template bool rebalance_if_due<1>(RunState<1>&, SlabPartition<1>&, const Comm&, double, Index&,
+                                  double&);
+template bool rebalance_if_due<2>(RunState<2>&, SlabPartition<2>&, const Comm&, double, Index&,
+                                  double&);
+template bool rebalance_if_due<3>(RunState<3>&, SlabPartition<3>&, const Comm&, double, Index&,
+                                  double&);
 
 }  // namespace mpm

@@ -8,6 +8,8 @@
 // neighbour (stages::detail::share_grid_sums); the cuts are chosen to give each process the same
 // number of particles. BENCHMARKS.md ("Distributed runs") has the communication model and where
 // slabs stop scaling.
+#include <cstddef>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -43,6 +45,15 @@ struct SlabPartition {
   static char axis_name() { return "xyz"[kAxis]; }
 };
 
+// Particle i's fields and its cell of the last evaluation (sim.cell) appended to `out` as bytes
+// (Particles::pack, then the cell): what travels between processes and into checkpoints.
+template <int Dim>
+void pack_particle(const RunState<Dim>& sim, std::size_t i, std::vector<std::byte>& out);
+// Appends the particles and cells of a buffer of pack_particle records.
+template <int Dim>
+void unpack_particles(std::span<const std::byte> in, Particles<Dim>& P,
+                      std::vector<CompactIndex>& cells);
+
 // Moves every particle whose owner (part.owner) is another rank there, with its fields and its
 // cell of the last evaluation (sim.cell); the particles that stay keep their order, and those
 // that arrive follow in the order of their source ranks. Collective; starts with comm.check().
@@ -61,9 +72,9 @@ double imbalance(const RunState<Dim>& sim, const Comm& comm,
 // slabs anew from the particles' current layers (SlabPartition::balanced) and migrates the
 // particles, if the new cuts hold fewer particles on the most loaded process. Every process
 // takes the same decision from the same gathered counts. Collective; true when it re-cut.
-// `sent`: adds the particles this rank sent.
+// `sent`: adds the particles this rank sent; `measured`: the imbalance before any re-cut.
 template <int Dim>
 bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& comm,
-                      double threshold, Index& sent);
+                      double threshold, Index& sent, double& measured);
 
 }  // namespace mpm

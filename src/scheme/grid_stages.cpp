@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <span>
 #include <string>
@@ -138,112 +137,88 @@ std::array<Index, 2> touched_dofs(const RunState<Dim>& sim) {
   return {lo, hi};
 }
 
+// Each rank's values on its DOF range sim.shared [lo, hi] summed with those of the ranks whose
+// ranges overlap it: values(i, f) calls f(double&) on each of the `width` values of DOF i. Every
+// rank that holds a DOF adds the same partial sums in the same (rank) order: the same bits
+// everywhere. tag: the exchange's MPI tag.
+template <int Dim, class Values>
+void sum_over_sharing_ranks(const RunState<Dim>& sim, std::size_t width, int tag, Values&& values) {
+  const Comm& comm = *sim.comm;
+  const auto& sh = sim.shared;
+  const int me = comm.rank();
+  const Index lo = sh.lo[static_cast<std::size_t>(me)], hi = sh.hi[static_cast<std::size_t>(me)];
+  // The values of DOFs [a, b] as doubles, `width` per DOF.
+  const auto pack = [&](Index a, Index b) {
+    std::vector<std::byte> out(static_cast<std::size_t>(b - a + 1) * width * sizeof(double));
+    auto* v = reinterpret_cast<double*>(out.data());
+    for (Index i = a; i <= b; ++i) values(i, [&](double& x) { *v++ = x; });
+    return out;
+  };
+  const auto overlap = [&](int r) {
+    return std::array<Index, 2>{std::max(lo, sh.lo[static_cast<std::size_t>(r)]),
+                                std::min(hi, sh.hi[static_cast<std::size_t>(r)])};
+  };
+  std::vector<int> peers;
+  std::vector<std::vector<std::byte>> send;
+  for (int r = 0; r < comm.size(); ++r) {
+    const auto [a, b] = overlap(r);
+    if (r == me || a > b) continue;
+    peers.push_back(r);
+    send.push_back(pack(a, b));
+  }
+  const auto recv = comm.exchange(peers, send, tag);
+  if (lo > hi) return;
+  const std::vector<std::byte> own = pack(lo, hi);
+  for (Index i = lo; i <= hi; ++i) values(i, [](double& x) { x = 0.0; });
+  std::size_t next = 0;
+  for (int r = 0; r < comm.size(); ++r) {
+    const bool peer = next < peers.size() && peers[next] == r;
+    if (r != me && !peer) continue;
+    const auto [a, b] = r == me ? std::array<Index, 2>{lo, hi} : overlap(r);
+    const auto* v = reinterpret_cast<const double*>(r == me ? own.data() : recv[next++].data());
+    for (Index i = a; i <= b; ++i) values(i, [&](double& x) { x += *v++; });
+  }
+}
+
+// Whether this rank counts DOF i in its sums over DOFs: the lowest rank whose range holds it.
+template <int Dim>
+bool owns_dof(const RunState<Dim>& sim, Index i) {
+  const auto me = static_cast<std::size_t>(sim.comm->rank());
+  for (std::size_t r = 0; r < me; ++r)
+    if (sim.shared.lo[r] <= i && i <= sim.shared.hi[r]) return false;
+  return true;
+}
+
 template <int Dim>
 void share_grid_sums(RunState<Dim>& sim, unsigned what) {
   const Comm* comm = sim.comm;
   if (comm == nullptr || !comm->distributed()) return;
   comm->check();  // a rank that failed in this step stops every rank here
-  const auto [lo, hi] = touched_dofs(sim);
-  const std::array<Index, 2> mine{lo, hi};
+  const std::array<Index, 2> mine = touched_dofs(sim);
   const std::vector<Index> all = comm->allgather(std::span<const Index>(mine));
-  const int n = comm->size(), me = comm->rank();
+  const auto n = static_cast<std::size_t>(comm->size());
   auto& sh = sim.shared;
-  sh.lo.resize(static_cast<std::size_t>(n));
-  sh.hi.resize(static_cast<std::size_t>(n));
-  for (int r = 0; r < n; ++r) {
-    sh.lo[static_cast<std::size_t>(r)] = all[2 * static_cast<std::size_t>(r)];
-    sh.hi[static_cast<std::size_t>(r)] = all[2 * static_cast<std::size_t>(r) + 1];
+  sh.lo.resize(n);
+  sh.hi.resize(n);
+  for (std::size_t r = 0; r < n; ++r) {
+    sh.lo[r] = all[2 * r];
+    sh.hi[r] = all[2 * r + 1];
   }
   using namespace grid_sum;
   auto& nd = sim.nodes;
   const bool M = (what & kMass) != 0, Q = (what & kMomentum) != 0, F = (what & kForces) != 0;
   const std::size_t width = (M ? 1 : 0) + (Q ? Dim : 0) + (F ? Dim : 0);
-  // The values of DOFs [a, b] as doubles, `width` per DOF.
-  auto pack = [&](Index a, Index b) {
-    std::vector<std::byte> out(static_cast<std::size_t>(b - a + 1) * width * sizeof(double));
-    auto* v = reinterpret_cast<double*>(out.data());
-    for (Index i = a; i <= b; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      if (M) *v++ = nd.mass[k];
-      if (Q)
-        for (int d = 0; d < Dim; ++d) *v++ = nd.momentum[k][d];
-      if (F)
-        for (int d = 0; d < Dim; ++d) *v++ = nd.force[k][d];
-    }
-    return out;
-  };
-  // Adds the values of DOFs [a, b] from a buffer of pack().
-  auto add = [&](const std::byte* data, Index a, Index b) {
-    const auto* v = reinterpret_cast<const double*>(data);
-    for (Index i = a; i <= b; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      if (M) nd.mass[k] += *v++;
-      if (Q)
-        for (int d = 0; d < Dim; ++d) nd.momentum[k][d] += *v++;
-      if (F)
-        for (int d = 0; d < Dim; ++d) nd.force[k][d] += *v++;
-    }
-  };
-  std::vector<int> peers;
-  std::vector<std::vector<std::byte>> send;
-  for (int r = 0; r < n; ++r) {
-    const Index a = std::max(lo, sh.lo[static_cast<std::size_t>(r)]);
-    const Index b = std::min(hi, sh.hi[static_cast<std::size_t>(r)]);
-    if (r == me || a > b) continue;
-    peers.push_back(r);
-    send.push_back(pack(a, b));
-  }
-  const auto recv = comm->exchange(peers, send, 100);
-  if (lo > hi) return;
-  // Every rank that holds a DOF adds the same partial sums in the same (rank) order: the same
-  // bits everywhere.
-  const std::vector<std::byte> own = pack(lo, hi);
-  for (Index i = lo; i <= hi; ++i) {
+  sum_over_sharing_ranks(sim, width, 100, [&](Index i, auto&& f) {
     const auto k = static_cast<std::size_t>(i);
-    if (M) nd.mass[k] = 0.0;
-    if (Q) nd.momentum[k].setZero();
-    if (F) nd.force[k].setZero();
-  }
-  std::size_t next = 0;
-  for (int r = 0; r < n; ++r) {
-    if (r == me) {
-      add(own.data(), lo, hi);
-    } else if (next < peers.size() && peers[next] == r) {
-      add(recv[next].data(), std::max(lo, sh.lo[static_cast<std::size_t>(r)]),
-          std::min(hi, sh.hi[static_cast<std::size_t>(r)]));
-      ++next;
-    }
-  }
+    if (M) f(nd.mass[k]);
+    if (Q)
+      for (int d = 0; d < Dim; ++d) f(nd.momentum[k][d]);
+    if (F)
+      for (int d = 0; d < Dim; ++d) f(nd.force[k][d]);
+  });
 }
 
-// sum over the DOFs of a grid array, each DOF counted once over the ranks of a distributed run
-// (by the lowest rank whose range holds it), combined in rank order. T: double or Vec<Dim>.
-template <int Dim, class T>
-T grid_total(const RunState<Dim>& sim, const std::vector<T>& a, const T& zero) {
-  const Comm* comm = sim.comm;
-  if (comm == nullptr || !comm->distributed())
-    return deterministic_sum(static_cast<Index>(a.size()), zero,
-                             [&](Index i) { return a[static_cast<std::size_t>(i)]; });
-  const auto me = static_cast<std::size_t>(comm->rank());
-  const auto& sh = sim.shared;
-  const Index lo = sh.lo[me], hi = sh.hi[me];
-  T local = zero;
-  if (lo <= hi)
-    local = deterministic_sum(hi - lo + 1, zero, [&](Index k) {
-      const Index i = lo + k;
-      for (std::size_t r = 0; r < me; ++r)
-        if (sh.lo[r] <= i && i <= sh.hi[r]) return zero;
-      return a[static_cast<std::size_t>(i)];
-    });
-  if constexpr (std::is_same_v<T, double>) {
-    return comm->sum(local);
-  } else {
-    comm->sum(std::span<double>(local.data(), static_cast<std::size_t>(local.size())));
-    return local;
-  }
-}
-
-// A particle sum of this rank, summed over the ranks (rank order).
+// A sum of this rank (double or an Eigen vector), summed over the ranks (rank order).
 template <class T>
 T over_ranks(const Comm* comm, T v) {
   if (comm == nullptr || !comm->distributed()) return v;
@@ -252,6 +227,21 @@ T over_ranks(const Comm* comm, T v) {
   else
     comm->sum(std::span<double>(v.data(), static_cast<std::size_t>(v.size())));
   return v;
+}
+
+// sum over the DOFs of a grid array, each DOF counted once over the ranks of a distributed run
+// (by the lowest rank whose range holds it), combined in rank order. T: double or Vec<Dim>.
+template <int Dim, class T>
+T grid_total(const RunState<Dim>& sim, const std::vector<T>& a, const T& zero) {
+  if (sim.comm == nullptr || !sim.comm->distributed())
+    return deterministic_sum(static_cast<Index>(a.size()), zero,
+                             [&](Index i) { return a[static_cast<std::size_t>(i)]; });
+  const auto [lo, end] = sim.dof_window();
+  const Index first = lo;
+  return over_ranks(sim.comm, deterministic_sum(end - lo, zero, [&](Index k) {
+                      return owns_dof(sim, first + k) ? a[static_cast<std::size_t>(first + k)]
+                                                      : zero;
+                    }));
 }
 
 // The active set and the mass conservation check, and the consistent matrix if requested,
@@ -444,37 +434,7 @@ template <int Dim>
 // (as share_grid_sums, for one array).
 template <int Dim>
 void share_vector(const RunState<Dim>& sim, Eigen::VectorXd& v) {
-  const Comm& comm = *sim.comm;
-  const auto& sh = sim.shared;
-  const int me = comm.rank();
-  const Index lo = sh.lo[static_cast<std::size_t>(me)], hi = sh.hi[static_cast<std::size_t>(me)];
-  std::vector<int> peers;
-  std::vector<std::vector<std::byte>> send;
-  for (int r = 0; r < comm.size(); ++r) {
-    const Index a = std::max(lo, sh.lo[static_cast<std::size_t>(r)]);
-    const Index b = std::min(hi, sh.hi[static_cast<std::size_t>(r)]);
-    if (r == me || a > b) continue;
-    peers.push_back(r);
-    std::vector<std::byte> buf(static_cast<std::size_t>(b - a + 1) * sizeof(double));
-    std::memcpy(buf.data(), v.data() + a, buf.size());
-    send.push_back(std::move(buf));
-  }
-  const auto recv = comm.exchange(peers, send, 200);
-  if (lo > hi) return;
-  const Eigen::VectorXd own = v.segment(lo, hi - lo + 1);
-  v.segment(lo, hi - lo + 1).setZero();
-  std::size_t next = 0;
-  for (int r = 0; r < comm.size(); ++r) {
-    if (r == me) {
-      v.segment(lo, hi - lo + 1) += own;
-    } else if (next < peers.size() && peers[next] == r) {
-      const Index a = std::max(lo, sh.lo[static_cast<std::size_t>(r)]);
-      const auto* in = reinterpret_cast<const double*>(recv[next].data());
-      for (Index i = a; i <= std::min(hi, sh.hi[static_cast<std::size_t>(r)]); ++i)
-        v[i] += in[i - a];
-      ++next;
-    }
-  }
+  detail::sum_over_sharing_ranks(sim, 1, 200, [&](Index i, auto&& f) { f(v[i]); });
 }
 
 // y = M^{-1} r with consistent mass in a distributed run: CG (method.mass_solver = "cg") on
@@ -488,12 +448,9 @@ void solve_distributed(RunState<Dim>& sim, const std::vector<V>& r, std::vector<
   const auto n = static_cast<Index>(r.size());
   const auto [first, end] = sim.dof_window();
   const Index lo = first, count = end - first;
-  const auto me = static_cast<std::size_t>(sim.comm->rank());
-  std::vector<unsigned char> owned(static_cast<std::size_t>(count), 1);
+  std::vector<unsigned char> owned(static_cast<std::size_t>(count));
   for (Index k = 0; k < count; ++k)
-    for (std::size_t q = 0; q < me; ++q)
-      if (sim.shared.lo[q] <= lo + k && lo + k <= sim.shared.hi[q])
-        owned[static_cast<std::size_t>(k)] = 0;
+    owned[static_cast<std::size_t>(k)] = detail::owns_dof(sim, lo + k);
   const InnerProduct dot = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
     return sim.comm->sum(deterministic_sum(count, 0.0, [&](Index k) {
       return owned[static_cast<std::size_t>(k)] ? a[lo + k] * b[lo + k] : 0.0;
