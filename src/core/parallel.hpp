@@ -100,17 +100,23 @@ struct ChunkDofRanges {
   // with its slab, not with the whole grid. Otherwise every DOF outside the ranges is set to zero.
   bool bounded = false;
 
-  // [first, end) of the DOFs the scatters write: all of them unless `bounded`.
-  std::array<Index, 2> written(Index dofs) const {
-    if (!bounded) return {0, dofs};
-    Index first = dofs, end = 0;
+  // [lowest, highest] DOF of the ranges (lowest > highest: none recorded).
+  std::array<Index, 2> span() const {
+    Index first = std::numeric_limits<Index>::max(), last = -1;
     for (int c = 0; c < ParticleChunks::count(particles); ++c) {
       const auto cc = static_cast<std::size_t>(c);
       if (hi[cc] < lo[cc]) continue;
       first = std::min(first, lo[cc]);
-      end = std::max(end, hi[cc] + 1);
+      last = std::max(last, hi[cc]);
     }
-    return first < end ? std::array<Index, 2>{first, end} : std::array<Index, 2>{0, 0};
+    return {first, last};
+  }
+
+  // [first, end) of the DOFs the scatters write: all of them unless `bounded`.
+  std::array<Index, 2> written(Index dofs) const {
+    if (!bounded) return {0, dofs};
+    const auto [first, last] = span();
+    return first <= last ? std::array<Index, 2>{first, last + 1} : std::array<Index, 2>{0, 0};
   }
 
   // Scans the stencils (fallback when evaluate_basis did not record them).

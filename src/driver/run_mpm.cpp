@@ -285,28 +285,35 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
       return part.owner(pb.grid, P.x[i], 0) == me;
     });
   }
-  // OTM and the unified solver are one- and two-dimensional (run_settings refuses them in 3D).
-  const auto stepper = [&]() -> std::unique_ptr<Stepper<Dim>> {
-    if constexpr (Dim <= 2)
-      if (otm || unified) return make_otm_stepper<Dim>({pb, method, !opt.restart});
-    return make_stepper<Dim>(basis, {pb, method, !opt.restart, comm});
-  }();
-  RunState<Dim>& sim = stepper->state();
-
-  // Outputs start once the input has passed every check above. Only rank 0 writes: when it
-  // cannot (its directory), every rank stops with its message.
-  std::optional<OutputSession<Dim>> out_session;
-  {
+  // An input error that only some processes meet (the stepper's checks of their own particles,
+  // rank 0's output directory) stops every process with the message of the lowest.
+  const auto agreed = [&](auto&& build) {
     std::optional<Comm::Failure> failed;
     try {
-      out_session.emplace(opt, settings, config_text, pb);
+      build();
     } catch (const InputError& e) {
       if (!comm) throw;
       failed = Comm::Failure{comm->rank(), exit_code::kInput, e.what()};
     }
     if (comm)
       if (const auto f = comm->agree(failed ? &*failed : nullptr)) throw InputError(f->message);
-  }
+  };
+  // OTM and the unified solver are one- and two-dimensional (run_settings refuses them in 3D).
+  std::unique_ptr<Stepper<Dim>> stepper;
+  agreed([&] {
+    if constexpr (Dim <= 2)
+      if (otm || unified) {
+        stepper = make_otm_stepper<Dim>({pb, method, !opt.restart});
+        return;
+      }
+    stepper = make_stepper<Dim>(basis, {pb, method, !opt.restart, comm});
+  });
+  RunState<Dim>& sim = stepper->state();
+
+  // Outputs start once the input has passed every check above. Only rank 0 writes: when it
+  // cannot (its directory), every rank stops with its message.
+  std::optional<OutputSession<Dim>> out_session;
+  agreed([&] { out_session.emplace(opt, settings, config_text, pb); });
   OutputSession<Dim>& out = *out_session;
   RunResult res;
   res.benchmark = pb.benchmark;

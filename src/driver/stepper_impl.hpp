@@ -63,17 +63,22 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
 }
 
 // What a distributed run (issue 21) does not do yet, refused before the first step with the
-// key to change: the exchange shares the direct mapping's particle-to-grid sums of bases whose
-// stencils depend on one particle alone; consistent mass is solved by distributed CG.
+// key to change: the exchange shares the particle-to-grid sums of the direct mapping and of TLS
+// (whose reconstructions read the other processes' particles near a process's own: ghost
+// particles) for bases whose stencils depend on one particle alone; consistent mass is solved
+// by distributed CG.
 template <class Basis, class Mapping>
 void check_distributed_run(const MethodSettings& method, bool tractions) {
   constexpr std::string_view kHow = "run it on one process (without mpirun)";
-  if constexpr (!std::is_same_v<Mapping, DirectMapping>)
+  if constexpr (!std::is_same_v<Mapping, DirectMapping> && !Mapping::kGhostParticles)
     throw InputError(fmt::format(
-        "{}: method.mapping = \"{}\" does not run on several processes yet (its "
-        "reconstructions read the particles of neighbouring cells, which a process does not "
-        "hold; issue 21); use method.mapping = \"direct\" or {}",
-        method.where_mapping, Mapping::kName, kHow));
+        "{}: method.mapping = \"{}\" does not run on several processes yet ({}; issue 21); use "
+        "method.mapping = \"direct\" or \"tls\", or {}",
+        method.where_mapping, Mapping::kName,
+        std::is_same_v<Mapping, CubicSplineMapping>
+            ? "its spline is one fit through all the particles"
+            : "its fits and its conservative correction are not split among processes",
+        kHow));
   if constexpr (Basis::kPrepare || Basis::kTrackedCorners || Basis::kTriangleMesh)
     throw InputError(fmt::format(
         "{}: the {} basis does not run on several processes yet ({}; issue 21); {}",

@@ -158,7 +158,7 @@ class CubicSplineMapping {
   // problems"); the run set-up rejects other dimensions with this before instantiating.
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
   // Capabilities (mapping/mapping.hpp).
-  static constexpr bool kFusedScatter = false, kRunTotals = false;
+  static constexpr bool kFusedScatter = false, kRunTotals = false, kGhostParticles = false;
 
   CubicSplineMapping() : CubicSplineMapping(Settings{}) {}
   // Throws InputError for a negative number of Gauss points.

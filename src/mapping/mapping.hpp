@@ -8,6 +8,11 @@
 //   kRunTotals     totals() / save_totals() / load_totals(): counters over the run (TLS
 //                  completions, MLS conditioning), reported in summary.json and kept in
 //                  checkpoints as the bytes the mapping writes of itself
+//   kGhostParticles ghost_reach(sim): the mapping reads the particles of neighbouring cells
+//                  (TLS). A distributed run gives it, for each sum, copies of the other
+//                  processes' particles within ghost_reach(sim) cell layers of its own
+//                  (stages::GhostParticles), and the mapping integrates only the elements of
+//                  RunState::own_cells(), so that each element is integrated once.
 // Mappings hold no per-particle state, so re-sorting the particles (scheme/sort.hpp) needs
 // nothing from them.
 #include <concepts>
@@ -23,6 +28,7 @@ concept MappingFor = requires(M& m, Sim& sim, int dim) {
   { M::kName } -> std::convertible_to<std::string_view>;
   { M::kFusedScatter } -> std::convertible_to<bool>;
   { M::kRunTotals } -> std::convertible_to<bool>;
+  { M::kGhostParticles } -> std::convertible_to<bool>;
   { M::supports_dimension(dim) } -> std::convertible_to<bool>;
   m.map_mass(sim);      // nodal masses (and the consistent matrix), D eq. 2.31 / 2.44
   m.map_momentum(sim);  // nodal momenta, 2.32 / 2.48
@@ -33,6 +39,10 @@ concept MappingFor = requires(M& m, Sim& sim, int dim) {
      m.template map_fused<grid_sum::kMass | grid_sum::kMomentum | grid_sum::kForces>(sim);
      m.template map_fused<grid_sum::kMomentum | grid_sum::kVelocityFirst>(sim, dt);
    }) &&
+    (!M::kGhostParticles ||
+     requires(const M& cm, const Sim& sim) {
+       { cm.ghost_reach(sim) } -> std::convertible_to<double>;
+     }) &&
     (!M::kRunTotals ||
      requires(M & m, const M& cm, std::string_view bytes, const std::string& what) {
        { cm.save_totals() } -> std::same_as<std::string>;

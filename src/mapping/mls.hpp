@@ -340,7 +340,7 @@ class MovingLeastSquaresMapping {
   using Settings = MlsSettings;
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
-  static constexpr bool kFusedScatter = false, kRunTotals = true;
+  static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = false;
 
   MovingLeastSquaresMapping() : MovingLeastSquaresMapping(Settings{}) {}
   // Throws InputError for a degree other than 1, 2 or negative Gauss points.

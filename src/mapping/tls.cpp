@@ -238,6 +238,53 @@ void accumulate(TlsReport& total, const TlsReport& step) {
   total.surface += step.surface;
 }
 
+TlsReport over_ranks(const Comm& comm, const TlsReport& mine) {
+  if (!comm.distributed()) return mine;
+  const TlsReport& m = mine;
+  // As doubles (exact for counts below 2^53), one all-gather.
+  const std::array<double, 15> v{static_cast<double>(m.active),
+                                 static_cast<double>(m.full),
+                                 static_cast<double>(m.reduced),
+                                 static_cast<double>(m.with_virtual),
+                                 static_cast<double>(m.with_neighbours),
+                                 static_cast<double>(m.failed),
+                                 static_cast<double>(m.truncated),
+                                 static_cast<double>(m.limited),
+                                 static_cast<double>(m.surface),
+                                 static_cast<double>(m.outside),
+                                 static_cast<double>(m.min_terms),
+                                 m.max_condition,
+                                 static_cast<double>(m.failed_element),
+                                 static_cast<double>(m.failed_points),
+                                 m.failed_condition};
+  const std::vector<double> all = comm.allgather(std::span<const double>(v));
+  TlsReport t;
+  t.elements = m.elements;
+  for (std::size_t r = 0; r < static_cast<std::size_t>(comm.size()); ++r) {
+    const double* o = all.data() + r * v.size();
+    const auto n = [&](int k) { return static_cast<Index>(o[k]); };
+    t.active += n(0);
+    t.full += n(1);
+    t.reduced += n(2);
+    t.with_virtual += n(3);
+    t.with_neighbours += n(4);
+    if (n(5) > 0 && (t.failed == 0 || n(12) < t.failed_element)) {
+      t.failed_element = n(12);
+      t.failed_points = n(13);
+      t.failed_condition = o[14];
+    }
+    t.failed += n(5);
+    t.truncated += n(6);
+    t.limited += n(7);
+    t.surface += n(8);
+    t.outside += n(9);
+    const int terms = static_cast<int>(o[10]);
+    if (terms > 0) t.min_terms = t.min_terms > 0 ? std::min(t.min_terms, terms) : terms;
+    t.max_condition = std::max(t.max_condition, o[11]);
+  }
+  return t;
+}
+
 template <int Dim>
 BasicTlsReconstruction<Dim>::BasicTlsReconstruction(const TlsSettings& s)
     : settings_(s), nb_(s.terms_used(Dim)) {
@@ -272,6 +319,7 @@ const TlsReport& BasicTlsReconstruction<Dim>::set_points(const Grid<Dim>& g,
   grid_ = g;
   x_.resize(x.size());
   for (std::size_t i = 0; i < x.size(); ++i) x_[i] = as_vec(x[i]);
+  key_.clear();
   report_ = TlsReport{};
   bin_points(share_face_points);
   build_systems();
@@ -283,6 +331,7 @@ const TlsReport& BasicTlsReconstruction<Dim>::set_points(const Grid<Dim>& g,
                                                          const Particles<Dim>& P) {
   grid_ = g;
   x_.assign(P.x.begin(), P.x.end());
+  key_.assign(P.id.begin(), P.id.end());
   report_ = TlsReport{};
   bins_.build(g, P);
   build_systems();
@@ -482,10 +531,10 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
       if (grid_.has_cell(nc)) nbrs[static_cast<std::size_t>(count++)] = grid_.cell_index(nc);
     }
     double last_d = -1.0;
-    Index last_p = -1;
+    Index last_key = -1;
     while (taken < max_taken && !well_posed(D, distinct, nb, cond)) {
       double best_d = kInf;
-      Index best_p = -1;
+      Index best_p = -1, best_key = -1;
       for (int k = 0; k < count; ++k) {
         const Index n = nbrs[static_cast<std::size_t>(k)];
         for (const Index* it = bins_.begin(n); it != bins_.end(n); ++it) {
@@ -501,17 +550,20 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
             }
             d = std::sqrt(sq);
           }
-          const bool after = d > last_d || (d == last_d && *it > last_p);
-          const bool better = d < best_d || (d == best_d && *it < best_p);
+          const Index k =
+              key_.empty() ? *it : static_cast<Index>(key_[static_cast<std::size_t>(*it)]);
+          const bool after = d > last_d || (d == last_d && k > last_key);
+          const bool better = d < best_d || (d == best_d && (best_p < 0 || k < best_key));
           if (after && better) {
             best_d = d;
             best_p = *it;
+            best_key = k;
           }
         }
       }
       if (best_p < 0) break;  // these neighbours have nothing left
       last_d = best_d;
-      last_p = best_p;
+      last_key = best_key;
       const Vec<Dim> s = local(e, x_[static_cast<std::size_t>(best_p)]);
       if (coincides(sys, s)) continue;
       add_datum(sys, D, s, best_p);
@@ -686,8 +738,9 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     info.condition = cond;
   });
 
-  // The report, in element order (the first failed element is the lowest index).
-  for (Index e = 0; e < ne; ++e) {
+  // The report, in element order (the first failed element is the lowest index), over the
+  // elements of set_focus.
+  for (Index e = std::max<Index>(0, focus_[0]); e < std::min(ne, focus_[1]); ++e) {
     const TlsElementInfo& info = info_[static_cast<std::size_t>(e)];
     if (info.points == 0) continue;
     ++report_.active;

@@ -162,6 +162,10 @@ struct TlsReport {
 
 // Sums the counts (element-steps over a run), keeps the extreme condition and terms.
 void accumulate(TlsReport& total, const TlsReport& step);
+// The reports of the processes of a distributed run, each over its own elements
+// (BasicTlsReconstruction::set_focus), as one report of the whole grid: counts summed, the
+// extremes taken, the first failed element the lowest of any process. Collective.
+TlsReport over_ranks(const Comm& comm, const TlsReport& mine);
 
 // The run stops (exit code kReconstruction) when a step's fits failed (rep.failed > 0): names the
 // first element that could not be fitted (`noun` "element" or "triangle", `which` its
@@ -247,8 +251,14 @@ class BasicTlsReconstruction {
   // to all elements sharing that face (or corner), as the point at pi in D 5.2.3.
   const TlsReport& set_points(const Grid<Dim>& g, std::span<const Point> x,
                               bool share_face_points = false);
-  // The particles of an MPM step (all inside the grid), binned with ElementBins.
+  // The particles of an MPM step (all inside the grid), binned with ElementBins. Ties between
+  // equally near points (neighbour completion) are broken by particle id, not by index, so that
+  // the order of the particles in memory (re-sorting, processes) does not change the fits.
   const TlsReport& set_points(const Grid<Dim>& g, const Particles<Dim>& P);
+  // The elements [first, end) the report counts (default: all): a process of a distributed run
+  // reports only the elements it integrates (RunState::own_cells); every element with points is
+  // still fitted, as the completions of those elements read their neighbours.
+  void set_focus(Index first, Index end) { focus_ = {first, end}; }
 
   // f: one value per point of set_points. integrals: c_e per element; a_1 = c_e / |Omega_e|
   // (D eq. 5.9) whatever the data, which (own and completion points alike) fit a_2.. only, so
@@ -414,6 +424,9 @@ class BasicTlsReconstruction {
   std::vector<double> face_xi_;
   Grid<Dim> grid_;
   std::vector<Vec<Dim>> x_;  // positions of the current point set [m]
+  // The order of the points for ties (particle ids; empty: their indices).
+  std::vector<CompactIndex> key_;
+  std::array<Index, 2> focus_{0, std::numeric_limits<Index>::max()};
   ElementBins<Dim> bins_;
   std::vector<Own> own_;
   std::vector<System> systems_;
@@ -516,7 +529,7 @@ class TlsMapping {
   // The run set-up rejects other dimensions with a clear message before instantiating.
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
-  static constexpr bool kFusedScatter = false, kRunTotals = true;
+  static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true;
 
   TlsMapping() : TlsMapping(TlsSettings{}) {}
   // Validates s for dimension dim (throws InputError).
@@ -546,6 +559,17 @@ class TlsMapping {
     if (!st) throw std::logic_error(fmt::format("TlsMapping: no {}D reconstruction yet", Dim));
     return st->recon;
   }
+  // The cell layers of the other processes' particles this mapping reads in a distributed run
+  // (MappingFor's kGhostParticles), for this process's particles: 1, as the completions and the
+  // free-surface test look one element across; with domain_integrals at least 2 ceil(r), r the
+  // largest half-side of a particle's box in cells along the last axis (a particle that far
+  // reaches this process's elements, and its fractions depend on the elements its box overlaps,
+  // as far again). tls_mapping.cpp.
+  template <class Sim>
+  double ghost_reach(const Sim& sim) const {
+    return reach<Sim::kDim>(sim);
+  }
+
   const TlsReport& last_report() const {
     if (triangles_) return triangle_report_;
     return dim_ == 3   ? reconstruction<3>().report()
@@ -591,6 +615,7 @@ class TlsMapping {
     } else {
       fit_mass<Dim>(sim, q);
       q.evaluate(sim.basis, sim.step, sim.time);
+      sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs (issue 21)
       assemble_mass(sim, q, state<Dim>().rho);
     }
   }
@@ -730,10 +755,13 @@ class TlsMapping {
   void fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q);
   // tls_mapping.cpp: TlsSettings::surface_volume's element flags and positivity's theta (both
   // from the density fit in st.coef), and theta applied to a conservative fit in st.coef.
+  // Both return how many elements of `own` (RunState::own_cells) they flagged or limited.
   template <int Dim>
-  void mark_surface(TlsMappingState<Dim>& st);
+  Index mark_surface(TlsMappingState<Dim>& st, const std::array<Index, 2>& own);
   template <int Dim>
-  void limit_density(TlsMappingState<Dim>& st);
+  Index limit_density(TlsMappingState<Dim>& st, const std::array<Index, 2>& own);
+  template <int Dim>
+  double reach(const RunState<Dim>& sim) const;
   template <int Dim>
   void apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficients<Dim>& coef,
                    const unsigned char* only);

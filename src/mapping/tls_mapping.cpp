@@ -15,8 +15,8 @@ namespace mpm {
 // TlsSettings::surface_volume: an active element with an inactive one among the 3^Dim - 1
 // around it (inside the grid) is cut by a free surface.
 template <int Dim>
-void TlsMapping::mark_surface(TlsMappingState<Dim>& st) {
-  if (!settings_.surface_volume) return;  // st.surface is read only with it
+Index TlsMapping::mark_surface(TlsMappingState<Dim>& st, const std::array<Index, 2>& own) {
+  if (!settings_.surface_volume) return 0;  // st.surface is read only with it
   const auto& recon = st.recon;
   const Index ne = recon.num_elements();
   st.surface.assign(static_cast<std::size_t>(ne), 0);
@@ -35,15 +35,17 @@ void TlsMapping::mark_surface(TlsMappingState<Dim>& st) {
       }
     }
   });
-  for (unsigned char f : st.surface) totals_.surface += f;
+  Index flagged = 0;
+  for (Index e = own[0]; e < own[1]; ++e) flagged += st.surface[static_cast<std::size_t>(e)];
+  return flagged;
 }
 
 // TlsSettings::positivity (Zhang and Shu 2010): with m = min_g rho^(x_g) < 0 over the element's
 // Gauss points, rho^ = a_1 + theta (rho^ - a_1) with theta = a_1 / (a_1 - m) is zero there and
 // non-negative at the others; a_1 = sum m_p / |Omega_e| > 0 is kept, so mass is conserved.
 template <int Dim>
-void TlsMapping::limit_density(TlsMappingState<Dim>& st) {
-  if (!settings_.positivity) return;  // st.theta is read only with it (apply_theta)
+Index TlsMapping::limit_density(TlsMappingState<Dim>& st, const std::array<Index, 2>& own) {
+  if (!settings_.positivity) return 0;  // st.theta is read only with it (apply_theta)
   const Index ne = st.recon.num_elements();
   st.theta.assign(static_cast<std::size_t>(ne), 1.0);
   parallel_for(ne, [&](Index e) {
@@ -57,7 +59,21 @@ void TlsMapping::limit_density(TlsMappingState<Dim>& st) {
       a.tail(a.size() - 1) *= theta;
     }
   });
-  for (double t : st.theta) totals_.limited += t < 1.0;
+  Index limited = 0;
+  for (Index e = own[0]; e < own[1]; ++e) limited += st.theta[static_cast<std::size_t>(e)] < 1.0;
+  return limited;
+}
+
+template <int Dim>
+double TlsMapping::reach(const RunState<Dim>& sim) const {
+  if (!settings_.domain_integrals) return 1.0;
+  const auto& g = sim.grid;
+  double r = 0.0;  // the largest half-side in cells along the last axis
+  for (Index p = 0; p < sim.particles.size(); ++p) {
+    const double half = 0.5 * cpgimp_side(g, sim.particles, p, Dim - 1) / g.h[Dim - 1];
+    if (std::isfinite(half)) r = std::max(r, half);
+  }
+  return std::max(1.0, 2.0 * std::ceil(r));
 }
 
 // The same theta on the terms beyond a_1 of a conservative field fitted in coef (every element,
@@ -159,7 +175,12 @@ template <int Dim>
 void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   auto& st = state<Dim>();
   const auto& P = sim.particles;
-  const TlsReport& rep = st.recon.set_points(sim.grid, P);
+  // In a distributed run this process reconstructs with the ghost particles but integrates, and
+  // reports, only its own elements; the reports of all processes are combined.
+  const std::array<Index, 2> own = sim.own_cells();
+  st.recon.set_focus(own[0], own[1]);
+  TlsReport rep = st.recon.set_points(sim.grid, P);
+  if (sim.comm) rep = over_ranks(*sim.comm, rep);
   accumulate(totals_, rep);
   if (rep.failed > 0)
     throw_fit_failure(sim.step, sim.time, rep, "element", st.recon.describe(rep.failed_element),
@@ -168,7 +189,7 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   // D 6.3: the same Gauss rule in every element of the uniform grid, weights scaled by the
   // half-widths (the Jacobian of the map from [-1, 1]^Dim).
   const Vec<Dim> hw = st.recon.half_width_vec();
-  for (Index e = 0; e < st.recon.num_elements(); ++e) {
+  for (Index e = own[0]; e < own[1]; ++e) {
     if (!st.recon.active(e)) continue;  // no particles: no reconstruction, no mass
     const Vec<Dim> c = st.recon.centre_vec(e);
     for (std::size_t k = 0; k < st.xi.size(); ++k) {
@@ -185,8 +206,11 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   element_sums(st.recon, 1, [&](std::size_t i, int) { return P.mass[i]; });
   fill_values(P.x.size(), 1, [&](std::size_t i, int) { return P.density(i); });
   st.recon.fit_conservative(values_, integrals_, st.coef);
-  mark_surface(st);
-  limit_density(st);
+  std::array<double, 2> flagged{static_cast<double>(mark_surface(st, own)),
+                                static_cast<double>(limit_density(st, own))};
+  if (sim.comm) sim.comm->sum(std::span<double>(flagged));
+  totals_.surface += static_cast<Index>(flagged[0]);
+  totals_.limited += static_cast<Index>(flagged[1]);
   st.rho.resize(q.size());
   at_gauss(st, q, [&](std::size_t g, double v) { st.rho[g] = v; });
 }
@@ -272,12 +296,15 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   });
 }
 
-template void TlsMapping::mark_surface<1>(TlsMappingState<1>&);
-template void TlsMapping::mark_surface<2>(TlsMappingState<2>&);
-template void TlsMapping::mark_surface<3>(TlsMappingState<3>&);
-template void TlsMapping::limit_density<1>(TlsMappingState<1>&);
-template void TlsMapping::limit_density<2>(TlsMappingState<2>&);
-template void TlsMapping::limit_density<3>(TlsMappingState<3>&);
+template Index TlsMapping::mark_surface<1>(TlsMappingState<1>&, const std::array<Index, 2>&);
+template Index TlsMapping::mark_surface<2>(TlsMappingState<2>&, const std::array<Index, 2>&);
+template Index TlsMapping::mark_surface<3>(TlsMappingState<3>&, const std::array<Index, 2>&);
+template Index TlsMapping::limit_density<1>(TlsMappingState<1>&, const std::array<Index, 2>&);
+template Index TlsMapping::limit_density<2>(TlsMappingState<2>&, const std::array<Index, 2>&);
+template Index TlsMapping::limit_density<3>(TlsMappingState<3>&, const std::array<Index, 2>&);
+template double TlsMapping::reach<1>(const RunState<1>&) const;
+template double TlsMapping::reach<2>(const RunState<2>&) const;
+template double TlsMapping::reach<3>(const RunState<3>&) const;
 template void TlsMapping::split_domains<1>(const RunState<1>&, const BasicTlsReconstruction<1>&);
 template void TlsMapping::split_domains<2>(const RunState<2>&, const BasicTlsReconstruction<2>&);
 template void TlsMapping::split_domains<3>(const RunState<3>&, const BasicTlsReconstruction<3>&);

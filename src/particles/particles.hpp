@@ -65,6 +65,12 @@ struct Particles {
     });
   }
 
+  // Keeps the first n particles (the ghost copies appended after a process's own particles
+  // are dropped this way: stages::GhostParticles).
+  void truncate(Index n) {
+    for_each_field([&](auto& field) { field.resize(static_cast<std::size_t>(n)); });
+  }
+
   // The same, numbering the kept particles 0, 1, ... again: for set-up only (a body cut out of a
   // seeded box), before any output names an id.
   template <class Keep>

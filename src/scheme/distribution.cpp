@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <span>
 
 namespace mpm {
@@ -136,6 +137,51 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
 }
 
 template <int Dim>
+void append_ghosts(RunState<Dim>& sim, const Comm& comm, Index layers) {
+  comm.check();
+  remove_ghosts(sim);
+  constexpr int kAxis = Dim - 1;
+  auto& P = sim.particles;
+  const auto n = static_cast<std::size_t>(P.size());
+  const Index top = sim.grid.cells[kAxis] - 1;
+  std::vector<Index> layer(n);
+  Index lo = std::numeric_limits<Index>::max(), hi = -1;
+  for (std::size_t i = 0; i < n; ++i) {
+    // (A particle outside the grid has stopped the run at the basis evaluation before this.)
+    layer[i] = std::clamp(sim.grid.cell_of(P.x[i][kAxis], kAxis), Index{0}, top);
+    lo = std::min(lo, layer[i]);
+    hi = std::max(hi, layer[i]);
+  }
+  sim.ghosts.layers = {lo, hi};
+  const std::array<Index, 2> mine{lo, hi};
+  const std::vector<Index> all = comm.allgather(std::span<const Index>(mine));
+  const int me = comm.rank();
+  std::vector<int> peers;
+  std::vector<std::vector<std::byte>> send;
+  if (lo <= hi)
+    for (int r = 0; r < comm.size(); ++r) {
+      const Index rlo = all[2 * static_cast<std::size_t>(r)],
+                  rhi = all[2 * static_cast<std::size_t>(r) + 1];
+      // The gap between the two processes' layers (1: adjacent), the same seen from either.
+      if (r == me || rlo > rhi || std::max(rlo - hi, lo - rhi) > layers) continue;
+      peers.push_back(r);
+      auto& out = send.emplace_back();
+      for (std::size_t i = 0; i < n; ++i)
+        if (layer[i] >= rlo - layers && layer[i] <= rhi + layers) P.pack(i, out);
+    }
+  const auto recv = comm.exchange(peers, send, 400);
+  sim.ghosts.owned = static_cast<Index>(n);
+  for (const auto& buf : recv) P.unpack_append(buf);
+}
+
+template <int Dim>
+void remove_ghosts(RunState<Dim>& sim) {
+  if (sim.ghosts.owned < 0) return;
+  sim.particles.truncate(sim.ghosts.owned);
+  sim.ghosts.owned = -1;
+}
+
+template <int Dim>
 double imbalance(const RunState<Dim>& sim, const Comm& comm, std::vector<Index>* per_rank) {
   comm.check();
   const Index n = sim.particles.size();
@@ -188,6 +234,12 @@ template Index migrate<3>(RunState<3>&, const SlabPartition<3>&, const Comm&);
 template void pack_particle<3>(const RunState<3>&, std::size_t, std::vector<std::byte>&);
 template void unpack_particles<3>(std::span<const std::byte>, Particles<3>&,
                                   std::vector<CompactIndex>&);
+template void append_ghosts<1>(RunState<1>&, const Comm&, Index);
+template void append_ghosts<2>(RunState<2>&, const Comm&, Index);
+template void append_ghosts<3>(RunState<3>&, const Comm&, Index);
+template void remove_ghosts<1>(RunState<1>&);
+template void remove_ghosts<2>(RunState<2>&);
+template void remove_ghosts<3>(RunState<3>&);
 template double imbalance<1>(const RunState<1>&, const Comm&, std::vector<Index>*);
 template double imbalance<2>(const RunState<2>&, const Comm&, std::vector<Index>*);
 template double imbalance<3>(const RunState<3>&, const Comm&, std::vector<Index>*);

@@ -63,6 +63,18 @@ void unpack_particles(std::span<const std::byte> in, Particles<Dim>& P,
 template <int Dim>
 Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& comm);
 
+// Ghost particles (RunState::ghosts) for a mapping that reads the particles of neighbouring
+// cells: appends to sim.particles copies of the other processes' particles whose cell layer
+// (along the last axis) lies within `layers` of those this process's particles occupy, in rank
+// order and, from one rank, in its particle order; sets sim.ghosts. Only processes whose
+// particles lie within `layers` of each other exchange (a symmetric relation, so each pair
+// agrees). Collective; starts with comm.check().
+template <int Dim>
+void append_ghosts(RunState<Dim>& sim, const Comm& comm, Index layers);
+// Drops the ghost copies again (nothing when none are appended).
+template <int Dim>
+void remove_ghosts(RunState<Dim>& sim);
+
 // The particles of each process and max / mean - 1 (0 without particles). Collective.
 template <int Dim>
 double imbalance(const RunState<Dim>& sim, const Comm& comm,

@@ -123,18 +123,14 @@ void throw_particle_failure(const RunState<Dim>& sim) {
 }
 
 // The DOF range [lo, hi] this rank's particle stencils touch: the union of the chunk ranges
-// evaluate_basis recorded (empty, lo > hi, without particles).
+// evaluate_basis recorded and of a reconstruction mapping's quadrature points (empty, lo > hi,
+// without either).
 template <int Dim>
 std::array<Index, 2> touched_dofs(const RunState<Dim>& sim) {
-  const auto& r = sim.scatter.ranges;
-  Index lo = std::numeric_limits<Index>::max(), hi = -1;
-  for (int c = 0; c < ParticleChunks::count(r.particles); ++c) {
-    const auto cc = static_cast<std::size_t>(c);
-    if (r.hi[cc] < r.lo[cc]) continue;
-    lo = std::min(lo, r.lo[cc]);
-    hi = std::max(hi, r.hi[cc]);
-  }
-  return {lo, hi};
+  const auto [lo, hi] = sim.scatter.ranges.span();
+  const auto& q = sim.quadrature_dofs;
+  if (q[0] > q[1]) return {lo, hi};
+  return {std::min(lo, q[0]), std::max(hi, q[1])};
 }
 
 // Each rank's values on its DOF range sim.shared [lo, hi] summed with those of the ranks whose

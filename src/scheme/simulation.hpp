@@ -114,6 +114,30 @@ struct RunState {
                                           : std::array<Index, 2>{0, 0};
   }
 
+  // Ghost particles (issue 21): a mapping that reads the particles of neighbouring cells
+  // (MappingFor's kGhostParticles: TLS) sees, during each of its particle-to-grid sums, copies of
+  // the other processes' particles within a few cell layers of this process's own, appended
+  // after them (stages::GhostParticles); `owned` is then this process's particle count (-1: no
+  // ghosts appended). `layers`: the cell layers [lo, hi] along the last axis that this process's
+  // particles occupy at the last exchange (no other process has particles there).
+  struct Ghosts {
+    Index owned = -1;
+    std::array<Index, 2> layers{0, -1};
+  } ghosts;
+  // The DOF range [lo, hi] that a reconstruction mapping's quadrature points touched in this
+  // step (lo > hi: none); the exchange shares the union with the particles' range.
+  std::array<Index, 2> quadrature_dofs{std::numeric_limits<Index>::max(), -1};
+  // [first, end) of the cells whose elements this process integrates: all of them on one
+  // process; in a distributed run those of the layers its particles occupy (ghosts.layers), so
+  // that each element is integrated by exactly one process.
+  std::array<Index, 2> own_cells() const {
+    if (comm == nullptr) return {0, grid.num_cells()};
+    const Index per_layer = grid.num_cells() / grid.cells[Dim - 1];
+    const auto& l = ghosts.layers;
+    if (l[0] > l[1]) return {0, 0};
+    return {l[0] * per_layer, (l[1] + 1) * per_layer};
+  }
+
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s
   Diagnostics diag;

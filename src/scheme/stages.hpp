@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/parallel.hpp"
+#include "scheme/distribution.hpp"
 #include "scheme/simulation.hpp"
 
 namespace mpm {
@@ -220,6 +221,30 @@ void after_forces(BasisState<Dim, B>& sim) {
 
 }  // namespace detail
 
+// For the sums of a mapping that reads the particles of neighbouring cells (kGhostParticles:
+// TLS's completions, free-surface test and domain integrals) in a distributed run: the other
+// processes' particles within the mapping's reach (ghost_reach, in cell layers, the largest of
+// any process) are appended to this process's while the object lives (scheme/distribution.hpp).
+// Fresh copies for every sum: the particles' velocities and stresses change between them.
+template <class Sim>
+class GhostParticles {
+ public:
+  explicit GhostParticles(Sim& sim) : sim_(sim) {
+    if constexpr (Sim::MappingT::kGhostParticles) {
+      if (sim.comm == nullptr) return;
+      sim.comm->check();  // before the first collective of the sum
+      const double reach = sim.comm->max(sim.mapping.ghost_reach(sim));
+      append_ghosts(sim, *sim.comm, static_cast<Index>(std::ceil(reach)));
+    }
+  }
+  ~GhostParticles() { remove_ghosts(sim_); }
+  GhostParticles(const GhostParticles&) = delete;
+  GhostParticles& operator=(const GhostParticles&) = delete;
+
+ private:
+  Sim& sim_;
+};
+
 // The particle-to-grid sums of What (grid_sum bits: masses, D eq. 2.31 / 2.44; momenta,
 // 2.32 / 2.48; forces, 2.33 / 2.45) with their checks, and the tractions after the forces.
 // A mapping with map_fused computes them in one pass over the particles (the same bits as
@@ -230,6 +255,7 @@ void map_to_grid(Sim& sim) {
   if constexpr (Sim::MappingT::kFusedScatter) {
     sim.mapping.template map_fused<What>(sim);
   } else {
+    const GhostParticles<Sim> ghosts(sim);
     if constexpr ((What & kMass) != 0) sim.mapping.map_mass(sim);
     if constexpr ((What & kMomentum) != 0) sim.mapping.map_momentum(sim);
     if constexpr ((What & kForces) != 0) sim.mapping.map_forces(sim);
