@@ -13,6 +13,10 @@
 //                    before every evaluation (GIMP, CPDI)
 //   kPrepare         prepare(P) runs before each evaluation pass (DDMPM node volumes, CPDI2
 //                    corners)
+//   kNodalSums       prepare(P) sums over the particles to the nodes (DDMPM node volumes): a
+//                    node's sums need the particles of the cells around it, so a distributed
+//                    run lends prepare the other processes' particles of the next cell layer
+//                    (stages::evaluate_basis)
 //   kTrackedCorners  per-particle state between steps (CPDI2 corners): corners() and
 //                    set_corners() (checkpoints), permute(perm) (re-sorting) and advect(sim, dt)
 //                    (after the position update)
@@ -45,6 +49,7 @@ concept Basis = requires(const B& b, const Vec<Dim>& x, typename B::StencilT& s,
   { B::kTensorProduct } -> std::convertible_to<bool>;
   { B::kParticleDomain } -> std::convertible_to<bool>;
   { B::kPrepare } -> std::convertible_to<bool>;
+  { B::kNodalSums } -> std::convertible_to<bool>;
   { B::kTrackedCorners } -> std::convertible_to<bool>;
   { B::kIterative } -> std::convertible_to<bool>;
   { B::kTriangleMesh } -> std::convertible_to<bool>;
@@ -65,6 +70,7 @@ concept Basis = requires(const B& b, const Vec<Dim>& x, typename B::StencilT& s,
        { b.fits(P, p) } -> std::convertible_to<bool>;
      }) &&
     (!B::kPrepare || requires(B & b, const Particles<Dim>& P) { b.prepare(P); }) &&
+    (!B::kNodalSums || B::kPrepare) &&
     (!B::kTrackedCorners ||
      requires(B & b, const B& cb, Permutation& perm) {
        b.set_corners(cb.corners());

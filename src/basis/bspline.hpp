@@ -120,7 +120,8 @@ class BSplineBasis {
   // Capabilities (basis/basis.hpp): compact tensor-product stencils evaluated from cell
   // coordinates; no particle domain, no preparation pass, no tracked per-particle state.
   static constexpr bool kTensorProduct = true, kParticleDomain = false, kPrepare = false,
-                        kTrackedCorners = false, kIterative = false, kTriangleMesh = false;
+                        kNodalSums = false, kTrackedCorners = false, kIterative = false,
+                        kTriangleMesh = false;
   using StencilT = Stencil<Dim, ipow(Degree + 1, Dim)>;
   using CachedStencilT = TensorStencil<Dim, Degree + 1>;
 

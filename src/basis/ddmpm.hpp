@@ -49,7 +49,8 @@ class DdmpmBasis {
   // Capabilities (basis/basis.hpp): full stencils at the particle position; prepare() refreshes
   // the node volumes from the particles before each evaluation pass.
   static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = true,
-                        kTrackedCorners = false, kIterative = false, kTriangleMesh = false;
+                        kNodalSums = true, kTrackedCorners = false, kIterative = false,
+                        kTriangleMesh = false;
   using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
 
   explicit DdmpmBasis(const Grid<Dim>& g) : p1_(g), n_(p1_.dofs_per_dim()) {

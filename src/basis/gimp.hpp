@@ -86,7 +86,8 @@ class NodalDomainBasis {
   // Capabilities (basis/basis.hpp): full stencils of a particle domain that must fit them
   // (fits()); CPDI2 adds its preparation pass and tracked corners.
   static constexpr bool kTensorProduct = false, kParticleDomain = true, kPrepare = false,
-                        kTrackedCorners = false, kIterative = false, kTriangleMesh = false;
+                        kNodalSums = false, kTrackedCorners = false, kIterative = false,
+                        kTriangleMesh = false;
 
   explicit NodalDomainBasis(const Grid<Dim>& g) : grid_(g) {
     for (int d = 0; d < Dim; ++d) {

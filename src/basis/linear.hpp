@@ -19,7 +19,8 @@ class LinearBasis {
   // Capabilities (basis/basis.hpp): compact tensor-product stencils evaluated from cell
   // coordinates; no particle domain, no preparation pass, no tracked per-particle state.
   static constexpr bool kTensorProduct = true, kParticleDomain = false, kPrepare = false,
-                        kTrackedCorners = false, kIterative = false, kTriangleMesh = false;
+                        kNodalSums = false, kTrackedCorners = false, kIterative = false,
+                        kTriangleMesh = false;
   using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
   using CachedStencilT = TensorStencil<Dim, kPerDim>;
 

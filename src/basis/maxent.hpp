@@ -64,7 +64,8 @@ class MaxEntBasis {
   // tensor-product form), no particle domain, no preparation pass, no per-particle state; the
   // evaluation is iterative and can fail (throw_if_failed).
   static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = false,
-                        kTrackedCorners = false, kIterative = true, kTriangleMesh = false;
+                        kNodalSums = false, kTrackedCorners = false, kIterative = true,
+                        kTriangleMesh = false;
   using StencilT = Stencil<Dim, ipow(kWindow, Dim)>;
 
   // InputError when the grid has fewer than kWindow - 1 cells in some direction or d_max is

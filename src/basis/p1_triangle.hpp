@@ -81,7 +81,8 @@ class TriangleP1Basis {
  public:
   static constexpr std::string_view kName = "p1_triangles";
   static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = false,
-                        kTrackedCorners = false, kIterative = false, kTriangleMesh = true;
+                        kNodalSums = false, kTrackedCorners = false, kIterative = false,
+                        kTriangleMesh = true;
   using StencilT = Stencil<Dim, 3>;
 
   TriangleP1Basis(const Grid<Dim>& g, TrianglePattern pattern)

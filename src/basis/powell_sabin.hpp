@@ -148,7 +148,8 @@ class PowellSabinGridBasis {
  public:
   static constexpr std::string_view kName = "powell_sabin";
   static constexpr bool kTensorProduct = false, kParticleDomain = false, kPrepare = false,
-                        kTrackedCorners = false, kIterative = false, kTriangleMesh = true;
+                        kNodalSums = false, kTrackedCorners = false, kIterative = false,
+                        kTriangleMesh = true;
   using StencilT = Stencil<Dim, 9>;
 
   // The mesh is shared, so that copies of the basis (the run's state holds one by value) keep

@@ -63,28 +63,21 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
 }
 
 // What a distributed run (issue 21) does not do yet, refused before the first step with the
-// key to change: the exchange shares the particle-to-grid sums of the direct mapping and of TLS
-// (whose reconstructions read the other processes' particles near a process's own: ghost
-// particles) for bases whose stencils depend on one particle alone; consistent mass is solved
-// by distributed CG.
-template <class Basis, class Mapping>
+// key to change: the exchange shares the particle-to-grid sums of every mapping (the
+// reconstructions read the other processes' particles near a process's own: ghost particles,
+// MappingFor's kGhostParticles) for the bases on the grid whose state is rebuilt from the
+// particles every step; consistent mass is solved by distributed CG.
+template <class Basis>
 void check_distributed_run(const MethodSettings& method, bool tractions) {
   constexpr std::string_view kHow = "run it on one process (without mpirun)";
-  if constexpr (!std::is_same_v<Mapping, DirectMapping> && !Mapping::kGhostParticles)
-    throw InputError(fmt::format(
-        "{}: method.mapping = \"{}\" does not run on several processes yet ({}; issue 21); use "
-        "method.mapping = \"direct\" or \"tls\", or {}",
-        method.where_mapping, Mapping::kName,
-        std::is_same_v<Mapping, CubicSplineMapping>
-            ? "its spline is one fit through all the particles"
-            : "its fits and its conservative correction are not split among processes",
-        kHow));
-  if constexpr (Basis::kPrepare || Basis::kTrackedCorners || Basis::kTriangleMesh)
+  if constexpr ((Basis::kPrepare && !Basis::kNodalSums) || Basis::kTrackedCorners ||
+                Basis::kTriangleMesh)
     throw InputError(fmt::format(
         "{}: the {} basis does not run on several processes yet ({}; issue 21); {}",
         method.where_basis, Basis::kName,
         Basis::kTriangleMesh ? "its mesh is not cut into slabs"
-                             : "it keeps state built from the particles of several cells",
+                             : "its corners, tracked from step to step, do not travel between "
+                               "processes yet",
         kHow));
   if (method.mass == MassType::Consistent && method.mass_solver.kind != MassSolver::Cg)
     throw InputError(fmt::format(
@@ -138,7 +131,7 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.tractions = pb.tractions;
     if (sim_.body_force.fill) sim_.body_force.fill(sim_.particles, 0.0, sim_.particles.body);
     if (in.comm != nullptr && in.comm->distributed()) {
-      check_distributed_run<Basis, Mapping>(method, !pb.tractions.empty());
+      check_distributed_run<Basis>(method, !pb.tractions.empty());
       sim_.comm = in.comm;
       sim_.scatter.ranges.bounded = true;  // the grid work of this rank's slab only
     }

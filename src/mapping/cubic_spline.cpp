@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -219,7 +220,9 @@ void CubicSplineMapping::fit_mass(const RunState<1>& sim, GaussPoints<1>& q) {
       body_hi = std::max(body_hi, grid.upper()[0]);
   }
   const std::size_t n = rule_.xi.size();
-  for (Index e = 0; e < grid.num_cells(); ++e) {
+  // A process of a distributed run integrates its own elements (the spline reads all particles).
+  const std::array<Index, 2> own = sim.own_cells();
+  for (Index e = own[0]; e < own[1]; ++e) {
     if (bins_.count(e) == 0) continue;
     const double lo_e = grid.origin[0] + static_cast<double>(e) * grid.h[0];
     const double lo = std::max(lo_e, body_lo), hi = std::min(lo_e + grid.h[0], body_hi);

@@ -158,7 +158,15 @@ class CubicSplineMapping {
   // problems"); the run set-up rejects other dimensions with this before instantiating.
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
   // Capabilities (mapping/mapping.hpp).
-  static constexpr bool kFusedScatter = false, kRunTotals = false, kGhostParticles = false;
+  static constexpr bool kFusedScatter = false, kRunTotals = false, kGhostParticles = true;
+
+  // The spline is one fit through all the particles: in a distributed run every process reads
+  // all of them (every cell layer), fits the same spline and integrates its own elements. A
+  // 1D problem's particles are few; the fit itself is serial anyway.
+  template <class Sim>
+  double ghost_reach(const Sim& sim) const {
+    return static_cast<double>(sim.grid.cells[Sim::kDim - 1]);
+  }
 
   CubicSplineMapping() : CubicSplineMapping(Settings{}) {}
   // Throws InputError for a negative number of Gauss points.
@@ -184,6 +192,7 @@ class CubicSplineMapping {
     auto& q = quad_.prepare<Sim>();
     fit_mass(sim, q);
     q.evaluate(sim.basis, sim.step, sim.time);
+    sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs (issue 21)
     assemble_mass(sim, q, rho_g_);
   }
 

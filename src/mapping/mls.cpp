@@ -2,8 +2,10 @@
 #include "mapping/mls.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include "core/bytes.hpp"
 
@@ -31,6 +33,39 @@ void accumulate(MlsReport& total, const MlsReport& step) {
     total.worst_y = step.worst_y;
     total.worst_z = step.worst_z;
   }
+}
+
+MlsReport over_ranks(const Comm& comm, const MlsReport& mine) {
+  if (!comm.distributed()) return mine;
+  const MlsReport& m = mine;
+  const std::array<double, 10> v{static_cast<double>(m.points),
+                                 static_cast<double>(m.empty),
+                                 static_cast<double>(m.ill_conditioned),
+                                 static_cast<double>(m.singular),
+                                 static_cast<double>(m.reduced),
+                                 static_cast<double>(m.widened),
+                                 m.max_condition,
+                                 m.worst_x,
+                                 m.worst_y,
+                                 m.worst_z};
+  const std::vector<double> all = comm.allgather(std::span<const double>(v));
+  MlsReport t;
+  for (std::size_t r = 0; r < static_cast<std::size_t>(comm.size()); ++r) {
+    const double* o = all.data() + r * v.size();
+    MlsReport one;
+    one.points = static_cast<Index>(o[0]);
+    one.empty = static_cast<Index>(o[1]);
+    one.ill_conditioned = static_cast<Index>(o[2]);
+    one.singular = static_cast<Index>(o[3]);
+    one.reduced = static_cast<Index>(o[4]);
+    one.widened = static_cast<Index>(o[5]);
+    one.max_condition = o[6];
+    one.worst_x = o[7];
+    one.worst_y = o[8];
+    one.worst_z = o[9];
+    accumulate(t, one);
+  }
+  return t;
 }
 
 template <int Dim>
@@ -397,7 +432,9 @@ void MovingLeastSquaresMapping<Improved>::fit_mass(RunState<Dim>& sim, GaussPoin
   const int n = static_cast<int>(rule_.xi.size());
   const int per_element = ipow(n, Dim);
   const Vec<Dim> half = 0.5 * grid.h;
-  for (Index e = 0; e < grid.num_cells(); ++e) {
+  // A process of a distributed run integrates its own elements (the fits read the ghosts too).
+  const std::array<Index, 2> own = sim.own_cells();
+  for (Index e = own[0]; e < own[1]; ++e) {
     if (mls.bins().count(e) == 0) continue;
     Vec<Dim> centre;
     Index rem = e;
@@ -427,9 +464,11 @@ void MovingLeastSquaresMapping<Improved>::fit_mass(RunState<Dim>& sim, GaussPoin
   });
   if (settings_.conservative) {
     // rho~ = rho^ M / sum_g w_g rho^_g (mls.hpp).
-    double integral = 0.0, mass = 0.0;
-    for (std::size_t g = 0; g < q.size(); ++g) integral += q.w[g] * rho_[g];
-    for (double m : P.mass) mass += m;
+    std::array<double, 2> sums{};  // sum_g w_g rho^_g, sum_p m_p
+    for (std::size_t g = 0; g < q.size(); ++g) sums[0] += q.w[g] * rho_[g];
+    for (Index p = 0; p < sim.own_particles(); ++p) sums[1] += P.mass[static_cast<std::size_t>(p)];
+    if (sim.comm) sim.comm->sum(std::span<double>(sums));
+    const double integral = sums[0], mass = sums[1];
     if (integral > 0.0)
       for (double& r : rho_) r *= mass / integral;
   }
@@ -438,14 +477,23 @@ void MovingLeastSquaresMapping<Improved>::fit_mass(RunState<Dim>& sim, GaussPoin
 template <bool Improved>
 template <int Dim, class V>
 void MovingLeastSquaresMapping<Improved>::conserve_with_density(const GaussPoints<Dim>& q,
-                                                                std::vector<V>& f,
-                                                                const V& total) const {
-  // f~_g = f_g + rho~_g delta with sum_g w_g f~_g = total (mls.hpp); serial sums in point order.
+                                                                std::vector<V>& f, const V& total,
+                                                                const Comm* comm) const {
+  // f~_g = f_g + rho~_g delta with sum_g w_g f~_g = total (mls.hpp); serial sums in point order,
+  // then over the processes in rank order.
   V integral = V::Zero();
   double mass = 0.0;
   for (std::size_t g = 0; g < q.size(); ++g) {
     integral += q.w[g] * f[g];
     mass += q.w[g] * rho_[g];
+  }
+  if (comm) {
+    std::array<double, Dim + 1> sums;
+    for (int d = 0; d < Dim; ++d) sums[static_cast<std::size_t>(d)] = integral[d];
+    sums[Dim] = mass;
+    comm->sum(std::span<double>(sums));
+    for (int d = 0; d < Dim; ++d) integral[d] = sums[static_cast<std::size_t>(d)];
+    mass = sums[Dim];
   }
   if (!(mass > 0.0)) return;
   const V delta = (total - integral) / mass;
@@ -463,7 +511,7 @@ void MovingLeastSquaresMapping<Improved>::finish_mass(RunState<Dim>& sim) {
         [&](Index r) -> const Vec<Dim>& { return xn[static_cast<std::size_t>(r)]; },
         MlsWeight::Linear, nodes_, true);
   }
-  const MlsReport& rep = mls.report();
+  const MlsReport rep = sim.comm ? over_ranks(*sim.comm, mls.report()) : mls.report();
   accumulate(totals_, rep);
   if (rep.singular > 0)
     throw RunError(
@@ -489,21 +537,38 @@ void MovingLeastSquaresMapping<Improved>::fit_momentum(RunState<Dim>& sim,
     std::fill(out.begin(), out.end(), V::Zero());
     nodes_.for_each_row([&](std::size_t r, const ShapeTable& t, std::size_t k) {
       const auto i = static_cast<std::size_t>(node_dof_[r]);
-      out[i] = sim.nodes.mass[i] * t.apply<V>(k, [&](std::size_t p) -> const V& { return P.v[p]; });
+      out[i] = node_mass_[r] * t.apply<V>(k, [&](std::size_t p) -> const V& { return P.v[p]; });
     });
     if (settings_.conservative) {
       // The common velocity shift (mls.hpp): sums in DOF and particle order, serial.
+      // In a distributed run each process's nodal masses and momenta are its partial sums
+      // (m_i^r v_i: the exchange adds them), so the totals are sums over the processes.
       V nodal = V::Zero(), particles = V::Zero();
       double mass = 0.0;
-      for (Index i : node_dof_) {
-        nodal += out[static_cast<std::size_t>(i)];
-        mass += sim.nodes.mass[static_cast<std::size_t>(i)];
+      for (std::size_t r = 0; r < node_dof_.size(); ++r) {
+        nodal += out[static_cast<std::size_t>(node_dof_[r])];
+        mass += node_mass_[r];
       }
-      for (std::size_t p = 0; p < P.v.size(); ++p) particles += P.mass[p] * P.v[p];
+      for (std::size_t p = 0; p < static_cast<std::size_t>(sim.own_particles()); ++p)
+        particles += P.mass[p] * P.v[p];
+      if (sim.comm) {
+        std::array<double, 2 * Dim + 1> sums;
+        for (int d = 0; d < Dim; ++d) {
+          sums[static_cast<std::size_t>(d)] = nodal[d];
+          sums[static_cast<std::size_t>(Dim + d)] = particles[d];
+        }
+        sums[2 * Dim] = mass;
+        sim.comm->sum(std::span<double>(sums));
+        for (int d = 0; d < Dim; ++d) {
+          nodal[d] = sums[static_cast<std::size_t>(d)];
+          particles[d] = sums[static_cast<std::size_t>(Dim + d)];
+        }
+        mass = sums[2 * Dim];
+      }
       if (mass > 0.0) {
         const V shift = (particles - nodal) / mass;
-        for (Index i : node_dof_)
-          out[static_cast<std::size_t>(i)] += sim.nodes.mass[static_cast<std::size_t>(i)] * shift;
+        for (std::size_t r = 0; r < node_dof_.size(); ++r)
+          out[static_cast<std::size_t>(node_dof_[r])] += node_mass_[r] * shift;
       }
     }
   } else {
@@ -514,8 +579,10 @@ void MovingLeastSquaresMapping<Improved>::fit_momentum(RunState<Dim>& sim,
     });
     if (settings_.conservative) {
       V total = V::Zero();
-      for (std::size_t p = 0; p < P.v.size(); ++p) total += P.mass[p] * P.v[p];
-      conserve_with_density(q, vec, total);
+      for (std::size_t p = 0; p < static_cast<std::size_t>(sim.own_particles()); ++p)
+        total += P.mass[p] * P.v[p];
+      if (sim.comm) sim.comm->sum(std::span<double>(total.data(), Dim));
+      conserve_with_density(q, vec, total, sim.comm);
     }
   }
 }
@@ -546,8 +613,10 @@ void MovingLeastSquaresMapping<Improved>::fit_forces(RunState<Dim>& sim,
   });
   if (settings_.conservative) {
     V total = V::Zero();
-    for (std::size_t p = 0; p < P.body.size(); ++p) total += P.mass[p] * P.body[p];
-    conserve_with_density(q, vec, total);
+    for (std::size_t p = 0; p < static_cast<std::size_t>(sim.own_particles()); ++p)
+      total += P.mass[p] * P.body[p];
+    if (sim.comm) sim.comm->sum(std::span<double>(total.data(), Dim));
+    conserve_with_density(q, vec, total, sim.comm);
   }
 }
 

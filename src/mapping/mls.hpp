@@ -80,6 +80,10 @@ struct MlsReport {
 };
 
 void accumulate(MlsReport& total, const MlsReport& step);
+// The reports of the processes of a distributed run as one (collective): counts summed, the
+// largest condition number with its place (the lowest rank's on ties). IMLS's nodal rows are
+// counted by every process that holds mass at the node.
+MlsReport over_ranks(const Comm& comm, const MlsReport& mine);
 
 // Shape functions phi_p(x) at a list of evaluation points (compressed rows).
 struct ShapeTable {
@@ -340,7 +344,20 @@ class MovingLeastSquaresMapping {
   using Settings = MlsSettings;
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
-  static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = false;
+  static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true;
+
+  // The cell layers of the other processes' particles this mapping reads in a distributed run
+  // (MappingFor's kGhostParticles): the quadratic-spline weight's support, 1.5 a cells (a the
+  // dilation), from the Gauss points in this process's elements, plus one for the layer the
+  // support starts in; IMLS's nodal rows sit at the DOFs of those elements' stencils, up to
+  // `per_dim` cells further (the stencil's nodes per direction).
+  template <class Sim>
+  double ghost_reach(const Sim&) const {
+    constexpr int kSize = Sim::BasisT::StencilT::kSize;
+    int per_dim = 1;
+    while (ipow(per_dim + 1, Sim::kDim) <= kSize) ++per_dim;
+    return std::ceil(1.5 * settings_.dilation) + 1.0 + (Improved ? per_dim : 0);
+  }
 
   MovingLeastSquaresMapping() : MovingLeastSquaresMapping(Settings{}) {}
   // Throws InputError for a degree other than 1, 2 or negative Gauss points.
@@ -382,16 +399,19 @@ class MovingLeastSquaresMapping {
     auto& q = quad_.prepare<Sim>();
     fit_mass<Dim>(sim, q);
     q.evaluate(sim.basis, sim.step, sim.time);
+    sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs (issue 21)
     assemble_mass(sim, q, rho_);
     if constexpr (Improved) {
       // Nodal rows (003 eq. 31) for the DOFs that carry mass.
       node_dof_.clear();
+      node_mass_.clear();
       auto& xn = std::get<Dim - 1>(work_).node_x;
       xn.clear();
       const auto& m = sim.nodes.mass;
       for (Index i = 0; i < sim.basis.num_dofs(); ++i)
         if (m[static_cast<std::size_t>(i)] > 0.0) {
           node_dof_.push_back(i);
+          node_mass_.push_back(m[static_cast<std::size_t>(i)]);
           xn.push_back(sim.basis.dof_position(i));
         }
     }
@@ -441,8 +461,10 @@ class MovingLeastSquaresMapping {
   void fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q);
   // Settings::conservative: f_g + rho_g delta with the common delta that makes
   // sum_g w_g f_g = total (mls.hpp).
+  // comm: the processes of a distributed run (the sums over all of them), or null.
   template <int Dim, class V>
-  void conserve_with_density(const GaussPoints<Dim>& q, std::vector<V>& f, const V& total) const;
+  void conserve_with_density(const GaussPoints<Dim>& q, std::vector<V>& f, const V& total,
+                             const Comm* comm) const;
 
   Settings settings_;
   std::tuple<Work<1>, Work<2>, Work<3>> work_;
@@ -451,6 +473,10 @@ class MovingLeastSquaresMapping {
   QuadratureStore quad_;
   ShapeTables gauss_, nodes_;  // rows at the Gauss points and (IMLS) at the nodes
   std::vector<Index> node_dof_;
+  // IMLS: the nodal masses of node_dof_ as this mapping assembled them: in a distributed run this
+  // process's partial sums m_i^r, so that its momenta m_i^r v_i add up to m_i v_i in the
+  // exchange (sim.nodes.mass holds the totals once the masses were exchanged).
+  std::vector<double> node_mass_;
   std::vector<double> rho_;
   MlsReport totals_;
 };

@@ -124,6 +124,8 @@ struct RunState {
     Index owned = -1;
     std::array<Index, 2> layers{0, -1};
   } ghosts;
+  // This process's own particles: the first own_particles() of `particles` (all but ghosts).
+  Index own_particles() const { return ghosts.owned >= 0 ? ghosts.owned : particles.size(); }
   // The DOF range [lo, hi] that a reconstruction mapping's quadrature points touched in this
   // step (lo > hi: none); the exchange shares the union with the particles' range.
   std::array<Index, 2> quadrature_dofs{std::numeric_limits<Index>::max(), -1};

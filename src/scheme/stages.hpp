@@ -69,7 +69,14 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
   auto& basis = sim.basis;
   // Bases built from the particle distribution (DDMPM node volumes, CPDI2 corners) refresh it
   // first.
-  if constexpr (B::kPrepare) basis.prepare(P);
+  if constexpr (B::kPrepare) {
+    // A node's sums (DDMPM) read the particles of the cells around it: in a distributed run the
+    // other processes' particles of the next cell layer are lent for them.
+    if constexpr (B::kNodalSums)
+      if (sim.comm) append_ghosts(sim, *sim.comm, 1);
+    basis.prepare(P);
+    remove_ghosts(sim);
+  }
   const auto& g = sim.grid;
   // Per chunk: flags, crossings and the DOF range of the new stencils (recorded here, while
   // the stencils are in cache, for the scatters of DirectMapping).
