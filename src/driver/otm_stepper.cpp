@@ -29,6 +29,7 @@ class OtmStepper final : public Stepper<Dim> {
   }
   // OTM runs on one process (run_mpm refuses it on several), and its particles never move
   // between processes.
+  void export_carried() override {}
   void resize_particle_caches() override {}
   void report(nlohmann::ordered_json& summary) const override {
     const auto& x = otm_.nodes();

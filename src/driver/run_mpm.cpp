@@ -27,7 +27,7 @@ double velocity_time(const Scheme& scheme) {
 // its own order, with the cuts and each rank's count, re-sorting state and grid crossings
 // (Checkpoint::distribution): a restart on as many processes continues bit for bit.
 template <int Dim>
-io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
+io::Checkpoint capture(Stepper<Dim>& stepper, std::string_view mapping,
                        const std::optional<Ulfem1D>& reference, const OutputSession<Dim>& out,
                        const std::string& config, const Comm* comm,
                        const SlabPartition<Dim>& part) {
@@ -39,8 +39,10 @@ io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
   c.step = sim.step;
   c.time = sim.time;
   c.diag = sim.diag;
+  std::vector<double> carried;  // a distributed run: the basis's per-particle state, gathered
   if (comm) {
     comm->check();
+    stepper.export_carried();
     const auto& P = sim.particles;
     const std::array<Index, 4> mine{P.size(), sim.sorting.reference, sim.sorting.sorts,
                                     sim.diag.grid_crossings};
@@ -51,7 +53,8 @@ io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
     if (!comm->root()) return c;  // rank 0 writes
     Particles<Dim> gathered;
     std::vector<CompactIndex> cells;
-    for (const auto& buf : all) unpack_particles<Dim>(buf, gathered, cells);
+    for (const auto& buf : all)
+      unpack_particles<Dim>(buf, gathered, cells, carried, sim.carried_width);
     c.cells.assign(cells.begin(), cells.end());
     c.particles = io::pack_particles(gathered);
     c.distribution.push_back(comm->size());
@@ -75,6 +78,10 @@ io::Checkpoint capture(const Stepper<Dim>& stepper, std::string_view mapping,
   c.frames = out.frames();
   c.frame_times = out.frame_times();
   stepper.save(c);  // mapping totals, basis state
+  if (comm) {
+    if (sim.carried_width > 0) c.basis_state = std::move(carried);  // every rank's, in order
+    stepper.resize_particle_caches();                               // (takes its state back)
+  }
   return c;
 }
 
@@ -172,6 +179,23 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
         q = at[static_cast<std::size_t>(sim.particles.id[static_cast<std::size_t>(q)])];
   }
   std::vector<CompactIndex> cell(c.cells.begin(), c.cells.end());
+  // A distributed restart: the basis's per-particle state (CPDI2's corners) is kept with the
+  // particles this process keeps (Stepper::load leaves it to resize_particle_caches).
+  std::vector<double> carried;
+  std::size_t width = 0;
+  if (comm && !c.basis_state.empty()) {
+    width = p.size() > 0 ? c.basis_state.size() / static_cast<std::size_t>(p.size()) : 0;
+    if (width * static_cast<std::size_t>(p.size()) != c.basis_state.size())
+      throw InputError(fmt::format("{} holds {} values of basis state for {} particles", what,
+                                   c.basis_state.size(), p.size()));
+  }
+  const auto keep_carried = [&](auto&& keep) {
+    for (std::size_t i = 0; i < static_cast<std::size_t>(p.size()); ++i)
+      if (keep(i))
+        carried.insert(carried.end(),
+                       c.basis_state.begin() + static_cast<std::ptrdiff_t>(i * width),
+                       c.basis_state.begin() + static_cast<std::ptrdiff_t>((i + 1) * width));
+  };
   sim.diag = c.diag;
   sim.sorting.reference = c.sort_reference;
   sim.sorting.sorts = c.sorts;
@@ -181,6 +205,7 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
     std::size_t first = 0;
     for (std::size_t r = 0; r < me; ++r) first += static_cast<std::size_t>(dist.info[4 * r]);
     const std::size_t n = static_cast<std::size_t>(dist.info[4 * me]);
+    keep_carried([&](std::size_t i) { return i >= first && i < first + n; });
     p.keep_with_ids(
         [&](const Particles<Dim>&, std::size_t i) { return i >= first && i < first + n; });
     cell = std::vector<CompactIndex>(cell.begin() + static_cast<std::ptrdiff_t>(first),
@@ -199,6 +224,7 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
     std::vector<CompactIndex> kept;
     for (std::size_t i = 0; i < cell.size(); ++i)
       if (part.owner(sim.grid, p.x[i], 0) == me) kept.push_back(cell[i]);
+    keep_carried([&](std::size_t i) { return part.owner(sim.grid, p.x[i], 0) == me; });
     cell = std::move(kept);
     p.keep_with_ids([&](const Particles<Dim>& P, std::size_t i) {
       return part.owner(sim.grid, P.x[i], 0) == me;
@@ -213,6 +239,8 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
   }
   sim.particles = std::move(p);
   sim.cell.assign(cell.begin(), cell.end());
+  sim.carried = std::move(carried);
+  sim.carried_width = static_cast<int>(width);
   sim.step = c.step;
   sim.time = c.time;
   if (reference) reference->restore(io::unpack_fem(*c.fem, what));
@@ -335,6 +363,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         sim.step = s + 1;
         sim.time = static_cast<double>(sim.step) * ts.dt;
         if (comm) {
+          stepper->export_carried();
           migrated += migrate(sim, part, *comm);
           if (settings.parallel.rebalance > 0.0) {
             // (The imbalance the run has reached before any re-cut, for the summary.)

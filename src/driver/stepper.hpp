@@ -49,8 +49,13 @@ class Stepper {
   virtual void load(const io::Checkpoint& c, const std::string& what) = 0;
   // The mapping's report over the run (TLS completions, MLS conditioning) into summary.json.
   virtual void report(nlohmann::ordered_json& summary) const = 0;
+  // Before particles travel between processes (a distributed run's migration or checkpoint):
+  // the basis's per-particle state (CPDI2's corners) into state().carried, which moves with
+  // them (scheme/distribution.hpp). Nothing for the other bases.
+  virtual void export_carried() = 0;
   // After particles have arrived or left (a distributed run's migration, scheme/distribution.hpp):
-  // sizes the per-particle caches to the particles (the next step's evaluate_basis fills them).
+  // sizes the per-particle caches to the particles (the next step's evaluate_basis fills them)
+  // and gives the basis its carried state back.
   virtual void resize_particle_caches() = 0;
 };
 

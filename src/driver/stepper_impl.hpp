@@ -65,20 +65,17 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
 // What a distributed run (issue 21) does not do yet, refused before the first step with the
 // key to change: the exchange shares the particle-to-grid sums of every mapping (the
 // reconstructions read the other processes' particles near a process's own: ghost particles,
-// MappingFor's kGhostParticles) for the bases on the grid whose state is rebuilt from the
-// particles every step; consistent mass is solved by distributed CG.
+// MappingFor's kGhostParticles) for every basis on the grid (DDMPM's node sums with the next
+// cell layer lent, CPDI2's corners moved with their particles: Stepper::export_carried);
+// consistent mass is solved by distributed CG.
 template <class Basis>
 void check_distributed_run(const MethodSettings& method, bool tractions) {
   constexpr std::string_view kHow = "run it on one process (without mpirun)";
-  if constexpr ((Basis::kPrepare && !Basis::kNodalSums) || Basis::kTrackedCorners ||
-                Basis::kTriangleMesh)
+  if constexpr (Basis::kTriangleMesh)
     throw InputError(fmt::format(
-        "{}: the {} basis does not run on several processes yet ({}; issue 21); {}",
-        method.where_basis, Basis::kName,
-        Basis::kTriangleMesh ? "its mesh is not cut into slabs"
-                             : "its corners, tracked from step to step, do not travel between "
-                               "processes yet",
-        kHow));
+        "{}: the {} basis does not run on several processes yet (its triangular mesh is not cut "
+        "into slabs; issue 21); {}",
+        method.where_basis, Basis::kName, kHow));
   if (method.mass == MassType::Consistent && method.mass_solver.kind != MassSolver::Cg)
     throw InputError(fmt::format(
         "{}: method.mass = \"consistent\" runs on several processes with method.mass_solver = "
@@ -151,42 +148,78 @@ class TypedStepper final : public Stepper<Dim> {
   RunState<Dim>& state() override { return sim_; }
   const RunState<Dim>& state() const override { return sim_; }
 
+  // A distributed checkpoint gathers the corners with the particles (export_carried) and
+  // replaces basis_state with them (driver/run_mpm.cpp).
   void save(io::Checkpoint& c) const override {
     if constexpr (Mapping::kRunTotals) c.mapping_totals = sim_.mapping.save_totals();
-    if constexpr (Basis::kTrackedCorners)
-      for (const auto& corners : sim_.basis.corners())
-        for (const auto& x : corners)
-          for (int d = 0; d < Dim; ++d) c.basis_state.push_back(x[d]);
+    if constexpr (Basis::kTrackedCorners) c.basis_state = flat_corners();
   }
 
   void load(const io::Checkpoint& c, const std::string& what) override {
     if constexpr (Mapping::kRunTotals) sim_.mapping.load_totals(c.mapping_totals, what);
-    if constexpr (Basis::kTrackedCorners) {
-      // CPDI2: the tracked corners, 2^Dim per particle.
-      using Corners = typename std::decay_t<decltype(sim_.basis.corners())>::value_type;
-      constexpr std::size_t kPer = std::tuple_size_v<Corners> * Dim;
-      if (c.basis_state.size() != kPer * sim_.particles.x.size())
-        throw InputError(fmt::format("{} holds {} values of basis state; the {} basis needs {}",
-                                     what, c.basis_state.size(), Basis::kName,
-                                     kPer * sim_.particles.x.size()));
-      std::vector<Corners> corners(sim_.particles.x.size());
-      std::size_t k = 0;
-      for (auto& cs : corners)
-        for (auto& x : cs)
-          for (int d = 0; d < Dim; ++d) x[d] = c.basis_state[k++];
-      sim_.basis.set_corners(std::move(corners));
-    }
+    // CPDI2: the tracked corners, 2^Dim per particle; a distributed restart has put this
+    // process's share in state().carried (driver/run_mpm.cpp), which resize_particle_caches
+    // gives the basis.
+    if constexpr (Basis::kTrackedCorners)
+      if (sim_.carried_width == 0) {
+        if (c.basis_state.size() != kCornerValues * sim_.particles.x.size())
+          throw InputError(fmt::format("{} holds {} values of basis state; the {} basis needs {}",
+                                       what, c.basis_state.size(), Basis::kName,
+                                       kCornerValues * sim_.particles.x.size()));
+        set_flat_corners(c.basis_state);
+      }
   }
 
   void report(nlohmann::ordered_json& summary) const override {
     report_mapping(summary, sim_.mapping, Dim);
   }
 
+  void export_carried() override {
+    if constexpr (Basis::kTrackedCorners) {
+      sim_.carried_width = static_cast<int>(kCornerValues);
+      sim_.carried = flat_corners();
+    }
+  }
+
   void resize_particle_caches() override {
     sim_.stencils.resize(static_cast<std::size_t>(sim_.particles.size()));
+    if constexpr (Basis::kTrackedCorners)
+      if (sim_.carried_width > 0) {
+        set_flat_corners(sim_.carried);
+        sim_.carried.clear();
+        sim_.carried_width = 0;
+      }
   }
 
  private:
+  // CPDI2's corners as doubles, kCornerValues per particle in particle order (checkpoints, the
+  // carried state), and back.
+  static constexpr std::size_t kCornerValues = [] {
+    if constexpr (Basis::kTrackedCorners)
+      return std::tuple_size_v<typename Basis::Corners> * Dim;
+    else
+      return std::size_t{0};
+  }();
+  std::vector<double> flat_corners() const {
+    std::vector<double> v;
+    if constexpr (Basis::kTrackedCorners) {
+      v.reserve(kCornerValues * sim_.basis.corners().size());
+      for (const auto& corners : sim_.basis.corners())
+        for (const auto& x : corners)
+          for (int d = 0; d < Dim; ++d) v.push_back(x[d]);
+    }
+    return v;
+  }
+  void set_flat_corners(const std::vector<double>& v) {
+    if constexpr (Basis::kTrackedCorners) {
+      std::vector<typename Basis::Corners> corners(v.size() / kCornerValues);
+      std::size_t k = 0;
+      for (auto& cs : corners)
+        for (auto& x : cs)
+          for (int d = 0; d < Dim; ++d) x[d] = v[k++];
+      sim_.basis.set_corners(std::move(corners));
+    }
+  }
   Scheme scheme_;
   Sim sim_;
 };

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <span>
+#include <stdexcept>
 
 namespace mpm {
 
@@ -72,20 +73,30 @@ template <int Dim>
 void pack_particle(const RunState<Dim>& sim, std::size_t i, std::vector<std::byte>& out) {
   sim.particles.pack(i, out);
   const std::size_t at = out.size();
-  out.resize(at + sizeof(CompactIndex));
+  const auto w = static_cast<std::size_t>(sim.carried_width);
+  out.resize(at + sizeof(CompactIndex) + w * sizeof(double));
   std::memcpy(out.data() + at, &sim.cell[i], sizeof(CompactIndex));
+  if (w > 0)
+    std::memcpy(out.data() + at + sizeof(CompactIndex), sim.carried.data() + i * w,
+                w * sizeof(double));
 }
 
 template <int Dim>
 void unpack_particles(std::span<const std::byte> in, Particles<Dim>& P,
-                      std::vector<CompactIndex>& cells) {
+                      std::vector<CompactIndex>& cells, std::vector<double>& carried, int width) {
   constexpr std::size_t kParticle = Particles<Dim>::bytes_per_particle();
-  for (std::size_t at = 0; at + kParticle + sizeof(CompactIndex) <= in.size();
-       at += kParticle + sizeof(CompactIndex)) {
+  const auto w = static_cast<std::size_t>(width);
+  const std::size_t record = kParticle + sizeof(CompactIndex) + w * sizeof(double);
+  for (std::size_t at = 0; at + record <= in.size(); at += record) {
     P.unpack_append(in.subspan(at, kParticle));
     CompactIndex c;
     std::memcpy(&c, in.data() + at + kParticle, sizeof(CompactIndex));
     cells.push_back(c);
+    const std::size_t k = carried.size();
+    carried.resize(k + w);
+    if (w > 0)
+      std::memcpy(carried.data() + k, in.data() + at + kParticle + sizeof(CompactIndex),
+                  w * sizeof(double));
   }
 }
 
@@ -95,6 +106,8 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
   auto& P = sim.particles;
   const int me = comm.rank();
   const auto n = static_cast<std::size_t>(P.size());
+  if (sim.carried.size() != n * static_cast<std::size_t>(sim.carried_width))
+    throw std::logic_error("migrate: the basis's carried state was not exported");
   std::vector<int> owner(n);
   Index leaving = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -126,13 +139,18 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
     recv = comm.exchange(peers, out, 300);
   }
   if (leaving > 0) {
+    const auto w = static_cast<std::size_t>(sim.carried_width);
     std::size_t k = 0;
     for (std::size_t i = 0; i < n; ++i)
-      if (owner[i] == me) sim.cell[k++] = sim.cell[i];
+      if (owner[i] == me) {
+        for (std::size_t j = 0; j < w; ++j) sim.carried[k * w + j] = sim.carried[i * w + j];
+        sim.cell[k++] = sim.cell[i];
+      }
     sim.cell.resize(k);
+    sim.carried.resize(k * w);
     P.keep_with_ids([&](const Particles<Dim>&, std::size_t i) { return owner[i] == me; });
   }
-  for (const auto& buf : recv) unpack_particles(buf, P, sim.cell);
+  for (const auto& buf : recv) unpack_particles(buf, P, sim.cell, sim.carried, sim.carried_width);
   return leaving;
 }
 
@@ -225,15 +243,15 @@ template struct SlabPartition<3>;
 template Index migrate<1>(RunState<1>&, const SlabPartition<1>&, const Comm&);
 template void pack_particle<1>(const RunState<1>&, std::size_t, std::vector<std::byte>&);
 template void unpack_particles<1>(std::span<const std::byte>, Particles<1>&,
-                                  std::vector<CompactIndex>&);
+                                  std::vector<CompactIndex>&, std::vector<double>&, int);
 template Index migrate<2>(RunState<2>&, const SlabPartition<2>&, const Comm&);
 template void pack_particle<2>(const RunState<2>&, std::size_t, std::vector<std::byte>&);
 template void unpack_particles<2>(std::span<const std::byte>, Particles<2>&,
-                                  std::vector<CompactIndex>&);
+                                  std::vector<CompactIndex>&, std::vector<double>&, int);
 template Index migrate<3>(RunState<3>&, const SlabPartition<3>&, const Comm&);
 template void pack_particle<3>(const RunState<3>&, std::size_t, std::vector<std::byte>&);
 template void unpack_particles<3>(std::span<const std::byte>, Particles<3>&,
-                                  std::vector<CompactIndex>&);
+                                  std::vector<CompactIndex>&, std::vector<double>&, int);
 template void append_ghosts<1>(RunState<1>&, const Comm&, Index);
 template void append_ghosts<2>(RunState<2>&, const Comm&, Index);
 template void append_ghosts<3>(RunState<3>&, const Comm&, Index);

@@ -45,14 +45,16 @@ struct SlabPartition {
   static char axis_name() { return "xyz"[kAxis]; }
 };
 
-// Particle i's fields and its cell of the last evaluation (sim.cell) appended to `out` as bytes
-// (Particles::pack, then the cell): what travels between processes and into checkpoints.
+// Particle i's fields, its cell of the last evaluation (sim.cell) and its carried basis state
+// (sim.carried) appended to `out` as bytes (Particles::pack, then the cell, then
+// sim.carried_width doubles): what travels between processes and into checkpoints.
 template <int Dim>
 void pack_particle(const RunState<Dim>& sim, std::size_t i, std::vector<std::byte>& out);
-// Appends the particles and cells of a buffer of pack_particle records.
+// Appends the particles, cells and carried states (`width` doubles each) of a buffer of
+// pack_particle records.
 template <int Dim>
 void unpack_particles(std::span<const std::byte> in, Particles<Dim>& P,
-                      std::vector<CompactIndex>& cells);
+                      std::vector<CompactIndex>& cells, std::vector<double>& carried, int width);
 
 // Moves every particle whose owner (part.owner) is another rank there, with its fields and its
 // cell of the last evaluation (sim.cell); the particles that stay keep their order, and those

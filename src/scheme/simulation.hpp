@@ -124,6 +124,13 @@ struct RunState {
     Index owned = -1;
     std::array<Index, 2> layers{0, -1};
   } ghosts;
+  // Per-particle state of the basis that travels with the particles between processes (CPDI2's
+  // tracked corners): `carried_width` doubles per particle in particle order, filled by the
+  // stepper before a migration or a distributed checkpoint (Stepper::export_carried), moved
+  // and gathered with the particles (pack_particle), and taken back by the basis after
+  // (Stepper::resize_particle_caches). Empty otherwise.
+  int carried_width = 0;
+  std::vector<double> carried;
   // This process's own particles: the first own_particles() of `particles` (all but ghosts).
   Index own_particles() const { return ghosts.owned >= 0 ? ghosts.owned : particles.size(); }
   // The DOF range [lo, hi] that a reconstruction mapping's quadrature points touched in this
