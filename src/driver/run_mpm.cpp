@@ -40,6 +40,7 @@ io::Checkpoint capture(Stepper<Dim>& stepper, std::string_view mapping,
   c.time = sim.time;
   c.diag = sim.diag;
   std::vector<double> carried;  // a distributed run: the basis's per-particle state, gathered
+  int width = 0;                // doubles of it per particle
   if (comm) {
     comm->check();
     stepper.export_carried();
@@ -50,11 +51,12 @@ io::Checkpoint capture(Stepper<Dim>& stepper, std::string_view mapping,
     std::vector<std::byte> bytes;
     for (std::size_t i = 0; i < P.x.size(); ++i) pack_particle(sim, i, bytes);
     const auto all = comm->gather(bytes, 0);
-    if (!comm->root()) return c;  // rank 0 writes
+    width = sim.carried_width;
+    stepper.resize_particle_caches();  // the basis takes its carried state back
+    if (!comm->root()) return c;       // rank 0 writes
     Particles<Dim> gathered;
     std::vector<CompactIndex> cells;
-    for (const auto& buf : all)
-      unpack_particles<Dim>(buf, gathered, cells, carried, sim.carried_width);
+    for (const auto& buf : all) unpack_particles<Dim>(buf, gathered, cells, carried, width);
     c.cells.assign(cells.begin(), cells.end());
     c.particles = io::pack_particles(gathered);
     c.distribution.push_back(comm->size());
@@ -77,11 +79,8 @@ io::Checkpoint capture(Stepper<Dim>& stepper, std::string_view mapping,
   c.mapping = std::string(mapping);
   c.frames = out.frames();
   c.frame_times = out.frame_times();
-  stepper.save(c);  // mapping totals, basis state
-  if (comm) {
-    if (sim.carried_width > 0) c.basis_state = std::move(carried);  // every rank's, in order
-    stepper.resize_particle_caches();                               // (takes its state back)
-  }
+  stepper.save(c);                                    // mapping totals, basis state
+  if (width > 0) c.basis_state = std::move(carried);  // every rank's, in particle order
   return c;
 }
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -155,7 +156,7 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
 }
 
 template <int Dim>
-void append_ghosts(RunState<Dim>& sim, const Comm& comm, Index layers) {
+void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
   comm.check();
   remove_ghosts(sim);
   constexpr int kAxis = Dim - 1;
@@ -171,8 +172,17 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, Index layers) {
     hi = std::max(hi, layer[i]);
   }
   sim.ghosts.layers = {lo, hi};
-  const std::array<Index, 2> mine{lo, hi};
-  const std::vector<Index> all = comm.allgather(std::span<const Index>(mine));
+  // Each process's layers and reach in one all-gather (layer indices are exact as doubles).
+  const std::array<double, 3> mine{static_cast<double>(lo), static_cast<double>(hi), reach};
+  const std::vector<double> gathered = comm.allgather(std::span<const double>(mine));
+  std::vector<Index> all;
+  double most = 0.0;
+  for (std::size_t k = 0; k < gathered.size(); k += 3) {
+    all.push_back(static_cast<Index>(gathered[k]));
+    all.push_back(static_cast<Index>(gathered[k + 1]));
+    most = std::max(most, gathered[k + 2]);
+  }
+  const auto layers = static_cast<Index>(std::ceil(most));
   const int me = comm.rank();
   std::vector<int> peers;
   std::vector<std::vector<std::byte>> send;
@@ -252,9 +262,9 @@ template Index migrate<3>(RunState<3>&, const SlabPartition<3>&, const Comm&);
 template void pack_particle<3>(const RunState<3>&, std::size_t, std::vector<std::byte>&);
 template void unpack_particles<3>(std::span<const std::byte>, Particles<3>&,
                                   std::vector<CompactIndex>&, std::vector<double>&, int);
-template void append_ghosts<1>(RunState<1>&, const Comm&, Index);
-template void append_ghosts<2>(RunState<2>&, const Comm&, Index);
-template void append_ghosts<3>(RunState<3>&, const Comm&, Index);
+template void append_ghosts<1>(RunState<1>&, const Comm&, double);
+template void append_ghosts<2>(RunState<2>&, const Comm&, double);
+template void append_ghosts<3>(RunState<3>&, const Comm&, double);
 template void remove_ghosts<1>(RunState<1>&);
 template void remove_ghosts<2>(RunState<2>&);
 template void remove_ghosts<3>(RunState<3>&);

@@ -67,12 +67,12 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
 
 // Ghost particles (RunState::ghosts) for a mapping that reads the particles of neighbouring
 // cells: appends to sim.particles copies of the other processes' particles whose cell layer
-// (along the last axis) lies within `layers` of those this process's particles occupy, in rank
-// order and, from one rank, in its particle order; sets sim.ghosts. Only processes whose
-// particles lie within `layers` of each other exchange (a symmetric relation, so each pair
-// agrees). Collective; starts with comm.check().
+// (along the last axis) lies within L layers of those this process's particles occupy, L the
+// largest `reach` of any process rounded up, in rank order and, from one rank, in its particle
+// order; sets sim.ghosts. Only processes whose particles lie within L of each other exchange (a
+// symmetric relation, so each pair agrees). Collective; starts with comm.check().
 template <int Dim>
-void append_ghosts(RunState<Dim>& sim, const Comm& comm, Index layers);
+void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach);
 // Drops the ghost copies again (nothing when none are appended).
 template <int Dim>
 void remove_ghosts(RunState<Dim>& sim);

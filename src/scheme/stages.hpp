@@ -73,7 +73,7 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
     // A node's sums (DDMPM) read the particles of the cells around it: in a distributed run the
     // other processes' particles of the next cell layer are lent for them.
     if constexpr (B::kNodalSums)
-      if (sim.comm) append_ghosts(sim, *sim.comm, 1);
+      if (sim.comm) append_ghosts(sim, *sim.comm, 1.0);
     basis.prepare(P);
     remove_ghosts(sim);
   }
@@ -239,9 +239,7 @@ class GhostParticles {
   explicit GhostParticles(Sim& sim) : sim_(sim) {
     if constexpr (Sim::MappingT::kGhostParticles) {
       if (sim.comm == nullptr) return;
-      sim.comm->check();  // before the first collective of the sum
-      const double reach = sim.comm->max(sim.mapping.ghost_reach(sim));
-      append_ghosts(sim, *sim.comm, static_cast<Index>(std::ceil(reach)));
+      append_ghosts(sim, *sim.comm, sim.mapping.ghost_reach(sim));
     }
   }
   ~GhostParticles() { remove_ghosts(sim_); }
