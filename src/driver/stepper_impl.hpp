@@ -76,12 +76,19 @@ void check_distributed_run(const MethodSettings& method, bool tractions) {
         "{}: the {} basis does not run on several processes yet (its triangular mesh is not cut "
         "into slabs; issue 21); {}",
         method.where_basis, Basis::kName, kHow));
-  if (method.mass == MassType::Consistent && method.mass_solver.kind != MassSolver::Cg)
+  if (method.mass == MassType::Consistent && method.mass_solver.kind == MassSolver::Direct)
     throw InputError(fmt::format(
         "{}: method.mass = \"consistent\" runs on several processes with method.mass_solver = "
-        "\"cg\" (distributed conjugate gradients); the {} solver needs the whole matrix on one "
-        "process (issue 21); choose \"cg\" or {}",
-        method.where_mass, method.mass_solver.kind == MassSolver::Direct ? "direct" : "pmg", kHow));
+        "\"cg\" or \"pmg\" (on distributed vectors); the direct solver factorises the whole "
+        "matrix on one process (issue 21); choose \"cg\" or \"pmg\", or {}",
+        method.where_mass, kHow));
+  if (method.mass == MassType::Consistent && method.mass_solver.kind == MassSolver::Pmg &&
+      method.mass_solver.pmg.smoother == Smoother::GaussSeidel)
+    throw InputError(fmt::format(
+        "{}: method.mass_solver = \"pmg\" runs on several processes with method.pmg_smoother = "
+        "\"jacobi\"; Gauss-Seidel sweeps through the whole grid in sequence, which no "
+        "distribution of the grid reproduces; choose \"jacobi\" or {}",
+        method.where_mass, kHow));
   if (tractions)
     throw InputError(fmt::format(
         "the problem's tractions do not run on several processes yet (their particle lists "

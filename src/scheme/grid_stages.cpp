@@ -13,6 +13,7 @@
 
 #include "core/parallel.hpp"
 #include "grid/triangle_mesh.hpp"
+#include "scheme/distributed_pmg.hpp"
 #include "scheme/stages.hpp"
 
 namespace mpm::stages {
@@ -133,78 +134,17 @@ std::array<Index, 2> touched_dofs(const RunState<Dim>& sim) {
   return {std::min(lo, q[0]), std::max(hi, q[1])};
 }
 
-// Each rank's values on its DOF range sim.shared [lo, hi] summed with those of the ranks whose
-// ranges overlap it: values(i, f) calls f(double&) on each of the `width` values of DOF i. Every
-// rank that holds a DOF adds the same partial sums in the same (rank) order: the same bits
-// everywhere. tag: the exchange's MPI tag.
-template <int Dim, class Values>
-void sum_over_sharing_ranks(const RunState<Dim>& sim, std::size_t width, int tag, Values&& values) {
-  const Comm& comm = *sim.comm;
-  const auto& sh = sim.shared;
-  const int me = comm.rank();
-  const Index lo = sh.lo[static_cast<std::size_t>(me)], hi = sh.hi[static_cast<std::size_t>(me)];
-  // The values of DOFs [a, b] as doubles, `width` per DOF.
-  const auto pack = [&](Index a, Index b) {
-    std::vector<std::byte> out(static_cast<std::size_t>(b - a + 1) * width * sizeof(double));
-    auto* v = reinterpret_cast<double*>(out.data());
-    for (Index i = a; i <= b; ++i) values(i, [&](double& x) { *v++ = x; });
-    return out;
-  };
-  const auto overlap = [&](int r) {
-    return std::array<Index, 2>{std::max(lo, sh.lo[static_cast<std::size_t>(r)]),
-                                std::min(hi, sh.hi[static_cast<std::size_t>(r)])};
-  };
-  std::vector<int> peers;
-  std::vector<std::vector<std::byte>> send;
-  for (int r = 0; r < comm.size(); ++r) {
-    const auto [a, b] = overlap(r);
-    if (r == me || a > b) continue;
-    peers.push_back(r);
-    send.push_back(pack(a, b));
-  }
-  const auto recv = comm.exchange(peers, send, tag);
-  if (lo > hi) return;
-  const std::vector<std::byte> own = pack(lo, hi);
-  for (Index i = lo; i <= hi; ++i) values(i, [](double& x) { x = 0.0; });
-  std::size_t next = 0;
-  for (int r = 0; r < comm.size(); ++r) {
-    const bool peer = next < peers.size() && peers[next] == r;
-    if (r != me && !peer) continue;
-    const auto [a, b] = r == me ? std::array<Index, 2>{lo, hi} : overlap(r);
-    const auto* v = reinterpret_cast<const double*>(r == me ? own.data() : recv[next++].data());
-    for (Index i = a; i <= b; ++i) values(i, [&](double& x) { x += *v++; });
-  }
-}
-
-// Whether this rank counts DOF i in its sums over DOFs: the lowest rank whose range holds it.
-template <int Dim>
-bool owns_dof(const RunState<Dim>& sim, Index i) {
-  const auto me = static_cast<std::size_t>(sim.comm->rank());
-  for (std::size_t r = 0; r < me; ++r)
-    if (sim.shared.lo[r] <= i && i <= sim.shared.hi[r]) return false;
-  return true;
-}
-
 template <int Dim>
 void share_grid_sums(RunState<Dim>& sim, unsigned what) {
   const Comm* comm = sim.comm;
   if (comm == nullptr || !comm->distributed()) return;
   comm->check();  // a rank that failed in this step stops every rank here
-  const std::array<Index, 2> mine = touched_dofs(sim);
-  const std::vector<Index> all = comm->allgather(std::span<const Index>(mine));
-  const auto n = static_cast<std::size_t>(comm->size());
-  auto& sh = sim.shared;
-  sh.lo.resize(n);
-  sh.hi.resize(n);
-  for (std::size_t r = 0; r < n; ++r) {
-    sh.lo[r] = all[2 * r];
-    sh.hi[r] = all[2 * r + 1];
-  }
+  sim.shared = DofRanges::gather(*comm, touched_dofs(sim));
   using namespace grid_sum;
   auto& nd = sim.nodes;
   const bool M = (what & kMass) != 0, Q = (what & kMomentum) != 0, F = (what & kForces) != 0;
   const std::size_t width = (M ? 1 : 0) + (Q ? Dim : 0) + (F ? Dim : 0);
-  sum_over_sharing_ranks(sim, width, 100, [&](Index i, auto&& f) {
+  sum_over_sharing_ranks(*comm, sim.shared, width, 100, [&](Index i, auto&& f) {
     const auto k = static_cast<std::size_t>(i);
     if (M) f(nd.mass[k]);
     if (Q)
@@ -235,8 +175,9 @@ T grid_total(const RunState<Dim>& sim, const std::vector<T>& a, const T& zero) {
   const auto [lo, end] = sim.dof_window();
   const Index first = lo;
   return over_ranks(sim.comm, deterministic_sum(end - lo, zero, [&](Index k) {
-                      return owns_dof(sim, first + k) ? a[static_cast<std::size_t>(first + k)]
-                                                      : zero;
+                      return sim.shared.owns(sim.comm->rank(), first + k)
+                                 ? a[static_cast<std::size_t>(first + k)]
+                                 : zero;
                     }));
 }
 
@@ -283,9 +224,21 @@ void after_mass(RunState<Dim>& sim) {
     const auto i = static_cast<std::size_t>(offset + k);
     sim.nodes.active[i] = m[i] > threshold ? 1 : 0;
   });
-  // A distributed run solves with CG on the matrices of the ranks' particles (solve_grid):
-  // nothing to factorise.
-  if (sim.mass_type == MassType::Consistent && sim.comm != nullptr) return;
+  const auto singular = [&] {
+    return RunError(exit_code::kNonFinite,
+                    fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
+                                "(a cell with too few particles); use method.mass = \"lumped\"",
+                                sim.step, sim.time));
+  };
+  // A distributed run solves with CG or p-multigrid on the matrices of the ranks' particles
+  // (solve_grid): nothing to factorise; p-multigrid's levels are built here.
+  if (sim.mass_type == MassType::Consistent && sim.comm != nullptr) {
+    if (sim.consistent.settings().kind == MassSolver::Pmg) {
+      sim.distributed_pmg = std::make_shared<DistributedPmg<Dim>>(sim);
+      if (!sim.distributed_pmg->positive()) throw singular();
+    }
+    return;
+  }
   if (sim.mass_type == MassType::Consistent) {
     constexpr std::uint8_t kAll = (1u << Dim) - 1u;
     const auto& act = sim.nodes.active;
@@ -304,25 +257,9 @@ void after_mass(RunState<Dim>& sim) {
         pts.x.assign(P.x.begin(), P.x.end());
         pts.w.assign(P.mass.begin(), P.mass.end());
         const auto bit = static_cast<std::uint8_t>(per_component ? 1u << slot : kAll);
-        const int p = sim.spline_degree;
-        IVec<Dim> n;
-        for (int d = 0; d < Dim; ++d) n[d] = sim.grid.cells[d] + p;
-        std::vector<std::pair<int, int>> sides;
-        for (int d = 0; d < Dim; ++d)
-          for (int side = 0; side < 2; ++side) {
-            bool all = true;
-            for (Index i = 0; i < static_cast<Index>(sim.nodes.fixed.size()) && all; ++i) {
-              Index rem = i, c = 0;
-              for (int e = 0; e <= d; ++e) {
-                c = rem % n[e];
-                rem /= n[e];
-              }
-              if (c == (side == 0 ? 0 : n[d] - 1))
-                all = (sim.nodes.fixed[static_cast<std::size_t>(i)] & bit) == bit;
-            }
-            if (all) sides.emplace_back(d, side);
-          }
-        return spline_pmg(sim.grid, p, pts, keep, sides, sim.consistent.settings().pmg, &fine);
+        const auto sides = spline_fixed_sides(sim, bit);
+        return spline_pmg(sim.grid, sim.spline_degree, pts, keep, sides,
+                          sim.consistent.settings().pmg, &fine);
       };
     if (!sim.nodes.projected.empty()) {
       // Rollers on inclined boundaries couple the components: one system for all of them.
@@ -337,10 +274,7 @@ void after_mass(RunState<Dim>& sim) {
       // so column-major blocks read as the row-major ones factorize_coupled takes.)
       if (!sim.consistent.factorize_coupled(
               Dim, std::span<const double>(proj.data()->data(), proj.size() * Dim * Dim)))
-        throw RunError(exit_code::kNonFinite,
-                       fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
-                                   "(a cell with too few particles); use method.mass = \"lumped\"",
-                                   sim.step, sim.time));
+        throw singular();
       return;
     }
     for (int d = 0; d < (per_component ? Dim : 1); ++d) {
@@ -351,10 +285,7 @@ void after_mass(RunState<Dim>& sim) {
                 return act[k] && !(fixed[k] & bit);
               },
               d))
-        throw RunError(exit_code::kNonFinite,
-                       fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
-                                   "(a cell with too few particles); use method.mass = \"lumped\"",
-                                   sim.step, sim.time));
+        throw singular();
     }
   }
 }
@@ -430,14 +361,15 @@ template <int Dim>
 // (as share_grid_sums, for one array).
 template <int Dim>
 void share_vector(const RunState<Dim>& sim, Eigen::VectorXd& v) {
-  detail::sum_over_sharing_ranks(sim, 1, 200, [&](Index i, auto&& f) { f(v[i]); });
+  sum_over_sharing_ranks(*sim.comm, sim.shared, 1, 200, [&](Index i, auto&& f) { f(v[i]); });
 }
 
 // y = M^{-1} r with consistent mass in a distributed run: CG (method.mass_solver = "cg") on
 // the operator x -> sum over ranks of M_rank (P x), shared like the grid sums, plus (I - P) x
 // for the eliminated DOFs (P: the kept DOFs, active and not fixed in the component); the
 // inner products over the DOFs each rank owns, summed in rank order, so every rank takes the
-// same iterations. The same system as the one process's CG on the assembled matrix.
+// same iterations. The same system as the one process's CG on the assembled matrix; "pmg":
+// the same system by the V-cycles of DistributedPmg (built in after_mass).
 template <int Dim, class V>
 void solve_distributed(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) {
   const auto& nd = sim.nodes;
@@ -446,7 +378,7 @@ void solve_distributed(RunState<Dim>& sim, const std::vector<V>& r, std::vector<
   const Index lo = first, count = end - first;
   std::vector<unsigned char> owned(static_cast<std::size_t>(count));
   for (Index k = 0; k < count; ++k)
-    owned[static_cast<std::size_t>(k)] = detail::owns_dof(sim, lo + k);
+    owned[static_cast<std::size_t>(k)] = sim.shared.owns(sim.comm->rank(), lo + k);
   const InnerProduct dot = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
     return sim.comm->sum(deterministic_sum(count, 0.0, [&](Index k) {
       return owned[static_cast<std::size_t>(k)] ? a[lo + k] * b[lo + k] : 0.0;
@@ -476,7 +408,10 @@ void solve_distributed(RunState<Dim>& sim, const std::vector<V>& r, std::vector<
         if (!keep[static_cast<std::size_t>(k)]) out[lo + k] = v[lo + k];
     };
     x.setZero();
-    const IterationReport rep = conjugate_gradient(A, b, x, s.tolerance, s.max_iterations, dot);
+    const IterationReport rep =
+        s.kind == MassSolver::Pmg
+            ? sim.distributed_pmg->solve(sim.consistent_per_component ? d : 0, b, x)
+            : conjugate_gradient(A, b, x, s.tolerance, s.max_iterations, dot);
     sim.diag.mass_solver_iterations += rep.iterations;
     sim.diag.max_mass_solver_iterations =
         std::max(sim.diag.max_mass_solver_iterations, rep.iterations);

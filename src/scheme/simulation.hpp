@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -23,6 +24,7 @@
 #include "model/loads.hpp"
 #include "particles/particles.hpp"
 #include "scheme/diagnostics.hpp"
+#include "scheme/dof_sharing.hpp"
 #include "scheme/sort.hpp"
 #include "solver/mass_matrix.hpp"
 
@@ -46,6 +48,9 @@ inline constexpr unsigned kPosition = 2;  // x_p, u_p from the grid velocity
 inline constexpr unsigned kStress = 4;    // F, V, rho, sigma from the grid velocity gradient
 }  // namespace particle_update
 
+template <int Dim>
+class DistributedPmg;  // scheme/distributed_pmg.hpp
+
 // The basis- and mapping-independent state of an MPM run: what the driver (driver/) reads and
 // writes between steps (outputs, checkpoints, error norms), with the grid quantities the stages
 // share. Simulation adds the basis, the mapping and the cached stencils.
@@ -68,6 +73,9 @@ struct RunState {
 
   GridState<Dim> nodes;
   ConsistentMass consistent;
+  // A distributed run's p-multigrid hierarchy (method.mass_solver = "pmg"), built with the
+  // consistent matrix each step (stages::detail::after_mass).
+  std::shared_ptr<DistributedPmg<Dim>> distributed_pmg;
   // Some DOF is fixed in only some components (rollers): consistent mass then factorises once
   // per velocity component. Set by Simulation::fix_side, the only place that changes
   // nodes.fixed.
@@ -101,17 +109,13 @@ struct RunState {
   // rank's grid holds the totals on its DOFs; `shared` holds each rank's DOF range [lo, hi] of
   // the last exchange (for the conservation totals, which count each DOF once).
   const Comm* comm = nullptr;
-  struct SharedRanges {
-    std::vector<Index> lo, hi;  // per rank
-  } shared;
+  DofRanges shared;
   // [first, end) of the DOFs the grid stages work on: all of them on one process; in a
   // distributed run the range this rank's particles touched at the last exchange (the other
   // DOFs hold stale values that nothing reads: ChunkDofRanges::bounded).
   std::array<Index, 2> dof_window() const {
     if (comm == nullptr || shared.lo.empty()) return {0, nodes.size()};
-    const auto me = static_cast<std::size_t>(comm->rank());
-    return shared.lo[me] <= shared.hi[me] ? std::array<Index, 2>{shared.lo[me], shared.hi[me] + 1}
-                                          : std::array<Index, 2>{0, 0};
+    return shared.window(comm->rank());
   }
 
   // Ghost particles (issue 21): a mapping that reads the particles of neighbouring cells

@@ -67,21 +67,110 @@ IterationReport conjugate_gradient(const LinearOperator& A, const Eigen::VectorX
   return rep;
 }
 
+double power_start(Index g) {
+  const double t = static_cast<double>(g) * 0.6180339887498949;
+  return 1.0 + (t - std::floor(t));
+}
+
+double jacobi_damping(const LinearOperator& A, const Eigen::VectorXd& inv_diag,
+                      Eigen::VectorXd start, const InnerProduct& dot) {
+  Eigen::VectorXd& v = start;
+  const double vv = dot(v, v);
+  if (!(vv > 0.0)) return 1.0;  // no function in the system: nothing to smooth
+  v /= std::sqrt(vv);
+  Eigen::VectorXd Av(v.size());
+  double lambda = 1.0;
+  for (int it = 0; it < 50; ++it) {
+    A(v, Av);
+    Av = inv_diag.cwiseProduct(Av);
+    lambda = std::sqrt(dot(Av, Av));  // |v| = 1
+    if (!(lambda > 0.0)) return 1.0;
+    v = Av / lambda;
+  }
+  return 1.0 / (1.05 * lambda);
+}
+
+namespace {
+void vcycle(const std::vector<PmgLevelOps>& levels, const PmgSettings& s, std::size_t k,
+            const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, long& coarse) {
+  const PmgLevelOps& L = levels[k];
+  Eigen::VectorXd r(L.size);
+  if (k + 1 == levels.size()) {
+    // The coarsest level: CG on the residual equation from zero (004), to 1e-4 when there are
+    // finer levels; a one-level hierarchy (p = 1) is solved to the outer tolerance.
+    L.A(x, r);
+    r = b - r;
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(L.size);
+    const double tol = levels.size() == 1 ? tolerance : s.coarse_tolerance;
+    const IterationReport rep = conjugate_gradient(L.A, r, e, tol, s.coarse_max_iterations, L.dot);
+    coarse += rep.iterations;
+    x += e;
+    return;
+  }
+  L.smooth(b, x, s.pre, true);
+  if (!s.coarse_correction) {
+    L.smooth(b, x, s.post, false);
+    return;
+  }
+  L.A(x, r);
+  r = b - r;
+  const PmgLevelOps& C = levels[k + 1];
+  Eigen::VectorXd rc(C.size), ec = Eigen::VectorXd::Zero(C.size);
+  L.restriction(r, rc);
+  vcycle(levels, s, k + 1, rc, ec, tolerance, coarse);
+  L.prolong(ec, r);
+  x += r;
+  L.smooth(b, x, s.post, false);
+}
+}  // namespace
+
+IterationReport pmg_cycles(const std::vector<PmgLevelOps>& levels, const PmgSettings& s,
+                           const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
+                           int max_cycles, long& coarse_iterations) {
+  IterationReport rep;
+  coarse_iterations = 0;
+  const PmgLevelOps& F = levels.front();
+  if (x.size() != b.size()) x = Eigen::VectorXd::Zero(b.size());
+  Eigen::VectorXd r(b.size());
+  const auto residual = [&] {
+    F.A(x, r);
+    r = b - r;
+    return std::sqrt(F.dot(r, r));
+  };
+  const double r0 = residual();
+  rep.history.push_back(1.0);
+  if (r0 == 0.0) {
+    rep.converged = true;
+    return rep;
+  }
+  while (rep.iterations < max_cycles) {
+    vcycle(levels, s, 0, b, x, tolerance, coarse_iterations);
+    ++rep.iterations;
+    rep.relative_residual = residual() / r0;
+    rep.history.push_back(rep.relative_residual);
+    if (rep.relative_residual < tolerance) {
+      rep.converged = true;
+      break;
+    }
+    if (!std::isfinite(rep.relative_residual)) break;
+  }
+  return rep;
+}
+
 PMultigrid::PMultigrid(std::vector<PmgLevel> levels, const PmgSettings& s)
     : levels_(std::move(levels)), s_(s) {
+  const InnerProduct dot = [](const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
+    return u.dot(v);
+  };
   for (auto& L : levels_) {
     L.inv_diag = L.A.diagonal().cwiseInverse();
     if (s_.smoother == Smoother::Jacobi) {
-      // lambda_max(D^-1 A) by power iteration from a fixed start (reproducible); the 1.05
-      // covers its underestimate, so omega lambda_max < 1 and the smoother contracts.
-      Eigen::VectorXd v = Eigen::VectorXd::LinSpaced(L.A.rows(), 1.0, 2.0);
-      double lambda = 1.0;
-      for (int it = 0; it < 50; ++it) {
-        Eigen::VectorXd w = L.inv_diag.asDiagonal() * (L.A * v);
-        lambda = w.norm() / v.norm();
-        v = w / w.norm();
-      }
-      L.omega = 1.0 / (1.05 * lambda);
+      Eigen::VectorXd start(L.A.rows());
+      for (Index i = 0; i < start.size(); ++i)
+        start[i] = power_start(L.functions.empty() ? i : L.functions[static_cast<std::size_t>(i)]);
+      L.omega = jacobi_damping(
+          [&L](const Eigen::VectorXd& v, Eigen::VectorXd& y) { y.noalias() = L.A * v; }, L.inv_diag,
+          std::move(start), dot);
     }
   }
 }
@@ -109,56 +198,26 @@ void PMultigrid::smooth(const PmgLevel& L, const Eigen::VectorXd& b, Eigen::Vect
   }
 }
 
-void PMultigrid::vcycle(std::size_t k, const Eigen::VectorXd& b, Eigen::VectorXd& x,
-                        double tolerance) const {
-  const PmgLevel& L = levels_[k];
-  if (k + 1 == levels_.size()) {
-    // The coarsest level: CG on the residual equation from zero (004), to 1e-4 when there are
-    // finer levels; a one-level hierarchy (p = 1) is solved to the outer tolerance.
-    Eigen::VectorXd e = Eigen::VectorXd::Zero(b.size());
-    const Eigen::VectorXd r = b - L.A * x;
-    const double tol = levels_.size() == 1 ? tolerance : s_.coarse_tolerance;
-    const IterationReport rep = conjugate_gradient(L.A, r, e, tol, s_.coarse_max_iterations);
-    coarse_iterations_ += rep.iterations;
-    x += e;
-    return;
-  }
-  smooth(L, b, x, s_.pre, true);
-  if (!s_.coarse_correction) {
-    smooth(L, b, x, s_.post, false);
-    return;
-  }
-  const Eigen::VectorXd rc = L.restriction * (b - L.A * x);
-  Eigen::VectorXd ec = Eigen::VectorXd::Zero(rc.size());
-  vcycle(k + 1, rc, ec, tolerance);
-  x += L.prolong * ec;
-  smooth(L, b, x, s_.post, false);
-}
-
 IterationReport PMultigrid::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
                                   int max_cycles) const {
-  IterationReport rep;
-  coarse_iterations_ = 0;
-  if (x.size() != b.size()) x = Eigen::VectorXd::Zero(b.size());
-  const SparseMatrixD& A = levels_.front().A;
-  const double r0 = (b - A * x).norm();
-  rep.history.push_back(1.0);
-  if (r0 == 0.0) {
-    rep.converged = true;
-    return rep;
+  // The operations bound to this hierarchy's matrices, for this solve (a PMultigrid moves).
+  std::vector<PmgLevelOps> ops(levels_.size());
+  for (std::size_t k = 0; k < levels_.size(); ++k) {
+    const PmgLevel& L = levels_[k];
+    PmgLevelOps& o = ops[k];
+    o.size = L.A.rows();
+    o.A = [&L](const Eigen::VectorXd& v, Eigen::VectorXd& y) { y.noalias() = L.A * v; };
+    o.dot = [](const Eigen::VectorXd& u, const Eigen::VectorXd& v) { return u.dot(v); };
+    o.smooth = [this, &L](const Eigen::VectorXd& rhs, Eigen::VectorXd& v, int steps, bool fwd) {
+      smooth(L, rhs, v, steps, fwd);
+    };
+    if (k + 1 == levels_.size()) continue;
+    o.prolong = [&L](const Eigen::VectorXd& v, Eigen::VectorXd& y) { y.noalias() = L.prolong * v; };
+    o.restriction = [&L](const Eigen::VectorXd& v, Eigen::VectorXd& y) {
+      y.noalias() = L.restriction * v;
+    };
   }
-  while (rep.iterations < max_cycles) {
-    vcycle(0, b, x, tolerance);
-    ++rep.iterations;
-    rep.relative_residual = (b - A * x).norm() / r0;
-    rep.history.push_back(rep.relative_residual);
-    if (rep.relative_residual < tolerance) {
-      rep.converged = true;
-      break;
-    }
-    if (!std::isfinite(rep.relative_residual)) break;
-  }
-  return rep;
+  return pmg_cycles(ops, s_, b, x, tolerance, max_cycles, coarse_iterations_);
 }
 
 SparseMatrixD kept_submatrix(const SparseMatrixD& A, const std::vector<unsigned char>& keep_rows,
@@ -224,6 +283,8 @@ PMultigrid spline_pmg(const Grid<Dim>& g, int p, const PointSet<Dim>& pts,
     const auto K = static_cast<std::size_t>(k);
     levels[K].degree = p - k;
     levels[K].A = kept_submatrix(M[K], keep[K], keep[K]);
+    for (std::size_t i = 0; i < keep[K].size(); ++i)
+      if (keep[K][i]) levels[K].functions.push_back(static_cast<Index>(i));
     if (k + 1 == nlev) continue;
     // I_{q-1}^{q} = (M_q^L)^-1 M_{q,q-1} (the lumped L2 projection onto the finer space).
     const int q = p - k;

@@ -71,6 +71,38 @@ struct PmgSettings {
   int coarse_max_iterations = 100000;
 };
 
+// One level of the cycle through its operations on the level's vectors. A matrix hierarchy
+// (PMultigrid) binds them to its matrices; a distributed run to each process's part of the
+// level's matrices, summed over the processes that share a function, and to inner products over
+// the functions each process owns (scheme/distributed_pmg.hpp).
+struct PmgLevelOps {
+  Index size = 0;
+  LinearOperator A;            // y = A x
+  LinearOperator prolong;      // coarser -> this (none on the coarsest level)
+  LinearOperator restriction;  // this -> coarser
+  InnerProduct dot;            // for the coarse CG and the outer residual
+  // `steps` sweeps of the smoother on A x = b from x; forward before the coarse correction.
+  std::function<void(const Eigen::VectorXd& b, Eigen::VectorXd& x, int steps, bool forward)> smooth;
+};
+
+// V-cycles (004 eq. 4.59-4.62) over `levels` (finest first) from x until the relative residual
+// (in levels[0].dot's norm) is below tolerance or max_cycles; coarse_iterations receives the
+// CG iterations of the coarse solves.
+IterationReport pmg_cycles(const std::vector<PmgLevelOps>& levels, const PmgSettings& s,
+                           const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
+                           int max_cycles, long& coarse_iterations);
+
+// Jacobi's damping omega = 1 / (1.05 lambda_max(D^-1 A)), lambda_max by 50 power iterations from
+// `start` (the 1.05 covers the iteration's underestimate, so omega lambda_max < 1 and the
+// smoother contracts); inv_diag is zero on the functions outside the system.
+double jacobi_damping(const LinearOperator& A, const Eigen::VectorXd& inv_diag,
+                      Eigen::VectorXd start, const InnerProduct& dot);
+// The power iteration's start on function g of a level: 1 + frac(g / golden ratio). It depends
+// on the function, not on its position in a vector, so a distributed run starts from the same
+// vector as one process; the sequence is equidistributed, so it holds the oscillating modes whose
+// eigenvalues are the largest (a smooth start would hold little of them).
+double power_start(Index g);
+
 // One level: the matrix on the kept functions, and the transfers to and from the next coarser
 // level (empty on the coarsest).
 struct PmgLevel {
@@ -79,7 +111,8 @@ struct PmgLevel {
   SparseMatrixD prolong;      // coarser -> this
   SparseMatrixD restriction;  // this -> coarser
   Eigen::VectorXd inv_diag;
-  double omega = 1.0;  // Jacobi damping
+  double omega = 1.0;            // Jacobi damping
+  std::vector<Index> functions;  // the function of each row (empty: the row itself)
 };
 
 class PMultigrid {
@@ -93,7 +126,6 @@ class PMultigrid {
   long coarse_iterations() const { return coarse_iterations_; }
 
  private:
-  void vcycle(std::size_t k, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance) const;
   void smooth(const PmgLevel& L, const Eigen::VectorXd& b, Eigen::VectorXd& x, int steps,
               bool forward) const;
 
