@@ -130,6 +130,17 @@ CASES = [
       "method.mapping=tls", "method.mass=consistent", "method.mass_solver=pmg",
       "method.pmg_smoother=jacobi", "method.mass_solver_tolerance=1e-13", "output.frames=1"],
      "none"),
+    # Tractions: the loaded points follow their particles to whichever process holds them, and
+    # a point's nodal forces go to the process that holds the DOF. The 1D bar's end traction
+    # (D 4.6.2); the 2D plate, narrowed to leave its right face inside the grid, with a shear
+    # traction there (loaded points on every process) and a pressure on its top, with quadratic
+    # B-splines (face stencils a layer beyond the particles').
+    ("1d_traction_bar", "examples/traction_bar.toml",
+     ["time.end=0.05", "method.basis=bspline", "output.frames=1"], "none"),
+    ("2d_custom_plate_tractions_bspline2", "examples/custom_plate_2d.toml",
+     ["time.end=0.05", "method.basis=bspline", "body.max=[0.15, 1.0]",
+      'traction.right=["0", "2e4*min(t/T, 1)"]', 'pressure.top="1e4*min(t/T, 1)"',
+      "output.frames=1"], "none"),
     ("2d_plate_maxent", "examples/plate_mms_2d.toml",
      ["grid.cells=8", "time.end=2e-3", "method.basis=maxent", "output.frames=1"], "none"),
     ("3d_cube_bspline2", "examples/cube_mms_3d.toml",

@@ -160,8 +160,10 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
         c.cells.empty() ? 0 : *std::max_element(c.cells.begin(), c.cells.end()),
         sim.grid.num_cells()));
   // The traction lists name their particles by position in the freshly set-up order; the
-  // checkpoint holds the particles in its own (re-sorted) order: follow the ids there.
-  if (!sim.tractions.empty()) {
+  // checkpoint holds the particles in its own (re-sorted) order: follow the ids there. (A
+  // distributed run's lists follow the ids after the particles are restored:
+  // resize_particle_caches.)
+  if (!sim.tractions.empty() && !comm) {
     const auto n = static_cast<std::size_t>(p.size());
     std::vector<Index> at(n, -1);  // position in the checkpoint of each id
     for (std::size_t k = 0; k < n; ++k) {
@@ -308,6 +310,10 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/true),
         comm->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
     const int me = comm->rank();
+    // The traction points name their particles by id from here (RunState::all_tractions).
+    for (auto& tr : pb.tractions)
+      for (auto& q : tr.particles)
+        q = static_cast<Index>(pb.particles.id[static_cast<std::size_t>(q)]);
     pb.particles.keep_with_ids([&](const Particles<Dim>& P, std::size_t i) {
       return part.owner(pb.grid, P.x[i], 0) == me;
     });

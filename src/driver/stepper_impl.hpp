@@ -12,6 +12,7 @@
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
 #include "mapping/mapping.hpp"
+#include "scheme/distribution.hpp"
 #include "scheme/schemes.hpp"
 #include "scheme/sort.hpp"
 #include "setup/run_settings.hpp"
@@ -67,9 +68,11 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
 // reconstructions read the other processes' particles near a process's own: ghost particles,
 // MappingFor's kGhostParticles) for every basis on the grid (DDMPM's node sums with the next
 // cell layer lent, CPDI2's corners moved with their particles: Stepper::export_carried);
-// consistent mass is solved by distributed CG.
+// consistent mass is solved by distributed CG or Jacobi-smoothed p-multigrid; the tractions'
+// points follow their particles (localize_tractions) and their forces the DOFs that hold mass
+// (share_grid_sums).
 template <class Basis>
-void check_distributed_run(const MethodSettings& method, bool tractions) {
+void check_distributed_run(const MethodSettings& method) {
   constexpr std::string_view kHow = "run it on one process (without mpirun)";
   if constexpr (Basis::kTriangleMesh)
     throw InputError(fmt::format(
@@ -89,11 +92,6 @@ void check_distributed_run(const MethodSettings& method, bool tractions) {
         "\"jacobi\"; Gauss-Seidel sweeps through the whole grid in sequence, which no "
         "distribution of the grid reproduces; choose \"jacobi\" or {}",
         method.where_mass, kHow));
-  if (tractions)
-    throw InputError(fmt::format(
-        "the problem's tractions do not run on several processes yet (their particle lists "
-        "belong to one process; issue 21); {}",
-        kHow));
 }
 
 template <int Dim, class Basis, class Mapping>
@@ -135,8 +133,11 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.tractions = pb.tractions;
     if (sim_.body_force.fill) sim_.body_force.fill(sim_.particles, 0.0, sim_.particles.body);
     if (in.comm != nullptr && in.comm->distributed()) {
-      check_distributed_run<Basis>(method, !pb.tractions.empty());
+      check_distributed_run<Basis>(method);
       sim_.comm = in.comm;
+      // The problem's traction points name their particles by id here (driver/run_mpm.cpp).
+      sim_.all_tractions = std::move(sim_.tractions);
+      localize_tractions(sim_);
       sim_.scatter.ranges.bounded = true;  // the grid work of this rank's slab only
     }
   }
@@ -190,6 +191,7 @@ class TypedStepper final : public Stepper<Dim> {
 
   void resize_particle_caches() override {
     sim_.stencils.resize(static_cast<std::size_t>(sim_.particles.size()));
+    if (sim_.comm && !sim_.all_tractions.empty()) localize_tractions(sim_);
     if constexpr (Basis::kTrackedCorners)
       if (sim_.carried_width > 0) {
         set_flat_corners(sim_.carried);

@@ -210,6 +210,35 @@ void remove_ghosts(RunState<Dim>& sim) {
 }
 
 template <int Dim>
+void localize_tractions(RunState<Dim>& sim) {
+  const auto& P = sim.particles;
+  const auto own = static_cast<std::size_t>(sim.own_particles());
+  // (id, index) of this process's particles, sorted by id, for lookups.
+  std::vector<std::pair<Index, Index>> at(own);
+  for (std::size_t i = 0; i < own; ++i)
+    at[i] = {static_cast<Index>(P.id[i]), static_cast<Index>(i)};
+  std::sort(at.begin(), at.end());
+  sim.tractions.clear();
+  for (const auto& all : sim.all_tractions) {
+    Traction<Dim> t;
+    t.direction = all.direction;
+    t.side = all.side;
+    t.value = all.value;
+    t.pressure = all.pressure;
+    for (std::size_t k = 0; k < all.particles.size(); ++k) {
+      const auto it = std::lower_bound(at.begin(), at.end(),
+                                       std::pair<Index, Index>{all.particles[k], Index{-1}});
+      if (it == at.end() || it->first != all.particles[k]) continue;
+      t.particles.push_back(it->second);
+      t.area.push_back(all.area[k]);
+      if (k < all.offset.size()) t.offset.push_back(all.offset[k]);
+      if (k < all.normal.size()) t.normal.push_back(all.normal[k]);
+    }
+    sim.tractions.push_back(std::move(t));
+  }
+}
+
+template <int Dim>
 double imbalance(const RunState<Dim>& sim, const Comm& comm, std::vector<Index>* per_rank) {
   comm.check();
   const Index n = sim.particles.size();
@@ -268,6 +297,9 @@ template void append_ghosts<3>(RunState<3>&, const Comm&, double);
 template void remove_ghosts<1>(RunState<1>&);
 template void remove_ghosts<2>(RunState<2>&);
 template void remove_ghosts<3>(RunState<3>&);
+template void localize_tractions<1>(RunState<1>&);
+template void localize_tractions<2>(RunState<2>&);
+template void localize_tractions<3>(RunState<3>&);
 template double imbalance<1>(const RunState<1>&, const Comm&, std::vector<Index>*);
 template double imbalance<2>(const RunState<2>&, const Comm&, std::vector<Index>*);
 template double imbalance<3>(const RunState<3>&, const Comm&, std::vector<Index>*);

@@ -77,6 +77,13 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach);
 template <int Dim>
 void remove_ghosts(RunState<Dim>& sim);
 
+// A distributed run's tractions: sim.tractions from sim.all_tractions (whose loaded points name
+// their particles by id), the points of this process's particles with their indices, in the
+// order of all_tractions (so each process adds its points' forces in the one process's order).
+// After every change of this process's particles (set-up, migration, restart).
+template <int Dim>
+void localize_tractions(RunState<Dim>& sim);
+
 // The particles of each process and max / mean - 1 (0 without particles). Collective.
 template <int Dim>
 double imbalance(const RunState<Dim>& sim, const Comm& comm,

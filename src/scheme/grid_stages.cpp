@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <span>
 #include <string>
@@ -134,6 +135,45 @@ std::array<Index, 2> touched_dofs(const RunState<Dim>& sim) {
   return {std::min(lo, q[0]), std::max(hi, q[1])};
 }
 
+// The tractions' nodal forces of this step (RunState::face_forces, after_forces): added here
+// where this process's range holds the DOF, else sent to the lowest process whose range holds it
+// (which adds them, in rank order, to its partial sums before they are shared). A DOF no range
+// holds has no mass on any process, so it is inactive and its force unused, as on one process.
+template <int Dim>
+void place_face_forces(RunState<Dim>& sim) {
+  const Comm& comm = *sim.comm;
+  const int me = comm.rank();
+  const auto& sh = sim.shared;
+  auto& force = sim.nodes.force;
+  constexpr std::size_t kRecord = sizeof(Index) + Dim * sizeof(double);
+  std::vector<std::vector<std::byte>> send(static_cast<std::size_t>(comm.size()));
+  for (const auto& [i, f] : sim.face_forces) {
+    if (sh.lo[static_cast<std::size_t>(me)] <= i && i <= sh.hi[static_cast<std::size_t>(me)]) {
+      force[static_cast<std::size_t>(i)] += f;
+      continue;
+    }
+    for (int r = 0; r < comm.size(); ++r)
+      if (sh.lo[static_cast<std::size_t>(r)] <= i && i <= sh.hi[static_cast<std::size_t>(r)]) {
+        auto& out = send[static_cast<std::size_t>(r)];
+        const std::size_t at = out.size();
+        out.resize(at + kRecord);
+        std::memcpy(out.data() + at, &i, sizeof(Index));
+        std::memcpy(out.data() + at + sizeof(Index), f.data(), Dim * sizeof(double));
+        break;
+      }
+  }
+  sim.face_forces.clear();
+  const auto recv = comm.alltoall(send);
+  for (const auto& buf : recv)
+    for (std::size_t at = 0; at + kRecord <= buf.size(); at += kRecord) {
+      Index i;
+      Vec<Dim> f;
+      std::memcpy(&i, buf.data() + at, sizeof(Index));
+      std::memcpy(f.data(), buf.data() + at + sizeof(Index), Dim * sizeof(double));
+      force[static_cast<std::size_t>(i)] += f;
+    }
+}
+
 template <int Dim>
 void share_grid_sums(RunState<Dim>& sim, unsigned what) {
   const Comm* comm = sim.comm;
@@ -143,6 +183,7 @@ void share_grid_sums(RunState<Dim>& sim, unsigned what) {
   using namespace grid_sum;
   auto& nd = sim.nodes;
   const bool M = (what & kMass) != 0, Q = (what & kMomentum) != 0, F = (what & kForces) != 0;
+  if (F && !sim.all_tractions.empty()) place_face_forces(sim);
   const std::size_t width = (M ? 1 : 0) + (Q ? Dim : 0) + (F ? Dim : 0);
   sum_over_sharing_ranks(*comm, sim.shared, width, 100, [&](Index i, auto&& f) {
     const auto k = static_cast<std::size_t>(i);

@@ -70,6 +70,13 @@ struct RunState {
   double conservation_limit = 0.5;
   BodyForce<Dim> body_force;
   std::vector<Traction<Dim>> tractions;
+  // A distributed run (issue 21): the whole problem's tractions with each loaded point's particle
+  // by id; `tractions` holds the points of this process's particles (localize_tractions, after
+  // every migration). `face_forces`: the loaded points' nodal forces of this step, (DOF, force),
+  // which stages::detail::share_grid_sums adds where this process's sums hold the DOF and sends
+  // on to the process that holds it otherwise.
+  std::vector<Traction<Dim>> all_tractions;
+  std::vector<std::pair<Index, Vec<Dim>>> face_forces;
 
   GridState<Dim> nodes;
   ConsistentMass consistent;

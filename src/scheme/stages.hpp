@@ -218,6 +218,10 @@ void after_forces(BasisState<Dim, B>& sim) {
       }
       // A_p = 1 in 1D: tau * 1.0 is exact, so the 1D forces are those of the end traction.
       const Vec<Dim> f = (tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k];
+      if (sim.comm) {  // a DOF maybe beyond this process's sums: share_grid_sums places them
+        for (int a = 0; a < s.kSize; ++a) sim.face_forces.emplace_back(s.dof[a], s.w[a] * f);
+        continue;
+      }
       for (int a = 0; a < s.kSize; ++a)
         sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
     }

@@ -1,6 +1,7 @@
 // Distributed runs (issue 21), the parts that do not need several processes: the slab cuts
 // balance the particles and give every process a layer, a particle's owner follows its cell,
-// particles travel between processes as bytes that restore every field, and the collective
+// particles travel between processes as bytes that restore every field, the traction lists
+// follow their particles by id, and the collective
 // operations are plain copies on one process. The runs on several processes are checked in
 // Mpi.SameAnswersAsOneProcess (scripts/mpi_check.py, under mpirun).
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 
 #include "core/comm.hpp"
 #include "scheme/distribution.hpp"
+#include "scheme/simulation.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {
@@ -103,6 +105,47 @@ TEST(Comm, OneProcessIsAPlainCopy) {
   EXPECT_EQ(c.agree(&f)->exit_code, 4);
   EXPECT_NO_THROW(c.check());
   EXPECT_TRUE(c.any(true));
+}
+
+TEST(Tractions, LoadedPointsFollowTheirParticlesById) {
+  // Six particles with ids 0 .. 5 at set-up; this process holds ids 4, 1, 3 (in that order,
+  // as after migrations). Two tractions name their points' particles by id.
+  Particles<2> P;
+  P.resize(3);
+  P.id = {4, 1, 3};
+  RunState<2> sim(Grid<2>(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{2, 2}), std::move(P),
+                  NeoHookean{});
+  Traction<2> a;
+  a.direction = 0;
+  a.side = 1;
+  a.particles = {0, 1, 3, 5};
+  a.area = {0.5, 1.5, 2.5, 3.5};
+  a.offset = {Vec<2>(0, 0), Vec<2>(1, 0), Vec<2>(3, 0), Vec<2>(5, 0)};
+  a.value = [](double t) { return Vec<2>(t, 0.0); };
+  Traction<2> b;
+  b.direction = 1;
+  b.side = -1;
+  b.particles = {2, 4};
+  b.area = {7.0, 8.0};
+  b.offset = {Vec<2>(0, 2), Vec<2>(0, 4)};
+  sim.all_tractions = {a, b};
+  localize_tractions(sim);
+  ASSERT_EQ(sim.tractions.size(), 2u);
+  // a: ids 1 and 3 are here, at indices 1 and 2, in a's order with their own data.
+  EXPECT_EQ(sim.tractions[0].particles, (std::vector<Index>{1, 2}));
+  EXPECT_EQ(sim.tractions[0].area, (std::vector<double>{1.5, 2.5}));
+  EXPECT_EQ(sim.tractions[0].offset[1], Vec<2>(3, 0));
+  EXPECT_EQ(sim.tractions[0].side, 1);
+  EXPECT_EQ(sim.tractions[0].value(2.0), Vec<2>(2.0, 0.0));
+  // b: id 4 only, at index 0.
+  EXPECT_EQ(sim.tractions[1].particles, (std::vector<Index>{0}));
+  EXPECT_EQ(sim.tractions[1].area, (std::vector<double>{8.0}));
+  EXPECT_EQ(sim.tractions[1].direction, 1);
+  // After a migration the lists follow: id 5 arrives, id 1 leaves.
+  sim.particles.id = {4, 3, 5};
+  localize_tractions(sim);
+  EXPECT_EQ(sim.tractions[0].particles, (std::vector<Index>{1, 2}));
+  EXPECT_EQ(sim.tractions[0].area, (std::vector<double>{2.5, 3.5}));
 }
 
 }  // namespace
