@@ -122,11 +122,11 @@ CASES = [
     # solve on the plate): two levels in 2D with the plate's per-component fixed sides, and
     # three (B3) with the fine level assembled by TLS in 1D.
     ("2d_plate_consistent_pmg", "examples/plate_mms_2d.toml",
-     ["grid.cells=8", "time.end=2e-4", "method.mass=consistent", "method.mass_solver=pmg",
+     ["grid.cells=8", "time.end=1e-4", "method.mass=consistent", "method.mass_solver=pmg",
       "method.pmg_smoother=jacobi", "method.mass_solver_tolerance=1e-13", "output.frames=1"],
      "none"),
     ("1d_tls_consistent_pmg_bspline3", "examples/vibrating_bar_crossing.toml",
-     ["grid.cells=60", "time.end=1e-3", "method.basis=bspline", "method.degree=3",
+     ["grid.cells=60", "time.end=5e-4", "method.basis=bspline", "method.degree=3",
       "method.mapping=tls", "method.mass=consistent", "method.mass_solver=pmg",
       "method.pmg_smoother=jacobi", "method.mass_solver_tolerance=1e-13", "output.frames=1"],
      "none"),
@@ -359,20 +359,31 @@ def last_frame(d):
     return max(frames, key=lambda f: (len(times[f]) > 0, f))
 
 
-def check_restart(mpm, tmp, failures):
-    # A run on 2 processes with checkpoints, against one shortened to t = 0.2 s and restarted to
-    # 0.26 s on 2 processes (the same bytes), on 4 and on 1 (1e-12). CPDI2 with TLS: the corners
-    # the basis tracks travel with their particles into the checkpoint and out of it, and the
-    # mapping's run totals continue.
-    config = "examples/vortex_2d.toml"
-    sets = ["grid.cells=16", "time.dt=2e-3", "output.frames=2", "output.checkpoint_every=50",
-            "method.basis=cpdi2", "method.mapping=tls"]
-    whole = os.path.join(tmp, "restart_whole")
-    r = run(mpm_cmd(mpm, 2, config, sets + ["time.end=0.26"], whole))
-    short = os.path.join(tmp, "restart_short")
-    r2 = run(mpm_cmd(mpm, 2, config, sets + ["time.end=0.2"], short))
+# Restart cases: (label, config, --set overrides, the shortened run's end, the whole run's end).
+# CPDI2 with TLS: the corners the basis tracks travel with their particles into the checkpoint
+# and out of it, and the mapping's run totals continue. The plate with tractions: the loaded
+# points find their particles again by id on any number of processes.
+RESTARTS = [
+    ("CPDI2 with TLS", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.dt=2e-3", "output.frames=2", "output.checkpoint_every=50",
+      "method.basis=cpdi2", "method.mapping=tls"], "0.2", "0.26"),
+    ("tractions", "examples/custom_plate_2d.toml",
+     ["method.basis=bspline", "body.max=[0.15, 1.0]", 'traction.right=["0", "2e4*min(t/T, 1)"]',
+      'pressure.top="1e4*min(t/T, 1)"', "output.frames=2", "output.checkpoint_every=40"],
+     "0.02", "0.03"),
+]
+
+
+def check_restart(mpm, tmp, failures, label, config, sets, t_short, t_end):
+    # A run on 2 processes with checkpoints, against one shortened to t_short and restarted to
+    # t_end on 2 processes (the same bytes), on 4 and on 1 (1e-12).
+    key = "".join(c if c.isalnum() else "_" for c in label)
+    whole = os.path.join(tmp, f"restart_{key}_whole")
+    r = run(mpm_cmd(mpm, 2, config, sets + [f"time.end={t_end}"], whole))
+    short = os.path.join(tmp, f"restart_{key}_short")
+    r2 = run(mpm_cmd(mpm, 2, config, sets + [f"time.end={t_short}"], short))
     if r.returncode or r2.returncode:
-        failures.append(f"restart: the runs failed: {r.stderr} {r2.stderr}")
+        failures.append(f"restart ({label}): the runs failed: {r.stderr} {r2.stderr}")
         return
     copies = {}
     for n in (4, 1):
@@ -380,13 +391,13 @@ def check_restart(mpm, tmp, failures):
         shutil.copytree(short, copies[n])
     results = []
     for n, d in [(2, short), (4, copies[4]), (1, copies[1])]:
-        cmd = [mpm, "run", "--restart", os.path.join(d, "checkpoint.bin"), "--set", "time.end=0.26",
-               "--quiet"]
+        cmd = [mpm, "run", "--restart", os.path.join(d, "checkpoint.bin"), "--set",
+               f"time.end={t_end}", "--quiet"]
         if n > 1:
             cmd = ["mpirun", "-n", str(n), "--oversubscribe"] + cmd
         r = run(cmd)
         if r.returncode:
-            failures.append(f"restart on {n}: exit {r.returncode}: {r.stderr.strip()}")
+            failures.append(f"restart ({label}) on {n}: exit {r.returncode}: {r.stderr.strip()}")
             continue
         a, b = read_csv(os.path.join(whole, last_frame(whole))), read_csv(
             os.path.join(d, last_frame(d)))
@@ -394,12 +405,13 @@ def check_restart(mpm, tmp, failures):
             same = a == b and open(os.path.join(whole, "history.csv"), "rb").read() == open(
                 os.path.join(d, "history.csv"), "rb").read()
             if not same:
-                failures.append("restart on 2 processes from a checkpoint of 2: not the same bytes")
+                failures.append(f"restart ({label}) on 2 processes from a checkpoint of 2: not "
+                                "the same bytes")
             results.append("on 2: the same bytes")
         else:
-            w = compare_tables(f"restart on {n}", a, b, failures)
+            w = compare_tables(f"restart ({label}) on {n}", a, b, failures)
             results.append(f"on {n}: largest relative difference {w:.2e}")
-    print("restart from a checkpoint of 2 processes: " + "; ".join(results))
+    print(f"restart ({label}) from a checkpoint of 2 processes: " + "; ".join(results))
 
 
 def check_failure(mpm, tmp, failures):
@@ -461,7 +473,8 @@ def main():
                 continue
             check_case(os.path.abspath(a.mpm), name, config, sets, both, ranks, tmp, failures)
         if not a.case:
-            check_restart(os.path.abspath(a.mpm), tmp, failures)
+            for case in RESTARTS:
+                check_restart(os.path.abspath(a.mpm), tmp, failures, *case)
             check_failure(os.path.abspath(a.mpm), tmp, failures)
     for f in failures:
         print("FAILED:", f)
