@@ -99,8 +99,8 @@ DistributedPmg<Dim>::DistributedPmg(RunState<Dim>& sim)
     // The lumped masses (row sums) and the diagonal, summed over the processes.
     Eigen::VectorXd lumped = L.M * Eigen::VectorXd::Ones(L.size());
     L.diag = L.M.diagonal();
-    share(L, lumped, 530 + k);
-    share(L, L.diag, 540 + k);
+    share(L, lumped, 600 + k);
+    share(L, L.diag, 610 + k);
     L.inv_lumped = Eigen::VectorXd::Zero(L.size());
     for (Index i = first; i < end; ++i)
       if (lumped[i] > 0.0) L.inv_lumped[i] = 1.0 / lumped[i];
@@ -161,6 +161,8 @@ std::vector<PmgLevelOps> DistributedPmg<Dim>::operators(const Slot& S) const {
     const std::vector<unsigned char>& keep = S.keep[k];
     PmgLevelOps& o = ops[k];
     o.size = L.size();
+    // MPI tags: 500 + 10 k, + 1, + 2 for level k's operator, prolongation and restriction
+    // (600 + k, 610 + k: the set-up's sums; the grid sums use 100, the CG 200, particles 300-400).
     const int tag = 500 + 10 * static_cast<int>(k);
     // y = A x: the kept rows and columns of the summed matrix; zero elsewhere.
     o.A = [this, &L, &keep, tag](const Eigen::VectorXd& x, Eigen::VectorXd& y) {
