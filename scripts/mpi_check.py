@@ -141,6 +141,13 @@ CASES = [
      ["time.end=0.05", "method.basis=bspline", "body.max=[0.15, 1.0]",
       'traction.right=["0", "2e4*min(t/T, 1)"]', 'pressure.top="1e4*min(t/T, 1)"',
       "output.frames=1"], "none"),
+    # The bases on the grid's triangles with the direct mapping: P1 on criss-cross triangles
+    # (whose centre DOFs follow the corners'), Powell-Sabin on right triangles.
+    ("2d_plate_p1_triangles_criss_cross", "examples/plate_triangles_2d.toml",
+     ["time.end=2e-3", "output.frames=1"], "none"),
+    ("2d_vortex_powell_sabin_musl", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.end=0.1", "time.dt=1e-3", "method.basis=powell_sabin",
+      "output.frames=1"], "both"),
     ("2d_plate_maxent", "examples/plate_mms_2d.toml",
      ["grid.cells=8", "time.end=2e-3", "method.basis=maxent", "output.frames=1"], "none"),
     ("3d_cube_bspline2", "examples/cube_mms_3d.toml",
@@ -438,10 +445,10 @@ def check_failure(mpm, tmp, failures):
     lines = [l for l in r.stderr.splitlines() if "error" in l]
     if r.returncode != 2 or len(lines) != 1 or "only `mpm run`" not in lines[0]:
         failures.append(f"mpm bench under mpirun: exit {r.returncode}, stderr {r.stderr!r}")
-    # Not distributed (a basis on triangles) or not distributable (Gauss-Seidel sweeps through
+    # Not distributed (TLS on triangles) or not distributable (Gauss-Seidel sweeps through
     # the whole grid): refused before the first step, naming the key.
     for k, (config, sets, expect) in enumerate([
-            ("examples/plate_triangles_2d.toml", ["time.end=1e-4"], "p1_triangles basis"),
+            ("examples/plate_tls_triangles_2d.toml", ["time.end=2.5e-4"], "p1_triangles basis"),
             ("examples/plate_mms_2d.toml",
              ["time.end=1e-4", "method.mass=consistent", "method.mass_solver=pmg"],
              "method.pmg_smoother")]):
