@@ -44,18 +44,6 @@ std::array<Index, 2> rows_used(const SparseMatrixD& M) {
     }
   return {lo, hi};
 }
-
-// Whether function i of a grid of n[d] functions per direction lies on one of `sides`.
-template <int Dim>
-bool on_side(Index i, const IVec<Dim>& n, const std::vector<std::pair<int, int>>& sides) {
-  for (int d = 0; d < Dim; ++d) {
-    const Index c = i % n[d];
-    i /= n[d];
-    for (const auto& [dir, side] : sides)
-      if (dir == d && c == (side == 0 ? 0 : n[d] - 1)) return true;
-  }
-  return false;
-}
 }  // namespace
 
 template <int Dim>
@@ -126,7 +114,7 @@ DistributedPmg<Dim>::DistributedPmg(RunState<Dim>& sim)
       for (Index i = L.first; i < L.end; ++i) {
         const auto I = static_cast<std::size_t>(i);
         keep[I] = k == 0 ? sim.nodes.active[I] && !(sim.nodes.fixed[I] & bit)
-                         : L.inv_lumped[i] > 0.0 && !on_side<Dim>(i, n, sides);
+                         : L.inv_lumped[i] > 0.0 && !on_spline_side<Dim>(i, n, sides);
       }
       S.inv_diag[k] = Eigen::VectorXd::Zero(L.size());
       for (Index i = L.first; i < L.end; ++i)

@@ -266,17 +266,9 @@ PMultigrid spline_pmg(const Grid<Dim>& g, int p, const PointSet<Dim>& pts,
     keep[K].assign(static_cast<std::size_t>(M[K].rows()), 1);
     IVec<Dim> n;
     for (int d = 0; d < Dim; ++d) n[d] = g.cells[d] + q;
-    for (Index i = 0; i < M[K].rows(); ++i) {
-      const auto I = static_cast<std::size_t>(i);
-      if (!(lumped[K][i] > 0.0)) keep[K][I] = 0;
-      Index rem = i;
-      for (int d = 0; d < Dim; ++d) {
-        const Index c = rem % n[d];
-        rem /= n[d];
-        for (const auto& [dir, side] : fixed_sides)
-          if (dir == d && c == (side == 0 ? 0 : n[d] - 1)) keep[K][I] = 0;
-      }
-    }
+    for (Index i = 0; i < M[K].rows(); ++i)
+      if (!(lumped[K][i] > 0.0) || on_spline_side<Dim>(i, n, fixed_sides))
+        keep[K][static_cast<std::size_t>(i)] = 0;
   }
   std::vector<PmgLevel> levels(static_cast<std::size_t>(nlev));
   for (int k = 0; k < nlev; ++k) {

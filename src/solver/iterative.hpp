@@ -22,6 +22,7 @@
 #include <Eigen/Sparse>
 #include <functional>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "grid/grid.hpp"
@@ -146,6 +147,20 @@ PMultigrid spline_pmg(const Grid<Dim>& g, int p, const PointSet<Dim>& pts,
                       const std::vector<unsigned char>& keep_fine,
                       const std::vector<std::pair<int, int>>& fixed_sides, const PmgSettings& s,
                       const SparseMatrixD* fine = nullptr);
+
+// Whether function i of a tensor grid of n[d] functions per direction (x fastest) lies on one of
+// the sides (direction, side 0: lower / 1: upper): a coarse level leaves these out (spline_pmg,
+// scheme/distributed_pmg.cpp).
+template <int Dim>
+bool on_spline_side(Index i, const IVec<Dim>& n, const std::vector<std::pair<int, int>>& sides) {
+  for (int d = 0; d < Dim; ++d) {
+    const Index c = i % n[d];
+    i /= n[d];
+    for (const auto& [dir, side] : sides)
+      if (dir == d && c == (side == 0 ? 0 : n[d] - 1)) return true;
+  }
+  return false;
+}
 
 // The kept rows and columns of A (keep[i] != 0), in increasing order.
 SparseMatrixD kept_submatrix(const SparseMatrixD& A, const std::vector<unsigned char>& keep_rows,
