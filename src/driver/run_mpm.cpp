@@ -448,6 +448,11 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
     method_json["mass_solver"] = ms.kind == MassSolver::Direct ? "direct"
                                  : ms.kind == MassSolver::Cg   ? "cg"
                                                                : "pmg";
+    if (method.partial_lumping > 0.0) {
+      // Active DOFs with lumped rows in the step with the most (a restart counts from there).
+      method_json["partial_lumping"] = method.partial_lumping;
+      method_json["partially_lumped_dofs_max"] = res.diag.max_lumped_dofs;
+    }
     if (ms.kind != MassSolver::Direct) {
       method_json["mass_solver_tolerance"] = ms.tolerance;
       // CG iterations or V-cycles over the run and the most of one solve (a restart counts

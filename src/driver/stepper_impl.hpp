@@ -13,6 +13,7 @@
 #include "io/checkpoint.hpp"
 #include "mapping/mapping.hpp"
 #include "scheme/distribution.hpp"
+#include "scheme/partial_lumping.hpp"
 #include "scheme/schemes.hpp"
 #include "scheme/sort.hpp"
 #include "setup/run_settings.hpp"
@@ -83,6 +84,11 @@ void check_distributed_run(const MethodSettings& method) {
         "(its fits per triangle are not restricted to a process's own triangles; issue 21); "
         "use method.mapping = \"direct\" or {}",
         method.where_mapping, Basis::kName, kHow));
+  if (method.partial_lumping > 0.0)
+    throw InputError(fmt::format(
+        "{}: method.partial_lumping does not run on several processes yet (each process would "
+        "need the fill of the cells next to its slab; issue 21); remove it or {}",
+        method.where_mass, kHow));
   if (method.mass == MassType::Consistent && method.mass_solver.kind == MassSolver::Direct)
     throw InputError(fmt::format(
         "{}: method.mass = \"consistent\" runs on several processes with method.mass_solver = "
@@ -119,6 +125,7 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.mass_tolerance = method.mass_tolerance;
     sim_.consistent.configure(method.mass_solver);
     sim_.spline_degree = basis_degree(method.basis);
+    if (method.partial_lumping > 0.0) setup_partial_lumping(sim_, method.partial_lumping);
     sim_.conservation_limit = method.conservation_limit;
     sim_.sorting.mode = method.sort;
     for (const auto& f : pb.fixed_sides) {

@@ -15,6 +15,10 @@ struct Diagnostics {
   // all and the most of one solve; not checkpointed (a restart counts from there).
   Index mass_solver_iterations = 0;
   int max_mass_solver_iterations = 0;
+  // Active DOFs with lumped rows (method.partial_lumping): in the latest step and the most in
+  // any step; not checkpointed.
+  Index lumped_dofs = 0;
+  Index max_lumped_dofs = 0;
 };
 
 }  // namespace mpm

@@ -91,6 +91,24 @@ struct RunState {
   // DOF has a nodes.projected entry: consistent mass then solves all components in one system
   // (ConsistentMass::factorize_coupled). Refreshed with the consistent matrix each step.
   std::vector<Mat<Dim>> coupled_projector;
+  // Partial lumping of the consistent mass matrix (method.partial_lumping; D 7.2 proposes it for
+  // the partially filled elements of PS-MPM): in each step the DOFs whose functions' integrals
+  // the particles cover to less than `below` get lumped rows and columns
+  // (ConsistentMass::set_lumped; marked in stages::detail::after_mass). Set up once per run by
+  // setup_partial_lumping (scheme/partial_lumping.hpp).
+  struct PartialLumping {
+    double below = 0.0;  // 0: off
+    // The elements (the grid's cells, or a basis's triangles) and in each the DOFs whose
+    // functions do not vanish there with the integrals of those functions over it: element e's
+    // are dofs[k] and share[k] for k in [first[e], first[e + 1]).
+    std::vector<Index> first, dofs;
+    std::vector<double> share;     // int_e N_i [m^Dim]
+    std::vector<double> integral;  // per DOF, int N_i over all elements [m^Dim]
+    std::vector<double> volume;    // of each element [m^Dim]
+    // The element holding a point (a basis's triangle); unset: the grid cell of the particle's
+    // last basis evaluation (`cell`). -1: none.
+    std::function<Index(const Vec<Dim>&)> element_of;
+  } lumping;
   // The degree of a B-spline basis on the grid (0 for the others): method.mass_solver = "pmg"
   // builds its hierarchy over the degrees below it.
   int spline_degree = 0;

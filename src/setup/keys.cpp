@@ -165,6 +165,12 @@ std::vector<KeySpec> declare() {
       real("method.mass_tolerance", "", 1e-10, closed_open(0, 1),
            "degrees of freedom with mass below this fraction of the largest nodal mass are "
            "inactive"),
+      // D 7.2: partial lumping of the mass matrix for partially filled elements; what counts as
+      // partially filled is this fraction of the element's volume held by its particles.
+      real("method.partial_lumping", "", 0.0, closed(0, 1),
+           "consistent mass: the DOFs whose functions reach an element (grid cell, or triangle of "
+           "a basis on triangles) whose particles fill less than this fraction of its volume get "
+           "lumped rows and columns (D 7.2); 0: none"),
       choice("method.mass_solver", "direct", kMassSolvers,
              "solver of the consistent mass matrix (method.mass = \"consistent\")"),
       real("method.mass_solver_tolerance", "", 1e-12, open(0, 1e-2),

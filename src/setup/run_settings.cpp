@@ -150,6 +150,15 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.reference_dofs = cfg.get_int("reference.dofs");
   m.mass = cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
   m.mass_tolerance = cfg.get_real("method.mass_tolerance");
+  m.partial_lumping = cfg.get_real("method.partial_lumping");
+  if (m.partial_lumping > 0.0 && (m.mass != MassType::Consistent || m.solver != Solver::Mpm))
+    throw InputError(fmt::format(
+        "{}: method.partial_lumping = {} lumps rows of the consistent mass matrix of the MPM "
+        "solver, and this run uses method.mass = \"{}\" with method.solver = \"{}\": set "
+        "method.mass = \"consistent\" (method.solver = \"mpm\") or remove "
+        "method.partial_lumping",
+        cfg.where("method.partial_lumping"), m.partial_lumping, cfg.get_string("method.mass"),
+        cfg.get_string("method.solver")));
   {
     const std::string solver = cfg.get_string("method.mass_solver");
     MassSolverSettings& ms = m.mass_solver;

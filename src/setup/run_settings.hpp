@@ -44,6 +44,7 @@ struct MethodSettings {
   MassType mass = MassType::Lumped;
   double mass_tolerance = 1e-10;
   MassSolverSettings mass_solver;  // method.mass_solver and its keys (consistent mass)
+  double partial_lumping = 0.0;    // method.partial_lumping (consistent mass; 0: off)
   double conservation_limit = 0.5;
   SortMode sort = SortMode::Auto;
   std::string where_solver, where_basis, where_mapping, where_tls_completion, where_mass;

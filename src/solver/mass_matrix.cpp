@@ -10,8 +10,33 @@ const Eigen::SparseMatrix<double>& ConsistentMass::summed() {
     summed_matrix_.resize(n_, n_);
     summed_matrix_.setFromTriplets(triplets_.begin(), triplets_.end());
     summed_ = true;
+    if (std::find(lumped_.begin(), lumped_.end(), 1) != lumped_.end()) lump_rows();
   }
   return summed_matrix_;
+}
+
+void ConsistentMass::lump_rows() {
+  if (static_cast<Index>(lumped_.size()) != n_)
+    throw std::logic_error("ConsistentMass: set_lumped does not cover every DOF");
+  const auto lumped = [&](Index i) { return lumped_[static_cast<std::size_t>(i)] != 0; };
+  // Entry (i, j) moves onto row i's diagonal, so each row keeps its sum to round-off even where
+  // the assembly is symmetric only to round-off (TLS's (w_a rw) w_b against (w_b rw) w_a); the
+  // moved entries are summed in the order of the stored entries, the same on every run.
+  std::vector<double> moved(static_cast<std::size_t>(n_), 0.0);
+  std::vector<Triplet> t;
+  t.reserve(static_cast<std::size_t>(summed_matrix_.nonZeros()));
+  for (Index k = 0; k < summed_matrix_.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(summed_matrix_, k); it; ++it) {
+      const Index i = it.row(), j = it.col();
+      if (i != j && (lumped(i) || lumped(j)))
+        moved[static_cast<std::size_t>(i)] += it.value();
+      else
+        t.emplace_back(i, j, it.value());
+    }
+  for (Index j = 0; j < n_; ++j)
+    if (moved[static_cast<std::size_t>(j)] != 0.0)
+      t.emplace_back(j, j, moved[static_cast<std::size_t>(j)]);
+  summed_matrix_.setFromTriplets(t.begin(), t.end());
 }
 
 bool ConsistentMass::factorize_kept(int slot) {

@@ -43,9 +43,23 @@ class ConsistentMass {
   void begin(Index ndofs) {
     n_ = ndofs;
     triplets_.clear();
+    lumped_.clear();
     summed_ = false;
   }
   void add(Index i, Index j, double value) { triplets_.emplace_back(i, j, value); }
+
+  // Partial lumping (method.partial_lumping; D 7.2): the rows and columns of the DOFs with
+  // rows[i] != 0 are lumped in the next assembly (empty: none). Each off-diagonal entry M_ij
+  // with i or j lumped moves onto the diagonal M_ii (and M_ji onto M_jj): every row keeps its
+  // sum (the lumped mass m_i, hence the conserved totals), the matrix stays symmetric, and a
+  // lumped DOF's row is its lumped mass alone. For a matrix with non-negative entries (particle
+  // quadrature of non-negative bases) the change is the sum of M_ij (e_i - e_j)(e_i - e_j)^T,
+  // positive semi-definite: the smallest eigenvalue does not fall. Set after the mapping's
+  // begin() and before factorize (scheme/grid_stages.cpp).
+  void set_lumped(std::vector<unsigned char> rows) {
+    lumped_ = std::move(rows);
+    summed_ = false;
+  }
 
   static constexpr int kSlots = 3;
 
@@ -96,6 +110,7 @@ class ConsistentMass {
   // from it instead of each summing the triplets again (the per-particle triplets, 27^2 per
   // particle for quadratic B-splines in 3D, were 60 % of a consistent-mass step; BENCHMARKS.md).
   const Eigen::SparseMatrix<double>& summed();
+  void lump_rows();  // set_lumped's change of summed_matrix_
   Eigen::SparseMatrix<double> summed_matrix_;
   bool summed_ = false;
 
@@ -103,6 +118,7 @@ class ConsistentMass {
   MassSolverSettings settings_;
   std::vector<Triplet> triplets_;
   std::vector<unsigned char> kept_;                        // keep(i) of the latest factorize
+  std::vector<unsigned char> lumped_;                      // set_lumped
   std::array<Eigen::SparseMatrix<double>, kSlots + 1> M_;  // [kCoupled]: the coupled system
   std::array<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>, kSlots + 1> solver_;
   bool factorize_matrix(int slot);
