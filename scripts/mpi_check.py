@@ -9,7 +9,8 @@ checks:
     the whole vector or tensor, so that a value near zero is held to the field's scale; an error
     norm to the scale of its field in the last frame), and a reconstruction mapping's counts
     in summary.json (TLS's element fits and completions) equal them exactly;
-  * the run on the largest N again gives the same bytes (frames, history);
+  * the run on the largest N again gives the same bytes (frames, history), for the cases of
+    AGAIN;
   * under mpirun -n 1 (the quick cases) the answers of the run without mpirun;
   * particles moved between processes (summary.json "mpi"), in both directions where the case
     says so, and the slabs were cut anew where it says so (parallel.rebalance).
@@ -160,6 +161,15 @@ CASES = [
      THROWN_BAR + ["output.frames=1", "parallel.rebalance=0"], "any"),
 ]
 QUICK = {"1d_linear_musl", "2d_vortex_bspline2_musl", "3d_cube_bspline2", "2d_plate_consistent_cg"}
+# The cases run a second time on the largest N for the same bytes: one of each way a process's
+# sums could depend on timing (the grid sums and migrations of a plain run, ghost particles,
+# sums over all processes of conservative MLS, distributed CG and p-multigrid, traction forces
+# sent on, CPDI2's carried corners, DDMPM's lent layer, re-cut slabs). The others share their
+# exchanges; repeating all 31 took about a quarter of the check's time in CI (2026-11-28).
+AGAIN = {"2d_vortex_bspline2_musl", "2d_vortex_tls_neighbour_domains_usl",
+         "2d_vortex_imls_conservative_usl", "2d_plate_tls_consistent_cg", "2d_plate_consistent_pmg",
+         "2d_custom_plate_tractions_bspline2", "2d_vortex_cpdi2_usl", "2d_vortex_ddmpm_musl",
+         "1d_thrown_bar_bspline2"}
 
 MPIRUN_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
               "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMP_NUM_THREADS": "1",
@@ -346,7 +356,7 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
                 failures.append(f"{name} -n 2: particles moved one way only ({sent})")
             moved = (f", particles sent per process {sent}, final cuts {mpi.get('cuts')}, "
                      f"{mpi.get('rebalances')} re-cuts")
-        if n == max(ranks) and n > 1:
+        if n == max(ranks) and n > 1 and name in AGAIN:
             # The same rank count again: the same bytes.
             d2 = d + "_again"
             r = run(mpm_cmd(mpm, n, config, sets, d2))
@@ -469,6 +479,10 @@ def main():
     ap.add_argument("--case", default="", help="only the cases whose name holds this text, "
                     "without the restart and failure checks")
     a = ap.parse_args()
+    unknown = (AGAIN | QUICK) - {c[0] for c in CASES}
+    if unknown:
+        print(f"mpi_check.py: AGAIN or QUICK names no case: {sorted(unknown)}")
+        return 1
     if shutil.which("mpirun") is None:
         print("mpirun not found: install openmpi-bin (scripts/deps.sh)")
         return 1

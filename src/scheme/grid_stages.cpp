@@ -308,10 +308,7 @@ void after_mass(RunState<Dim>& sim) {
                     fmt::format("step {}, t = {:.9g} s: the consistent mass matrix is singular "
                                 "(a cell with too few particles); use method.mass = \"lumped\"{}",
                                 sim.step, sim.time,
-                                sim.lumping.below > 0.0
-                                    ? ""
-                                    : ", or lump the rows of the DOFs of partly filled cells "
-                                      "(method.partial_lumping, e.g. 0.5)"));
+                                sim.lumping.below > 0.0 ? "" : " or method.partial_lumping = 0.5"));
   };
   // A distributed run solves with CG or p-multigrid on the matrices of the ranks' particles
   // (solve_grid): nothing to factorise; p-multigrid's levels are built here.
