@@ -84,11 +84,6 @@ void check_distributed_run(const MethodSettings& method) {
         "(its fits per triangle are not restricted to a process's own triangles; issue 21); "
         "use method.mapping = \"direct\" or {}",
         method.where_mapping, Basis::kName, kHow));
-  if (method.partial_lumping > 0.0)
-    throw InputError(fmt::format(
-        "{}: method.partial_lumping does not run on several processes yet (each process would "
-        "need the fill of the cells next to its slab; issue 21); remove it or {}",
-        method.where_mass, kHow));
   if (method.mass == MassType::Consistent && method.mass_solver.kind == MassSolver::Direct)
     throw InputError(fmt::format(
         "{}: method.mass = \"consistent\" runs on several processes with method.mass_solver = "

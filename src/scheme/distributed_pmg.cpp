@@ -150,7 +150,8 @@ std::vector<PmgLevelOps> DistributedPmg<Dim>::operators(const Slot& S) const {
     PmgLevelOps& o = ops[k];
     o.size = L.size();
     // MPI tags: 500 + 10 k, + 1, + 2 for level k's operator, prolongation and restriction
-    // (600 + k, 610 + k: the set-up's sums; the grid sums use 100, the CG 200, particles 300-400).
+    // (600 + k, 610 + k: the set-up's sums; the grid sums use 100, the CG 200, partial lumping's
+    // covers 250, particles 300-400).
     const int tag = 500 + 10 * static_cast<int>(k);
     // y = A x: the kept rows and columns of the summed matrix; zero elsewhere.
     o.A = [this, &L, &keep, tag](const Eigen::VectorXd& x, Eigen::VectorXd& y) {

@@ -249,12 +249,24 @@ void mark_lumped_rows(RunState<Dim>& sim) {
            k < static_cast<std::size_t>(L.first[e + 1]); ++k)
         cover[static_cast<std::size_t>(L.dofs[k])] += f * L.share[k];
   }
+  // A distributed run: an element's particles are all on the process of its cell layer (the
+  // slabs are whole layers, and particles move to their process after every step), so each
+  // element's fill is whole on one process; the covers of the DOFs two processes share are the
+  // sums of their parts, added in rank order as the grid sums, so every process lumps the same
+  // rows and the sum of the processes' lumped matrices is the lumped sum (the change is linear).
+  if (sim.comm)
+    sum_over_sharing_ranks(*sim.comm, sim.shared, 1, 250,
+                           [&](Index i, auto&& f) { f(cover[static_cast<std::size_t>(i)]); });
   std::vector<unsigned char> rows(static_cast<std::size_t>(sim.nodes.size()), 0);
-  Index lumped = 0;
-  for (std::size_t i = 0; i < rows.size(); ++i) {
+  for (std::size_t i = 0; i < rows.size(); ++i)
     rows[i] = cover[i] < L.below * L.integral[i] ? 1 : 0;
-    lumped += rows[i] && sim.nodes.active[i];
-  }
+  // Active lumped DOFs, each counted once over the processes.
+  const auto [first, end] = sim.dof_window();
+  Index lumped = 0;
+  for (Index i = first; i < end; ++i)
+    if (!sim.comm || sim.shared.owns(sim.comm->rank(), i))
+      lumped += rows[static_cast<std::size_t>(i)] && sim.nodes.active[static_cast<std::size_t>(i)];
+  if (sim.comm) lumped = sim.comm->sum(lumped);
   sim.diag.lumped_dofs = lumped;
   sim.diag.max_lumped_dofs = std::max(sim.diag.max_lumped_dofs, lumped);
   sim.consistent.set_lumped(std::move(rows));
@@ -313,6 +325,7 @@ void after_mass(RunState<Dim>& sim) {
   // A distributed run solves with CG or p-multigrid on the matrices of the ranks' particles
   // (solve_grid): nothing to factorise; p-multigrid's levels are built here.
   if (sim.mass_type == MassType::Consistent && sim.comm != nullptr) {
+    if (sim.lumping.below > 0.0) mark_lumped_rows(sim);
     if (sim.consistent.settings().kind == MassSolver::Pmg) {
       sim.distributed_pmg = std::make_shared<DistributedPmg<Dim>>(sim);
       if (!sim.distributed_pmg->positive()) throw singular();
