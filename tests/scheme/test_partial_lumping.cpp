@@ -103,18 +103,24 @@ TEST(PartialLumping, ASingularParticleMatrixBecomesPositiveDefinite) {
   EXPECT_NEAR(y[1], -0.5 / (2.0 * hat(1, n, 0.1)), 1e-15);
 }
 
+// A run of examples/`example` without output files, with consistent mass and
+// method.partial_lumping = `lump`, then `sets` (which may override them).
+RunResult run_example(const std::string& example, std::vector<std::string> sets,
+                      const std::string& lump) {
+  sets.insert(sets.begin(), {"output.frames=0", "output.csv=false", "output.vtk=false",
+                             "method.mass=consistent", "method.partial_lumping=" + lump});
+  RunOptions ro;
+  ro.quiet = true;
+  return run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + example, sets), ro);
+}
+
 // examples/custom_plate_2d.toml (a column under ramped gravity on 4 x 22 cells of 0.05 m, free
 // top) with its top at 0.96 m: the cell row below the top filled to 20 % (docs/verification.md,
 // "PS-MPM with partially filled elements"), over `end` seconds.
-RunResult column(const std::vector<std::string>& extra, const std::string& end) {
-  std::vector<std::string> o = {
-      "output.frames=0",      "output.csv=false", "output.vtk=false",
-      "body.max=[0.2, 0.96]", "constants.H=0.96", "particles.per_cell=4",
-      "time.dt=1e-4",         "time.end=" + end,  "method.mass=consistent"};
-  o.insert(o.end(), extra.begin(), extra.end());
-  RunOptions ro;
-  ro.quiet = true;
-  return run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/custom_plate_2d.toml", o), ro);
+RunResult column(std::vector<std::string> extra, const std::string& end, const std::string& lump) {
+  extra.insert(extra.begin(), {"body.max=[0.2, 0.96]", "constants.H=0.96", "particles.per_cell=4",
+                               "time.dt=1e-4", "time.end=" + end});
+  return run_example("custom_plate_2d.toml", extra, lump);
 }
 
 void expect_conserving_run(const RunResult& r) {
@@ -127,12 +133,11 @@ void expect_conserving_run(const RunResult& r) {
 // The consistent PS matrix of the column stops the run at step 0 (singular); with the DOFs of
 // the top row lumped it runs, and conserves.
 TEST(PartialLumping, PowellSabinColumnWithAFifthFilledTopRowRuns) {
-  const RunResult stops = column({"method.basis=powell_sabin"}, "2e-3");
+  const RunResult stops = column({"method.basis=powell_sabin"}, "2e-3", "0");
   EXPECT_EQ(stops.exit_code, exit_code::kNonFinite);
   EXPECT_NE(stops.failure.find("step 0,"), std::string::npos) << stops.failure;
   EXPECT_NE(stops.failure.find("method.partial_lumping"), std::string::npos) << stops.failure;
-  expect_conserving_run(
-      column({"method.basis=powell_sabin", "method.partial_lumping=0.5"}, "0.02"));
+  expect_conserving_run(column({"method.basis=powell_sabin"}, "0.02", "0.5"));
 }
 
 // TLS with consistent mass (issue 22 item 1): on the vortex (A = 0.1 rad, quadratic B-splines,
@@ -140,14 +145,10 @@ TEST(PartialLumping, PowellSabinColumnWithAFifthFilledTopRowRuns) {
 // where the annulus's edges cut cells; with partial lumping the run reaches its end.
 TEST(PartialLumping, TlsWithConsistentMassRunsTheVortex) {
   const auto vortex = [](const std::string& lump) {
-    RunOptions ro;
-    ro.quiet = true;
-    return run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/vortex_2d.toml",
-                            {"output.frames=0", "output.csv=false", "output.vtk=false",
-                             "vortex.amplitude=0.1", "grid.cells=16", "method.mapping=tls",
-                             "method.basis=bspline", "method.degree=2", "method.mass=consistent",
-                             "method.partial_lumping=" + lump}),
-               ro);
+    return run_example("vortex_2d.toml",
+                       {"vortex.amplitude=0.1", "grid.cells=16", "method.mapping=tls",
+                        "method.basis=bspline", "method.degree=2"},
+                       lump);
   };
   const RunResult stops = vortex("0");
   EXPECT_EQ(stops.exit_code, exit_code::kNonFinite);
@@ -160,13 +161,8 @@ TEST(PartialLumping, TlsWithConsistentMassRunsTheVortex) {
 // consistent one to the bit.
 TEST(PartialLumping, ABodyThatFillsItsCellsLumpsNothing) {
   const auto plate = [](const std::string& lump) {
-    RunOptions ro;
-    ro.quiet = true;
-    return run(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml",
-                            {"output.frames=0", "output.csv=false", "output.vtk=false",
-                             "time.end=2e-4", "method.basis=bspline", "method.degree=2",
-                             "method.mass=consistent", "method.partial_lumping=" + lump}),
-               ro);
+    return run_example("plate_mms_2d.toml",
+                       {"time.end=2e-4", "method.basis=bspline", "method.degree=2"}, lump);
   };
   const RunResult with = plate("0.5"), without = plate("0");
   ASSERT_EQ(with.exit_code, exit_code::kOk) << with.failure;
@@ -178,7 +174,7 @@ TEST(PartialLumping, ABodyThatFillsItsCellsLumpsNothing) {
 // Lumped mass has no matrix to lump: refused, naming the key and what to change.
 TEST(PartialLumping, RefusedWithLumpedMass) {
   try {
-    column({"method.mass=lumped", "method.partial_lumping=0.5"}, "2e-3");
+    column({"method.mass=lumped"}, "2e-3", "0.5");
     FAIL() << "no input error";
   } catch (const InputError& e) {
     const std::string what = e.what();
