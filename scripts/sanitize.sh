@@ -150,7 +150,7 @@ SLOW+='|MappingParallel\.Mls1DSameForOneAndTwoThreads|MappingParallel\.Tls1DSame
 SLOW+='|Traction2D\.OneDimensionalCustomTractionIsTheTractionBar|TriangleMesh\.PointLocationMatchesBruteForceOnADistortedMesh'
 SLOW+='|MeshFileRun\.StructuredMeshFromAFileRunsBitwiseAsTheGeneratedOne|Ulfem\.TractionBarMatchesTheExactStress'
 # Partial lumping's long runs (the PS column, TLS on the vortex: 0.4 and 3 s in Release);
-# PartialLumping's matrix tests and the plate's 20 steps keep its code under the sanitizers.
+# PartialLumping's matrix tests and the plate's 5 steps keep its code under the sanitizers.
 SLOW+='|PartialLumping\.PowellSabinColumnWithAFifthFilledTopRowRuns|PartialLumping\.TlsWithConsistentMassRunsTheVortex'
 # ctest's regular expressions (CMake's kwsys) allow at most nine parenthesised groups; with more
 # the expression silently matches nothing and every slow test ran here (2026-11-27: twelve groups,
