@@ -174,7 +174,9 @@ QUICK = {"1d_linear_musl", "2d_vortex_bspline2_musl", "3d_cube_bspline2", "2d_pl
 # sums could depend on timing (the grid sums and migrations of a plain run, ghost particles,
 # sums over all processes of conservative MLS, distributed CG and p-multigrid, traction forces
 # sent on, CPDI2's carried corners, DDMPM's lent layer, re-cut slabs). The others share their
-# exchanges; repeating all 31 took about a quarter of the check's time in CI (2026-11-28).
+# exchanges. Repeating all of them was one mpirun of the four of most cases: with these nine the
+# check took 91 s of a fresh-clone CI run against 103 s with all repeated (one case fewer then;
+# 2026-11-28, this machine).
 AGAIN = {"2d_vortex_bspline2_musl", "2d_vortex_tls_neighbour_domains_usl",
          "2d_vortex_imls_conservative_usl", "2d_plate_tls_consistent_cg", "2d_plate_consistent_pmg",
          "2d_custom_plate_tractions_bspline2", "2d_vortex_cpdi2_usl", "2d_vortex_ddmpm_musl",
