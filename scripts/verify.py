@@ -3042,13 +3042,11 @@ def sec_ps_partial(R, ctx):
                      " | ".join(cell(res[(ci, top, b, m)]) for top in tops) + " |")
         tables.append("\n".join(t))
 
-    def stops(b, m):
+    def stops(b, m, rows=tops[1:]):
+        """Runs of basis b with mass m that stop, over both cases and the top rows `rows` (by
+        default the partly filled ones)."""
         return sum(res[(ci, top, b, m)].get("status") != "ok"
-                   for ci in range(len(cases)) for top in tops[1:])
-
-    def all_stops(b, m):
-        return sum(res[(ci, top, b, m)].get("status") != "ok"
-                   for ci in range(len(cases)) for top in tops)
+                   for ci in range(len(cases)) for top in rows)
 
     def growth(b, m):
         """Worst partial-fill stress error over the full-row one, over both cases (None when a
@@ -3099,14 +3097,15 @@ def sec_ps_partial(R, ctx):
     for top, fill in zip(tops, fills):
         r = res[(0, top, "powell_sabin", "consistent")]
         if r.get("status") != "ok":
-            reasons.append(f"{fill}: {(r.get('failure') or '?')[:150]}")
+            # The message up to its advice (after the first "; "), whole words only.
+            reasons.append(f"{fill}: {(r.get('failure') or '?').split('; ')[0]}")
     why = ("The consistent PS runs (gravity) stop with: " + "; ".join(reasons) + "."
            if reasons else "")
 
     # Partial lumping: which runs finish, its error against lumped and consistent mass (where
     # consistent finishes), the most DOFs lumped, and conservation.
     n_all = len(cases) * len(tops)
-    finish = {b: {m: n_all - all_stops(b, m) for m in ("lumped", "consistent", "partial")}
+    finish = {b: {m: n_all - stops(b, m, tops) for m in ("lumped", "consistent", "partial")}
               for b in bases}
     ratios_l, ratios_c, lumped_max, cons = [], [], 0, [0.0, 0.0]
     for b in bases:
@@ -4197,11 +4196,21 @@ def regenerate_only(R, ctx, steps, labels):
         doc = splice_section(doc, fn(R, ctx))
         print(f"verify: {label} ({time.time() - t:.0f} s)", flush=True)
     note = "Sections regenerated alone since (`--only`): "
-    done = "; ".join(f"{label} ({time.strftime('%Y-%m-%d', time.gmtime())})" for label, _ in chosen)
+    today = time.strftime('%Y-%m-%d', time.gmtime())
     lines = doc.split("\n")
     old = [k for k, line in enumerate(lines) if line.startswith(note)]
+    # One entry per section, with the date of its latest regeneration.
+    entries = {}
     if old:
-        lines[old[0]] = lines[old[0]].rstrip(".") + "; " + done + "."
+        for item in lines[old[0]][len(note):].rstrip(".").split("; "):
+            label, _, date = item.rpartition(" (")
+            entries[label] = date.rstrip(")")
+    for label, _ in chosen:
+        entries.pop(label, None)
+        entries[label] = today
+    done = "; ".join(f"{label} ({date})" for label, date in entries.items())
+    if old:
+        lines[old[0]] = note + done + "."
     else:
         at = next(k for k, line in enumerate(lines) if line.startswith("Measured with this"))
         lines[at:at] = [note + done + ".", ""]

@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "mapping/quadrature.hpp"
 #include "scheme/simulation.hpp"
 
 namespace mpm {
@@ -83,9 +84,13 @@ void setup_partial_lumping(BasisState<Dim, B>& sim, double below) {
       const auto& g = sim.grid;
       double volume = 1.0;
       for (int d = 0; d < Dim; ++d) volume *= g.h[d];
-      // Gauss-Legendre on [0, 1]: 1/2 -+ sqrt(3/5)/2, 1/2 with weights 5/18, 4/9, 5/18.
-      const double r = 0.5 * std::sqrt(0.6);
-      const std::array<double, 3> at{0.5 - r, 0.5, 0.5 + r}, wt{5.0 / 18.0, 4.0 / 9.0, 5.0 / 18.0};
+      // The 3-point Gauss-Legendre rule moved from [-1, 1] to [0, 1].
+      const GaussRule rule = gauss_legendre(3);
+      std::array<double, 3> at{}, wt{};
+      for (std::size_t j = 0; j < 3; ++j) {
+        at[j] = 0.5 * (rule.xi[j] + 1.0);
+        wt[j] = 0.5 * rule.w[j];
+      }
       int points = 1;
       for (int d = 0; d < Dim; ++d) points *= 3;
       for (Index c = 0; c < g.num_cells(); ++c) {
