@@ -37,10 +37,13 @@ fi
 # 4 and 5 (kinds 1, 2, 3, 5, 8, 9) and in 2D the B-splines of degree 1 and 3 (5, 7) ran only in
 # TlsMapping.RunsWithEveryBasis and TlsMapping2D.RunsWithEveryCompletionAndBasis, which loop over
 # every basis with TLS: those two run in the Release suite (SLOW below), and the eight units are
-# left out here. The units kept are those other tests need: 1D linear, B2, B3 (the mass solvers'
-# tests), DDMPM and max-ent; 2D all but B1, B3, B4 and B5; 3D linear and B2. The units left out
-# are the same stage templates with another basis: the Release suite runs them, and the basis
-# tests here check those bases' functions. A test kept here that needs a left-out unit fails with
+# left out here. In 2D uGIMP, cpGIMP, CPDI and DDMPM (1, 2, 3, 10) ran only in their
+# Bases2D.RigidTranslation* tests, which run in the Release suite too (four more units). The
+# units kept are those other tests need: 1D linear, B2, B3 (the mass solvers' tests), DDMPM and
+# max-ent; 2D linear, CPDI2 (its tracked corners), B2, max-ent, P1 and PS triangles; 3D linear and
+# B2. The units left out are the same stage templates with another basis and stencil size (the
+# kept units have fixed stencils of several sizes and max-ent's run-time ones): the Release suite
+# runs them, and the basis tests here check those bases' functions. A test kept here that needs a left-out unit fails with
 # an input error naming MPM_STEPPERS_1D, _2D or _3D: add the kind below. Configured on every run,
 # so a changed list applies; SANITIZE_ALL=1 (every test) compiles every unit.
 debug_flags="-O0"
@@ -48,7 +51,7 @@ debug_flags="-O0"
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
   units=(-UMPM_STEPPERS_1D -UMPM_STEPPERS_2D -UMPM_STEPPERS_3D)
 else
-  units=(-DMPM_STEPPERS_1D="0;6;7;10;11" -DMPM_STEPPERS_2D="0;1;2;3;4;6;10;11;12;13"
+  units=(-DMPM_STEPPERS_1D="0;6;7;10;11" -DMPM_STEPPERS_2D="0;4;6;11;12;13"
     -DMPM_STEPPERS_3D="0;6")
 fi
 # Without MPI (MPM_MPI=OFF): Open MPI's run-time keeps allocations to its exit that
@@ -159,6 +162,9 @@ SLOW+='|PartialLumping\.PowellSabinColumnWithAFifthFilledTopRowRuns|PartialLumpi
 # TLS with every basis (4.7 s here for the 2D one): they alone need eight stepper units (above);
 # TLS's stages stay under the sanitizers in TlsMapping.*, TlsMapping2D.* and TlsRobust.*.
 SLOW+='|TlsMapping\.RunsWithEveryBasis|TlsMapping2D\.RunsWithEveryCompletionAndBasis'
+# Steps with four 2D bases (1.7-2.4 s each here), the only tests here of their stepper units.
+SLOW+='|Bases2D\.RigidTranslationUGimp|Bases2D\.RigidTranslationCpGimp'
+SLOW+='|Bases2D\.RigidTranslationCpdi$|Bases2D\.RigidTranslationDdmpm'
 # ctest's regular expressions (CMake's kwsys) allow at most nine parenthesised groups; with more
 # the expression silently matches nothing and every slow test ran here (2026-11-27: twelve groups,
 # found when the step ran past its time). New entries are whole names, and the step stops if the

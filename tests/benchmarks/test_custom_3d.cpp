@@ -330,8 +330,10 @@ front = "3*q0*min(t/T0, 1)"
   double front = 0.0;
   for (double a : r->pb.tractions[2].area) front += a;
   EXPECT_NEAR(front, 0.5 * 0.4, 1e-15);
+  // 50 steps, halfway up the ramp (100 took 17 s under the sanitizers; the impulse is exact at
+  // every step, ramped or not).
   const double dt = 1e-4;
-  const int n = 100;
+  const int n = 50;
   steps(*r->stepper, dt, n);
   Vec<3> impulse = Vec<3>::Zero();
   for (int s = 0; s < n; ++s) {

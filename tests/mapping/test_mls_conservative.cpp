@@ -38,8 +38,10 @@ TEST(MlsConservative, MassAndMomentumToRoundOffIn1D) {
 
 TEST(MlsConservative, FreeBodyIn2DConservesWhereTheDefinitionDoesNot) {
   // The vortex's annulus, free on both circles: the MLS supports reach past the body's edge.
+  // Five steps: the definition's errors are there from the first (0.25 in mass and 7.8e-3 in
+  // momentum after 5 steps, 0.25 and 8.2e-3 after 20; 19 s under the sanitizers with 20).
   const std::vector<std::string> sets = {"benchmark=vortex_2d", "grid.cells=16",
-                                         "vortex.amplitude=0.1", "time.end=0.02",
+                                         "vortex.amplitude=0.1", "time.end=0.005",
                                          "method.mapping=mls"};
   const auto plain = run_example_ok("vortex_2d", sets);
   auto with = sets;
