@@ -20,8 +20,10 @@ TEST(DistributedPmg, OneProcessIsTheMatrixHierarchy) {
   // Cubic B-splines (three levels) on 6 x 5 cells; particles, 3 x 3 per cell of unequal mass,
   // fill the cells with x < 4 cells and y < 4 cells (a partly filled grid: inactive functions and
   // coarse functions without mass; functions below 1e-2 of the largest mass are left out, as
-  // method.mass_tolerance does). Jacobi cycles to 1e-6: 839 and 993 for the two slots (at 1e-4
-  // and 1e-10, 4,193 and 4,551: 90 s under the sanitizers, now about a fifth of that).
+  // method.mass_tolerance does). Jacobi cycles to 1e-4: 323 and 374 for the two slots (to 1e-6,
+  // 839 and 993: 21 s under the sanitizers; with functions down to 1e-4 of the largest mass and
+  // to 1e-10, 4,193 and 4,551: 90 s). Every cycle's residual is compared, so fewer of them
+  // check the same steps.
   // Side x = 0 is fixed in component x only (a roller): two slots with their own kept functions and
   // coarse sides.
   const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.2, 1.0), IVec<2>{6, 5});
@@ -59,7 +61,7 @@ TEST(DistributedPmg, OneProcessIsTheMatrixHierarchy) {
   sim.consistent_per_component = true;
   MassSolverSettings s;
   s.kind = MassSolver::Pmg;
-  s.tolerance = 1e-6;
+  s.tolerance = 1e-4;
   s.pmg.smoother = Smoother::Jacobi;
   sim.consistent.configure(s);
   sim.consistent.begin(n);
