@@ -110,10 +110,7 @@ void report_mls(nlohmann::ordered_json& summary, const Mapping& m, int dim) {
 }
 }  // namespace
 
-void report_mapping(nlohmann::ordered_json& summary, const MlsMapping& m, int dim) {
-  report_mls(summary, m, dim);
-}
-void report_mapping(nlohmann::ordered_json& summary, const ImlsMapping& m, int dim) {
+void report_mapping(nlohmann::ordered_json& summary, const MlsFamilyMapping& m, int dim) {
   report_mls(summary, m, dim);
 }
 

@@ -97,8 +97,7 @@ std::unique_ptr<Stepper<Dim>> make_stepper_for(const StepperInput<Dim>& in);
 // 003); nothing for the other mappings. Out of line (stepper.cpp), so that the steppers' units
 // do not compile the JSON library.
 void report_mapping(nlohmann::ordered_json& summary, const TlsMapping& m, int dim);
-void report_mapping(nlohmann::ordered_json& summary, const MlsMapping& m, int dim);
-void report_mapping(nlohmann::ordered_json& summary, const ImlsMapping& m, int dim);
+void report_mapping(nlohmann::ordered_json& summary, const MlsFamilyMapping& m, int dim);
 template <class Mapping>
 void report_mapping(nlohmann::ordered_json&, const Mapping&, int) {}
 

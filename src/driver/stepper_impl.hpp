@@ -106,12 +106,12 @@ class TypedStepper final : public Stepper<Dim> {
   static_assert(mpm::Basis<Basis, Dim>, "basis/basis.hpp");
   static_assert(MappingFor<Mapping, Sim>, "mapping/mapping.hpp");
 
-  // The basis is built from its kind (make_basis: with the kind's settings), the mapping is the
-  // configured one of the settings (run_settings, make_mapping).
-  TypedStepper(const StepperInput<Dim>& in, Basis basis)
+  // The basis is built from its kind (make_basis: with the kind's settings), the mapping from the
+  // configured one of the settings (run_settings, make_mapping; stepped_mapping_t).
+  TypedStepper(const StepperInput<Dim>& in, Basis basis, Mapping mapping)
       : scheme_(in.method.scheme),
-        sim_(in.problem.grid, std::move(basis), std::get<Mapping>(in.method.mapping),
-             std::move(in.problem.particles), in.problem.material) {
+        sim_(in.problem.grid, std::move(basis), std::move(mapping), std::move(in.problem.particles),
+             in.problem.material) {
     const MethodSettings& method = in.method;
     const Problem<Dim>& pb = in.problem;
     if (in.check_input)
@@ -248,15 +248,17 @@ std::unique_ptr<Stepper<Dim>> make_stepper_for(const StepperInput<Dim>& in) {
     using Basis = typename Kind::template type<Dim>;
     return std::visit(
         [&](const auto& m) -> std::unique_ptr<Stepper<Dim>> {
-          using Mapping = std::decay_t<decltype(m)>;
-          if constexpr (!supports_dimension<Mapping>(Dim))
+          using Chosen = std::decay_t<decltype(m)>;
+          // MLS and IMLS run as one type (mapping/mapping.hpp, stepped_mapping).
+          using Mapping = stepped_mapping_t<Chosen>;
+          if constexpr (!supports_dimension<Chosen>(Dim))
             throw std::logic_error("make_stepper_for: mapping not available in this dimension");
-          else if constexpr (!supports_mapping<Kind, Mapping>())
+          else if constexpr (!supports_mapping<Kind, Chosen>())
             throw std::logic_error("make_stepper_for: basis and mapping not available together");
           else
             return std::make_unique<TypedStepper<Dim, Basis, Mapping>>(
-                in,
-                make_basis<Dim>(std::get<I>(in.method.basis), in.problem.grid, in.problem.mesh));
+                in, make_basis<Dim>(std::get<I>(in.method.basis), in.problem.grid, in.problem.mesh),
+                Mapping(m));
         },
         in.method.mapping);
   }

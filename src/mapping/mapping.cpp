@@ -16,6 +16,9 @@ static_assert(MappingFor<DirectMapping, Simulation<1, LinearBasis<1>, DirectMapp
 static_assert(MappingFor<CubicSplineMapping, Simulation<1, LinearBasis<1>, CubicSplineMapping>>);
 static_assert(MappingFor<TlsMapping, Simulation<1, LinearBasis<1>, TlsMapping>> &&
               MappingFor<TlsMapping, Simulation<2, LinearBasis<2>, TlsMapping>>);
+// The steppers run MLS and IMLS as MlsFamilyMapping (stepped_mapping_t); the tests run each.
+static_assert(MappingFor<MlsFamilyMapping, Simulation<1, LinearBasis<1>, MlsFamilyMapping>> &&
+              MappingFor<MlsFamilyMapping, Simulation<2, LinearBasis<2>, MlsFamilyMapping>>);
 static_assert(MappingFor<MlsMapping, Simulation<1, LinearBasis<1>, MlsMapping>> &&
               MappingFor<MlsMapping, Simulation<2, LinearBasis<2>, MlsMapping>>);
 static_assert(MappingFor<ImlsMapping, Simulation<1, LinearBasis<1>, ImlsMapping>> &&

@@ -49,4 +49,14 @@ concept MappingFor = requires(M& m, Sim& sim, int dim) {
        m.load_totals(bytes, what);
      });
 
+// The mapping type a stepper runs for a configured mapping: the mapping itself, or a class that
+// runs several configured alternatives with a run-time choice (MLS and IMLS: MlsFamilyMapping,
+// mapping/mls.hpp), so that the stepper units compile one Simulation for them.
+template <class M>
+struct stepped_mapping {
+  using type = M;
+};
+template <class M>
+using stepped_mapping_t = typename stepped_mapping<M>::type;
+
 }  // namespace mpm

@@ -414,12 +414,11 @@ template class MovingLeastSquares<1>;
 template class MovingLeastSquares<2>;
 template class MovingLeastSquares<3>;
 
-// The mapping's reconstructions (mls.hpp, MovingLeastSquaresMapping): everything of map_mass,
+// The mapping's reconstructions (mls.hpp, MlsFamilyMapping): everything of map_mass,
 // map_momentum and map_forces but the basis evaluation and assembly at the Gauss points.
-template <bool Improved>
 template <int Dim>
-void MovingLeastSquaresMapping<Improved>::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
-  if (Improved && sim.mass_type == MassType::Consistent)
+void MlsFamilyMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
+  if (improved_ && sim.mass_type == MassType::Consistent)
     throw InputError("method.mapping = imls needs method.mass = lumped (003 eq. 32)");
   dim_ = Dim;
   auto& mls = std::get<Dim - 1>(work_).mls;
@@ -474,11 +473,9 @@ void MovingLeastSquaresMapping<Improved>::fit_mass(RunState<Dim>& sim, GaussPoin
   }
 }
 
-template <bool Improved>
 template <int Dim, class V>
-void MovingLeastSquaresMapping<Improved>::conserve_with_density(const GaussPoints<Dim>& q,
-                                                                std::vector<V>& f, const V& total,
-                                                                const Comm* comm) const {
+void MlsFamilyMapping::conserve_with_density(const GaussPoints<Dim>& q, std::vector<V>& f,
+                                             const V& total, const Comm* comm) const {
   // f~_g = f_g + rho~_g delta with sum_g w_g f~_g = total (mls.hpp); serial sums in point order,
   // then over the processes in rank order.
   V integral = V::Zero();
@@ -500,11 +497,10 @@ void MovingLeastSquaresMapping<Improved>::conserve_with_density(const GaussPoint
   for (std::size_t g = 0; g < q.size(); ++g) f[g] += rho_[g] * delta;
 }
 
-template <bool Improved>
 template <int Dim>
-void MovingLeastSquaresMapping<Improved>::finish_mass(RunState<Dim>& sim) {
+void MlsFamilyMapping::finish_mass(RunState<Dim>& sim) {
   auto& mls = std::get<Dim - 1>(work_).mls;
-  if constexpr (Improved) {
+  if (improved_) {
     const auto& xn = std::get<Dim - 1>(work_).node_x;
     mls.add_rows(
         static_cast<Index>(xn.size()),
@@ -526,13 +522,11 @@ void MovingLeastSquaresMapping<Improved>::finish_mass(RunState<Dim>& sim) {
                     settings_.degree));
 }
 
-template <bool Improved>
 template <int Dim>
-void MovingLeastSquaresMapping<Improved>::fit_momentum(RunState<Dim>& sim,
-                                                       const GaussPoints<Dim>& q) {
+void MlsFamilyMapping::fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   using V = Vec<Dim>;
   const auto& P = sim.particles;
-  if constexpr (Improved) {
+  if (improved_) {
     auto& out = sim.nodes.momentum;
     std::fill(out.begin(), out.end(), V::Zero());
     nodes_.for_each_row([&](std::size_t r, const ShapeTable& t, std::size_t k) {
@@ -587,10 +581,8 @@ void MovingLeastSquaresMapping<Improved>::fit_momentum(RunState<Dim>& sim,
   }
 }
 
-template <bool Improved>
 template <int Dim>
-void MovingLeastSquaresMapping<Improved>::fit_forces(RunState<Dim>& sim,
-                                                     const GaussPoints<Dim>& q) {
+void MlsFamilyMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   using V = Vec<Dim>;
   using M = Mat<Dim>;
   const auto& P = sim.particles;
@@ -620,23 +612,18 @@ void MovingLeastSquaresMapping<Improved>::fit_forces(RunState<Dim>& sim,
   }
 }
 
-#define MPM_MLS_MAPPING_DIM(I, D)                                                         \
-  template void MovingLeastSquaresMapping<I>::fit_mass<D>(RunState<D>&, GaussPoints<D>&); \
-  template void MovingLeastSquaresMapping<I>::finish_mass<D>(RunState<D>&);               \
-  template void MovingLeastSquaresMapping<I>::fit_momentum<D>(RunState<D>&,               \
-                                                              const GaussPoints<D>&);     \
-  template void MovingLeastSquaresMapping<I>::fit_forces<D>(RunState<D>&, const GaussPoints<D>&);
-MPM_MLS_MAPPING_DIM(false, 1)
-MPM_MLS_MAPPING_DIM(false, 2)
-MPM_MLS_MAPPING_DIM(true, 1)
-MPM_MLS_MAPPING_DIM(true, 2)
-MPM_MLS_MAPPING_DIM(false, 3)
-MPM_MLS_MAPPING_DIM(true, 3)
+#define MPM_MLS_MAPPING_DIM(D)                                                          \
+  template void MlsFamilyMapping::fit_mass<D>(RunState<D>&, GaussPoints<D>&);           \
+  template void MlsFamilyMapping::finish_mass<D>(RunState<D>&);                         \
+  template void MlsFamilyMapping::fit_momentum<D>(RunState<D>&, const GaussPoints<D>&); \
+  template void MlsFamilyMapping::fit_forces<D>(RunState<D>&, const GaussPoints<D>&);
+MPM_MLS_MAPPING_DIM(1)
+MPM_MLS_MAPPING_DIM(2)
+MPM_MLS_MAPPING_DIM(3)
 #undef MPM_MLS_MAPPING_DIM
 
 // The run totals in a checkpoint: six counters, then the largest condition number and where.
-template <bool Improved>
-std::string MovingLeastSquaresMapping<Improved>::save_totals() const {
+std::string MlsFamilyMapping::save_totals() const {
   const MlsReport& t = totals_;
   ByteWriter w;
   for (Index v : {t.points, t.empty, t.ill_conditioned, t.singular, t.reduced, t.widened}) w.i64(v);
@@ -647,9 +634,7 @@ std::string MovingLeastSquaresMapping<Improved>::save_totals() const {
   return std::move(w.bytes());
 }
 
-template <bool Improved>
-void MovingLeastSquaresMapping<Improved>::load_totals(std::string_view bytes,
-                                                      const std::string& what) {
+void MlsFamilyMapping::load_totals(std::string_view bytes, const std::string& what) {
   ByteReader r(bytes, what + " (MLS totals)");
   MlsReport t;
   for (Index* v : {&t.points, &t.empty, &t.ill_conditioned, &t.singular, &t.reduced, &t.widened})
@@ -661,10 +646,5 @@ void MovingLeastSquaresMapping<Improved>::load_totals(std::string_view bytes,
   r.expect_done();
   totals_ = t;
 }
-
-template std::string MovingLeastSquaresMapping<false>::save_totals() const;
-template std::string MovingLeastSquaresMapping<true>::save_totals() const;
-template void MovingLeastSquaresMapping<false>::load_totals(std::string_view, const std::string&);
-template void MovingLeastSquaresMapping<true>::load_totals(std::string_view, const std::string&);
 
 }  // namespace mpm
