@@ -9,16 +9,21 @@
 # The corpora live in a temporary directory (nothing is written into the repository). Fails on
 # any crash, hang, leak, sanitizer report or uncaught exception; the reproducer is kept in
 # FUZZ_ARTIFACTS (default: the temporary directory, printed).
+# FUZZ_BUILD: the build tree of the targets (default build-fuzz/, configured here at -O2 -g).
+# scripts/sanitize.sh with FUZZ_ALONGSIDE=1 (CI) builds them in its instrumented tree build-asan/
+# (-O0, the same sanitizers) and runs this script with FUZZ_BUILD=build-asan: the five sources
+# they compile cost about 170 s of CPU in a tree of their own at -O2 -g, a few seconds there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/deps.sh clang libclang-rt-14-dev
 seconds="${FUZZ_SECONDS:-60}"
 checkpoint_seconds="${FUZZ_CHECKPOINT_SECONDS:-30}"
-if [ ! -f build-fuzz/CMakeCache.txt ]; then
+build="${FUZZ_BUILD:-build-fuzz}"
+if [ "$build" = build-fuzz ] && [ ! -f build-fuzz/CMakeCache.txt ]; then
   cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DCMAKE_CXX_COMPILER=clang++ -DMPM_FUZZ=ON -DMPM_BUILD_TESTS=OFF >/dev/null
 fi
-cmake --build build-fuzz --target fuzz_config fuzz_checkpoint -j "$(nproc)"
+cmake --build "$build" --target fuzz_config fuzz_checkpoint -j "$(nproc)"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/mpm-fuzz.XXXXXX")
 corpus="$work/corpus"
@@ -65,13 +70,13 @@ fi
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 status=0
-build-fuzz/fuzz_config "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+"$build/fuzz_config" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
   -max_len=131072 -print_final_stats=1 -artifact_prefix="$artifacts/" 2>"$work/fuzz.log" ||
   status=$?
 tail -n 20 "$work/fuzz.log"
 if [ "$status" -eq 0 ]; then
   seeds=$(ls "$work/checkpoints" | wc -l)
-  build-fuzz/fuzz_checkpoint "$work/checkpoints" -max_total_time="$checkpoint_seconds" \
+  "$build/fuzz_checkpoint" "$work/checkpoints" -max_total_time="$checkpoint_seconds" \
     -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
     -artifact_prefix="$artifacts/" 2>"$work/fuzz_checkpoint.log" || status=$?
   echo "-- checkpoint loader ($seeds seed payloads)"

@@ -12,9 +12,16 @@
 # reports keep file and line (its checks carry their source location); ASan's name the functions
 # of the stack. SANITIZE_LINES=1 builds with line tables for file and line in ASan's reports too
 # (full -g took 8.7 s per stepper unit against 7.7 s with line tables). -O0: the instrumented
-# library at -O1 took about three times as long to compile (g++; clang 29 s per stepper unit against 12.6 s). The slow tests (SLOW below; under a second to a few
-# seconds each in Release, up to 80 s here) are left out here and run in the Release suite of
-# scripts/test.sh. SANITIZE_ALL=1 runs every test.
+# library at -O1 took about three times as long to compile (g++; clang 29 s per stepper unit
+# against 12.6 s). The slow tests (SLOW below; under a second to a few seconds each in Release,
+# up to 80 s here) are left out here and run in the Release suite of scripts/test.sh.
+# SANITIZE_ALL=1 runs every test.
+#
+# FUZZ_ALONGSIDE=1 (CI, .ci/run) also builds the libFuzzer targets here (-DMPM_FUZZ=ON: their
+# five sources again, with the fuzzer's coverage, at -O0 like the rest of this tree) and runs
+# scripts/fuzz.sh on them (FUZZ_BUILD=build-asan; FUZZ_SECONDS, FUZZ_CHECKPOINT_SECONDS) while
+# the tests run; either failing fails the script, and the fuzzers' log is printed at the end.
+# Their own tree (build-fuzz/, -O2 -g) took about 170 s of CPU beside this build in CI.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/deps.sh clang libclang-rt-14-dev libomp-dev lld
@@ -43,9 +50,10 @@ fi
 # max-ent; 2D linear, CPDI2 (its tracked corners), B2, max-ent, P1 and PS triangles; 3D linear and
 # B2. The units left out are the same stage templates with another basis and stencil size (the
 # kept units have fixed stencils of several sizes and max-ent's run-time ones): the Release suite
-# runs them, and the basis tests here check those bases' functions. A test kept here that needs a left-out unit fails with
-# an input error naming MPM_STEPPERS_1D, _2D or _3D: add the kind below. Configured on every run,
-# so a changed list applies; SANITIZE_ALL=1 (every test) compiles every unit.
+# runs them, and the basis tests here check those bases' functions. A test kept here that needs
+# a left-out unit fails with an input error naming MPM_STEPPERS_1D, _2D or _3D: add the kind
+# below. Configured on every run, so a changed list applies; SANITIZE_ALL=1 (every test)
+# compiles every unit.
 debug_flags="-O0"
 [ "${SANITIZE_LINES:-0}" = 1 ] && debug_flags="-gline-tables-only -O0"
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
@@ -57,9 +65,12 @@ fi
 # Without MPI (MPM_MPI=OFF): Open MPI's run-time keeps allocations to its exit that
 # LeakSanitizer would report, and the distributed runs are checked in the Release suite
 # (Mpi.SameAnswersAsOneProcess); the one-process paths of core/comm.cpp are compiled here.
+fuzz=OFF
+[ "${FUZZ_ALONGSIDE:-0}" = 1 ] && fuzz=ON
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
   -DCMAKE_CXX_FLAGS_DEBUG="$debug_flags" -DCMAKE_EXE_LINKER_FLAGS=-fuse-ld=lld \
-  -DCMAKE_CXX_COMPILER=clang++ -DMPM_SANITIZE=ON -DMPM_MPI=OFF "${units[@]}" >/dev/null
+  -DCMAKE_CXX_COMPILER=clang++ -DMPM_SANITIZE=ON -DMPM_MPI=OFF -DMPM_FUZZ=$fuzz \
+  "${units[@]}" >/dev/null
 cmake --build build-asan -j "$(nproc)"
 # Tests that take more than about 4 s under the sanitizers at -O0 (refinement studies, bitwise
 # restart series, whole-grid runs, the column compaction: 5,000 steps of 1,000 particles, 300 s
@@ -176,8 +187,25 @@ if [ "${SANITIZE_ALL:-0}" != 1 ] && [ "$kept_tests" = "$all_tests" ]; then
   exit 1
 fi
 echo "sanitizers: $kept_tests of $all_tests tests (the others run in the Release suite)"
-if [ "${SANITIZE_ALL:-0}" = 1 ]; then
-  ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
-else
-  ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -E "$SLOW"
+if [ "$fuzz" = ON ]; then
+  fuzz_log=$(mktemp)
+  fuzz_t0=$SECONDS
+  FUZZ_BUILD=build-asan bash scripts/fuzz.sh >"$fuzz_log" 2>&1 &
+  fuzz_pid=$!
 fi
+test_status=0
+if [ "${SANITIZE_ALL:-0}" = 1 ]; then
+  ctest --test-dir build-asan --output-on-failure -j "$(nproc)" || test_status=$?
+else
+  ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -E "$SLOW" || test_status=$?
+fi
+if [ "$fuzz" = ON ]; then
+  fuzz_status=0
+  wait "$fuzz_pid" || fuzz_status=$?
+  echo "== fuzz (scripts/fuzz.sh on build-asan), alongside the tests: ended after" \
+    "$((SECONDS - fuzz_t0)) s, status $fuzz_status"
+  cat "$fuzz_log"
+  rm -f "$fuzz_log"
+  [ "$fuzz_status" -eq 0 ] || exit "$fuzz_status"
+fi
+exit "$test_status"

@@ -11,6 +11,7 @@
 #include <limits>
 #include <ostream>
 
+#include "solver/ldlt_pivots.hpp"
 #include "solver/spline_matrices.hpp"
 
 namespace mpm {
@@ -102,7 +103,9 @@ MassMatrixRow one(const MassMatrixOptions& opt, int p, Index n) {
                            std::log((std::sqrt(row.kappa) - 1.0) / (std::sqrt(row.kappa) + 1.0)));
   auto t0 = std::chrono::steady_clock::now();
   const Eigen::SimplicialLDLT<SparseMatrixD> direct(M);
-  const bool factorised = direct.info() == Eigen::Success && (direct.vectorD().array() > 0.0).all();
+  // As the consistent mass's direct solver (solver/ldlt_pivots.hpp): a pivot within round-off
+  // of zero, whatever its sign, is a singular matrix.
+  const bool factorised = ldlt_pivots_above_roundoff(direct, M);
   const Eigen::VectorXd exact =
       factorised ? Eigen::VectorXd(direct.solve(f)) : Eigen::VectorXd::Constant(M.rows(), kNaN);
   row.direct_seconds = seconds_since(t0);

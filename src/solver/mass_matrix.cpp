@@ -1,8 +1,9 @@
 #include "solver/mass_matrix.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <stdexcept>
+
+#include "solver/ldlt_pivots.hpp"
 
 namespace mpm {
 
@@ -81,24 +82,8 @@ bool ConsistentMass::factorize_matrix(int slot) {
   if (settings_.kind == MassSolver::Cg) return (M.diagonal().array() > 0.0).all();
   auto& solver = solver_[s];
   solver.compute(M);
-  if (solver.info() != Eigen::Success) return false;
-  // Each pivot is what is left of its (permuted) diagonal entry after the elimination of the
-  // rows before it, a Schur complement: computed, it carries a round-off of about the number of
-  // entries of its row times epsilon times that diagonal entry. A pivot no larger than that is
-  // zero to working precision, whatever its sign: the matrix is singular. (LDL^T of a rank-one
-  // 2 x 2 particle matrix returned a tiny positive second pivot, which the test of the signs
-  // alone accepted and the solve then divided by: PartialLumping.ASingularParticleMatrix...)
-  // Both in the order of the pivots (P M P^T is factorised; permutationP() * diag(M) is its
-  // diagonal).
-  Eigen::VectorXd roundoff(M.rows());
-  for (Index j = 0; j < M.rows(); ++j)
-    roundoff[j] = static_cast<double>(M.innerVector(j).nonZeros()) *
-                  std::numeric_limits<double>::epsilon() * M.coeff(j, j);
-  roundoff = solver.permutationP() * roundoff;
-  const Eigen::VectorXd& pivot = solver.vectorD();
-  for (Index i = 0; i < M.rows(); ++i)
-    if (!(pivot[i] > roundoff[i])) return false;
-  return true;
+  // Singular when a pivot is zero to working precision, whatever its sign (ldlt_pivots.hpp).
+  return ldlt_pivots_above_roundoff(solver, M);
 }
 
 bool ConsistentMass::factorize_coupled(int dim, std::span<const double> projector) {
