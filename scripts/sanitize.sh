@@ -189,8 +189,13 @@ fi
 echo "sanitizers: $kept_tests of $all_tests tests (the others run in the Release suite)"
 if [ "$fuzz" = ON ]; then
   fuzz_log=$(mktemp)
-  fuzz_t0=$SECONDS
-  FUZZ_BUILD=build-asan bash scripts/fuzz.sh >"$fuzz_log" 2>&1 &
+  {
+    fuzz_t0=$SECONDS
+    fuzz_status=0
+    FUZZ_BUILD=build-asan bash scripts/fuzz.sh || fuzz_status=$?
+    echo "(the fuzz job took $((SECONDS - fuzz_t0)) s)"
+    exit "$fuzz_status"
+  } >"$fuzz_log" 2>&1 &
   fuzz_pid=$!
 fi
 test_status=0
@@ -202,8 +207,7 @@ fi
 if [ "$fuzz" = ON ]; then
   fuzz_status=0
   wait "$fuzz_pid" || fuzz_status=$?
-  echo "== fuzz (scripts/fuzz.sh on build-asan), alongside the tests: ended after" \
-    "$((SECONDS - fuzz_t0)) s, status $fuzz_status"
+  echo "== fuzz (scripts/fuzz.sh on build-asan), alongside the tests: status $fuzz_status"
   cat "$fuzz_log"
   rm -f "$fuzz_log"
   [ "$fuzz_status" -eq 0 ] || exit "$fuzz_status"
