@@ -91,9 +91,7 @@ void report_mapping(nlohmann::ordered_json& summary, const TlsMapping& m, int) {
   }
 }
 
-namespace {
-template <class Mapping>
-void report_mls(nlohmann::ordered_json& summary, const Mapping& m, int dim) {
+void report_mapping(nlohmann::ordered_json& summary, const MlsFamilyMapping& m, int dim) {
   const auto& t = m.totals();
   summary["mls"] = {{"degree", m.settings().degree},
                     {"dilation", m.settings().dilation},
@@ -107,11 +105,6 @@ void report_mls(nlohmann::ordered_json& summary, const Mapping& m, int dim) {
                     {"worst_x", t.worst_x}};
   if (dim >= 2) summary["mls"]["worst_y"] = t.worst_y;
   if (dim == 3) summary["mls"]["worst_z"] = t.worst_z;
-}
-}  // namespace
-
-void report_mapping(nlohmann::ordered_json& summary, const MlsFamilyMapping& m, int dim) {
-  report_mls(summary, m, dim);
 }
 
 double altitude_stability_factor(const BasisKind& basis) {

@@ -373,7 +373,6 @@ class MlsFamilyMapping {
   }
 
   const Settings& settings() const { return settings_; }
-  bool improved() const { return improved_; }
   template <int Dim = 1>
   const MovingLeastSquares<Dim>& reconstruction() const {
     return std::get<Dim - 1>(work_).mls;
