@@ -3350,11 +3350,20 @@ With dt from 1e-4 to 2.5e-5 s {rate_text}. {load_text}. The same run with lumped
 {"runs to t = 3 s" if lumped.get("status") == "ok" else "stops at t = " + fail_time(lumped.get("failure")) + " s"}, and P1-TLS with consistent mass {"runs to T" if p1.get("status") == "ok" else "stops at t = " + fail_time(p1.get("failure")) + " s"}. During development (a debugging
 hook, not in the code) the smallest eigenvalue of the consistent matrix scaled by its row sums,
 L^(-1/2) M L^(-1/2), stayed between 9.0e-3 and 9.3e-3 up to the stop, so the matrix does not
-approach singularity; {switch_text}. Not shown:
-which term of the semi-discrete equations grows. One candidate: TLS integrates the force with
-the stress fitted at the Gauss points while the strain rate is taken at the particles, so its
-stiffness is not symmetric and can have growing modes that a symmetric one cannot; the
-lumped matrix gives other modes."""
+approach singularity; {switch_text}. In a modified build (not in the code: in
+`TlsMapping::map_mass`, `map_momentum` or `map_forces` the Gauss-point assembly replaced by
+`DirectMapping`'s sum over the particles, one at a time, the fits kept), TLS's grid sums were
+swapped for the direct mapping's one at a time on this run (dt = 1e-4 s, P = 1e4 Pa): with the
+direct forces it stops at t = 0.6344 s, with the direct mass matrix at 0.6111 s, and with TLS's
+momentum alone (direct mass and forces) at 0.7995 s; with the direct momentum (TLS's mass and
+forces) it reaches T, but with a stress error of 5.68e4 Pa, 5.7 times the load, and 5 of the 8
+column runs of the tables above stop. So the growth needs neither TLS's force integral nor its
+mass matrix: TLS's momentum fit (D eq. 5.14) projected by a consistent matrix, M v = q, is
+enough. Not shown: the mechanism. A candidate: with a consistent matrix v = M^-1 q is a
+projection of the particles' velocities only for the direct sums (q and M from the same
+particle quadrature); from a fitted momentum density it is not, and a velocity field it
+amplifies feeds the strain rate, and so the stress, at every step: a negative damping, whose
+rate would not depend on dt."""
 
 
 VORTEX_METHODS = ("linear/direct, bspline2/direct, bspline3/direct, cpdi2/direct, linear/tls, "

@@ -1,6 +1,7 @@
 #include "core/comm.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -17,6 +18,11 @@ namespace {
 
 Comm g_world;
 bool g_mpi_running = false;
+#ifdef MPM_HAVE_MPI
+// A duplicate of the world communicator for the reductions' point-to-point messages
+// (tree_reduce), so that they can never match a message of an exchange.
+MPI_Comm g_reduce = MPI_COMM_NULL;
+#endif
 
 // Started by an MPI launcher: Open MPI's mpirun sets OMPI_COMM_WORLD_SIZE, PMI and PMIx
 // launchers (MPICH's hydra, srun) PMI_SIZE or PMIX_RANK.
@@ -52,6 +58,7 @@ void Comm::init([[maybe_unused]] int* argc, [[maybe_unused]] char*** argv) {
   MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local);
   MPI_Comm_size(local, &g_world.local_size_);
   MPI_Comm_free(&local);
+  check_mpi(MPI_Comm_dup(MPI_COMM_WORLD, &g_reduce), "MPI_Comm_dup");
 #else
   // A build without MPI started by mpirun: every process would run the whole problem alone.
   if (const char* n = std::getenv("OMPI_COMM_WORLD_SIZE"); n && std::atoi(n) > 1)
@@ -66,7 +73,10 @@ void Comm::finalize() {
   if (g_mpi_running) {
     int done = 0;
     MPI_Finalized(&done);
-    if (!done) MPI_Finalize();
+    if (!done) {
+      if (g_reduce != MPI_COMM_NULL) MPI_Comm_free(&g_reduce);
+      MPI_Finalize();
+    }
     g_mpi_running = false;
   }
 #endif
@@ -85,9 +95,7 @@ const Comm& Comm::world() {
 std::optional<Comm::Failure> Comm::agree(const Failure* mine) const {
   if (!distributed()) return mine ? std::optional<Failure>(*mine) : std::nullopt;
   // The lowest failing rank (size_ when none), then its code and message from it.
-  const Index me = mine ? rank_ : size_;
-  const std::vector<Index> all = allgather(std::span<const Index>(&me, 1));
-  const Index first = *std::min_element(all.begin(), all.end());
+  const Index first = integer_reduce(mine ? rank_ : size_, Integer::Min);
   if (first == size_) return std::nullopt;
   const auto r = static_cast<int>(first);
   std::vector<std::byte> buf;
@@ -115,9 +123,7 @@ void Comm::check() const {
 
 bool Comm::any(bool flag) const {
   if (!distributed()) return flag;
-  const Index v = flag ? 1 : 0;
-  const auto all = allgather(std::span<const Index>(&v, 1));
-  return std::any_of(all.begin(), all.end(), [](Index x) { return x != 0; });
+  return integer_reduce(flag ? 1 : 0, Integer::Max) != 0;
 }
 
 double Comm::sum(double v) const {
@@ -127,27 +133,83 @@ double Comm::sum(double v) const {
 
 Index Comm::sum(Index v) const {
   if (!distributed()) return v;
-  const auto all = allgather(std::span<const Index>(&v, 1));
-  Index s = 0;
-  for (Index x : all) s += x;
-  return s;
+  return integer_reduce(v, Integer::Sum);
+}
+
+Index Comm::integer_reduce([[maybe_unused]] Index v, [[maybe_unused]] Integer op) const {
+#ifdef MPM_HAVE_MPI
+  // Integer sums and extrema are exact in any order, so MPI's own reduction gives the same value
+  // on every rank and in every run.
+  Index out = 0;
+  const MPI_Op mpi_op = op == Integer::Sum ? MPI_SUM : op == Integer::Min ? MPI_MIN : MPI_MAX;
+  check_mpi(MPI_Allreduce(&v, &out, 1, MPI_INT64_T, mpi_op, MPI_COMM_WORLD), "MPI_Allreduce");
+  return out;
+#else
+  throw std::logic_error("Comm::integer_reduce in a build without MPI");
+#endif
+}
+
+void Comm::tree_reduce([[maybe_unused]] std::span<double> v, [[maybe_unused]] bool max) const {
+#ifdef MPM_HAVE_MPI
+  // Recursive doubling on a fixed tree. With N = P + E ranks, P the largest power of two <= N:
+  // rank P + r (r < E) first hands its values to rank r, which combines v_r op v_(P+r); then in
+  // rounds k = 1, 2, 4, ... < P ranks r and r xor k swap their results and both combine them
+  // lower rank first, (a op b) with a from the lower one, so both hold the same bits and every
+  // rank ends with ((v_0 op v_1) op (v_2 op v_3)) op ..., bracketed by N alone; rank r then
+  // returns the result to P + r. log2(P) message latencies (two more when N is not a power of
+  // two) of n values each, where an all-gather moves N n values to every rank.
+  // max: NaN wins (a NaN on any rank must stop the run, whatever the order).
+  const int n = to_int(v.size());
+  std::vector<double> other(v.size());
+  const auto combine = [&](const double* a, const double* b) {
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const double x = a[i], y = b[i];
+      v[i] = !max ? x + y : (std::isnan(x) || x >= y) ? x : y;
+    }
+  };
+  int P = 1;
+  while (2 * P <= size_) P *= 2;
+  const int extra = size_ - P;
+  if (rank_ >= P) {
+    check_mpi(MPI_Send(v.data(), n, MPI_DOUBLE, rank_ - P, 0, g_reduce), "MPI_Send");
+    check_mpi(MPI_Recv(v.data(), n, MPI_DOUBLE, rank_ - P, 1, g_reduce, MPI_STATUS_IGNORE),
+              "MPI_Recv");
+    return;
+  }
+  if (rank_ < extra) {
+    check_mpi(MPI_Recv(other.data(), n, MPI_DOUBLE, rank_ + P, 0, g_reduce, MPI_STATUS_IGNORE),
+              "MPI_Recv");
+    const std::vector<double> mine(v.begin(), v.end());
+    combine(mine.data(), other.data());
+  }
+  std::vector<double> mine(v.size());
+  for (int k = 1; k < P; k *= 2) {
+    const int partner = rank_ ^ k;
+    std::copy(v.begin(), v.end(), mine.begin());
+    check_mpi(MPI_Sendrecv(mine.data(), n, MPI_DOUBLE, partner, 2, other.data(), n, MPI_DOUBLE,
+                           partner, 2, g_reduce, MPI_STATUS_IGNORE),
+              "MPI_Sendrecv");
+    if (rank_ < partner)
+      combine(mine.data(), other.data());
+    else
+      combine(other.data(), mine.data());
+  }
+  if (rank_ < extra)
+    check_mpi(MPI_Send(v.data(), n, MPI_DOUBLE, rank_ + P, 1, g_reduce), "MPI_Send");
+#else
+  throw std::logic_error("Comm::tree_reduce in a build without MPI");
+#endif
 }
 
 void Comm::sum(std::span<double> v) const {
   if (!distributed() || v.empty()) return;
-  const std::vector<double> all = allgather(std::span<const double>(v.data(), v.size()));
-  const std::size_t n = v.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    double s = 0.0;  // rank order: the same bits on every rank and in every run
-    for (int r = 0; r < size_; ++r) s += all[static_cast<std::size_t>(r) * n + k];
-    v[k] = s;
-  }
+  tree_reduce(v, false);
 }
 
 double Comm::max(double v) const {
   if (!distributed()) return v;
-  const auto all = allgather(std::span<const double>(&v, 1));
-  return *std::max_element(all.begin(), all.end());
+  tree_reduce(std::span<double>(&v, 1), true);
+  return v;
 }
 
 double Comm::min(double v) const {

@@ -4,9 +4,13 @@
 // core/comm.cpp includes <mpi.h>; everything above sees this interface, whose operations are
 // plain copies with one process.
 //
-// Every reduction is deterministic: the values of all ranks are gathered and combined in rank
-// order, so a run gives the same bits every time with the same number of ranks, and every rank
-// gets the same bits (MPI_Allreduce promises neither).
+// Every reduction is deterministic: sums and maxima of doubles are combined by recursive doubling
+// on a fixed tree over the ranks (Comm::tree_reduce), bracketed by the number of ranks alone, so a
+// run gives the same bits every time with the same number of ranks, and every rank gets the same
+// bits (MPI_Allreduce promises neither for doubles); integer sums and extrema, exact in any
+// order, use MPI_Allreduce. Both take about log2(N) message latencies and move n values per
+// round, where an all-gather moves N n values to every rank (BENCHMARKS.md, the communication
+// model of issue 21).
 //
 // Failures: a rank that meets a RunError must not leave the others waiting in a collective
 // operation. Every collective operation of a time step therefore starts with agree(): each rank
@@ -64,7 +68,8 @@ class Comm {
   // Collective: whether `flag` holds on any rank.
   bool any(bool flag) const;
 
-  // Collective sums and extrema over the ranks, combined in rank order.
+  // Collective sums and extrema over the ranks (the fixed tree for doubles; max: NaN if any
+  // rank has one).
   double sum(double v) const;
   Index sum(Index v) const;
   void sum(std::span<double> v) const;  // elementwise, in place
@@ -89,6 +94,13 @@ class Comm {
                                                int tag) const;
 
  private:
+  enum class Integer { Sum, Min, Max };
+  // MPI_Allreduce of one integer (exact in any order).
+  Index integer_reduce(Index v, Integer op) const;
+  // v combined elementwise over the ranks on the fixed tree (sum, or max with NaN winning), the
+  // same bits on every rank.
+  void tree_reduce(std::span<double> v, bool max) const;
+
   int rank_ = 0, size_ = 1, local_size_ = 1;
 };
 

@@ -239,27 +239,22 @@ void localize_tractions(RunState<Dim>& sim) {
 }
 
 template <int Dim>
-double imbalance(const RunState<Dim>& sim, const Comm& comm, std::vector<Index>* per_rank) {
+double imbalance(const RunState<Dim>& sim, const Comm& comm, Index* most) {
   comm.check();
   const Index n = sim.particles.size();
-  const std::vector<Index> counts = comm.allgather(std::span<const Index>(&n, 1));
-  Index total = 0, most = 0;
-  for (Index c : counts) {
-    total += c;
-    most = std::max(most, c);
-  }
-  if (per_rank) *per_rank = counts;
+  const Index total = comm.sum(n);
+  // (A count is exact as a double up to 2^53.)
+  const double largest = comm.max(static_cast<double>(n));
+  if (most) *most = static_cast<Index>(largest);
   if (total == 0) return 0.0;
-  return static_cast<double>(most) * static_cast<double>(counts.size()) /
-             static_cast<double>(total) -
-         1.0;
+  return largest * static_cast<double>(comm.size()) / static_cast<double>(total) - 1.0;
 }
 
 template <int Dim>
 bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& comm,
                       double threshold, Index& sent, double& measured) {
-  std::vector<Index> counts;
-  measured = imbalance(sim, comm, &counts);
+  Index most = 0;
+  measured = imbalance(sim, comm, &most);
   if (!(threshold > 0.0) || measured <= threshold) return false;
   const std::vector<double> per_layer =
       SlabPartition<Dim>::layer_counts(sim.grid, sim.particles, comm, /*replicated=*/false);
@@ -269,7 +264,7 @@ bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& 
   std::vector<double> predicted(static_cast<std::size_t>(comm.size()), 0.0);
   for (std::size_t l = 0; l < per_layer.size(); ++l)
     predicted[static_cast<std::size_t>(next.owner_of_layer(static_cast<Index>(l)))] += per_layer[l];
-  const double now = static_cast<double>(*std::max_element(counts.begin(), counts.end()));
+  const double now = static_cast<double>(most);
   if (!(*std::max_element(predicted.begin(), predicted.end()) < now)) return false;
   part = std::move(next);
   sent += migrate(sim, part, comm);
@@ -300,9 +295,9 @@ template void remove_ghosts<3>(RunState<3>&);
 template void localize_tractions<1>(RunState<1>&);
 template void localize_tractions<2>(RunState<2>&);
 template void localize_tractions<3>(RunState<3>&);
-template double imbalance<1>(const RunState<1>&, const Comm&, std::vector<Index>*);
-template double imbalance<2>(const RunState<2>&, const Comm&, std::vector<Index>*);
-template double imbalance<3>(const RunState<3>&, const Comm&, std::vector<Index>*);
+template double imbalance<1>(const RunState<1>&, const Comm&, Index*);
+template double imbalance<2>(const RunState<2>&, const Comm&, Index*);
+template double imbalance<3>(const RunState<3>&, const Comm&, Index*);
 template bool rebalance_if_due<1>(RunState<1>&, SlabPartition<1>&, const Comm&, double, Index&,
                                   double&);
 template bool rebalance_if_due<2>(RunState<2>&, SlabPartition<2>&, const Comm&, double, Index&,

@@ -84,10 +84,10 @@ void remove_ghosts(RunState<Dim>& sim);
 template <int Dim>
 void localize_tractions(RunState<Dim>& sim);
 
-// The particles of each process and max / mean - 1 (0 without particles). Collective.
+// max / mean - 1 of the particles per process (0 without particles), and in `most` the most
+// particles of one process. Collective (two reductions, not a gather of every count).
 template <int Dim>
-double imbalance(const RunState<Dim>& sim, const Comm& comm,
-                 std::vector<Index>* per_rank = nullptr);
+double imbalance(const RunState<Dim>& sim, const Comm& comm, Index* most = nullptr);
 
 // Load balance (parallel.rebalance): when the imbalance exceeds `threshold` (> 0), cuts the
 // slabs anew from the particles' current layers (SlabPartition::balanced) and migrates the
