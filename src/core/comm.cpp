@@ -245,7 +245,7 @@ std::vector<double> Comm::allgather(std::span<const double> mine) const {
 }
 
 std::vector<std::vector<std::byte>> Comm::gather(const std::vector<std::byte>& mine,
-                                                 int root) const {
+                                                 [[maybe_unused]] int root) const {
   std::vector<std::vector<std::byte>> out;
   if (!distributed()) {
     out.push_back(mine);
@@ -322,9 +322,9 @@ std::vector<std::vector<std::byte>> Comm::alltoall(
   return recv;
 }
 
-std::vector<std::vector<std::byte>> Comm::exchange(const std::vector<int>& peers,
-                                                   const std::vector<std::vector<std::byte>>& send,
-                                                   [[maybe_unused]] int tag) const {
+std::vector<std::vector<std::byte>> Comm::exchange(
+    const std::vector<int>& peers, [[maybe_unused]] const std::vector<std::vector<std::byte>>& send,
+    [[maybe_unused]] int tag) const {
   std::vector<std::vector<std::byte>> recv(peers.size());
   if (peers.empty()) return recv;
 #ifdef MPM_HAVE_MPI
