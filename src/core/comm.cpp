@@ -17,8 +17,8 @@ namespace mpm {
 namespace {
 
 Comm g_world;
-bool g_mpi_running = false;
 #ifdef MPM_HAVE_MPI
+bool g_mpi_running = false;
 // A duplicate of the world communicator for the reductions' point-to-point messages
 // (tree_reduce), so that they can never match a message of an exchange.
 MPI_Comm g_reduce = MPI_COMM_NULL;
