@@ -3352,18 +3352,19 @@ hook, not in the code) the smallest eigenvalue of the consistent matrix scaled b
 L^(-1/2) M L^(-1/2), stayed between 9.0e-3 and 9.3e-3 up to the stop, so the matrix does not
 approach singularity; {switch_text}. In a modified build (not in the code: in
 `TlsMapping::map_mass`, `map_momentum` or `map_forces` the Gauss-point assembly replaced by
-`DirectMapping`'s sum over the particles, one at a time, the fits kept), TLS's grid sums were
-swapped for the direct mapping's one at a time on this run (dt = 1e-4 s, P = 1e4 Pa): with the
-direct forces it stops at t = 0.6344 s, with the direct mass matrix at 0.6111 s, and with TLS's
-momentum alone (direct mass and forces) at 0.7995 s; with the direct momentum (TLS's mass and
-forces) it reaches T, but with a stress error of 5.68e4 Pa, 5.7 times the load, and 5 of the 8
-column runs of the tables above stop. So the growth needs neither TLS's force integral nor its
-mass matrix: TLS's momentum fit (D eq. 5.14) projected by a consistent matrix, M v = q, is
-enough. Not shown: the mechanism. A candidate: with a consistent matrix v = M^-1 q is a
-projection of the particles' velocities only for the direct sums (q and M from the same
-particle quadrature); from a fitted momentum density it is not, and a velocity field it
-amplifies feeds the strain rate, and so the stress, at every step: a negative damping, whose
-rate would not depend on dt."""
+`DirectMapping`'s sum over the particles, the fits kept), TLS's grid sums were swapped for the
+direct mapping's on this run (dt = 1e-4 s, P = 1e4 Pa): with the direct forces it stops at
+t = 0.6344 s, with the direct mass matrix at 0.6111 s, with TLS's momentum alone (direct mass and
+forces) at 0.7995 s, and with TLS's forces alone (direct mass and momentum: the consistent
+projection of the direct mapping) at 0.9179 s, its loaded face leaving the grid; with the direct
+momentum (TLS's mass and forces) it reaches T with a stress error of 5.68e4 Pa, 5.7 times the
+load. On the 8 column runs of the tables above, TLS's forces alone stop 7 (two of them at step 5)
+and the direct momentum 5. So no one of TLS's three sums is the cause: each, with a consistent
+B2 matrix, can make these runs grow. Not shown: the mechanism. What the failing runs share is
+the consistent B2 matrix, whose highest modes are far lighter than the lumped matrix's (its
+smallest eigenvalue scaled by the row sums, 9e-3, above), combined with a grid sum that is not
+the particles' quadrature of the same equations; with lumped mass, or with P1's consistent
+matrix, the TLS run of this case finishes."""
 
 
 VORTEX_METHODS = ("linear/direct, bspline2/direct, bspline3/direct, cpdi2/direct, linear/tls, "
