@@ -3028,16 +3028,15 @@ def sec_ps_partial(R, ctx):
     # What stops B2-TLS with consistent mass (issue 22 item 1): the pressure case with the top row
     # full, every step in history.csv, at three time steps and three loads; lumped mass to 3 s;
     # P1-TLS with consistent mass.
-    tls_cons = ["method.basis=bspline", "method.mapping=tls", "method.mass=consistent"]
-    probe = common[:-2] + ["method.degree=2", "output.history_every=1"] + pressure + [
+    tls_cons = method_keys("bspline_tls", "consistent")
+    probe = ["particles.per_cell=4", "method.degree=2", "output.history_every=1"] + pressure + [
         "body.max=[0.2, 1.0]", "constants.H=1.0"]
     probes = [(("probe", "dt", dt), probe + tls_cons + [f"time.dt={dt}"])
               for dt in ("1e-4", "5e-5", "2.5e-5")]
     probes += [(("probe", "P", P), probe + tls_cons + ["time.dt=1e-4", f"constants.P={P}"])
                for P in ("1.5e4", "2e4")]
-    probes += [(("probe", "lumped"), probe + ["method.basis=bspline", "method.mapping=tls",
-                                             "method.mass=lumped", "time.dt=1e-4",
-                                             "time.end=3"]),
+    probes += [(("probe", "lumped"), probe + method_keys("bspline_tls", "lumped")
+                + ["time.dt=1e-4", "time.end=3"]),
                (("probe", "p1"), probe + ["method.basis=linear", "method.mapping=tls",
                                          "method.mass=consistent", "time.dt=1e-4"])]
     # One TLS setting or the scheme changed at a time.
@@ -3297,17 +3296,12 @@ def tls_consistent_probe(res):
     dts = ("1e-4", "5e-5", "2.5e-5")
     loads = (("1e4", res[("probe", "dt", "1e-4")]), ("1.5e4", res[("probe", "P", "1.5e4")]),
              ("2e4", res[("probe", "P", "2e4")]))
+    runs = [(f"dt = {dt} s, P = 1e4 Pa", res[("probe", "dt", dt)]) for dt in dts] + [
+        (f"dt = 1e-4 s, P = {P} Pa", r) for P, r in loads[1:]]
     rows = []
-    for dt in dts:
-        r = res[("probe", "dt", dt)]
+    for label, r in runs:
         g = kinetic_growth(r)
-        rows.append(f"| dt = {dt} s, P = 1e4 Pa | "
-                    + ("runs to T | | |" if r.get("status") == "ok" else
-                       f"{fail_time(r.get('failure'))} s | "
-                       + (f"{g[0]:.4g} s | {g[1]:.0f} |" if g else "not measured | |")))
-    for P, r in loads[1:]:
-        g = kinetic_growth(r)
-        rows.append(f"| dt = 1e-4 s, P = {P} Pa | "
+        rows.append(f"| {label} | "
                     + ("runs to T | | |" if r.get("status") == "ok" else
                        f"{fail_time(r.get('failure'))} s | "
                        + (f"{g[0]:.4g} s | {g[1]:.0f} |" if g else "not measured | |")))

@@ -176,13 +176,13 @@ void Comm::tree_reduce([[maybe_unused]] std::span<double> v, [[maybe_unused]] bo
               "MPI_Recv");
     return;
   }
+  std::vector<double> mine(v.size());
   if (rank_ < extra) {
     check_mpi(MPI_Recv(other.data(), n, MPI_DOUBLE, rank_ + P, 0, g_reduce, MPI_STATUS_IGNORE),
               "MPI_Recv");
-    const std::vector<double> mine(v.begin(), v.end());
+    std::copy(v.begin(), v.end(), mine.begin());
     combine(mine.data(), other.data());
   }
-  std::vector<double> mine(v.size());
   for (int k = 1; k < P; k *= 2) {
     const int partner = rank_ ^ k;
     std::copy(v.begin(), v.end(), mine.begin());
