@@ -787,8 +787,20 @@ class TlsMapping {
     std::vector<std::size_t> start;  // element e: entries start[e] .. start[e + 1]
     std::vector<Index> point;        // particle
     std::vector<double> fraction;    // of the particle's domain in e (sum over e: 1)
-    std::vector<std::pair<Index, std::pair<Index, double>>> scratch;  // (e, (p, overlap))
-    std::vector<std::size_t> next;  // fill cursors of the counting sort
+    std::vector<std::size_t> next;   // fill cursors of the counting sort
+    // What one chunk of the binned particles (ParticleChunks over bins.order) splits: its
+    // entries in bin order, the elements [lo, hi] they fall in, and per element of that band
+    // first its entry count, then the chunk's first slot in the sorted arrays.
+    struct Entry {
+      Index element, point;
+      double fraction;
+    };
+    struct Chunk {
+      std::vector<Entry> entries;
+      Index lo = 0, hi = -1;
+      std::vector<std::size_t> slot;
+    };
+    std::array<Chunk, ParticleChunks::kMax> chunks;
   } split_;
   TlsReport totals_;
 };

@@ -94,8 +94,12 @@ void TlsMapping::apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficient
 // overlap; overlap with inactive elements (no particle centre: no reconstruction) is given to
 // the active ones, so each particle's fractions sum to one and sum_e c_e = sum_p value_p. A box
 // that is empty or not finite (F_dd <= 0) leaves the whole value in the particle's own element,
-// as D's sum does. Serial, in element-then-bin order, then sorted by element (stable): the same
-// entries and order for any thread count.
+// as D's sum does. The entries are then sorted by element, stably: in each element they follow
+// the particles' bin order. The overlaps are computed in parallel over fixed chunks of the
+// binned particles (each chunk's entries in bin order), the counting sort places each chunk's
+// entries after those of the chunks before it: the same entries and order for any thread count,
+// and serial work only per element of each chunk's band (issue 22 item 5: the serial split was
+// 10 % of a one-thread TLS step).
 template <int Dim>
 void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstruction<Dim>& recon) {
   if (!settings_.domain_integrals) return;
@@ -103,19 +107,28 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
   const auto& g = recon.grid();
   const Index ne = recon.num_elements();
   const auto& bins = recon.bins();
-  auto& list = split_.scratch;
-  list.clear();
-  list.reserve(bins.order.size() * (std::size_t{1} << Dim));
+  const auto binned = static_cast<Index>(bins.order.size());
+  const int nc = ParticleChunks::count(binned);
   Vec<Dim> inv_h;
   for (int d = 0; d < Dim; ++d) inv_h[d] = 1.0 / g.h[d];
-  for (Index e = 0; e < ne; ++e)
-    for (const Index* it = bins.begin(e); it != bins.end(e); ++it) {
-      const auto p = static_cast<std::size_t>(*it);
+  for_each_chunk(binned, [&](int c, Index first_k, Index end_k) {
+    auto& ch = split_.chunks[static_cast<std::size_t>(c)];
+    auto& list = ch.entries;
+    list.clear();
+    // The element holding bin position first_k: the last e with start[e] <= first_k (empty
+    // elements before it share its start).
+    Index e = static_cast<Index>(std::upper_bound(bins.start.begin(), bins.start.end(), first_k) -
+                                 bins.start.begin()) -
+              1;
+    for (Index k = first_k; k < end_k; ++k) {
+      while (bins.start[static_cast<std::size_t>(e + 1)] <= k) ++e;
+      const Index pi = bins.order[static_cast<std::size_t>(k)];
+      const auto p = static_cast<std::size_t>(pi);
       std::array<double, Dim> lo{}, hi{};
       IVec<Dim> c0{}, c1{};
       bool box = true;
       for (int d = 0; d < Dim; ++d) {
-        const double r = 0.5 * cpgimp_side(g, P, *it, d) * inv_h[d];  // half side in cells
+        const double r = 0.5 * cpgimp_side(g, P, pi, d) * inv_h[d];  // half side in cells
         const double s = (P.x[p][d] - g.origin[d]) * inv_h[d];
         const auto n = static_cast<double>(g.cells[d]);
         box = box && r > 0.0 && std::isfinite(r) && std::isfinite(s);
@@ -125,50 +138,78 @@ void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstru
         // floor and ceil of these non-negative values by conversion (the library calls were a
         // tenth of this function).
         const auto fl = static_cast<Index>(lo[d]), fh = static_cast<Index>(hi[d]);
-        const Index ch = static_cast<double>(fh) == hi[d] ? fh : fh + 1;
+        const Index cu = static_cast<double>(fh) == hi[d] ? fh : fh + 1;
         c0[d] = std::clamp(fl, Index{0}, g.cells[d] - 1);
-        c1[d] = std::clamp(ch - 1, c0[d], g.cells[d] - 1);
+        c1[d] = std::clamp(cu - 1, c0[d], g.cells[d] - 1);
       }
       const std::size_t first = list.size();
       double total = 0.0;
       if (box) {
-        IVec<Dim> c = c0;
+        IVec<Dim> cell = c0;
         while (true) {
           double overlap = 1.0;
           for (int d = 0; d < Dim; ++d)
-            overlap *= std::max(0.0, std::min(hi[d], static_cast<double>(c[d] + 1)) -
-                                         std::max(lo[d], static_cast<double>(c[d])));
-          const Index n = g.cell_index(c);
+            overlap *= std::max(0.0, std::min(hi[d], static_cast<double>(cell[d] + 1)) -
+                                         std::max(lo[d], static_cast<double>(cell[d])));
+          const Index n = g.cell_index(cell);
           if (overlap > 0.0 && recon.active(n)) {
-            list.push_back({n, {*it, overlap}});
+            list.push_back({n, pi, overlap});
             total += overlap;
           }
           int d = 0;
-          while (d < Dim && c[d] == c1[d]) c[d] = c0[d], ++d;
+          while (d < Dim && cell[d] == c1[d]) cell[d] = c0[d], ++d;
           if (d == Dim) break;
-          ++c[d];
+          ++cell[d];
         }
       }
       if (!(total > 0.0)) {
         list.resize(first);
-        list.push_back({e, {*it, 1.0}});
+        list.push_back({e, pi, 1.0});
         total = 1.0;
       }
-      for (std::size_t k = first; k < list.size(); ++k) list[k].second.second /= total;
+      for (std::size_t j = first; j < list.size(); ++j) list[j].fraction /= total;
     }
+    // The chunk's band of elements and its entries per element of the band.
+    ch.lo = ne;
+    ch.hi = -1;
+    for (const auto& t : list) {
+      ch.lo = std::min(ch.lo, t.element);
+      ch.hi = std::max(ch.hi, t.element);
+    }
+    ch.slot.assign(ch.lo <= ch.hi ? static_cast<std::size_t>(ch.hi - ch.lo + 1) : 0, 0);
+    for (const auto& t : list) ++ch.slot[static_cast<std::size_t>(t.element - ch.lo)];
+  });
+  // Serial, per element of each band: the totals per element, then each chunk's first slot in
+  // an element after the entries of the chunks before it.
   auto& start = split_.start;
   start.assign(static_cast<std::size_t>(ne) + 1, 0);
-  for (const auto& t : list) ++start[static_cast<std::size_t>(t.first) + 1];
-  for (std::size_t e = 0; e < static_cast<std::size_t>(ne); ++e) start[e + 1] += start[e];
-  split_.point.resize(list.size());
-  split_.fraction.resize(list.size());
+  for (int c = 0; c < nc; ++c) {
+    const auto& ch = split_.chunks[static_cast<std::size_t>(c)];
+    for (Index n = ch.lo; n <= ch.hi; ++n)
+      start[static_cast<std::size_t>(n) + 1] += ch.slot[static_cast<std::size_t>(n - ch.lo)];
+  }
+  for (std::size_t n = 0; n < static_cast<std::size_t>(ne); ++n) start[n + 1] += start[n];
   auto& next = split_.next;
   next.assign(start.begin(), start.end() - 1);
-  for (const auto& t : list) {
-    const std::size_t k = next[static_cast<std::size_t>(t.first)]++;
-    split_.point[k] = t.second.first;
-    split_.fraction[k] = t.second.second;
+  for (int c = 0; c < nc; ++c) {
+    auto& ch = split_.chunks[static_cast<std::size_t>(c)];
+    for (Index n = ch.lo; n <= ch.hi; ++n) {
+      auto& s = ch.slot[static_cast<std::size_t>(n - ch.lo)];
+      const std::size_t count = s;
+      s = next[static_cast<std::size_t>(n)];
+      next[static_cast<std::size_t>(n)] += count;
+    }
   }
+  split_.point.resize(start.back());
+  split_.fraction.resize(start.back());
+  for_each_chunk(binned, [&](int c, Index, Index) {
+    auto& ch = split_.chunks[static_cast<std::size_t>(c)];
+    for (const auto& t : ch.entries) {
+      const std::size_t k = ch.slot[static_cast<std::size_t>(t.element - ch.lo)]++;
+      split_.point[k] = t.point;
+      split_.fraction[k] = t.fraction;
+    }
+  });
 }
 
 template <int Dim>
