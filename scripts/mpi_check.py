@@ -118,9 +118,12 @@ CASES = [
     ("2d_plate_consistent_cg", "examples/plate_mms_2d.toml",
      ["grid.cells=8", "time.end=2e-3", "method.mass=consistent", "method.mass_solver=cg",
       "method.mass_solver_tolerance=1e-14", "output.frames=1"], "none"),
+    # B2-TLS with consistent mass is refused unless asked for (issue 22 item 1: it flutters under
+    # load); these 200 steps are far too short for that, and the check is of TLS with CG.
     ("2d_plate_tls_consistent_cg", "examples/plate_mms_2d.toml",
      ["grid.cells=8", "time.end=2e-3", "method.mapping=tls", "method.mass=consistent",
-      "method.mass_solver=cg", "method.mass_solver_tolerance=1e-14", "output.frames=1"], "none"),
+      "method.allow_unstable=true", "method.mass_solver=cg", "method.mass_solver_tolerance=1e-14",
+      "output.frames=1"], "none"),
     # Partial lumping (method.partial_lumping): the covers of the DOFs at the cuts summed over
     # the processes; the column with a fifth-filled top row, whose consistent matrix is singular
     # without it (CG to 1e-15: to 1e-14 its nearly singular rows left 3e-11 of the tiny

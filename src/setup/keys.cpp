@@ -171,6 +171,11 @@ std::vector<KeySpec> declare() {
            "consistent mass: the DOFs whose functions reach an element (grid cell, or triangle of "
            "a basis on triangles) whose particles fill less than this fraction of its volume get "
            "lumped rows and columns (D 7.2); 0: none"),
+      // Issue 22 item 1: B-spline TLS with consistent mass flutters under load
+      // (docs/verification.md, "PS-MPM with partially filled elements").
+      boolean("method.allow_unstable", false,
+              "run B-spline TLS (degree >= 2) with consistent mass in 2D and 3D, refused otherwise "
+              "as unstable under load (docs/verification.md)"),
       choice("method.mass_solver", "direct", kMassSolvers,
              "solver of the consistent mass matrix (method.mass = \"consistent\")"),
       real("method.mass_solver_tolerance", "", 1e-12, open(0, 1e-2),

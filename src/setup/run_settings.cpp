@@ -236,6 +236,22 @@ RunSettings run_settings(const Config& cfg, int dim) {
       }
     }
     *tls = TlsMapping(ts, dim);
+    // Issue 22 item 1: under a constant load, B-spline TLS with consistent mass grows an
+    // oscillation among the highest modes of the consistent matrix, at loads that fall with the
+    // cell size; lumped mass, P1-TLS and the direct mapping stay neutral (docs/verification.md,
+    // "PS-MPM with partially filled elements": the growing mode).
+    const int degree = basis_degree_of(m.basis);
+    if (!triangles && dim >= 2 && degree >= 2 && m.mass == MassType::Consistent &&
+        !cfg.get_bool("method.allow_unstable"))
+      throw InputError(fmt::format(
+          "{}: method.mass = \"consistent\" with method.mapping = \"tls\" and B-splines of "
+          "degree {} is refused in {}D: under a constant load it grows an oscillation among the "
+          "highest modes of the consistent matrix (TLS's operator is not symmetric), at loads "
+          "that fall with the cell size (measured in 2D; docs/verification.md, \"PS-MPM with "
+          "partially filled elements\"). Choose method.mass = \"lumped\", or method.basis = "
+          "\"linear\" (P1-TLS; with method.partial_lumping = 0.5 where cells are partly "
+          "filled), or set method.allow_unstable = true to run it anyway",
+          m.where_mass, degree, dim));
   }
   if (m.solver == Solver::Otm) {
     // OTM's update x_p = sum phi_i x_i needs consistent bases (D eq. 4.14-4.16), and it

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/examples.hpp"
 #include "driver/run.hpp"
 #include "mapping/tls.hpp"
 #include "setup/config.hpp"
@@ -162,6 +163,37 @@ TEST(TlsRobust, RectangleMeasuresAreRefusedOnTriangles) {
       EXPECT_NE(std::string(e.what()).find("grid's cells"), std::string::npos) << e.what();
     }
   }
+}
+
+// B-spline TLS (degree >= 2) with consistent mass flutters under load (docs/verification.md,
+// "PS-MPM with partially filled elements": the growing mode), so in 2D and 3D it is refused
+// before the run, naming the key and the choices; method.allow_unstable runs it, and P1-TLS with
+// consistent mass and 1D BSMPM-TLS with consistent mass (D ch. 5) are not refused.
+TEST(TlsRobust, BSplineTlsWithConsistentMassIsRefusedIn2DAnd3D) {
+  const std::vector<std::string> tls{"method.mapping=tls", "method.mass=consistent"};
+  for (const auto& [example, degree] :
+       {std::pair<std::string, int>{"plate_mms_2d", 2}, {"plate_mms_2d", 3}, {"cube_mms_3d", 2}}) {
+    std::vector<std::string> sets = tls;
+    sets.push_back("method.degree=" + std::to_string(degree));
+    try {
+      (void)test::run_example(example, sets);
+      ADD_FAILURE() << example << ", degree " << degree << ": no input error";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("is refused in"), std::string::npos) << what;
+      EXPECT_NE(what.find("method.allow_unstable = true"), std::string::npos) << what;
+      EXPECT_NE(what.find("method.mass = \"lumped\""), std::string::npos) << what;
+      EXPECT_NE(what.find("method.basis = \"linear\""), std::string::npos) << what;
+    }
+  }
+  const auto short_run = [&](const std::string& example, std::vector<std::string> extra) {
+    std::vector<std::string> sets = tls;
+    sets.insert(sets.end(), extra.begin(), extra.end());
+    return test::run_example_ok(example, sets);
+  };
+  short_run("plate_mms_2d", {"time.end=5e-5", "method.allow_unstable=true"});
+  short_run("plate_mms_2d", {"time.end=5e-5", "method.basis=linear"});
+  short_run("vibrating_bar_small", {"time.end=1e-5", "method.basis=bspline", "method.degree=2"});
 }
 
 }  // namespace
