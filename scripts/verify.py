@@ -2703,8 +2703,15 @@ at t = 0.087 s. A halved time step does not help (earlier runs), so this is not 
 instability. IMLS (003) breaks down earlier still. We conclude that 001's MLS-BSMPM, as
 specified, is not stable at A = 0.1 m on these grids in our implementation; 001 reports no
 mass errors, and its figures may rest on details the paper does not give (its own reading of
-eq. 16, a wider particle seeding, or a smaller effective amplitude). Open: the BSMPM breakdown
-on 64 cells. Why TLS stops: the next section.
+eq. 16, a wider particle seeding, or a smaller effective amplitude).
+
+Open: the BSMPM breakdown on 64 cells. In a rerun of the study (2026-11-29, the same step and
+message as above) the kinetic energy of B2 direct at quarter periods (where the exact one is
+zero; next section), divided by the exact largest, grows steadily from 4.4e-3 to 7.8e-2 up to
+t = 0.075 s, jumps to 0.96 by t = 0.085 s and reaches 3.8-16 until the stop, whose message names
+two particles at x_1 = 1.00002 and 1.00045 m, past the roller at x_1 = 1 m: a sudden event at
+the boundary, unlike the steady growth of TLS on every grid (next section); its cause is not
+traced. Why TLS stops: the next section.
 """
 
 
