@@ -35,6 +35,12 @@ struct BenchResult {
   int threads = 0;  // OpenMP threads used
   double best_ns_per_particle_step = 0.0;
   double median_ns_per_particle_step = 0.0;
+  // The same over the steps after the first (steps >= 2; 0 otherwise), and the first step's wall
+  // time per particle, median over the repeats [ns]: the first step allocates and first touches
+  // the step's arrays, which a run of thousands of steps pays once.
+  double best_ns_after_first = 0.0;
+  double median_ns_after_first = 0.0;
+  double median_ns_first_step = 0.0;
   double bytes_per_particle = 0.0;  // particle state + cached stencil + grid share
   // Re-sorting (scheme/sort.hpp): sorts per run, mean wall time of one [ns per particle], and
   // its buffers [bytes per particle] (order, inverse, scratch of the largest field, cursors per

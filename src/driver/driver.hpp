@@ -179,7 +179,9 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
     while (step < ts.steps) {
       const auto t0 = Clock::now();
       advance(step);
-      step_seconds += seconds_since(t0);
+      const double seconds = seconds_since(t0);
+      step_seconds += seconds;
+      if (step == start) res.first_step_seconds = seconds;
       ++step;
       after();
       const bool last = step == ts.steps;

@@ -83,6 +83,10 @@ struct RunResult {
   Index steps = 0;
   double wall_seconds = 0.0;
   double ns_per_particle_step = 0.0;
+  // Wall time of the first step the run took [s], part of ns_per_particle_step: it allocates and
+  // first touches the step's arrays (a TLS first step costs about five later ones, BENCHMARKS.md),
+  // so `mpm bench` reports the steps after it separately.
+  double first_step_seconds = 0.0;
   Index sorts = 0;            // re-sorts by cell over the run (scheme/sort.hpp; MPM only)
   double sort_seconds = 0.0;  // their wall time, part of ns_per_particle_step [s]
   ErrorNorms errors;

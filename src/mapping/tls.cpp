@@ -100,6 +100,22 @@ void spd_inverse(const In& A, int first, int n, Out& inv) {
       n, [&]<int N>(std::integral_constant<int, N>) { spd_inverse_n<N>(A, first, inv); });
 }
 
+// ||M^4||_F for the symmetric n x n block M of A at rows and columns first..first + n - 1, by
+// two squarings of a block of n fixed at compile time (infinite or NaN when an entry is not
+// finite).
+template <class M>
+double frobenius_fourth_power(const M& A, int first, int n) {
+  double r = 0.0;
+  with_size<M::RowsAtCompileTime>(n, [&]<int N>(std::integral_constant<int, N>) {
+    if constexpr (N > 0) {
+      const Eigen::Matrix<double, N, N> b = A.template block<N, N>(first, first);
+      const Eigen::Matrix<double, N, N> b2 = b * b;
+      r = (b2 * b2).norm();
+    }
+  });
+  return r;
+}
+
 // max_i sum_j |A_ij| over the n x n block at first..first + n - 1; infinite when an entry is
 // not finite (an inverse whose pivot was not positive).
 template <class M>
@@ -444,6 +460,21 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
       }
       return bound;
     }
+    // A lower bound that already exceeds the limit fails the test without the eigenvalues (in
+    // deformed layouts most eigenvalue solves were of elements far above the limit: Eigen's
+    // solver took a third of a TLS step at A = 0.1 on the plate). For symmetric positive definite
+    // M with eigenvalues mu_i, sum mu_i^8 = ||M^4||_F^2, so lambda_max(M) >= (||M^4||_F^2 /
+    // n)^(1/8) and cond(S) = lambda_max(S) lambda_max(S^{-1}) >= (||S^4||_F ||S^{-4}||_F)^(1/4) /
+    // n^(1/4). Only where rounding cannot reach the limit (the margin, as above; a failed or
+    // non-finite inverse goes to the eigenvalues). The value returned then is this bound, not
+    // cond(S): the elements it rejects are reported only through their completion (fitted elements
+    // report the condition of the system they keep; `none` recomputes it for its message).
+    if (settings_.max_condition <= 1e10) {
+      const double lower = std::sqrt(std::sqrt(frobenius_fourth_power(S, first, n) *
+                                               frobenius_fourth_power(inv, 0, n))) /
+                           std::sqrt(std::sqrt(static_cast<double>(n)));
+      if (std::isfinite(lower) && lower * (1.0 - 1e-4) > settings_.max_condition) return lower;
+    }
   }
   return condition_number(S, first, t);
 }
@@ -707,7 +738,10 @@ void BasicTlsReconstruction<Dim>::build_systems() {
       switch (settings_.completion) {
         case TlsCompletion::None:
           info.failed = true;
-          info.condition = o.condition;
+          // The value for the failure's message: pass 1's may be a lower bound (condition()).
+          info.condition =
+              condition_number(Matrix(scales().asDiagonal() * D * scales().asDiagonal()),
+                               settings_.conservative_only ? 1 : 0, nb);
           return;
         case TlsCompletion::Reduce:
           break;
@@ -728,8 +762,12 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     // points keeps D, so its pass-1 condition number stands (the same eigenvalues, not recomputed).
     int t = nb;
     double cond = o.condition;
-    if (!o.ok)
+    if (!o.ok) {
+      // With no completion point added (`reduce`, or none found) D is pass 1's, which already
+      // failed with n_b terms: the same test again would only repeat its eigenvalues.
+      if (sys.end - sys.begin == info.points) t = fewer_terms(t, Dim);
       while (!well_posed(D, distinct, t, cond) && t > 1) t = fewer_terms(t, Dim);
+    }
     sys.terms = t;
     // An element well posed from its own points has D = o.D and t = n_b: its inverse from the
     // condition bound serves.

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
 
 #include <sstream>
 #include <string>
@@ -645,9 +646,23 @@ TEST(Cli, StudyPlotsConvergence) {
 TEST(Cli, BenchRunsAShortCaseIn1D2DAnd3D) {
   // The regression guard of the benchmark suite: the bench command builds and runs one short
   // case per dimension and reports its figures (the timings themselves are not checked).
-  auto one = sh("bench --particles 2000 --steps 2 --repeats 1 --threads 1");
+  auto one = sh("bench --particles 2000 --steps 4 --repeats 1 --threads 1");
   ASSERT_EQ(one.code, 0) << one.out;
   EXPECT_NE(one.out.find("ns per particle-step"), std::string::npos) << one.out;
+  // The first step and the steps after it split the time of every step: with one repeat, all =
+  // (first + 3 after) / 4, to the printed two decimals.
+  std::smatch all, split;
+  ASSERT_TRUE(std::regex_search(one.out, all, std::regex(R"(([0-9.]+) ns per particle-step)")))
+      << one.out;
+  ASSERT_TRUE(std::regex_search(
+      one.out, split,
+      std::regex(R"(the first step ([0-9.]+) ns per particle \(median\); the steps after it )"
+                 R"(([0-9.]+) ns per particle-step)")))
+      << one.out;
+  const double t_all = std::stod(all[1]), t_first = std::stod(split[1]),
+               t_after = std::stod(split[2]);
+  EXPECT_GT(t_first, 0.0);
+  EXPECT_NEAR(t_all, (t_first + 3.0 * t_after) / 4.0, 0.02) << one.out;
   auto two =
       sh("bench --dim 2 --particles 2000 --steps 2 --repeats 1 --threads 2 --basis bspline "
          "--degree 2");
