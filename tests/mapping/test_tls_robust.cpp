@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -65,6 +66,54 @@ TEST(TlsRobust, CrowdedPointsReduceUnderTheLimit) {
   s.max_condition = 1e8;
   TlsReconstruction2D loose(s);
   EXPECT_EQ(loose.set_points(unit_cells(1, 1), std::span<const Vec<2>>(x)).full, 1);
+}
+
+// The bounds that spare the eigenvalues (TlsSettings::exact_condition = false: an upper bound
+// accepts, a lower bound from ||S^4||_F ||S^-4||_F rejects) decide every element as the
+// eigenvalues do: random layouts of 1-14 points per element, uniform, squeezed towards a line
+// or a corner (the deformed layouts where most fits fail the limit), limits 3, 10 and 100, with
+// `reduce` (terms kept) and `none` (failures, and the first failure's condition, exact).
+TEST(TlsRobust, ConditionBoundsDecideAsTheEigenvaluesDo) {
+  const int n = 12;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec<2>> x;
+  for (int e = 0; e < n * n; ++e) {
+    const int cx = e % n, cy = e / n, kind = e % 3;
+    const int count = 1 + static_cast<int>(u(rng) * 14.0);
+    for (int k = 0; k < count; ++k) {
+      double a = u(rng), b = u(rng);
+      if (kind == 1) b = 0.5 + 0.08 * (b - 0.5);  // near the line y = const
+      if (kind == 2) {                            // in a corner
+        a *= 0.3;
+        b *= 0.3;
+      }
+      x.push_back({(cx + 0.02 + 0.96 * a) / n, (cy + 0.02 + 0.96 * b) / n});
+    }
+  }
+  int reduced = 0;
+  for (const double limit : {3.0, 10.0, 100.0}) {
+    for (const TlsCompletion completion : {TlsCompletion::Reduce, TlsCompletion::None}) {
+      TlsSettings s;
+      s.completion = completion;
+      s.max_condition = limit;
+      s.exact_condition = true;
+      TlsReconstruction2D exact(s);
+      const TlsReport re = exact.set_points(unit_cells(n, n), std::span<const Vec<2>>(x));
+      s.exact_condition = false;
+      TlsReconstruction2D bounded(s);
+      const TlsReport rb = bounded.set_points(unit_cells(n, n), std::span<const Vec<2>>(x));
+      for (Index e = 0; e < n * n; ++e) {
+        EXPECT_EQ(exact.element(e).terms, bounded.element(e).terms) << e << " limit " << limit;
+        EXPECT_EQ(exact.element(e).failed, bounded.element(e).failed) << e << " limit " << limit;
+      }
+      EXPECT_EQ(re.reduced, rb.reduced);
+      EXPECT_EQ(re.failed, rb.failed);
+      EXPECT_EQ(re.failed_condition, rb.failed_condition);
+      reduced += re.reduced;
+    }
+  }
+  EXPECT_GT(reduced, n * n / 2);  // the layouts put many elements above the limits
 }
 
 // fit_mixed: the conservative fit where flagged (its integral reproduced exactly), the plain fit
