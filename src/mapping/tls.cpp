@@ -544,6 +544,13 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
   const IVec<Dim> c = cell(e);
   int taken = 0;
   double cond = 0.0;
+  // Whether D as it stands is known to fail the test: pass 1's D did, and so does D until a point
+  // is added (the test repeated on the same D would only repeat its eigenvalues).
+  bool known_failed = true;
+  auto failing = [&] {
+    if (!known_failed) known_failed = !well_posed(D, distinct, nb, cond);
+    return known_failed;
+  };
   for (int corners = 0; corners < Dim; ++corners) {
     // The neighbours of this round: those 1 + corners steps away (across a face, an edge, a
     // corner), in the order of the offsets (x fastest).
@@ -563,7 +570,7 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
     }
     double last_d = -1.0;
     Index last_key = -1;
-    while (taken < max_taken && !well_posed(D, distinct, nb, cond)) {
+    while (taken < max_taken && failing()) {
       double best_d = kInf;
       Index best_p = -1, best_key = -1;
       for (int k = 0; k < count; ++k) {
@@ -598,6 +605,7 @@ void BasicTlsReconstruction<Dim>::borrow_points(Index e, System& sys, Matrix& D,
       const Vec<Dim> s = local(e, x_[static_cast<std::size_t>(best_p)]);
       if (coincides(sys, s)) continue;
       add_datum(sys, D, s, best_p);
+      known_failed = false;
       ++distinct;
       ++taken;
       ++info_[static_cast<std::size_t>(e)].borrowed;
