@@ -101,9 +101,9 @@ void spd_inverse(const In& A, int first, int n, Out& inv) {
 }
 
 // ||M^4||_F for the symmetric n x n block M of A at rows and columns first..first + n - 1, by
-// two squarings (infinite or NaN when an entry is not finite). A block of run-time size: one of
-// compile-time size per n (with_size) made the A = 0.1 plate run at most 3 % faster and this
-// unit 13 s slower to compile in CI (BENCHMARKS.md).
+// two squarings (infinite or NaN when an entry is not finite). A block of run-time size: blocks
+// of compile-time size per n (with_size) made the A = 0.1 plate run at most 3 % faster and this
+// unit 2-5 s slower to compile (BENCHMARKS.md).
 template <class M>
 double frobenius_fourth_power(const M& A, int first, int n) {
   using Block = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, M::RowsAtCompileTime,
