@@ -16,6 +16,8 @@ checks:
   * under mpirun -n 1 (the quick cases) the answers of the run without mpirun;
   * particles moved between processes (summary.json "mpi"), in both directions where the case
     says so, and the slabs were cut anew where it says so (parallel.rebalance).
+The runs of each process count are made in one start of mpm (`mpm run --batch`, one mpirun),
+the repeats in another; the restart and failure checks start mpm for each run.
 Each frame of a distributed run is a .pvtu over one VTU piece per process, whose particles are
 those of the CSV frame. A run on 2 processes shortened and restarted from its checkpoint on 2 processes ends in the same
 bytes as the whole run, and restarted on 4 or 1 in the same answers to 1e-12.
@@ -221,6 +223,74 @@ def mpm_cmd(mpm, ranks, config, sets, out):
     return ["mpirun", "-n", str(ranks), "--oversubscribe"] + cmd
 
 
+def counts(name, ranks):
+    # The process counts a case runs on: those of --ranks (one process under mpirun, the
+    # launcher's path rather than a distributed run, for the quick cases only) and 3 for THREE.
+    ns = ranks + ([3] if name in THREE and 3 not in ranks else [])
+    return [n for n in ns if n > 1 or name in QUICK]
+
+
+def repeated(name, n, ranks):
+    # Whether the run on n processes is made a second time, for the same bytes.
+    return n > 1 and ((n == max(ranks) and name in AGAIN) or (n == 3 and name in THREE))
+
+
+class Made:
+    def __init__(self, returncode, stderr):
+        self.returncode, self.stderr = returncode, stderr
+
+
+# The runs of the cases, made before they are compared: all those of one process count (and
+# tag: the repeats apart) in one start of mpm (`mpm run --batch`, under one mpirun). Each start
+# of 4 processes costs about 0.5 s here (Open MPI's start-up and MPI_Init, most of a short
+# case's run), each of 2 about 0.3 s; the check made about 90 of them. MADE maps a run's output
+# directory to its exit code, read from the batch's status lines.
+MADE = {}
+BATCH_LINE = re.compile(r"^mpm: batch run (\d+) of (\d+) .*: (ok|exit code (\d+))$")
+
+
+def make_batch(mpm, n, runs, path):
+    with open(path, "w") as f:
+        for config, sets, out in runs:
+            f.write("[[run]]\n")
+            f.write(f"config = {json.dumps(config)}\nout = {json.dumps(out)}\n")
+            f.write("set = [" + ", ".join(json.dumps(x) for x in sets) + "]\n\n")
+    cmd = [mpm, "run", "--batch", path, "--quiet"]
+    if n is not None:
+        cmd = ["mpirun", "-n", str(n), "--oversubscribe"] + cmd
+    try:
+        r = run(cmd, timeout=120 + 30 * len(runs))
+        out, err = r.stdout, r.stderr
+    except subprocess.TimeoutExpired as e:
+        out, err = (e.stdout or b"").decode(), f"the batch ran past its time: {e}"
+    codes = {}
+    for line in out.splitlines():
+        m = BATCH_LINE.match(line)
+        if m:
+            codes[int(m.group(1)) - 1] = 0 if m.group(3) == "ok" else int(m.group(4))
+    for k, (_, _, d) in enumerate(runs):
+        # A run the batch did not reach (an abort ended it) counts as failed, with its stderr.
+        MADE[d] = Made(codes.get(k, -1), err)
+
+
+def make_runs(mpm, cases, ranks, tmp):
+    batches = {}
+    for name, config, sets, _ in cases:
+        batches.setdefault((None, ""), []).append((config, sets, os.path.join(tmp, name + "_serial")))
+        for n in counts(name, ranks):
+            d = os.path.join(tmp, f"{name}_n{n}")
+            batches.setdefault((n, ""), []).append((config, sets, d))
+            if repeated(name, n, ranks):
+                batches.setdefault((n, "again"), []).append((config, sets, d + "_again"))
+    for k, ((n, tag), runs) in enumerate(batches.items()):
+        make_batch(mpm, n, runs, os.path.join(tmp, f"batch{k}_{n}{tag}.toml"))
+
+
+def made(mpm, n, config, sets, out):
+    # A run of make_runs, else made now.
+    return MADE.pop(out, None) or run(mpm_cmd(mpm, n, config, sets, out))
+
+
 def read_csv(path):
     with open(path) as f:
         rows = list(csv.reader(f))
@@ -312,20 +382,16 @@ def check_pieces(what, d, frame_csv, failures):
 
 def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
     serial = os.path.join(tmp, name + "_serial")
-    r = run(mpm_cmd(mpm, None, config, sets, serial))
+    r = made(mpm, None, config, sets, serial)
     if r.returncode != 0:
         failures.append(f"{name}: the one-process run failed ({r.returncode}): {r.stderr.strip()}")
         return
     ref_summary = json.load(open(os.path.join(serial, "summary.json")))
     frames = outputs(serial)
     report = []
-    for n in ranks + ([3] if name in THREE and 3 not in ranks else []):
-        # One process under mpirun (the launcher's path, not a distributed run) for the quick
-        # cases only.
-        if n == 1 and name not in QUICK:
-            continue
+    for n in counts(name, ranks):
         d = os.path.join(tmp, f"{name}_n{n}")
-        r = run(mpm_cmd(mpm, n, config, sets, d))
+        r = made(mpm, n, config, sets, d)
         if r.returncode != 0:
             failures.append(f"{name}: mpirun -n {n} failed ({r.returncode}): {r.stderr.strip()}")
             continue
@@ -384,10 +450,10 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
                 failures.append(f"{name} -n 2: particles moved one way only ({sent})")
             moved = (f", particles sent per process {sent}, final cuts {mpi.get('cuts')}, "
                      f"{mpi.get('rebalances')} re-cuts")
-        if n > 1 and ((n == max(ranks) and name in AGAIN) or (n == 3 and name in THREE)):
-            # The same rank count again: the same bytes.
+        if repeated(name, n, ranks):
+            # The same rank count again (another start of the program): the same bytes.
             d2 = d + "_again"
-            r = run(mpm_cmd(mpm, n, config, sets, d2))
+            r = made(mpm, n, config, sets, d2)
             for f in frames + ["history.csv"]:
                 if r.returncode != 0 or open(os.path.join(d, f), "rb").read() != open(
                         os.path.join(d2, f), "rb").read():
@@ -516,10 +582,10 @@ def main():
         return 1
     ranks = [int(x) for x in a.ranks.split(",")]
     failures = []
+    cases = [c for c in CASES if not (a.quick and c[0] not in QUICK) and a.case in c[0]]
     with tempfile.TemporaryDirectory() as tmp:
-        for name, config, sets, both in CASES:
-            if (a.quick and name not in QUICK) or a.case not in name:
-                continue
+        make_runs(os.path.abspath(a.mpm), cases, ranks, tmp)
+        for name, config, sets, both in cases:
             check_case(os.path.abspath(a.mpm), name, config, sets, both, ranks, tmp, failures)
         if not a.case:
             for case in RESTARTS:

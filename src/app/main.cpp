@@ -251,6 +251,50 @@ void report_error(const std::string& text, bool all_ranks) {
   }
 }
 
+// mpm run --batch FILE (setup/config.hpp, read_batch): the runs in order, each as `mpm run`
+// would make it. A run that fails or is refused does not stop the others (its message names
+// the run's table); an interrupted one (SIGINT, SIGTERM) ends the batch. Under mpirun every
+// process makes every run: an error every process meets (input, a failed run) moves them all
+// to the next run together.
+int cmd_batch(const std::string& file, bool quiet, bool overwrite, int threads) {
+  const std::vector<mpm::BatchRun> runs = mpm::read_batch(file);
+  const mpm::Comm& comm = mpm::Comm::world();
+  int first = 0;
+  std::size_t failed = 0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const mpm::BatchRun& r = runs[k];
+    int rc = 0;
+    try {
+      rc = cmd_run(r.config, r.sets, r.out, quiet, "", overwrite, threads);
+    } catch (const mpm::InputError& e) {
+      report_error(fmt::format("mpm: error: {} (the run of {})", e.what(), r.where), true);
+      rc = mpm::exit_code::kInput;
+    } catch (const mpm::RunError& e) {
+      report_error(fmt::format("mpm: error: {} (the run of {})", e.what(), r.where), true);
+      rc = e.exit_code();
+    }
+    if (comm.root())
+      std::cout << fmt::format("mpm: batch run {} of {} ({}, out {}): {}\n", k + 1, runs.size(),
+                               r.config, r.out, rc == 0 ? "ok" : fmt::format("exit code {}", rc))
+                << std::flush;
+    if (rc != 0) {
+      ++failed;
+      if (first == 0) first = rc;
+    }
+    if (rc == mpm::exit_code::kInterrupted) {
+      if (comm.root())
+        std::cout << fmt::format("mpm: batch interrupted; runs {} to {} not made\n", k + 2,
+                                 runs.size());
+      return rc;
+    }
+  }
+  if (comm.root())
+    std::cout << fmt::format(
+        "mpm: batch of {} runs: {}\n", runs.size(),
+        failed == 0 ? std::string("all ok") : fmt::format("{} failed", failed));
+  return first;
+}
+
 int run_main(int argc, char** argv) {
   CLI::App app{"mpmlab: material point methods, verified side by side"};
   app.set_version_flag("--version", fmt::format("mpm (mpmlab) {}", mpm::kVersion));
@@ -279,6 +323,11 @@ int run_main(int argc, char** argv) {
   run->add_flag("--overwrite", overwrite,
                 "replace the files of an earlier run in the output directory (otherwise the run "
                 "is refused)");
+  std::string batch;
+  run->add_option("--batch", batch,
+                  "run the [[run]] tables of a TOML file (config, out, set) one after another in "
+                  "this start of the program (one mpirun for many runs); the exit code is the "
+                  "first non-zero one of its runs");
 
   auto* study = app.add_subcommand("study", "run a refinement series and print observed orders");
   study->add_option("config", config, "TOML configuration file")->required();
@@ -489,6 +538,14 @@ int run_main(int argc, char** argv) {
           "only `mpm run` runs on several processes (this is `mpm {}` under mpirun with {} "
           "processes); start it without mpirun",
           app.get_subcommands().front()->get_name(), mpm::Comm::world().size()));
+    if (*run && !batch.empty()) {
+      if (!config.empty() || !restart.empty() || !sets.empty() || !out.empty())
+        throw mpm::InputError(
+            "mpm run --batch FILE takes each run's configuration, --set overrides and output "
+            "directory from FILE ([[run]] tables with config, set and out); leave out CONFIG, "
+            "--restart, --set and --out");
+      return cmd_batch(batch, quiet, overwrite, threads);
+    }
     if (*run) return cmd_run(config, sets, out, quiet, restart, overwrite, threads);
     if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot, overwrite);
     if (*bench) return cmd_bench(bopt);

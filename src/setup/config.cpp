@@ -1053,4 +1053,72 @@ std::string Config::to_toml() const {
   return os.str();
 }
 
+std::vector<BatchRun> read_batch(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError("cannot open batch file '" + path + "': it is a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("cannot open batch file '" + path + "'");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError("cannot read batch file '" + path + "'");
+  check_nesting(text.str(), path);
+  toml::table root;
+  try {
+    root = toml::parse(text.str(), path);
+  } catch (const toml::parse_error& e) {
+    throw InputError(location(path, e.source()) +
+                     ": TOML syntax error: " + std::string(e.description()));
+  }
+  constexpr std::string_view kForm =
+      "a batch file holds one [[run]] table per run, with config = \"FILE\", out = \"DIR\" "
+      "and optionally set = [\"section.key=value\", ...]";
+  for (auto&& [key, node] : root)
+    if (key.str() != "run" || !node.is_array_of_tables())
+      throw InputError(fmt::format("{}: '{}' is not a [[run]] table; {}",
+                                   location(path, key.source()), key.str(), kForm));
+  const toml::array* tables = root["run"].as_array();
+  if (tables == nullptr || tables->empty())
+    throw InputError(fmt::format("{}: no [[run]] table; {}", path, kForm));
+  std::vector<BatchRun> runs;
+  std::map<std::filesystem::path, std::size_t> outs;  // normalised out -> index in runs
+  for (const toml::node& item : *tables) {
+    const toml::table& t = *item.as_table();
+    BatchRun r;
+    r.where = location(path, t.source());
+    for (auto&& [key, node] : t) {
+      const std::string at = location(path, key.source());
+      if (key.str() == "config" || key.str() == "out") {
+        const auto* v = node.as_string();
+        if (v == nullptr || v->get().empty())
+          throw InputError(
+              fmt::format("{}: {} must be a non-empty string (a {})", at, key.str(),
+                          key.str() == "config" ? "configuration file" : "output directory"));
+        (key.str() == "config" ? r.config : r.out) = v->get();
+      } else if (key.str() == "set") {
+        const auto* a = node.as_array();
+        if (a == nullptr || !a->is_homogeneous(toml::node_type::string))
+          throw InputError(fmt::format(
+              "{}: set must be an array of strings \"section.key=value\" (as --set)", at));
+        for (const toml::node& v : *a) r.sets.push_back(v.as_string()->get());
+      } else {
+        throw InputError(fmt::format(
+            "{}: unknown key '{}' in [[run]]; valid keys: config, out, set", at, key.str()));
+      }
+    }
+    if (r.config.empty() || r.out.empty())
+      throw InputError(fmt::format("{}: this [[run]] has no {}; {}", r.where,
+                                   r.config.empty() ? "config" : "out", kForm));
+    // "runs/a", "runs/a/" and "./runs/a" are one directory.
+    auto key = std::filesystem::absolute(r.out, ec).lexically_normal();
+    if (!key.has_filename()) key = key.parent_path();
+    if (const auto [it, fresh] = outs.emplace(key, runs.size()); !fresh)
+      throw InputError(
+          fmt::format("{}: run {} writes to '{}', as run {} does ({}); give each run its own out",
+                      r.where, runs.size() + 1, r.out, it->second + 1, runs[it->second].where));
+    runs.push_back(std::move(r));
+  }
+  return runs;
+}
+
 }  // namespace mpm

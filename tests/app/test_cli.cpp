@@ -443,6 +443,56 @@ TEST(Cli, SigtermEndsTheRunWithAnInterruptedSummary) {
 // A rerun into a directory holding an earlier run (issue 16, 3: its frames beyond the new run's
 // last and its summary stayed beside the new files) is refused; with --overwrite the earlier
 // run's files go before the first write, and files that are not a run's stay.
+// `mpm run --batch FILE`: the runs of the file one after another in one start of the program
+// (one mpirun for many runs; scripts/mpi_check.py). Each run writes the bytes it writes alone; a
+// refused run in the middle does not stop the next, and the exit code is the first failure's.
+TEST(Cli, BatchRunsEachAsAloneAndGoesOnPastAFailure) {
+  const auto dir = temp_dir("batch");
+  std::filesystem::create_directories(dir);
+  const std::string cfg = src("examples/vibrating_bar_small.toml");
+  const std::string sets = "set = [\"output.vtk=false\"";
+  std::ofstream(dir / "b.toml") << "[[run]]\nconfig = \"" << cfg << "\"\nout = \""
+                                << (dir / "a").string() << "\"\n"
+                                << sets << "]\n"
+                                << "[[run]]\nconfig = \"" << cfg << "\"\nout = \""
+                                << (dir / "bad").string() << "\"\n"
+                                << sets << ", \"method.scheme=usx\"]\n"
+                                << "[[run]]\nconfig = \"" << cfg << "\"\nout = \""
+                                << (dir / "c").string() << "\"\n"
+                                << sets << ", \"method.basis=bspline\"]\n";
+  const auto b = sh("run --batch " + (dir / "b.toml").string() + " --quiet");
+  EXPECT_EQ(b.code, 2) << b.out;
+  EXPECT_NE(b.out.find("batch run 1 of 3"), std::string::npos) << b.out;
+  EXPECT_NE(b.out.find("method.scheme"), std::string::npos) << b.out;
+  EXPECT_NE(b.out.find(fmt::format("(the run of {}:5:1)", (dir / "b.toml").string())),
+            std::string::npos)
+      << b.out;
+  EXPECT_NE(b.out.find("batch run 2 of 3"), std::string::npos);
+  EXPECT_NE(b.out.find("): exit code 2"), std::string::npos);
+  EXPECT_NE(b.out.find("batch of 3 runs: 1 failed"), std::string::npos);
+  auto bytes = [](const std::filesystem::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  for (const auto& [name, extra] :
+       {std::pair{"a", ""}, std::pair{"c", " --set method.basis=bspline"}}) {
+    const auto alone = dir / (std::string(name) + "_alone");
+    const auto r =
+        sh("run " + cfg + " -q --out " + alone.string() + " --set output.vtk=false" + extra);
+    ASSERT_EQ(r.code, 0) << r.out;
+    const std::string hist = bytes(dir / name / "history.csv");
+    EXPECT_GT(hist.size(), 100u) << name;
+    EXPECT_EQ(hist, bytes(alone / "history.csv")) << name;
+    EXPECT_EQ(bytes(dir / name / fmt_frame(4)), bytes(alone / fmt_frame(4))) << name;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad" / "history.csv"));
+  // With CONFIG, --set or --out as well: refused, saying where those come from.
+  const auto mixed = sh("run " + cfg + " --batch " + (dir / "b.toml").string());
+  EXPECT_EQ(mixed.code, 2);
+  EXPECT_NE(mixed.out.find("takes each run's configuration"), std::string::npos) << mixed.out;
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, RerunIntoAnEarlierRunIsRefusedOrReplaces) {
   const auto out = temp_dir("rerun");
   const std::string run = "run " + src("examples/vibrating_bar_small.toml") + " -q --out " +

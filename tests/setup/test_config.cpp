@@ -596,6 +596,60 @@ TEST(Config, ToTomlWithStringsThatNeedEscaping) {
   EXPECT_EQ(d.get_string("initial.stress"), "1 + 0*x");
 }
 
+// `mpm run --batch FILE` (read_batch): the runs in file order with their overrides; every
+// mistake in the file named by file, line and column with what would be valid, before any run.
+std::string batch_error(const std::string& text) {
+  const std::string path = ::testing::TempDir() + "mpm_batch_test.toml";
+  std::ofstream(path) << text;
+  try {
+    read_batch(path);
+  } catch (const InputError& e) {
+    std::string m = e.what();
+    for (auto at = m.find(path); at != std::string::npos; at = m.find(path))
+      m.replace(at, path.size(), "b.toml");
+    return m;
+  }
+  ADD_FAILURE() << "expected an InputError for:\n" << text;
+  return "";
+}
+
+TEST(Batch, RunsInFileOrderWithTheirOverrides) {
+  const std::string path = ::testing::TempDir() + "mpm_batch_ok.toml";
+  std::ofstream(path) << "# two runs\n[[run]]\nconfig = \"a.toml\"\nout = \"runs/a\"\n"
+                         "set = [\"grid.cells=8\", 'traction.right=[\"0\", \"1e3*t\"]']\n\n"
+                         "[[run]]\nconfig = \"a.toml\"\nout = \"runs/b\"\n";
+  const auto runs = read_batch(path);
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(runs[0].config, "a.toml");
+  EXPECT_EQ(runs[0].out, "runs/a");
+  EXPECT_EQ(runs[0].sets,
+            (std::vector<std::string>{"grid.cells=8", "traction.right=[\"0\", \"1e3*t\"]"}));
+  EXPECT_TRUE(runs[1].sets.empty());
+  EXPECT_EQ(runs[1].where, path + ":7:1");  // its [[run]] header
+}
+
+TEST(Batch, MistakesNameFileLineAndWhatIsValid) {
+  EXPECT_EQ(batch_error("[[run]]\nconfig = \"a.toml\"\nout = \"x\"\nsets = [\"a=1\"]\n"),
+            "b.toml:4:1: unknown key 'sets' in [[run]]; valid keys: config, out, set");
+  EXPECT_NE(batch_error("x = 1\n").find("b.toml:1:1: 'x' is not a [[run]] table; a batch file "
+                                        "holds one [[run]] table per run"),
+            std::string::npos);
+  EXPECT_NE(
+      batch_error("[[run]]\nconfig = \"a.toml\"\n").find("b.toml:1:1: this [[run]] has no out"),
+      std::string::npos);
+  EXPECT_EQ(batch_error("[[run]]\nconfig = \"a.toml\"\nout = \"x\"\nset = [1]\n"),
+            "b.toml:4:1: set must be an array of strings \"section.key=value\" (as --set)");
+  EXPECT_EQ(batch_error("[[run]]\nconfig = 3\nout = \"x\"\n"),
+            "b.toml:2:1: config must be a non-empty string (a configuration file)");
+  // "runs/a", "./runs/a/" are one directory: the second run would replace the first's files.
+  EXPECT_EQ(batch_error("[[run]]\nconfig = \"a.toml\"\nout = \"runs/a\"\n[[run]]\nconfig = "
+                        "\"b.toml\"\nout = \"./runs/a/\"\n"),
+            "b.toml:4:1: run 2 writes to './runs/a/', as run 1 does (b.toml:1:1); give each run "
+            "its own out");
+  EXPECT_NE(batch_error("# nothing\n").find("b.toml: no [[run]] table"), std::string::npos);
+  EXPECT_NE(batch_error("[[run]\n").find("b.toml:1:"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace MPM_UNITY_ID
 }  // namespace mpm
