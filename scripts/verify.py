@@ -4411,7 +4411,7 @@ def sec_001(R, ctx):
                               "--dilation", a], check=True, capture_output=True, text=True)
         tables.append(res.stdout.strip())
     return (STATIC_LONG.replace("{mls_static}", "\n\n".join(tables)).rstrip() + "\n\n"
-            + a_growth(R))
+            + a_growth(R) + "\n" + a_stiffness(R, A_OBSERVED["B2"]))
 
 
 # The runs of a_growth: (label, settings) per basis, on top of the plate at A = 0.1 m, 16 cells,
@@ -4431,6 +4431,7 @@ A_GROWTH = [("direct", ["method.mapping=direct"]),
 # Quarter periods of the manufactured solution (omega = 100 pi, period 0.02 s), where its
 # velocity and so its kinetic energy are zero: the kinetic energy of a run there is error.
 A_QUARTERS = (0.005, 0.045, 0.085, 0.125, 0.165)
+A_OBSERVED = {}  # set by a_growth: B2-TLS's growth factor per period
 
 
 def quarter_energies(r):
@@ -4513,6 +4514,9 @@ def a_growth(R):
         f"{max(res[k]['errors']['stress_rms'] for k in b2_fin) / b2_direct_sigma:.1f} times "
         "B2 direct's: they finish because T comes first" if b2_fin else "none reaches T")
     p1_fin = fin("P1")
+    # B2-TLS's (2D defaults) growth factor of the error's energy per period over the first two
+    # periods, for the next subsection (a_stiffness).
+    A_OBSERVED["B2"] = per_period(q[("B2", "TLS, 2D defaults")], False)
     dt_t = {b: fail_time(res[(b, "TLS, dt / 2")].get("failure")) for b in ("B2", "P1")}
     def_t = {b: fail_time(res[(b, "TLS, 2D defaults")].get("failure")) for b in ("B2", "P1")}
     const_t = [fail_time(res[(b, "TLS, constant fits")].get("failure")) for b in ("B2", "P1")]
@@ -4557,13 +4561,124 @@ What the table shows:
 So the target of issue 22 at A = 0.1 (a reconstruction that finishes every run) is not reached
 by TLS under any of its settings; the growth comes from what TLS changes against the direct
 mapping (the particle-to-grid fits and their integration over the elements), the one
-difference of each pair of runs. Which term makes it grow is not shown. The same signature
-(growth under load at a rate independent of the time step) is what B2-TLS with consistent mass
-shows on the column (section "PS-MPM with partially filled elements"), where the growing mode
-oscillates, so TLS's linearized operator is not symmetric there; here the growth was not
-decomposed into modes. A run that grows this way cannot be refused from its input (its
+difference of each pair of runs; the next subsection finds, for B2, the term that makes it
+grow. The same signature (growth under load at a rate independent of the time step) is what
+B2-TLS with consistent mass shows on the column (section "PS-MPM with partially filled
+elements"), where the growing mode oscillates. A run that grows this way cannot be refused from its input (its
 particles, grid and settings are those of the small-amplitude plate, which converges); it
 stops at the first non-finite stress with the step and the particles named.
+"""
+
+
+# The layouts of the 16-cell plate at A = 0.1 analysed by `mpm stiffness`: the runs of
+# a_growth (B2, MUSL, direct and TLS) stopped at a quarter period (t = 0.005 s, the particles at
+# their farthest) and at three instants of zero exact displacement.
+A_LAYOUTS = (0.005, 0.05, 0.1, 0.15)
+
+
+def stiffness_rows(R, checkpoint, sets):
+    """`mpm stiffness --layout-only` on a checkpoint: {(force, mass): (growth, asymmetry)}."""
+    cmd = [R.mpm, "stiffness", os.path.join(EX, "plate_mms_2d.toml"), "--checkpoint", checkpoint,
+           "--layout-only"]
+    for x in ["grid.cells=16", "method.mapping=tls"] + sets:
+        cmd += ["--set", x]
+    res = subprocess.run(cmd, capture_output=True, text=True, env=R.env)
+    rows = {}
+    for line in res.stdout.splitlines():
+        f = line.split()
+        if len(f) >= 8 and f[0] in ("direct", "tls") and f[1] in ("direct", "tls"):
+            rows[(f[0], f[1])] = (float(f[3]), float(f[7]))
+    return rows
+
+
+def a_stiffness(R, factor):
+    """Where the growth of B2-TLS at A = 0.1 comes from: the linearised operator of the direct
+    mapping and of TLS on the layouts of the runs (mpm stiffness, app/stiffness.hpp)."""
+    base = ["grid.cells=16", "method.basis=bspline", "method.degree=2"]
+    specs, keys = [], []
+    for m in ("direct", "tls"):
+        for t in A_LAYOUTS:
+            steps = round(t / 1e-5)
+            specs.append(("plate_mms_2d", base + [f"method.mapping={m}", f"time.end={t}",
+                                                  f"output.checkpoint_every={steps}"], 1,
+                          f"a01_layout_{m}_{t}"))
+            keys.append((m, t))
+    runs = dict(zip(keys, R.many(specs)))
+    b2 = ["method.basis=bspline", "method.degree=2"]
+    res = {k: (stiffness_rows(R, os.path.join(r["_dir"], "checkpoint.bin"), b2),
+               stiffness_rows(R, os.path.join(r["_dir"], "checkpoint.bin"),
+                              ["method.basis=linear"]))
+           for k, r in runs.items()}
+    lines = ["| layout: run, t | B2, direct force | B2-TLS force, TLS mass | B2-TLS force, direct "
+             "mass | B2-TLS: asymmetry | P1, direct force | P1-TLS | P1-TLS: asymmetry |",
+             "|---|---|---|---|---|---|---|---|"]
+    for (m, t), (bb, pp) in res.items():
+        cell = lambda rows, k: f"{rows[k][0]:.3g}" if k in rows else "n/a"
+        asym = lambda rows: f"{rows[('tls', 'tls')][1]:.2g}" if ("tls", "tls") in rows else "n/a"
+        lines.append(f"| {m}, {t:g} s{' (quarter period)' if t == 0.005 else ''} | "
+                     f"{cell(bb, ('direct', 'direct'))} | {cell(bb, ('tls', 'tls'))} | "
+                     f"{cell(bb, ('tls', 'direct'))} | {asym(bb)} | "
+                     f"{cell(pp, ('direct', 'direct'))} | {cell(pp, ('tls', 'tls'))} | {asym(pp)} |")
+    ok = [v for v in res.values() if ("tls", "tls") in v[0] and ("tls", "tls") in v[1]]
+    direct_max = max(max(v[0][("direct", "direct")][0], v[0][("direct", "tls")][0],
+                         v[1][("direct", "direct")][0]) for v in ok) if ok else None
+    tls_b2 = [v[0][("tls", "tls")][0] for v in ok]
+    p1_max = max(v[1][("tls", "tls")][0] for v in ok) if ok else None
+    p1_asym = max(v[1][("tls", "tls")][1] for v in ok) if ok else None
+    quarter = res.get(("tls", A_LAYOUTS[0]), ({}, {}))[0]
+    q_tls = quarter.get(("tls", "tls"), (math.nan,))[0]
+    q_direct = quarter.get(("tls", "direct"), (math.nan,))[0]
+    # The observed growth rate of B2-TLS (defaults): the energy factor per period over the first
+    # two periods, gamma = ln(factor) / (2 period).
+    return f"""#### Where B2-TLS's growth comes from: its force is not the adjoint of the strain rate
+
+`mpm stiffness` (app/stiffness.hpp) linearises the step's grid operator on a frozen layout: a
+grid velocity v gives each particle the velocity gradient at its position, its law the stress
+rate, the mapping the grid force, so that v'' = K v; a mode exp(lambda t) has lambda^2 an
+eigenvalue of K, and a lambda with a positive real part grows whatever the time step. The
+direct mapping's force, -B^T W sigma (B: the gradients at the particles, W: their volumes), is
+the adjoint of the particles' strain rate B v, so that on an unstressed layout M K is symmetric
+and every lambda imaginary; TLS integrates its fitted stress R sigma against the gradients at
+its Gauss points, -B_g^T W_g R sigma, which is not. The analysis leaves out what moves with the
+particles (positions, volumes, the gradients at them), which the stress of a deformed state
+multiplies, so it is made with the layouts unstressed (`--layout-only`: sigma = 0, F = I): the
+layout alone acts. The layouts are those of the runs above (B2, MUSL, direct and TLS, 16
+cells) stopped at a quarter period, where the particles are at their farthest, and at three
+instants of zero exact displacement; the columns are the largest Re lambda [1/s] of each
+operator and the relative asymmetry ||S - S^T|| / ||S|| of TLS's force matrix S = df/dv.
+
+{chr(10).join(lines)}
+
+- **The direct mapping's operator is neutral on every layout** (largest Re lambda
+  {e(direct_max) if direct_max is not None else "n/a"} 1/s, round-off), with its own lumped mass or TLS's: a
+  lumped mass alone makes no mode grow.
+- **B2-TLS's force has growing modes on every layout that is not the initial one**: from
+  {min(tls_b2):.3g} to {max(tls_b2):.3g} 1/s, the largest on the stretched layout of the quarter
+  period, and larger on the layouts of the TLS run (whose particles have drifted further from
+  the exact motion) than on the direct run's; with TLS's own lumped mass larger than with the
+  direct mapping's on the quarter-period layouts ({q_tls:.3g} and {q_direct:.3g} 1/s on the TLS run's).
+  B2-TLS's error energy grows by a factor of {factor:.2f} per period over its first two periods
+  (table above), a rate gamma = ln({factor:.2f}) / (2 x 0.02 s) = {math.log(factor) / 0.04:.1f}
+  1/s (energy grows as exp(2 gamma t)): between the rates of the layouts of zero displacement
+  and those of the quarter periods, through both of which the particles pass twice a period.
+  The analysis does not average over the cycle, so the match is one of size, not a prediction.
+  On the uniform initial layout the operator is neutral (`tests/app/test_stiffness.cpp`), and
+  the small-amplitude runs of the plate converge.
+- **P1-TLS's operator is symmetric on every layout** (asymmetry at most {e(p1_asym) if p1_asym is not None else "n/a"}, largest Re
+  lambda {e(p1_max) if p1_max is not None else "n/a"} 1/s): with P1 the gradients are constant in a cell, so the integral
+  of the fitted stress against them is a weighted sum of the particles' stresses against the
+  same gradients, the adjoint of the strain rate again. P1-TLS's faster breakdown above therefore
+  has another cause, not found here.
+
+So B2-TLS's linearised operator grows where the direct mapping's is neutral, and it does so
+through its force, the integral of the fitted stress against the gradients at the Gauss points
+(its lumped mass alone, with the direct force, is neutral; the momentum fit is not part of
+this operator); it grows whatever the time step, as the runs above do. A TLS whose particle strain
+rate were the adjoint of its force (the transpose of the stress fit applied to the gradients
+at the Gauss points) would be neutral on these layouts, but that rate is not consistent for a
+uniform velocity gradient where the fit's effective weights differ from the particle volumes,
+and it was not tried. `tests/app/test_stiffness.cpp` checks the neutral and the growing cases on
+the 4-cell plate.
 """
 
 

@@ -1,5 +1,5 @@
 // mpm: the mpmlab command line. Subcommands: run, study, bench, reconstruct, massmatrix, mesh,
-// verify, keys, list.
+// stiffness, verify, keys, list.
 #include <fmt/format.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,6 +15,7 @@
 #include "app/mesh_info.hpp"
 #include "app/perf.hpp"
 #include "app/reconstruct.hpp"
+#include "app/stiffness.hpp"
 #include "app/study.hpp"
 #include "core/comm.hpp"
 #include "core/interrupt.hpp"
@@ -498,6 +499,24 @@ int run_main(int argc, char** argv) {
   std::string mesh_file, mesh_vtu, mesh_pattern = "right";
   std::vector<double> mesh_box;
   std::vector<mpm::Index> mesh_cells;
+  mpm::StiffnessOptions sopt;
+  auto* stiff = app.add_subcommand(
+      "stiffness",
+      "eigenvalues of a mapping's linearised grid operator on a frozen particle layout (2D): "
+      "growing modes of the force against the strain rate");
+  stiff->add_option("config", sopt.config, "TOML configuration file (2D, on the grid)")->required();
+  stiff->add_option("--set", sopt.sets, "override a key: section.key=value (repeatable)");
+  stiff->add_option("--checkpoint", sopt.checkpoint,
+                    "the particles of a run's checkpoint.bin (default: the initial layout)");
+  stiff->add_flag("--layout-only", sopt.layout_only,
+                  "zero stress and F = I: only the particle layout acts (the operator leaves out "
+                  "the geometric stiffness of a stressed state)");
+  stiff
+      ->add_option("--period", sopt.period,
+                   "also print the energy factor exp(2 Re(lambda) period) of the fastest mode "
+                   "[s]")
+      ->check(CLI::PositiveNumber);
+
   auto* mesh = app.add_subcommand(
       "mesh",
       "read a Gmsh mesh (or generate a triangulation) and print its vertices, triangles, "
@@ -559,6 +578,10 @@ int run_main(int argc, char** argv) {
       const auto rows = mpm::massmatrix_study(mopt);
       mpm::print_massmatrix(std::cout, mopt, rows);
       if (!mopt.csv.empty()) mpm::write_massmatrix_csv(mopt.csv, rows);
+      return 0;
+    }
+    if (*stiff) {
+      mpm::print_stiffness(std::cout, sopt, mpm::stiffness_spectrum(sopt));
       return 0;
     }
     if (*mesh) {

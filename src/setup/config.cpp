@@ -836,17 +836,23 @@ class ConfigBuilder {
   std::map<std::string, Order> positions_;
 };
 
-Config Config::load(const std::string& path, const std::vector<std::string>& overrides) {
+namespace {
+// The bytes of a file the user named; `what` ("config", "batch") names it in the messages.
+std::string read_input_file(const std::string& path, std::string_view what) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw InputError("cannot open config file '" + path + "': it is a directory");
-  }
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(fmt::format("cannot open {} file '{}': it is a directory", what, path));
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot open config file '" + path + "'");
+  if (!in) throw InputError(fmt::format("cannot open {} file '{}'", what, path));
   std::ostringstream text;
   text << in.rdbuf();
-  if (in.bad()) throw InputError("cannot read config file '" + path + "'");
-  return parse(text.str(), path, overrides);
+  if (in.bad()) throw InputError(fmt::format("cannot read {} file '{}'", what, path));
+  return text.str();
+}
+}  // namespace
+
+Config Config::load(const std::string& path, const std::vector<std::string>& overrides) {
+  return parse(read_input_file(path, "config"), path, overrides);
 }
 
 Config Config::parse(std::string_view toml_text, const std::string& source_name,
@@ -1054,18 +1060,12 @@ std::string Config::to_toml() const {
 }
 
 std::vector<BatchRun> read_batch(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError("cannot open batch file '" + path + "': it is a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot open batch file '" + path + "'");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError("cannot read batch file '" + path + "'");
-  check_nesting(text.str(), path);
+  const std::string text = read_input_file(path, "batch");
+  check_nesting(text, path);
   toml::table root;
+  std::error_code ec;
   try {
-    root = toml::parse(text.str(), path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     throw InputError(location(path, e.source()) +
                      ": TOML syntax error: " + std::string(e.description()));
