@@ -549,13 +549,16 @@ def check_failure(mpm, tmp, failures):
     lines = [l for l in r.stderr.splitlines() if "error" in l]
     if r.returncode != 2 or len(lines) != 1 or "only `mpm run`" not in lines[0]:
         failures.append(f"mpm bench under mpirun: exit {r.returncode}, stderr {r.stderr!r}")
-    # Not distributed (TLS on triangles) or not distributable (Gauss-Seidel sweeps through
-    # the whole grid): refused before the first step, naming the key.
+    # Not distributed (TLS on triangles, TLS's adjoint strain rate) or not distributable
+    # (Gauss-Seidel sweeps through the whole grid): refused before the first step, naming the key.
     for k, (config, sets, expect) in enumerate([
             ("examples/plate_tls_triangles_2d.toml", ["time.end=2.5e-4"], "p1_triangles basis"),
             ("examples/plate_mms_2d.toml",
              ["time.end=1e-4", "method.mass=consistent", "method.mass_solver=pmg"],
-             "method.pmg_smoother")]):
+             "method.pmg_smoother"),
+            ("examples/plate_mms_2d.toml",
+             ["time.end=1e-4", "method.mapping=tls", "method.tls_strain_rate=adjoint"],
+             "method.tls_strain_rate")]):
         d = os.path.join(tmp, f"refused{k}")
         r = run(mpm_cmd(mpm, 2, config, sets, d))
         lines = [l for l in r.stderr.splitlines() if "error" in l]

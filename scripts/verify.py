@@ -4428,7 +4428,9 @@ A_GROWTH = [("direct", ["method.mapping=direct"]),
             ("TLS, linear fits", ["method.mapping=tls", "method.tls_terms=3"]),
             ("TLS, constant fits", ["method.mapping=tls", "method.tls_terms=1"]),
             ("TLS, USL", ["method.mapping=tls", "method.scheme=usl"]),
-            ("TLS, dt / 2", ["method.mapping=tls", "time.dt=5e-6"])]
+            ("TLS, dt / 2", ["method.mapping=tls", "time.dt=5e-6"]),
+            # Not a setting of the TLS above: the strain rate changed (a_adjoint).
+            ("TLS, adjoint strain rate", ["method.mapping=tls", "method.tls_strain_rate=adjoint"])]
 # Quarter periods of the manufactured solution (omega = 100 pi, period 0.02 s), where its
 # velocity and so its kinetic energy are zero: the kinetic energy of a run there is error.
 A_QUARTERS = (0.005, 0.045, 0.085, 0.125, 0.165)
@@ -4488,7 +4490,12 @@ def a_growth(R):
         lines.append(f"| {basis} | {label} | {result} | "
                      + " | ".join(e(q[t]) if t in q else "" for t in A_QUARTERS)
                      + f" | {o(per_period(q, False))} | {o(per_period(q, True))} |")
-    tls = [(k, r) for k, r in res.items() if k[1] != "direct"]
+    tls = [(k, r) for k, r in res.items() if k[1] != "direct" and "adjoint" not in k[1]]
+    adj = {b: res[(b, "TLS, adjoint strain rate")] for b in ("B2", "P1")}
+    adj_text = {b: (f"finishes (sigma RMS {e(r['errors'].get('stress_rms'))} Pa)"
+                    if r.get("status") == "ok" else f"stops at t = {fail_time(r.get('failure'))} s")
+                for b, r in adj.items()}
+    adj_q = {b: quarter_energies(r) for b, r in adj.items()}
     tls_ok = [k for k, r in tls if r.get("status") == "ok"]
     q = {k: quarter_energies(r) for k, r in res.items()}
 
@@ -4550,13 +4557,17 @@ What the table shows:
 - **P1-TLS** starts {q[("P1", "direct")][0.005] / q[("P1", "TLS, 2D defaults")][0.005]:.0f}x more
   accurate than P1 direct (the error's energy at the first quarter period) and then grows
   faster and faster (a factor {factors("P1", True)} per period over its last two periods) until
-  it stops, under every setting ({len(p1_fin)} of 11 reach T).
+  it stops, under every setting ({len(p1_fin)} of {len([k for k, _ in tls if k[0] == "P1"])} reach T).
 - Neither the completion, the condition limit, the positivity limiter, the element integrals,
   the Gauss points, linear instead of quadratic fits nor the update scheme removes the growth;
   constant fits (one term, the element means) stop within two periods (t = {const_t[0]} and
   {const_t[1]} s).
 - **The time step is not the cause**: with dt halved the runs stop at t = {dt_t["B2"]} s (B2)
   and {dt_t["P1"]} s (P1) against {def_t["B2"]} s and {def_t["P1"]} s.
+- The last row of each basis changes what the settings do not, the particles' strain rate
+  (`method.tls_strain_rate = "adjoint"`, the subsection after next): B2 {adj_text["B2"]}, its
+  error's energy growing by a factor of {o(per_period(adj_q["B2"], False))} and then
+  {o(per_period(adj_q["B2"], True))} per period; P1 {adj_text["P1"]}.
 
 So the target of issue 22 at A = 0.1 (a reconstruction that finishes every run) is not reached
 by TLS under any of its settings; the growth comes from what TLS changes against the direct
@@ -4612,22 +4623,31 @@ def a_stiffness(R, factor):
     res = {k: (stiffness_rows(R, os.path.join(r["_dir"], "checkpoint.bin"), b2),
                stiffness_rows(R, os.path.join(r["_dir"], "checkpoint.bin"), p1))
            for k, r in runs.items()}
+    # The same layouts with the strain rate the adjoint of TLS's force (a_adjoint).
+    adjoint = ["method.tls_strain_rate=adjoint"]
+    res_adj = {k: (stiffness_rows(R, os.path.join(r["_dir"], "checkpoint.bin"), b2 + adjoint),
+                   stiffness_rows(R, os.path.join(r["_dir"], "checkpoint.bin"), p1 + adjoint))
+               for k, r in runs.items()}
     # P1-TLS on its last layout with a condition limit that reduces (almost) no fit to fewer
     # terms: whether its order reductions take part in the asymmetry there.
     late = runs.get(("P1-TLS", 0.09))
     p1_limit = stiffness_rows(R, os.path.join(late["_dir"], "checkpoint.bin"),
                               p1 + ["method.tls_max_condition=1e12"]) if late else {}
     lines = ["| layout: run, t | B2, direct force | B2-TLS force, TLS mass | B2-TLS force, direct "
-             "mass | B2-TLS: asymmetry | P1, direct force | P1-TLS | P1-TLS: asymmetry |",
-             "|---|---|---|---|---|---|---|---|"]
+             "mass | B2-TLS: asymmetry | P1, direct force | P1-TLS | P1-TLS: asymmetry "
+             "| B2-TLS, adjoint rate | its asymmetry | P1-TLS, adjoint rate | its asymmetry |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (m, t), (bb, pp) in res.items():
+        ab, ap = res_adj[(m, t)]
         cell = lambda rows, k: f"{rows[k][0]:.3g}" if k in rows else "n/a"
         asym = lambda rows: f"{rows[('tls', 'tls')][1]:.2g}" if ("tls", "tls") in rows else "n/a"
         lines.append(f"| {m if m == 'P1-TLS' else 'B2 ' + m}, {t:g} s"
                      f"{' (quarter period)' if t == 0.005 else ''} | "
                      f"{cell(bb, ('direct', 'direct'))} | {cell(bb, ('tls', 'tls'))} | "
                      f"{cell(bb, ('tls', 'direct'))} | {asym(bb)} | "
-                     f"{cell(pp, ('direct', 'direct'))} | {cell(pp, ('tls', 'tls'))} | {asym(pp)} |")
+                     f"{cell(pp, ('direct', 'direct'))} | {cell(pp, ('tls', 'tls'))} | {asym(pp)} | "
+                     f"{cell(ab, ('tls', 'tls'))} | {asym(ab)} | {cell(ap, ('tls', 'tls'))} | "
+                     f"{asym(ap)} |")
     ok = [v for v in res.values() if ("tls", "tls") in v[0] and ("tls", "tls") in v[1]]
     direct_max = max(max(v[0][("direct", "direct")][0], v[0][("direct", "tls")][0],
                          v[1][("direct", "direct")][0]) for v in ok) if ok else None
@@ -4641,6 +4661,10 @@ def a_stiffness(R, factor):
     limit_text = (f"{p1_limit[('tls', 'tls')][1]:.2g} (Re lambda "
                   f"{p1_limit[('tls', 'tls')][0]:.3g} 1/s)" if ("tls", "tls") in p1_limit
                   else "n/a")
+    adj_rows = [r for v in res_adj.values() for rows in v for k, r in rows.items()
+                if k[0] == "tls"]
+    adj_growth = max(r[0] for r in adj_rows) if adj_rows else None
+    adj_asym = max(r[1] for r in adj_rows) if adj_rows else None
     quarter = res.get(("tls", A_LAYOUTS[0]), ({}, {}))[0]
     q_tls = quarter.get(("tls", "tls"), (math.nan,))[0]
     q_direct = quarter.get(("tls", "direct"), (math.nan,))[0]
@@ -4662,7 +4686,9 @@ layout alone acts. The layouts are those of the runs above (B2, MUSL, direct and
 cells) stopped at a quarter period, where the particles are at their farthest, and at three
 instants of zero exact displacement, and P1-TLS's run at three instants up to its stop; the
 columns are the largest Re lambda [1/s] of each
-operator and the relative asymmetry ||S - S^T|| / ||S|| of TLS's force matrix S = df/dv.
+operator and the relative asymmetry ||S - S^T|| / ||S|| of TLS's force matrix S = df/dv; the last
+four columns are TLS with the strain rate its force's adjoint (the next subsection), with its own
+lumped mass.
 
 {chr(10).join(lines)}
 
@@ -4699,12 +4725,177 @@ So B2-TLS's linearised operator grows where the direct mapping's is neutral (and
 once its layout has degenerated), and it does so
 through its force, the integral of the fitted stress against the gradients at the Gauss points
 (its lumped mass alone, with the direct force, is neutral; the momentum fit is not part of
-this operator); it grows whatever the time step, as the runs above do. A TLS whose particle strain
-rate were the adjoint of its force (the transpose of the stress fit applied to the gradients
-at the Gauss points) would be neutral on these layouts, but that rate is not consistent for a
-uniform velocity gradient where the fit's effective weights differ from the particle volumes,
-and it was not tried. `tests/app/test_stiffness.cpp` checks the neutral and the growing cases on
-the 4-cell plate.
+this operator); it grows whatever the time step, as the runs above do. With the strain rate
+the adjoint of TLS's force (next subsection) every TLS operator of the table is symmetric
+(asymmetry at most {e(adj_asym) if adj_asym is not None else "n/a"}) and neutral (largest Re lambda
+{e(adj_growth) if adj_growth is not None else "n/a"} 1/s), B2 and P1, on every layout.
+`tests/app/test_stiffness.cpp` checks the neutral and the growing cases on the 4-cell plate, and
+the adjoint rate's neutrality on its stretched layout.
+""" + "\n" + a_adjoint(R)
+
+
+# a_adjoint's variants of the mapping, on top of each basis.
+ADJ_MAPPINGS = [("direct", ["method.mapping=direct"]), ("TLS, 2D defaults", ["method.mapping=tls"]),
+                ("TLS, adjoint rate", ["method.mapping=tls", "method.tls_strain_rate=adjoint"])]
+ADJ_BASES = [("P1", ["method.basis=linear"]), ("B2", ["method.basis=bspline", "method.degree=2"])]
+
+
+def a_adjoint(R):
+    """TLS with the strain rate the adjoint of its force (method.tls_strain_rate = "adjoint"):
+    the plate at A = 0.05 m (issue 22's target) and A = 0.1 m (001's set-up) on 8-32 cells and
+    the vortex at A = 0.1 and 1 rad on 32 and 64 cells, against the direct mapping and the 2D
+    default TLS."""
+    specs, keys = [], []
+    for basis, bs in ADJ_BASES:
+        for label, ms in ADJ_MAPPINGS:
+            for n in (8, 16, 32):
+                specs.append(("plate_mms_2d", [f"grid.cells={n}", "mms.amplitude=0.05"] + bs + ms,
+                              1, f"adj_plate05_{basis}_{label}_{n}"))
+                keys.append(("plate05", basis, label, n))
+                specs.append(("plate_mms_2d", [f"grid.cells={n}", "time.end=0.2",
+                                               "output.history_every=100"] + bs + ms,
+                              1, f"adj_plate10_{basis}_{label}_{n}"))
+                keys.append(("plate10", basis, label, n))
+            for A in ("0.1", "1"):
+                for n in (32, 64):
+                    specs.append(("vortex_2d", [f"vortex.amplitude={A}", f"grid.cells={n}"] + bs + ms,
+                                  1, f"adj_vortex_{A}_{basis}_{label}_{n}"))
+                    keys.append((f"vortex{A}", basis, label, n))
+    res = dict(zip(keys, R.many(specs)))
+    labels = [m for m, _ in ADJ_MAPPINGS]
+
+    def cell(r, what):
+        if r.get("status") != "ok":
+            return f"stops at t = {fail_time(r.get('failure'))} s"
+        return e(r["errors"].get(what))
+
+    def table(case, grids, what):
+        head = "| basis | cells | " + " | ".join(labels) + " |"
+        out = [head, "|---|---|" + "---|" * len(labels)]
+        for basis, _ in ADJ_BASES:
+            for n in grids:
+                out.append(f"| {basis} | {n} | "
+                           + " | ".join(cell(res[(case, basis, m, n)], what) for m in labels) + " |")
+        return "\n".join(out)
+
+    def ok(case, basis, m, n):
+        return res[(case, basis, m, n)].get("status") == "ok"
+
+    def err(case, basis, m, n, what="stress_rms"):
+        return res[(case, basis, m, n)]["errors"].get(what)
+
+    # A = 0.05: the adjoint against the direct mapping and the default, in stress.
+    beats = {}
+    for basis, _ in ADJ_BASES:
+        beats[basis] = [
+            (n, err("plate05", basis, "direct", n) / err("plate05", basis, "TLS, adjoint rate", n),
+             err("plate05", basis, "TLS, 2D defaults", n) / err("plate05", basis, "TLS, adjoint rate", n))
+            for n in (8, 16, 32) if ok("plate05", basis, "TLS, adjoint rate", n)
+            and ok("plate05", basis, "direct", n) and ok("plate05", basis, "TLS, 2D defaults", n)]
+    wins = {basis: sum(a > 1.0 for _, a, _ in v) for basis, v in beats.items()}
+
+    def rng(basis):
+        v = [b for _, _, b in beats[basis]]
+        return f"{min(v):.3g}-{max(v):.3g}" if v else "n/a"
+    ratio_text = "; ".join(
+        f"{basis}: direct / adjoint {', '.join(f'{a:.3g}' for _, a, _ in v)}, default / adjoint "
+        f"{', '.join(f'{b:.3g}' for _, _, b in v)}" for basis, v in beats.items())
+    # A = 0.1: where each finishes; the adjoint's error energy per period.
+    fin10 = {(b, m): [n for n in (8, 16, 32) if ok("plate10", b, m, n)]
+             for b, _ in ADJ_BASES for m in labels}
+    growth = []
+    for basis, _ in ADJ_BASES:
+        for n in (8, 16, 32):
+            q = quarter_energies(res[("plate10", basis, "TLS, adjoint rate", n)])
+            qd = quarter_energies(res[("plate10", basis, "direct", n)])
+            growth.append(f"| {basis} | {n} | {o(per_period(qd, False))} | {o(per_period(qd, True))} | "
+                          f"{o(per_period(q, False))} | {o(per_period(q, True))} |")
+    fin_v = {m: sum(ok(c, b, m, n) for c in ("vortex0.1", "vortex1") for b, _ in ADJ_BASES
+                    for n in (32, 64)) for m in labels}
+    cost = [(n, res[("plate10", "B2", "TLS, adjoint rate", n)].get("ns_per_particle_step"),
+             res[("plate10", "B2", "direct", n)].get("ns_per_particle_step"))
+            for n in (16, 32) if ok("plate10", "B2", "TLS, adjoint rate", n)]
+    cost_text = "; ".join(f"{n} cells {a:.0f} against B2 direct's {d:.0f} ns per particle-step"
+                          for n, a, d in cost if a and d) or "n/a"
+    return f"""#### A TLS whose strain rate is the adjoint of its force (`method.tls_strain_rate`)
+
+TLS's force is f_i = -sum_g w_g sigma^(x_g) grad phi_i(x_g) + (body force), with the fitted
+stress at the Gauss points linear in the particles' stresses, sigma^(x_g) = sum_p R_gp sigma_p.
+Its power is therefore f . v = -sum_p sigma_p : Z_p with Z_p = sum_g R_gp w_g L(x_g), L(x_g) =
+sum_i v_i grad phi_i(x_g)^T the grid's velocity gradient at the Gauss points: the strain rate
+that this force is the adjoint of is L_p = Z_p / omega_p, omega_p = sum_g R_gp w_g the particle's
+weight in the fit. `method.tls_strain_rate = "adjoint"` updates the particles' stress, F and
+volume with that L_p instead of the gradient at x_p (`TlsMapping::strain_rates`, the transpose of
+the fit `BasicTlsReconstruction::fit_transpose`). A plain least-squares fit gives weights that
+are not the volumes and can be negative (measured while developing this option with TLS's plain
+stress fit: -0.8 to 1.5 V_p on the 4-cell stretched layout of `tests/app/test_stiffness.cpp`,
+where the 8 particles of 144 without a positive weight, which then took the gradient at x_p,
+left the operator 4 % asymmetric); with the adjoint rate every element therefore fits the
+stress conservatively, int_e sigma^ =
+sum_p V_p sigma_p (split by the domains), which makes omega_p = V_p exactly. Then f . v = -sum_p
+V_p sigma_p : L_p, the direct mapping's pairing; L_p = A for any uniform gradient A, whatever the
+layout; and the linearised operator is -G^T diag(V C) G, symmetric and neutral (the table above).
+`tests/mapping/test_tls2d.cpp` checks the transpose against the fit (every completion, plain,
+conservative and mixed fields), the power identity, omega_p = V_p and a uniform gradient on a
+body with cut cells, P1 and B2.
+
+Plate, A = 0.05 m, T = 0.02 s (issue 22's target), 9 particles per cell, MUSL, lumped mass.
+Stress RMS [Pa]:
+
+{table("plate05", (8, 16, 32), "stress_rms")}
+
+Displacement RMS [m]:
+
+{table("plate05", (8, 16, 32), "displacement_rms")}
+
+Stress error ratios on 8, 16, 32 cells ({ratio_text}; above 1: the adjoint rate is more
+accurate).
+
+Plate at 001's A = 0.1 m, T = 0.2 s (20,000 steps). Stress RMS [Pa] or where the run stops:
+
+{table("plate10", (8, 16, 32), "stress_rms")}
+
+The error's energy (kinetic energy at the quarter periods, as above) per period, over the first
+two periods and the last two before the end or the stop:
+
+| basis | cells | direct, first two | direct, last two | adjoint rate, first two | adjoint rate, last two |
+|---|---|---|---|---|---|
+{chr(10).join(growth)}
+
+Generalized vortex (section above), 4 particles per cell, T = 1 s. Displacement RMS [m] at
+A = 0.1 rad:
+
+{table("vortex0.1", (32, 64), "displacement_rms")}
+
+At A = 1 rad:
+
+{table("vortex1", (32, 64), "displacement_rms")}
+
+What this shows:
+
+- The adjoint rate removes the growth of the frozen-layout analysis (the table above: every TLS
+  operator symmetric and neutral), and at A = 0.1 m B2-TLS with it reaches T on
+  {", ".join(str(n) for n in fin10[("B2", "TLS, adjoint rate")]) or "no grid"} cells of 8, 16, 32
+  (the 2D default on {", ".join(str(n) for n in fin10[("B2", "TLS, 2D defaults")]) or "none"};
+  B2 direct on {", ".join(str(n) for n in fin10[("B2", "direct")]) or "none"}). Its error's energy
+  still grows on the finer grids (the per-period table), which the frozen-layout analysis does
+  not explain; what it leaves out (the stress times the change of the geometry; F integrated
+  from an L_p that averages over the element instead of the gradient of the motion that moves
+  the particle) is not traced here. P1-TLS with it reaches T on
+  {", ".join(str(n) for n in fin10[("P1", "TLS, adjoint rate")]) or "no grid"} (P1's own
+  layouts degenerate, the P1 rows of the stiffness table).
+- At A = 0.05 m (the ratios above) it beats the direct mapping of its basis in stress on
+  {wins["P1"]} of 3 grids with P1 and {wins["B2"]} of 3 with B2; against the 2D default its
+  stress error is {rng("P1")} times smaller with P1 and {rng("B2")} times with B2. Issue 22's
+  target (every grid) is met by P1 with it (as by P1 with the default), not by B2.
+- On the vortex it finishes {fin_v["TLS, adjoint rate"]} of 8 runs (the default
+  {fin_v["TLS, 2D defaults"]}, the direct mapping {fin_v["direct"]}).
+- So it is an option, not the default: it cures the mechanism found above but not every run of
+  the study. Its cost: {cost_text} in the A = 0.1 runs above (two runs at a time); against
+  TLS with the gradient at x_p, alternating, see BENCHMARKS.md (the transpose is one serial pass
+  over the elements). It runs
+  on the grid's cells of one process (refused on triangles and on several processes: its
+  transpose reaches the ghost particles).
 """
 
 

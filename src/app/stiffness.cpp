@@ -70,6 +70,7 @@ Linearised linearise(Sim& sim) {
         P = frozen;
         for (auto& v : sim.nodes.velocity) v.setZero();
         sim.nodes.velocity[static_cast<std::size_t>(j)][e] = sign * eps;
+        stages::mapped_strain_rates(sim);  // TLS's adjoint rate, where configured
         stages::update_stress(sim, 1.0);
         for (std::size_t p = 0; p < dsigma.size(); ++p) dsigma[p] += sign * P.stress[p];
       }

@@ -80,6 +80,8 @@ void report_mapping(nlohmann::ordered_json& summary, const TlsMapping& m, int) {
   // The robustness measures of the grid's cells, where switched on (element-steps).
   if (m.settings().positivity) summary["tls"]["positivity_limited"] = t.limited;
   if (m.settings().surface_volume) summary["tls"]["surface_elements"] = t.surface;
+  // Particle-steps without a positive weight in the fits, whose rate was the gradient at x_p.
+  if (m.settings().adjoint_strain_rate) summary["tls"]["adjoint_unweighted"] = t.unweighted;
   if (m.on_triangles()) {
     // Triangles (D 6.3): the completion resolved, the fits with dropped directions, and the
     // smallest rank (min_terms) of an element's fit.

@@ -158,7 +158,8 @@ class CubicSplineMapping {
   // problems"); the run set-up rejects other dimensions with this before instantiating.
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
   // Capabilities (mapping/mapping.hpp).
-  static constexpr bool kFusedScatter = false, kRunTotals = false, kGhostParticles = true;
+  static constexpr bool kFusedScatter = false, kRunTotals = false, kGhostParticles = true,
+                        kStrainRates = false;
 
   // The spline is one fit through all the particles: in a distributed run every process reads
   // all of them (every cell layer), fits the same spline and integrates its own elements. A

@@ -13,6 +13,9 @@
 //                  processes' particles within ghost_reach(sim) cell layers of its own
 //                  (stages::GhostParticles), and the mapping integrates only the elements of
 //                  RunState::own_cells(), so that each element is integrated once.
+//   kStrainRates   strain_rates(sim): the mapping may define the particles' velocity
+//                  gradients for the stress update (TLS's adjoint rate), which it writes to
+//                  RunState::mapped_gradient (stages::mapped_strain_rates)
 // Mappings hold no per-particle state, so re-sorting the particles (scheme/sort.hpp) needs
 // nothing from them.
 #include <concepts>
@@ -29,6 +32,7 @@ concept MappingFor = requires(M& m, Sim& sim, int dim) {
   { M::kFusedScatter } -> std::convertible_to<bool>;
   { M::kRunTotals } -> std::convertible_to<bool>;
   { M::kGhostParticles } -> std::convertible_to<bool>;
+  { M::kStrainRates } -> std::convertible_to<bool>;
   { M::supports_dimension(dim) } -> std::convertible_to<bool>;
   m.map_mass(sim);      // nodal masses (and the consistent matrix), D eq. 2.31 / 2.44
   m.map_momentum(sim);  // nodal momenta, 2.32 / 2.48
@@ -43,6 +47,7 @@ concept MappingFor = requires(M& m, Sim& sim, int dim) {
      requires(const M& cm, const Sim& sim) {
        { cm.ghost_reach(sim) } -> std::convertible_to<double>;
      }) &&
+    (!M::kStrainRates || requires(M & m, Sim& sim) { m.strain_rates(sim); }) &&
     (!M::kRunTotals ||
      requires(M & m, const M& cm, std::string_view bytes, const std::string& what) {
        { cm.save_totals() } -> std::same_as<std::string>;

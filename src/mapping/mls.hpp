@@ -348,7 +348,8 @@ class MlsFamilyMapping {
   using Settings = MlsSettings;
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
-  static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true;
+  static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true,
+                        kStrainRates = false;
 
   // The cell layers of the other processes' particles this mapping reads in a distributed run
   // (MappingFor's kGhostParticles): the quadratic-spline weight's support, 1.5 a cells (a the

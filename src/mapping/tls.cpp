@@ -249,6 +249,7 @@ void accumulate(TlsReport& total, const TlsReport& step) {
   total.truncated += step.truncated;
   total.limited += step.limited;
   total.surface += step.surface;
+  total.unweighted += step.unweighted;
 }
 
 TlsReport over_ranks(const Comm& comm, const TlsReport& mine) {
@@ -927,6 +928,64 @@ void BasicTlsReconstruction<Dim>::fit_mixed(std::span<const double> f,
     throw std::logic_error("TlsReconstruction::fit_mixed: the settings are conservative_only");
   const Field fd{integrals.data(), conservative.data(), &a};
   fit(f, std::span<const Field>(&fd, 1));
+}
+
+// fit() in reverse: the elements with completion points first (they push their part to the
+// elements that value those points, which have none), then the others. Per element and field,
+// plain: a = D^{-1} sum_k psi_k u_k, so u_k gets psi_k . D^{-1} abar; conservative: a_1 = c_e /
+// |Omega_e| and a_2..t = D_c^{-1} sum_k psi_k' (u_k - a_1), so u_k gets psi_k' . D_c^{-1}
+// abar', and c_e gets (abar_1 - sum_k of those) / |Omega_e|. Serial: a point (borrowed, or on
+// a shared face) can be a datum of several elements.
+template <int Dim>
+void BasicTlsReconstruction<Dim>::fit_transpose(std::span<Coefficients> abar,
+                                                const unsigned char* conservative,
+                                                std::span<double> z, std::span<double> ibar) const {
+  const std::size_t nf = abar.size();
+  const Index ne = grid_.num_cells();
+  const auto E = static_cast<std::size_t>(ne);
+  if (z.size() < x_.size() * nf || ibar.size() < E * nf)
+    throw std::invalid_argument("TlsReconstruction::fit_transpose: output too small");
+  for (const Coefficients& a : abar)
+    if (a.size() < E)
+      throw std::invalid_argument("TlsReconstruction::fit_transpose: one vector per element");
+  std::fill(z.begin(), z.end(), 0.0);
+  std::fill(ibar.begin(), ibar.end(), 0.0);
+  const double volume = grid_.cell_volume();
+  std::vector<Taylor> c(nf);
+  for (int pass = 1; pass >= 0; --pass) {
+    for (Index e = 0; e < ne; ++e) {
+      const auto ei = static_cast<std::size_t>(e);
+      const System& sys = systems_[ei];
+      if (info_[ei].points == 0 || info_[ei].failed || sys.terms == 0) continue;
+      if (sys.has_virtual != (pass == 1)) continue;
+      const bool cons = conservative != nullptr && conservative[ei] != 0;
+      for (std::size_t j = 0; j < nf; ++j) {
+        const Taylor& ab = abar[j][ei];
+        if (cons) {
+          c[j].setZero();
+          c[j].template tail<K - 1>().noalias() = sys.inv_c * ab.template tail<K - 1>();
+        } else {
+          c[j].noalias() = sys.inv * ab;
+        }
+      }
+      std::vector<double> sum(nf, 0.0);  // sum_k of u_k's parts (conservative a_1)
+      for (Index k = sys.begin; k < sys.end; ++k) {
+        const Datum& d = data_[static_cast<std::size_t>(k)];
+        for (std::size_t j = 0; j < nf; ++j) {
+          const double u = d.psi.dot(c[j]);
+          sum[j] += u;
+          if (d.point >= 0) {
+            z[static_cast<std::size_t>(d.point) * nf + j] += u;
+          } else {
+            const DatumSource& src = from_[static_cast<std::size_t>(k)];
+            abar[j][static_cast<std::size_t>(src.source)] += taylor_basis_at<Dim>(src.s_source) * u;
+          }
+        }
+      }
+      if (cons)
+        for (std::size_t j = 0; j < nf; ++j) ibar[j * E + ei] = (abar[j][ei][0] - sum[j]) / volume;
+    }
+  }
 }
 
 template <int Dim>

@@ -120,6 +120,19 @@ struct TlsSettings {
   // bound is only used where it proves cond <= max_condition), the numbers reported are then
   // upper bounds. The 2D MPM runs use false (method_settings.cpp).
   bool exact_condition = true;
+  // The particles' velocity gradients for the stress update as the adjoint of the force
+  // (issue 22 item 3; docs/verification.md, "A TLS whose strain rate is the adjoint of its
+  // force"): the force is f_i = -sum_g w_g sigma^(x_g) grad phi_i(x_g) with sigma^(x_g) =
+  // sum_p R_gp sigma_p (the stress fit, linear in the particle stresses), so the rate whose power
+  // the force does is L_p = sum_g R_gp w_g L(x_g) / omega_p, L(x_g) = sum_i v_i grad phi_i(x_g)^T
+  // the grid's velocity gradient at the Gauss points and omega_p = sum_g R_gp w_g the particle's
+  // effective weight in the fit. Then f . v = -sum_p omega_p sigma_p : L_p, so the linearised
+  // step is symmetric (neutral) where every omega_p > 0, and L_p = A for any uniform gradient A
+  // (sum_g R_gp w_g A / omega_p). The stress is then fitted conservatively in every element
+  // (c_e = sum_p V_p sigma_p, as surface_volume does at a surface), which makes omega_p = V_p:
+  // a plain fit's weights vary (-0.8 to 1.5 V_p on a stretched layout of the plate). false:
+  // L_p = sum_i v_i grad phi_i(x_p)^T (D eq. 2.52) and the stress fit of surface_volume.
+  bool adjoint_strain_rate = false;
 
   int gauss_points_used() const { return gauss_points > 0 ? gauss_points : 2; }
   int terms_used(int dim) const { return terms > 0 ? terms : quadratic_terms(dim); }
@@ -149,7 +162,10 @@ struct TlsReport {
   Index limited = 0;          // positivity: elements whose higher terms were scaled down
   Index surface = 0;          // surface_volume: elements at a free surface
   Index outside = 0;          // points outside the grid, ignored (standalone input only)
-  int min_terms = 0;          // fewest terms of a fitted element (0: none fitted)
+  // TlsSettings::adjoint_strain_rate: particles (particle-steps in the run totals) whose weight
+  // omega_p in the fits was not positive, so their rate is the gradient at x_p.
+  Index unweighted = 0;
+  int min_terms = 0;  // fewest terms of a fitted element (0: none fitted)
   // Largest cond(D) of a fitted element's final system (with TlsSettings::exact_condition =
   // false an upper bound of it, at most max_condition).
   double max_condition = 0.0;
@@ -287,6 +303,16 @@ class BasicTlsReconstruction {
   // value at point p is f[p * fields.size() + j]. The same numbers as one fit per field (each
   // field's sums run in the same order); it reads the data once instead of once per field.
   void fit_fields(std::span<const double> f, std::span<const Field> fields) const;
+  // The transpose of fit_fields for nf fields fitted alike (each plain, or conservative in the
+  // elements with conservative[e] != 0 when conservative is given): abar[j][e] is the derivative
+  // of a functional with respect to element e's coefficients of field j (used as scratch:
+  // completion points push their part to the elements that value them). On return z[p * nf + j]
+  // holds its derivative with respect to the value of field j at point p, and ibar[j * E + e]
+  // (E elements) with respect to element e's integral (zero where e is fitted plainly).
+  void fit_transpose(std::span<Coefficients> abar, const unsigned char* conservative,
+                     std::span<double> z, std::span<double> ibar) const;
+  // The number of points of the current point set (own and ghost particles).
+  Index num_points() const { return static_cast<Index>(x_.size()); }
 
   // The reconstruction at x: element-local; an interior face belongs to the upper element, like
   // Grid::cell_of. Zero outside the grid.
@@ -460,6 +486,14 @@ struct TlsMappingState {
   std::vector<double> rho;  // at the Gauss points of the step
   std::vector<Vec<Dim>> rhov, rhob;
   std::vector<Mat<Dim>> sigma;
+  // TlsSettings::adjoint_strain_rate: w_g L(x_g) at the Gauss points, the transposed fit's
+  // element data (Dim^2 velocity-gradient components and the weight), point and integral
+  // derivatives (BasicTlsReconstruction::fit_transpose).
+  std::vector<Mat<Dim>> wgrad;
+  std::vector<BasicTlsCoefficients<Dim>> abar;
+  std::vector<double> zbar, ibar;
+  std::vector<unsigned char> conservative;  // 1 per element: the stress fits' flags
+  std::vector<double> omega;  // omega_p [m^Dim] of the last strain_rates, per particle
   // Per element, set by the density fit of the step: the positivity factor theta (1: not
   // limited) and whether the element lies at a free surface (TlsSettings).
   std::vector<double> theta;
@@ -529,7 +563,8 @@ class TlsMapping {
   // The run set-up rejects other dimensions with a clear message before instantiating.
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
-  static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true;
+  static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true,
+                        kStrainRates = true;
 
   TlsMapping() : TlsMapping(TlsSettings{}) {}
   // Validates s for dimension dim (throws InputError).
@@ -581,6 +616,17 @@ class TlsMapping {
   const TlsTriangleReconstruction& triangle_reconstruction() const {
     if (!triangles_) throw std::logic_error("TlsMapping: no triangle reconstruction yet");
     return triangles_->recon;
+  }
+  // TlsSettings::adjoint_strain_rate: each particle's weight omega_p [m^Dim] in the stress fits
+  // at the last strain_rates (sum_g R_gp w_g; its volume V_p where the fits are conservative).
+  template <int Dim>
+  const std::vector<double>& adjoint_weights() const {
+    if constexpr (Dim == 1)
+      return state1_->omega;
+    else if constexpr (Dim == 2)
+      return state2_->omega;
+    else
+      return state3_->omega;
   }
   // Counts summed over the steps so far (element-steps), largest condition number of the run.
   const TlsReport& totals() const { return totals_; }
@@ -652,7 +698,49 @@ class TlsMapping {
     }
   }
 
+  // TlsSettings::adjoint_strain_rate: the velocity gradients of the particles for the stress
+  // update that follows, from the grid velocity and this step's fits, into
+  // sim.mapped_gradient (stages::mapped_strain_rates); nothing otherwise. On the grid's cells
+  // of one process (the run set-up refuses triangles and several processes).
+  template <class Sim>
+  void strain_rates(Sim& sim) {
+    if (!settings_.adjoint_strain_rate) return;
+    constexpr int Dim = Sim::kDim;
+    if constexpr (Sim::BasisT::kTriangleMesh) {
+      throw std::logic_error("TLS: the adjoint strain rate is defined on the grid's cells");
+    } else {
+      const auto& q = quad_.prepared<Sim>();
+      auto& st = state<Dim>();
+      const auto& v = sim.nodes.velocity;
+      st.wgrad.resize(q.size());
+      parallel_for(static_cast<Index>(q.size()), [&](Index gi) {
+        const auto g = static_cast<std::size_t>(gi);
+        const auto& s = q.stencil[g];
+        Mat<Dim> L = Mat<Dim>::Zero();
+        for (int a = 0; a < s.kSize; ++a) L.noalias() += v[s.dof[a]] * s.grad[a].transpose();
+        st.wgrad[g] = q.w[g] * L;
+      });
+      // A particle without a positive weight in the fits (omega_p <= 0: possible where a fit
+      // extrapolates) has no adjoint rate; it takes its gradient at x_p (D eq. 2.52).
+      for (const Index p : adjoint_gradients<Dim>(sim, q)) {
+        const auto i = static_cast<std::size_t>(p);
+        Mat<Dim> L = Mat<Dim>::Zero();
+        for_each_entry(sim.stencils[i], sim.dof_stride,
+                       [&](Index dof, double, const Vec<Dim>& grad) {
+                         L.noalias() += v[static_cast<std::size_t>(dof)] * grad.transpose();
+                       });
+        sim.mapped_gradient[i] = L;
+      }
+    }
+  }
+
  private:
+  // tls_mapping.cpp: strain_rates' transpose of the stress fit, from st.wgrad, into
+  // sim.mapped_gradient; returns the particles whose weight omega_p is not positive (their
+  // entries left for the caller). Counts them in totals_.adjoint_fallback.
+  template <int Dim>
+  const std::vector<Index>& adjoint_gradients(RunState<Dim>& sim, const GaussPoints<Dim>& q);
+  std::vector<Index> no_weight_;
   // The state of dimension Dim, created (and the settings validated for Dim) on first use.
   template <int Dim>
   TlsMappingState<Dim>& state() {

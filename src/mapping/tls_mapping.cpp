@@ -302,11 +302,13 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
     return P.density(i) * P.body[i][j - ns];
   });
   // Surface elements (surface_volume): the stress of their material, int_e sigma^ =
-  // sum_p V_p sigma_p (fitted conservatively there, plain elsewhere).
-  const bool surface = settings_.surface_volume;
+  // sum_p V_p sigma_p (fitted conservatively there, plain elsewhere). With the adjoint strain
+  // rate every element fits the stress so, which makes each particle's weight in the fits its
+  // volume (omega_p = V_p, adjoint_gradients).
+  const bool surface = settings_.surface_volume, everywhere = settings_.adjoint_strain_rate;
   element_sums(st.recon, nf, [&](std::size_t i, int j) {
     if (j < ns) {
-      if (!surface) return 0.0;
+      if (!surface && !everywhere) return 0.0;
       const auto [r, c] = rc(j);
       return P.volume[i] * P.stress[i](r, c);
     }
@@ -316,8 +318,8 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   for (int j = 0; j < nf; ++j) {
     auto& f = fields[static_cast<std::size_t>(j)];
     f.a = &st.fields[static_cast<std::size_t>(j)];
-    if (j >= ns || surface) f.integrals = integrals_of(j, ne);
-    if (j < ns && surface) f.conservative = st.surface.data();
+    if (j >= ns || surface || everywhere) f.integrals = integrals_of(j, ne);
+    if (j < ns && surface && !everywhere) f.conservative = st.surface.data();
   }
   st.recon.fit_fields(values_, fields);
   for (int j = 0; j < nf; ++j) {
@@ -335,6 +337,89 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
       st.rhob[g][j - ns] = v;
     }
   });
+}
+
+// TlsSettings::adjoint_strain_rate. The force's stress part, -sum_g w_g sigma^_g grad phi_i(x_g),
+// is linear in the particle stresses through the stress fit (fit_forces: conservative in every
+// element with c_e = sum_p V_p sigma_p, split by the domains; in surface elements positivity
+// scales the terms beyond a_1 by theta_e): its power sum_g w_g sigma^_g : L_g is sum_p
+// sigma_p : Z_p, Z_p the transpose of that fit applied to the element data abar_e =
+// sum_{g in e} psi_g w_g L_g. The same transpose of w_g alone (abar_e = |Omega_e| e_1) gives
+// omega_p: V_p, since every element's fit integrates to its particles' sum (a plain fit's
+// weights are not the volumes and can be negative: -0.8 to 1.5 V_p on a stretched layout of the
+// plate, where the particles without a positive one broke the symmetry). L_p = Z_p / omega_p.
+template <int Dim>
+const std::vector<Index>& TlsMapping::adjoint_gradients(RunState<Dim>& sim,
+                                                        const GaussPoints<Dim>& q) {
+  auto& st = state<Dim>();
+  const auto& recon = st.recon;
+  const Index ne = recon.num_elements();
+  const auto E = static_cast<std::size_t>(ne);
+  constexpr int nL = Dim * Dim, nf = nL + 1;  // L's components (row-major), then the weight
+  st.abar.resize(nf);
+  for (auto& a : st.abar) a.assign(E, TaylorVector<Dim>::Zero());
+  // The Gauss points of an element are consecutive (fit_mass places n^Dim per active element).
+  const std::size_t n = st.psi.size();
+  parallel_for(static_cast<Index>(q.size() / n), [&](Index group) {
+    const std::size_t g0 = static_cast<std::size_t>(group) * n;
+    const auto e = static_cast<std::size_t>(q.element[g0]);
+    for (std::size_t k = 0; k < n; ++k) {
+      const Mat<Dim>& wl = st.wgrad[g0 + k];
+      for (int r = 0; r < Dim; ++r)
+        for (int c = 0; c < Dim; ++c)
+          st.abar[static_cast<std::size_t>(r * Dim + c)][e] += st.psi[k] * wl(r, c);
+      st.abar[nL][e] += st.psi[k] * q.w[g0 + k];
+    }
+  });
+  if (settings_.surface_volume && settings_.positivity)  // apply_theta's transpose (fit_forces)
+    for (std::size_t e = 0; e < E; ++e)
+      if (st.surface[e] != 0 && st.theta[e] < 1.0)
+        for (auto& a : st.abar) a[e].tail(a[e].size() - 1) *= st.theta[e];
+  st.conservative.assign(E, 1);
+  const auto np = static_cast<std::size_t>(recon.num_points());
+  st.zbar.resize(np * nf);
+  st.ibar.resize(E * nf);
+  recon.fit_transpose(st.abar, st.conservative.data(), st.zbar, st.ibar);
+  const auto& P = sim.particles;
+  {
+    // c_e = sum_p V_p sigma_p (times the overlap fraction with the domains): Z_p += V_p frac
+    // ibar_e.
+    auto add = [&](std::size_t e, std::size_t p, double fraction) {
+      const double f = P.volume[p] * fraction;
+      for (int j = 0; j < nf; ++j)
+        st.zbar[p * nf + static_cast<std::size_t>(j)] +=
+            f * st.ibar[static_cast<std::size_t>(j) * E + e];
+    };
+    for (std::size_t e = 0; e < E; ++e) {
+      if (settings_.domain_integrals) {
+        for (std::size_t k = split_.start[e]; k < split_.start[e + 1]; ++k)
+          add(e, static_cast<std::size_t>(split_.point[k]), split_.fraction[k]);
+      } else {
+        const auto& bins = recon.bins();
+        for (const Index* p = bins.begin(static_cast<Index>(e));
+             p != bins.end(static_cast<Index>(e)); ++p)
+          add(e, static_cast<std::size_t>(*p), 1.0);
+      }
+    }
+  }
+  const auto N = static_cast<std::size_t>(P.size());
+  sim.mapped_gradient.resize(N);
+  st.omega.resize(N);
+  no_weight_.clear();
+  for (std::size_t p = 0; p < N; ++p) {
+    const double* z = st.zbar.data() + p * nf;
+    const double omega = z[nL];
+    st.omega[p] = omega;
+    if (!(omega > 0.0)) {
+      no_weight_.push_back(static_cast<Index>(p));
+      continue;
+    }
+    Mat<Dim>& L = sim.mapped_gradient[p];
+    for (int r = 0; r < Dim; ++r)
+      for (int c = 0; c < Dim; ++c) L(r, c) = z[r * Dim + c] / omega;
+  }
+  totals_.unweighted += static_cast<Index>(no_weight_.size());
+  return no_weight_;
 }
 
 template Index TlsMapping::mark_surface<1>(TlsMappingState<1>&, const std::array<Index, 2>&);
@@ -358,6 +443,12 @@ template void TlsMapping::fit_momentum<3>(RunState<3>&, const GaussPoints<3>&);
 template void TlsMapping::fit_forces<1>(RunState<1>&, const GaussPoints<1>&);
 template void TlsMapping::fit_forces<2>(RunState<2>&, const GaussPoints<2>&);
 template void TlsMapping::fit_forces<3>(RunState<3>&, const GaussPoints<3>&);
+template const std::vector<Index>& TlsMapping::adjoint_gradients<1>(RunState<1>&,
+                                                                    const GaussPoints<1>&);
+template const std::vector<Index>& TlsMapping::adjoint_gradients<2>(RunState<2>&,
+                                                                    const GaussPoints<2>&);
+template const std::vector<Index>& TlsMapping::adjoint_gradients<3>(RunState<3>&,
+                                                                    const GaussPoints<3>&);
 
 // The run totals in a checkpoint: eleven counts, then the two condition numbers.
 std::string TlsMapping::save_totals() const {
@@ -372,6 +463,7 @@ std::string TlsMapping::save_totals() const {
   w.i64(t.truncated);  // since the triangles (checkpoints before them end here)
   w.i64(t.limited);    // since positivity and surface stress (earlier checkpoints end above)
   w.i64(t.surface);
+  w.i64(t.unweighted);  // since the adjoint strain rate (earlier checkpoints end above)
   return std::move(w.bytes());
 }
 
@@ -391,6 +483,7 @@ void TlsMapping::load_totals(std::string_view bytes, const std::string& what) {
     t.limited = r.i64();
     t.surface = r.i64();
   }
+  if (!r.done()) t.unweighted = r.i64();
   r.expect_done();
   totals_ = t;
 }

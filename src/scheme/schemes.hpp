@@ -28,6 +28,7 @@ struct Usl {
     solve_acceleration(sim);         // a^s       (2.34)
     solve_velocity(sim);             // v_i^s     (2.35)
     advance_grid_velocity(sim, dt);  // v_i^{s+1} (2.36)
+    mapped_strain_rates(sim);        // L_p from v_i^{s+1} where the mapping defines it
     // x_p^{s+1} (2.38), v_p^{s+1} (2.39), F, V, rho, sigma from v_i^{s+1} (2.40-2.43) in one pass
     using namespace particle_update;
     update_particles<kPosition | kVelocity | kStress>(sim, dt);
@@ -49,6 +50,7 @@ struct Musl {
     solve_acceleration(sim);                                // a^s                (2.46)
     update_velocity_map_momentum(sim, dt);  // v_p^{s+1} (2.47), q from it (2.48): one pass
     solve_velocity(sim);                    // v_i^{s+1}          (2.49)
+    mapped_strain_rates(sim);               // L_p where the mapping defines it
     // x_p^{s+1} (2.50-2.51), F, V, rho, sigma (2.52-2.55) in one pass
     update_particles<particle_update::kPosition | particle_update::kStress>(sim, dt);
   }
@@ -69,6 +71,7 @@ struct Usf {
     refresh_body_force(sim);
     map_to_grid<grid_sum::kMass | grid_sum::kMomentum>(sim);  // M^s, q from v_p^s
     solve_velocity(sim);                                      // v_i^s
+    mapped_strain_rates(sim);                                 // L_p where the mapping defines it
     update_stress(sim, dt);                                   // sigma^{s+1} from v_i^s
     map_forces(sim);  // f with the updated stress and volume
     solve_acceleration(sim);
@@ -93,11 +96,13 @@ struct Usavg {
     refresh_body_force(sim);
     map_to_grid<grid_sum::kMass | grid_sum::kMomentum>(sim);  // M^s, q from v_p^s
     solve_velocity(sim);                                      // v_i^s
+    mapped_strain_rates(sim);                                 // L_p where the mapping defines it
     update_stress(sim, 0.5 * dt);                             // USF half
     map_forces(sim);
     solve_acceleration(sim);
     update_velocity_map_momentum(sim, dt);  // v_p^{s+1}, q from v_p^{s+1}: one pass
     solve_velocity(sim);                    // v_i^{s+1}
+    mapped_strain_rates(sim);               // L_p where the mapping defines it
     // x_p^{s+1} and the MUSL half of the stress increment in one pass
     update_particles<particle_update::kPosition | particle_update::kStress>(sim, dt, 0.5 * dt);
   }

@@ -176,6 +176,11 @@ struct RunState {
     return {l[0] * per_layer, (l[1] + 1) * per_layer};
   }
 
+  // The particles' velocity gradients [1/s] from the mapping (MappingFor's kStrainRates: TLS's
+  // adjoint rate), written by stages::mapped_strain_rates just before the stress update that
+  // reads them, which empties it; empty: each particle's gradient from its stencil (D eq. 2.52).
+  std::vector<Mat<Dim>> mapped_gradient;
+
   double time = 0.0;  // t^s [s]
   Index step = 0;     // s
   Diagnostics diag;

@@ -320,6 +320,15 @@ void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
   auto& P = sim.particles;
   const auto& a = sim.nodes.accel;
   const auto& v = sim.nodes.velocity;
+  // The mapping's velocity gradients, where it gave them (RunState::mapped_gradient).
+  const Mat<Dim>* mapped = nullptr;
+  if constexpr ((What & kStress) != 0) {
+    if (!sim.mapped_gradient.empty()) {
+      if (static_cast<Index>(sim.mapped_gradient.size()) != P.size())
+        throw std::logic_error("update_particles: mapped gradients of another particle set");
+      mapped = sim.mapped_gradient.data();
+    }
+  }
   // The variant is resolved once, outside the parallel loop; `bad`: any particle failed.
   // Laws that do not exist in Dim (make_material refuses them) get no loop.
   const bool bad = std::visit(
@@ -344,12 +353,15 @@ void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
               dx *= dt;
               P.x[i] += dx;
             }
-            if constexpr ((What & kStress) != 0)
+            if constexpr ((What & kStress) != 0) {
+              if (mapped != nullptr) L = mapped[i];
               return detail::deform_particle(P, i, Mat<Dim>(stress_dt * L), law);
+            }
             return false;
           });
       },
       sim.material);
+  if constexpr ((What & kStress) != 0) sim.mapped_gradient.clear();
   // Bases that track particle-domain corners (CPDI2) move them with the same grid velocity.
   if constexpr ((What & kPosition) != 0) {
     if constexpr (B::kTrackedCorners) sim.basis.advect(sim, dt);
@@ -372,6 +384,14 @@ void update_particle_velocity(BasisState<Dim, B>& sim, double dt) {
 template <int Dim, class B>
 void update_particle_position(BasisState<Dim, B>& sim, double dt) {
   update_particles<particle_update::kPosition>(sim, dt);
+}
+
+// The velocity gradients that the next stress update reads, where the mapping defines its own
+// (MappingFor's kStrainRates: TLS with method.tls_strain_rate = "adjoint", from the current grid
+// velocity); nothing otherwise, and the update takes each particle's from its stencil.
+template <class Sim>
+void mapped_strain_rates(Sim& sim) {
+  if constexpr (Sim::MappingT::kStrainRates) sim.mapping.strain_rates(sim);
 }
 
 // F, V, rho and the stress from the current grid velocity (D eq. 2.52-2.55). dt is the

@@ -218,6 +218,9 @@ std::vector<KeySpec> declare() {
       choice("method.tls_cell_integrals", "auto", kTlsCellIntegrals,
              "TLS: the element integrals (mass, momentum, body force) of the conservative fits "
              "(the grid's cells)"),
+      choice("method.tls_strain_rate", "gradient", kTlsStrainRates,
+             "TLS: the particles' velocity gradients for the stress update (the grid's cells, "
+             "one process)"),
       real("method.tls_triangle_max_condition", "", 10.0, greater_than(1),
            "largest condition number of a triangle's least-squares matrix in the L2-orthonormal "
            "Taylor basis (1: as well sampled as by uniform points) before completion "

@@ -23,6 +23,7 @@ TlsSettings tls_settings(const Config& cfg, int dim) {
   s.surface_volume = surface == "volume" || (surface == "auto" && dim >= 2);
   const std::string integrals = cfg.get_string("method.tls_cell_integrals");
   s.domain_integrals = integrals == "domains" || (integrals == "auto" && dim >= 2);
+  s.adjoint_strain_rate = cfg.get_string("method.tls_strain_rate") == "adjoint";
   s.gauss_points = static_cast<int>(cfg.get_int("method.gauss_points"));
   // 2D, 3D: the summary's max_condition is an upper bound where a cheap bound proves the element
   // well posed (TlsSettings::exact_condition), which saves the 6 x 6 eigensolves; 1D keeps the

@@ -134,6 +134,13 @@ inline constexpr Entry kTlsCellIntegrals[] = {
      "c_e = each particle's value split among the active elements its domain (the cpGIMP box) "
      "overlaps, by the overlap"},
 };
+inline constexpr Entry kTlsStrainRates[] = {
+    {"gradient", "each particle's velocity gradient at its position (D eq. 2.52)"},
+    {"adjoint",
+     "the adjoint of TLS's force: the grid's velocity gradients at the Gauss points through the "
+     "transposed stress fit, divided by the particle's weight in it (a symmetric linearised "
+     "step; docs/verification.md)"},
+};
 inline constexpr Entry kTlsSurfaceStress[] = {
     {"auto", "volume in 2D, element in 1D"},
     {"volume",

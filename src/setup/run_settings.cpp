@@ -225,6 +225,11 @@ RunSettings run_settings(const Config& cfg, int dim) {
               "whose TLS keeps the plain stress fit, D's element integrals and no positivity "
               "scaling (leave it \"auto\")",
               cfg.where(key), key, name_of(m.basis)));
+      if (ts.adjoint_strain_rate)
+        throw InputError(fmt::format(
+            "{}: method.tls_strain_rate = \"adjoint\" is defined on the grid's cells; this "
+            "run's basis \"{}\" uses triangles (choose \"gradient\")",
+            cfg.where("method.tls_strain_rate"), name_of(m.basis)));
       ts.positivity = false;
       ts.surface_volume = false;
       ts.domain_integrals = false;

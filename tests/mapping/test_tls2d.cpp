@@ -220,6 +220,68 @@ TEST(TlsReconstruction2D, ConservesElementIntegralsWithEveryCompletion) {
   EXPECT_TRUE(std::isnan(a[2][0]));
 }
 
+// fit_transpose (TlsSettings::adjoint_strain_rate) is the transpose of the fit: for data f,
+// element integrals c and coefficient weights abar, sum_e abar_e . a_e = sum_p z_p f_p +
+// sum_e ibar_e c_e, for plain, conservative and mixed fields, with elements of 0-12 points
+// (collinear, coincident: reduced and completed) and every completion (virtual points pass their
+// part on to the elements that value them, borrowed points to their own).
+TEST(TlsReconstruction2D, FitTransposeIsTheTransposeOfTheFit) {
+  const Grid<2> g(Vec<2>(-1.0, 0.0), Vec<2>(1.4, 2.0), IVec<2>{4, 4});
+  auto x = scatter(g, {9, 0, 1, 2, 8, 3, 10, 7, 12, 5, 0, 9, 8, 4, 11, 6}, 11);
+  for (auto& xp : x) {
+    const Index e = g.cell_index(xp);
+    if (e == 7) xp[1] = 0.75;                                      // collinear
+    if (e == 9) xp = Vec<2>(-1.0 + 1.37 * 0.6, 2.0 * 0.5 + 0.21);  // coincident
+  }
+  constexpr int nf = 2;
+  constexpr std::size_t E = 16;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> f(x.size() * nf), c(E * nf);
+  for (double& v : f) v = u(rng);
+  for (double& v : c) v = u(rng);
+  std::vector<unsigned char> flags(E), all(E, 1);
+  for (std::size_t e = 0; e < E; ++e) flags[e] = e % 3 == 0;
+  for (TlsCompletion mode :
+       {TlsCompletion::Reduce, TlsCompletion::Virtual, TlsCompletion::Neighbour}) {
+    TlsReconstruction2D r(settings(6, mode));
+    const TlsReport& rep = r.set_points(g, x);
+    EXPECT_GT(mode == TlsCompletion::Reduce    ? rep.reduced
+              : mode == TlsCompletion::Virtual ? rep.with_virtual
+                                               : rep.with_neighbours,
+              0);
+    for (const char* kind : {"plain", "conservative", "mixed"}) {
+      SCOPED_TRACE(fmt::format("{}, {}", tls_completion_name(mode), kind));
+      const bool plain = kind[0] == 'p';
+      const unsigned char* cons = plain ? nullptr : kind[0] == 'c' ? all.data() : flags.data();
+      std::array<TlsCoefficients2D, nf> a;
+      std::array<TlsReconstruction2D::Field, nf> fields;
+      for (int j = 0; j < nf; ++j) fields[j] = {plain ? nullptr : c.data() + j * E, cons, &a[j]};
+      r.fit_fields(f, fields);
+      std::vector<TlsCoefficients2D> abar(nf, TlsCoefficients2D(E));
+      double lhs = 0.0, scale = 0.0;
+      for (int j = 0; j < nf; ++j)
+        for (std::size_t e = 0; e < E; ++e) {
+          for (int k = 0; k < 6; ++k) abar[j][e][k] = u(rng);
+          lhs += abar[j][e].dot(a[j][e]);
+          scale += abar[j][e].norm() * a[j][e].norm();
+        }
+      std::vector<double> z(x.size() * nf), ibar(E * nf);
+      r.fit_transpose(abar, cons, z, ibar);
+      double rhs = 0.0;
+      for (std::size_t k = 0; k < z.size(); ++k) rhs += z[k] * f[k];
+      for (std::size_t k = 0; k < ibar.size(); ++k) {
+        if (plain) {
+          EXPECT_EQ(ibar[k], 0.0);
+        }
+        rhs += ibar[k] * c[k];
+      }
+      EXPECT_GT(scale, 1.0);
+      EXPECT_NEAR(lhs, rhs, 1e-12 * scale);
+    }
+  }
+}
+
 // A deficient element (one or two points) in the middle of well-filled neighbours: virtual face
 // points (3 per face for the quadratic basis, 2 for the linear one) and borrowed points restore
 // the full basis, so the polynomial is reproduced there exactly; Reduce keeps the conserved mean
@@ -603,6 +665,64 @@ TEST(TlsMapping2D, RigidTranslationStaysRigidLinear) {
 }
 TEST(TlsMapping2D, RigidTranslationStaysRigidBSpline) {
   rigid_translation(BSplineKind<2>{}, 1);
+}
+
+// TlsSettings::adjoint_strain_rate on the rough body (cut cells: surface elements with the
+// conservative stress fit, reduced fits, positivity) with the 2D defaults: the internal force's
+// power for any grid velocity and particle stresses is -sum_p omega_p sigma_p : L_p (the rate is
+// the force's adjoint, so the linearised step is symmetric), omega_p = V_p (the stress fitted
+// conservatively in every element), and a
+// uniform velocity gradient (v_i = A x*_i at the DOFs' Greville points) gives L_p = A.
+template <class Basis>
+void check_adjoint_rate() {
+  const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{8, 8});
+  auto P = rough_body(g, Vec<2>(0.3, 0.27), Vec<2>(0.72, 0.7), 9);
+  for (auto& b : P.body) b.setZero();
+  TlsSettings s;
+  s.completion = TlsCompletion::Reduce;
+  s.max_condition = 10.0;
+  s.positivity = s.surface_volume = s.domain_integrals = true;
+  s.exact_condition = false;
+  s.adjoint_strain_rate = true;
+  TlsSim2<Basis> sim(g, Basis(g), TlsMapping(s, 2), P, material_2d());
+  stages::evaluate_basis(sim);
+  stages::map_mass(sim);
+  stages::map_forces(sim);
+  const TlsReport& rep = sim.mapping.last_report();
+  EXPECT_GT(rep.surface + rep.reduced, 0);
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double power = 0.0, scale = 0.0;
+  for (Index i = 0; i < sim.nodes.size(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    sim.nodes.velocity[k] = Vec<2>(u(rng), u(rng));
+    power += sim.nodes.force[k].dot(sim.nodes.velocity[k]);
+    scale += sim.nodes.force[k].norm() * sim.nodes.velocity[k].norm();
+  }
+  sim.mapping.strain_rates(sim);
+  const auto& omega = sim.mapping.template adjoint_weights<2>();
+  ASSERT_EQ(sim.mapped_gradient.size(), P.x.size());
+  double adjoint = 0.0;
+  for (std::size_t p = 0; p < P.x.size(); ++p) {
+    EXPECT_NEAR(omega[p], P.volume[p], 1e-13 * P.volume[p]) << "particle " << p;
+    adjoint -= omega[p] * P.stress[p].cwiseProduct(sim.mapped_gradient[p]).sum();
+  }
+  EXPECT_GT(scale, 0.0);
+  EXPECT_NEAR(power, adjoint, 1e-12 * scale);
+  Mat<2> A;
+  A << 0.3, -1.2, 0.7, 0.45;
+  for (Index i = 0; i < sim.nodes.size(); ++i)
+    sim.nodes.velocity[static_cast<std::size_t>(i)] = A * sim.basis.dof_position(i);
+  sim.mapping.strain_rates(sim);
+  for (std::size_t p = 0; p < P.x.size(); ++p)
+    EXPECT_LT((sim.mapped_gradient[p] - A).norm(), 1e-12 * A.norm()) << "particle " << p;
+}
+
+TEST(TlsMapping2D, AdjointStrainRateIsTheForcesAdjointLinear) {
+  check_adjoint_rate<LinearBasis<2>>();
+}
+TEST(TlsMapping2D, AdjointStrainRateIsTheForcesAdjointBSpline) {
+  check_adjoint_rate<BSplineBasis<2, 2>>();
 }
 
 // Completion None stops the run with exit code 6, naming the element with its cell indices.
