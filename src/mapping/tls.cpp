@@ -930,12 +930,13 @@ void BasicTlsReconstruction<Dim>::fit_mixed(std::span<const double> f,
   fit(f, std::span<const Field>(&fd, 1));
 }
 
-// fit() in reverse: the elements with completion points first (they push their part to the
+// fit() in reverse: the elements with virtual points first (they push their part to the
 // elements that value those points, which have none), then the others. Per element and field,
 // plain: a = D^{-1} sum_k psi_k u_k, so u_k gets psi_k . D^{-1} abar; conservative: a_1 = c_e /
 // |Omega_e| and a_2..t = D_c^{-1} sum_k psi_k' (u_k - a_1), so u_k gets psi_k' . D_c^{-1}
-// abar', and c_e gets (abar_1 - sum_k of those) / |Omega_e|. Serial: a point (borrowed, or on
-// a shared face) can be a datum of several elements.
+// abar', and c_e gets (abar_1 - sum_k of those) / |Omega_e|. A point can be a datum of several
+// elements (borrowed, or on a shared face), so only the parts of own points are written in
+// parallel.
 template <int Dim>
 void BasicTlsReconstruction<Dim>::fit_transpose(std::span<Coefficients> abar,
                                                 const unsigned char* conservative,
@@ -951,39 +952,76 @@ void BasicTlsReconstruction<Dim>::fit_transpose(std::span<Coefficients> abar,
   std::fill(z.begin(), z.end(), 0.0);
   std::fill(ibar.begin(), ibar.end(), 0.0);
   const double volume = grid_.cell_volume();
-  std::vector<Taylor> c(nf);
-  for (int pass = 1; pass >= 0; --pass) {
-    for (Index e = 0; e < ne; ++e) {
-      const auto ei = static_cast<std::size_t>(e);
-      const System& sys = systems_[ei];
-      if (info_[ei].points == 0 || info_[ei].failed || sys.terms == 0) continue;
-      if (sys.has_virtual != (pass == 1)) continue;
-      const bool cons = conservative != nullptr && conservative[ei] != 0;
+  // Element e: c_j = D^{-1} abar_j (conservative: of terms 2..t) into c[0..nf), the parts of its
+  // own points (the first info.points data) if `own`, of its borrowed points if `borrowed`, of
+  // its virtual points (to their sources' abar), and ibar from all of them.
+  auto element = [&](Index e, bool own, bool borrowed, Taylor* c) {
+    const auto ei = static_cast<std::size_t>(e);
+    const System& sys = systems_[ei];
+    const bool cons = conservative != nullptr && conservative[ei] != 0;
+    for (std::size_t j = 0; j < nf; ++j) {
+      const Taylor& ab = abar[j][ei];
+      if (cons) {
+        c[j].setZero();
+        c[j].template tail<K - 1>().noalias() = sys.inv_c * ab.template tail<K - 1>();
+      } else {
+        c[j].noalias() = sys.inv * ab;
+      }
+    }
+    constexpr std::size_t kMaxNf = 16;
+    if (nf > kMaxNf)
+      throw std::invalid_argument("TlsReconstruction::fit_transpose: too many fields");
+    std::array<double, kMaxNf> sum{};  // sum_k of u_k's parts (conservative a_1)
+    const Index own_end = sys.begin + info_[ei].points;
+    for (Index k = sys.begin; k < sys.end; ++k) {
+      const Datum& d = data_[static_cast<std::size_t>(k)];
+      const bool write = d.point < 0 || (k < own_end ? own : borrowed);
       for (std::size_t j = 0; j < nf; ++j) {
-        const Taylor& ab = abar[j][ei];
-        if (cons) {
-          c[j].setZero();
-          c[j].template tail<K - 1>().noalias() = sys.inv_c * ab.template tail<K - 1>();
+        const double u = d.psi.dot(c[j]);
+        sum[j] += u;
+        if (!write) continue;
+        if (d.point >= 0) {
+          z[static_cast<std::size_t>(d.point) * nf + j] += u;
         } else {
-          c[j].noalias() = sys.inv * ab;
+          const DatumSource& src = from_[static_cast<std::size_t>(k)];
+          abar[j][static_cast<std::size_t>(src.source)] += taylor_basis_at<Dim>(src.s_source) * u;
         }
       }
-      std::vector<double> sum(nf, 0.0);  // sum_k of u_k's parts (conservative a_1)
-      for (Index k = sys.begin; k < sys.end; ++k) {
-        const Datum& d = data_[static_cast<std::size_t>(k)];
-        for (std::size_t j = 0; j < nf; ++j) {
-          const double u = d.psi.dot(c[j]);
-          sum[j] += u;
-          if (d.point >= 0) {
-            z[static_cast<std::size_t>(d.point) * nf + j] += u;
-          } else {
-            const DatumSource& src = from_[static_cast<std::size_t>(k)];
-            abar[j][static_cast<std::size_t>(src.source)] += taylor_basis_at<Dim>(src.s_source) * u;
-          }
-        }
-      }
-      if (cons)
-        for (std::size_t j = 0; j < nf; ++j) ibar[j * E + ei] = (abar[j][ei][0] - sum[j]) / volume;
+    }
+    if (cons)
+      for (std::size_t j = 0; j < nf; ++j) ibar[j * E + ei] = (abar[j][ei][0] - sum[j]) / volume;
+  };
+  auto fitted = [&](Index e, bool with_virtual) {
+    const auto ei = static_cast<std::size_t>(e);
+    return info_[ei].points > 0 && !info_[ei].failed && systems_[ei].terms > 0 &&
+           systems_[ei].has_virtual == with_virtual;
+  };
+  // The elements with virtual points first, serially: they push parts to their sources.
+  std::vector<Taylor> c(E * nf);
+  for (Index e = 0; e < ne; ++e)
+    if (fitted(e, true)) element(e, true, true, c.data() + static_cast<std::size_t>(e) * nf);
+  // Then the others. Each point is the own datum of one element unless face points were shared
+  // (standalone set_points): then they write their own points' parts in parallel, and the parts
+  // of the points borrowed from other elements follow in element order (the same bits for any
+  // thread count).
+  const bool exclusive =
+      bins_.order.size() + static_cast<std::size_t>(report_.outside) == x_.size();
+  if (!exclusive) {
+    for (Index e = 0; e < ne; ++e)
+      if (fitted(e, false)) element(e, true, true, c.data() + static_cast<std::size_t>(e) * nf);
+    return;
+  }
+  parallel_for(ne, [&](Index e) {
+    if (fitted(e, false)) element(e, true, false, c.data() + static_cast<std::size_t>(e) * nf);
+  });
+  for (Index e = 0; e < ne; ++e) {
+    const auto ei = static_cast<std::size_t>(e);
+    if (!fitted(e, false)) continue;
+    const System& sys = systems_[ei];
+    for (Index k = sys.begin + info_[ei].points; k < sys.end; ++k) {
+      const Datum& d = data_[static_cast<std::size_t>(k)];
+      for (std::size_t j = 0; j < nf; ++j)
+        z[static_cast<std::size_t>(d.point) * nf + j] += d.psi.dot(c[ei * nf + j]);
     }
   }
 }

@@ -390,34 +390,37 @@ const std::vector<Index>& TlsMapping::adjoint_gradients(RunState<Dim>& sim,
         st.zbar[p * nf + static_cast<std::size_t>(j)] +=
             f * st.ibar[static_cast<std::size_t>(j) * E + e];
     };
-    for (std::size_t e = 0; e < E; ++e) {
-      if (settings_.domain_integrals) {
-        for (std::size_t k = split_.start[e]; k < split_.start[e + 1]; ++k)
-          add(e, static_cast<std::size_t>(split_.point[k]), split_.fraction[k]);
-      } else {
-        const auto& bins = recon.bins();
-        for (const Index* p = bins.begin(static_cast<Index>(e));
-             p != bins.end(static_cast<Index>(e)); ++p)
-          add(e, static_cast<std::size_t>(*p), 1.0);
-      }
+    // In parallel over the particles: the split's entries of a particle are all in the chunk
+    // of binned particles that holds it (split_domains), a bin's particles in that bin alone.
+    const auto& bins = recon.bins();
+    if (settings_.domain_integrals) {
+      for_each_chunk(static_cast<Index>(bins.order.size()), [&](int c, Index, Index) {
+        for (const auto& t : split_.chunks[static_cast<std::size_t>(c)].entries)
+          add(static_cast<std::size_t>(t.element), static_cast<std::size_t>(t.point), t.fraction);
+      });
+    } else {
+      parallel_for(ne, [&](Index e) {
+        for (const Index* p = bins.begin(e); p != bins.end(e); ++p)
+          add(static_cast<std::size_t>(e), static_cast<std::size_t>(*p), 1.0);
+      });
     }
   }
   const auto N = static_cast<std::size_t>(P.size());
   sim.mapped_gradient.resize(N);
   st.omega.resize(N);
-  no_weight_.clear();
-  for (std::size_t p = 0; p < N; ++p) {
+  parallel_for(static_cast<Index>(N), [&](Index i) {
+    const auto p = static_cast<std::size_t>(i);
     const double* z = st.zbar.data() + p * nf;
     const double omega = z[nL];
     st.omega[p] = omega;
-    if (!(omega > 0.0)) {
-      no_weight_.push_back(static_cast<Index>(p));
-      continue;
-    }
+    if (!(omega > 0.0)) return;
     Mat<Dim>& L = sim.mapped_gradient[p];
     for (int r = 0; r < Dim; ++r)
       for (int c = 0; c < Dim; ++c) L(r, c) = z[r * Dim + c] / omega;
-  }
+  });
+  no_weight_.clear();
+  for (std::size_t p = 0; p < N; ++p)
+    if (!(st.omega[p] > 0.0)) no_weight_.push_back(static_cast<Index>(p));
   totals_.unweighted += static_cast<Index>(no_weight_.size());
   return no_weight_;
 }

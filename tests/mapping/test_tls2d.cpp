@@ -237,49 +237,58 @@ TEST(TlsReconstruction2D, FitTransposeIsTheTransposeOfTheFit) {
   constexpr std::size_t E = 16;
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // Two points on interior faces (x = -0.4 between cells 0 and 1 of row 2; y = 1 between rows 1
+  // and 2): with share_face_points each is a datum of both elements (the serial path).
+  x.push_back(Vec<2>(g.origin[0] + g.h[0], 1.3));
+  x.push_back(Vec<2>(0.5, g.origin[1] + 2.0 * g.h[1]));
   std::vector<double> f(x.size() * nf), c(E * nf);
   for (double& v : f) v = u(rng);
   for (double& v : c) v = u(rng);
   std::vector<unsigned char> flags(E), all(E, 1);
   for (std::size_t e = 0; e < E; ++e) flags[e] = e % 3 == 0;
-  for (TlsCompletion mode :
-       {TlsCompletion::Reduce, TlsCompletion::Virtual, TlsCompletion::Neighbour}) {
-    TlsReconstruction2D r(settings(6, mode));
-    const TlsReport& rep = r.set_points(g, x);
-    EXPECT_GT(mode == TlsCompletion::Reduce    ? rep.reduced
-              : mode == TlsCompletion::Virtual ? rep.with_virtual
-                                               : rep.with_neighbours,
-              0);
-    for (const char* kind : {"plain", "conservative", "mixed"}) {
-      SCOPED_TRACE(fmt::format("{}, {}", tls_completion_name(mode), kind));
-      const bool plain = kind[0] == 'p';
-      const unsigned char* cons = plain ? nullptr : kind[0] == 'c' ? all.data() : flags.data();
-      std::array<TlsCoefficients2D, nf> a;
-      std::array<TlsReconstruction2D::Field, nf> fields;
-      for (int j = 0; j < nf; ++j) fields[j] = {plain ? nullptr : c.data() + j * E, cons, &a[j]};
-      r.fit_fields(f, fields);
-      std::vector<TlsCoefficients2D> abar(nf, TlsCoefficients2D(E));
-      double lhs = 0.0, scale = 0.0;
-      for (int j = 0; j < nf; ++j)
-        for (std::size_t e = 0; e < E; ++e) {
-          for (int k = 0; k < 6; ++k) abar[j][e][k] = u(rng);
-          lhs += abar[j][e].dot(a[j][e]);
-          scale += abar[j][e].norm() * a[j][e].norm();
-        }
-      std::vector<double> z(x.size() * nf), ibar(E * nf);
-      r.fit_transpose(abar, cons, z, ibar);
-      double rhs = 0.0;
-      for (std::size_t k = 0; k < z.size(); ++k) rhs += z[k] * f[k];
-      for (std::size_t k = 0; k < ibar.size(); ++k) {
-        if (plain) {
-          EXPECT_EQ(ibar[k], 0.0);
-        }
-        rhs += ibar[k] * c[k];
+  for (const bool share : {false, true})
+    for (TlsCompletion mode :
+         {TlsCompletion::Reduce, TlsCompletion::Virtual, TlsCompletion::Neighbour}) {
+      TlsReconstruction2D r(settings(6, mode));
+      const TlsReport& rep = r.set_points(g, x, share);
+      if (share) {
+        EXPECT_EQ(r.bins().order.size(), x.size() + 2);  // the face points twice
       }
-      EXPECT_GT(scale, 1.0);
-      EXPECT_NEAR(lhs, rhs, 1e-12 * scale);
+      EXPECT_GT(mode == TlsCompletion::Reduce    ? rep.reduced
+                : mode == TlsCompletion::Virtual ? rep.with_virtual
+                                                 : rep.with_neighbours,
+                0);
+      for (const char* kind : {"plain", "conservative", "mixed"}) {
+        SCOPED_TRACE(fmt::format("{}, {}{}", tls_completion_name(mode), kind,
+                                 share ? ", face points shared" : ""));
+        const bool plain = kind[0] == 'p';
+        const unsigned char* cons = plain ? nullptr : kind[0] == 'c' ? all.data() : flags.data();
+        std::array<TlsCoefficients2D, nf> a;
+        std::array<TlsReconstruction2D::Field, nf> fields;
+        for (int j = 0; j < nf; ++j) fields[j] = {plain ? nullptr : c.data() + j * E, cons, &a[j]};
+        r.fit_fields(f, fields);
+        std::vector<TlsCoefficients2D> abar(nf, TlsCoefficients2D(E));
+        double lhs = 0.0, scale = 0.0;
+        for (int j = 0; j < nf; ++j)
+          for (std::size_t e = 0; e < E; ++e) {
+            for (int k = 0; k < 6; ++k) abar[j][e][k] = u(rng);
+            lhs += abar[j][e].dot(a[j][e]);
+            scale += abar[j][e].norm() * a[j][e].norm();
+          }
+        std::vector<double> z(x.size() * nf), ibar(E * nf);
+        r.fit_transpose(abar, cons, z, ibar);
+        double rhs = 0.0;
+        for (std::size_t k = 0; k < z.size(); ++k) rhs += z[k] * f[k];
+        for (std::size_t k = 0; k < ibar.size(); ++k) {
+          if (plain) {
+            EXPECT_EQ(ibar[k], 0.0);
+          }
+          rhs += ibar[k] * c[k];
+        }
+        EXPECT_GT(scale, 1.0);
+        EXPECT_NEAR(lhs, rhs, 1e-12 * scale);
+      }
     }
-  }
 }
 
 // A deficient element (one or two points) in the middle of well-filled neighbours: virtual face
