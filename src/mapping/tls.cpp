@@ -942,6 +942,8 @@ void BasicTlsReconstruction<Dim>::fit_transpose(std::span<Coefficients> abar,
                                                 const unsigned char* conservative,
                                                 std::span<double> z, std::span<double> ibar) const {
   const std::size_t nf = abar.size();
+  constexpr std::size_t kMaxNf = 16;  // a stack array per element (before the parallel loop)
+  if (nf > kMaxNf) throw std::invalid_argument("TlsReconstruction::fit_transpose: too many fields");
   const Index ne = grid_.num_cells();
   const auto E = static_cast<std::size_t>(ne);
   if (z.size() < x_.size() * nf || ibar.size() < E * nf)
@@ -968,9 +970,6 @@ void BasicTlsReconstruction<Dim>::fit_transpose(std::span<Coefficients> abar,
         c[j].noalias() = sys.inv * ab;
       }
     }
-    constexpr std::size_t kMaxNf = 16;
-    if (nf > kMaxNf)
-      throw std::invalid_argument("TlsReconstruction::fit_transpose: too many fields");
     std::array<double, kMaxNf> sum{};  // sum_k of u_k's parts (conservative a_1)
     const Index own_end = sys.begin + info_[ei].points;
     for (Index k = sys.begin; k < sys.end; ++k) {

@@ -621,12 +621,17 @@ class TlsMapping {
   // at the last strain_rates (sum_g R_gp w_g; its volume V_p where the fits are conservative).
   template <int Dim>
   const std::vector<double>& adjoint_weights() const {
-    if constexpr (Dim == 1)
-      return state1_->omega;
-    else if constexpr (Dim == 2)
-      return state2_->omega;
-    else
-      return state3_->omega;
+    const auto& st = [this]() -> const auto& {
+      if constexpr (Dim == 1)
+        return state1_;
+      else if constexpr (Dim == 2)
+        return state2_;
+      else
+        return state3_;
+    }
+    ();
+    if (!st) throw std::logic_error(fmt::format("TlsMapping: no {}D adjoint weights yet", Dim));
+    return st->omega;
   }
   // Counts summed over the steps so far (element-steps), largest condition number of the run.
   const TlsReport& totals() const { return totals_; }
@@ -737,7 +742,7 @@ class TlsMapping {
  private:
   // tls_mapping.cpp: strain_rates' transpose of the stress fit, from st.wgrad, into
   // sim.mapped_gradient; returns the particles whose weight omega_p is not positive (their
-  // entries left for the caller). Counts them in totals_.adjoint_fallback.
+  // entries left for the caller). Counts them in totals_.unweighted.
   template <int Dim>
   const std::vector<Index>& adjoint_gradients(RunState<Dim>& sim, const GaussPoints<Dim>& q);
   std::vector<Index> no_weight_;
