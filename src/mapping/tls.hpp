@@ -582,15 +582,7 @@ class TlsMapping {
   // The reconstruction of the last step (before the first step: of the constructor's dimension).
   template <int Dim = 1>
   const BasicTlsReconstruction<Dim>& reconstruction() const {
-    const auto& st = [this]() -> const auto& {
-      if constexpr (Dim == 1)
-        return state1_;
-      else if constexpr (Dim == 2)
-        return state2_;
-      else
-        return state3_;
-    }
-    ();
+    const auto& st = slot<Dim>();
     if (!st) throw std::logic_error(fmt::format("TlsMapping: no {}D reconstruction yet", Dim));
     return st->recon;
   }
@@ -621,15 +613,7 @@ class TlsMapping {
   // at the last strain_rates (sum_g R_gp w_g; its volume V_p where the fits are conservative).
   template <int Dim>
   const std::vector<double>& adjoint_weights() const {
-    const auto& st = [this]() -> const auto& {
-      if constexpr (Dim == 1)
-        return state1_;
-      else if constexpr (Dim == 2)
-        return state2_;
-      else
-        return state3_;
-    }
-    ();
+    const auto& st = slot<Dim>();
     if (!st) throw std::logic_error(fmt::format("TlsMapping: no {}D adjoint weights yet", Dim));
     return st->omega;
   }
@@ -746,20 +730,26 @@ class TlsMapping {
   template <int Dim>
   const std::vector<Index>& adjoint_gradients(RunState<Dim>& sim, const GaussPoints<Dim>& q);
   std::vector<Index> no_weight_;
+  // The slot of dimension Dim's state (empty until its first use).
+  template <int Dim>
+  std::optional<TlsMappingState<Dim>>& slot() {
+    if constexpr (Dim == 1)
+      return state1_;
+    else if constexpr (Dim == 2)
+      return state2_;
+    else
+      return state3_;
+  }
+  template <int Dim>
+  const std::optional<TlsMappingState<Dim>>& slot() const {
+    return const_cast<TlsMapping*>(this)->slot<Dim>();
+  }
   // The state of dimension Dim, created (and the settings validated for Dim) on first use.
   template <int Dim>
   TlsMappingState<Dim>& state() {
     static_assert(Dim >= 1 && Dim <= 3, "the TLS mapping is implemented in 1D to 3D");
     dim_ = Dim;
-    auto& st = [this]() -> auto& {
-      if constexpr (Dim == 1)
-        return state1_;
-      else if constexpr (Dim == 2)
-        return state2_;
-      else
-        return state3_;
-    }
-    ();
+    auto& st = slot<Dim>();
     if (!st) {
       validate(settings_, Dim);
       st.emplace(settings_);
