@@ -344,10 +344,16 @@ template <int Dim>
 const TlsReport& BasicTlsReconstruction<Dim>::set_points(const Grid<Dim>& g,
                                                          const Particles<Dim>& P) {
   grid_ = g;
-  x_.assign(P.x.begin(), P.x.end());
-  key_.assign(P.id.begin(), P.id.end());
+  // Copied in the sort's parallel pass over the points (serial, these and the sort were 3 % of
+  // a step).
+  const auto n = static_cast<std::size_t>(P.size());
+  x_.resize(n);
+  key_.resize(n);
   report_ = TlsReport{};
-  bins_.build(g, P);
+  bins_.build(g, std::span(P.x), [&](std::size_t p) {
+    x_[p] = P.x[p];
+    key_[p] = P.id[p];
+  });
   build_systems();
   return report_;
 }
@@ -667,10 +673,26 @@ void BasicTlsReconstruction<Dim>::build_systems() {
   own_.resize(ne_s);
   systems_.resize(ne_s);
   info_.assign(ne_s, TlsElementInfo{});
+  // Every element gets a slot in data_ for its own points and the most completion points it can
+  // add, at a fixed offset, so that pass 2 can fill the slots in parallel (unused entries stay
+  // unused; sys.begin .. sys.end is what an element filled).
+  const std::size_t nxi = face_xi_.size();
+  const std::size_t virtual_max = 2 * Dim * (Dim == 1 ? 1 : Dim == 2 ? nxi : nxi * nxi);
+  const Index extra = settings_.completion == TlsCompletion::Virtual
+                          ? static_cast<Index>(virtual_max)
+                      : settings_.completion == TlsCompletion::Neighbour
+                          ? static_cast<Index>(settings_.max_borrowed_used(Dim))
+                          : 0;
+  slots_.resize(ne_s + 1);
 
+  // Reduce and None complete no element from its neighbours: each element's slot holds its own
+  // points (the bins' offsets), and an element's pass 2 can follow its pass 1 in one loop (a
+  // parallel region and a second sweep over the elements saved per step; the same systems).
+  const bool local =
+      settings_.completion == TlsCompletion::Reduce || settings_.completion == TlsCompletion::None;
   // Pass 1: each element from its own points (also decides which neighbours can lend virtual
   // points). Elements are independent: parallel, and the same bits for any thread count.
-  parallel_for(ne, [&](Index e) {
+  auto own_pass = [&](Index e) {
     Own& o = own_[static_cast<std::size_t>(e)];
     o.D.setZero();
     o.distinct = 0;
@@ -701,32 +723,17 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     info_[static_cast<std::size_t>(e)].points = count;
     o.ok = count > 0 && well_posed(o.D, o.distinct, nb, o.condition, &o.s_inv, &o.has_s_inv);
     if (count == 0) o.condition = 0.0;
-  });
-
-  // Every element gets a slot in data_ for its own points and the most completion points it can
-  // add, at a fixed offset, so that pass 2 can fill the slots in parallel (unused entries stay
-  // unused; sys.begin .. sys.end is what an element filled).
-  const std::size_t nxi = face_xi_.size();
-  const std::size_t virtual_max = 2 * Dim * (Dim == 1 ? 1 : Dim == 2 ? nxi : nxi * nxi);
-  const std::size_t extra = settings_.completion == TlsCompletion::Virtual ? virtual_max
-                            : settings_.completion == TlsCompletion::Neighbour
-                                ? static_cast<std::size_t>(settings_.max_borrowed_used(Dim))
-                                : 0;
-  std::size_t slots = 0;
-  for (std::size_t e = 0; e < ne_s; ++e) {
-    systems_[e].begin = static_cast<Index>(slots);
-    const auto count = static_cast<std::size_t>(info_[e].points);
-    if (count > 0) slots += count + (own_[e].ok ? 0 : extra);
-  }
-  data_.resize(slots);
-  from_.resize(slots);
+    if (!local)
+      slots_[static_cast<std::size_t>(e) + 1] = count > 0 ? count + (o.ok ? 0 : extra) : 0;
+  };
 
   // Pass 2: data, completion, number of terms and factorisations; independent per element (a
   // completion reads only the pass-1 results of its neighbours).
-  parallel_for(ne, [&](Index e) {
+  auto system_pass = [&](Index e) {
     const Own& o = own_[static_cast<std::size_t>(e)];
     System& sys = systems_[static_cast<std::size_t>(e)];
     TlsElementInfo& info = info_[static_cast<std::size_t>(e)];
+    sys.begin = slots_[static_cast<std::size_t>(e)];
     sys.end = sys.begin;
     sys.terms = 0;
     sys.has_virtual = false;
@@ -780,29 +787,73 @@ void BasicTlsReconstruction<Dim>::build_systems() {
     factorise(sys, D, o.ok && o.has_s_inv ? &o.s_inv : nullptr);
     info.terms = t;
     info.condition = cond;
-  });
+  };
+  if (local) {
+    slots_.assign(bins_.start.begin(), bins_.start.end());
+    data_.resize(static_cast<std::size_t>(slots_[ne_s]));
+    from_.resize(static_cast<std::size_t>(slots_[ne_s]));
+    parallel_for(ne, [&](Index e) {
+      own_pass(e);
+      system_pass(e);
+    });
+  } else {
+    parallel_for(ne, own_pass);
+    // The slots' offsets: a prefix sum over this compact array (a serial pass that read the
+    // elements' systems instead, a cache line each, was 1 % of a step).
+    slots_[0] = 0;
+    for (std::size_t e = 0; e < ne_s; ++e) slots_[e + 1] += slots_[e];
+    data_.resize(static_cast<std::size_t>(slots_[ne_s]));
+    from_.resize(static_cast<std::size_t>(slots_[ne_s]));
+    parallel_for(ne, system_pass);
+  }
 
-  // The report, in element order (the first failed element is the lowest index), over the
-  // elements of set_focus.
-  for (Index e = std::max<Index>(0, focus_[0]); e < std::min(ne, focus_[1]); ++e) {
-    const TlsElementInfo& info = info_[static_cast<std::size_t>(e)];
-    if (info.points == 0) continue;
-    ++report_.active;
-    if (info.failed) {
-      if (report_.failed++ == 0) {
-        report_.failed_element = e;
-        report_.failed_points = info.points;
-        report_.failed_condition = info.condition;
+  // The report over the elements of set_focus: partial reports of fixed chunks of elements in
+  // parallel, combined in chunk order (counts, extremes and the first failed element, the
+  // lowest index: the same for any thread count; a serial pass was 1 % of a step).
+  const Index lo = std::max<Index>(0, focus_[0]),
+              span = std::max<Index>(std::min(ne, focus_[1]) - lo, 0);
+  std::array<TlsReport, ParticleChunks::kMax> part;
+  for_each_chunk(span, [&](int c, Index b, Index end) {
+    TlsReport& r = part[static_cast<std::size_t>(c)];
+    r = TlsReport{};
+    for (Index e = lo + b; e < lo + end; ++e) {
+      const TlsElementInfo& info = info_[static_cast<std::size_t>(e)];
+      if (info.points == 0) continue;
+      ++r.active;
+      if (info.failed) {
+        if (r.failed++ == 0) {
+          r.failed_element = e;
+          r.failed_points = info.points;
+          r.failed_condition = info.condition;
+        }
+        continue;
       }
-      continue;
+      const int t = info.terms;
+      if (own_[static_cast<std::size_t>(e)].ok) ++r.full;
+      if (t < nb) ++r.reduced;
+      if (info.virtual_points > 0) ++r.with_virtual;
+      if (info.borrowed > 0) ++r.with_neighbours;
+      r.min_terms = r.min_terms > 0 ? std::min(r.min_terms, t) : t;
+      r.max_condition = std::max(r.max_condition, info.condition);
     }
-    const int t = info.terms;
-    if (own_[static_cast<std::size_t>(e)].ok) ++report_.full;
-    if (t < nb) ++report_.reduced;
-    if (info.virtual_points > 0) ++report_.with_virtual;
-    if (info.borrowed > 0) ++report_.with_neighbours;
-    report_.min_terms = report_.min_terms > 0 ? std::min(report_.min_terms, t) : t;
-    report_.max_condition = std::max(report_.max_condition, info.condition);
+  });
+  for (int c = 0; c < ParticleChunks::count(span); ++c) {
+    const TlsReport& r = part[static_cast<std::size_t>(c)];
+    if (r.failed > 0 && report_.failed == 0) {
+      report_.failed_element = r.failed_element;
+      report_.failed_points = r.failed_points;
+      report_.failed_condition = r.failed_condition;
+    }
+    report_.active += r.active;
+    report_.failed += r.failed;
+    report_.full += r.full;
+    report_.reduced += r.reduced;
+    report_.with_virtual += r.with_virtual;
+    report_.with_neighbours += r.with_neighbours;
+    if (r.min_terms > 0)
+      report_.min_terms =
+          report_.min_terms > 0 ? std::min(report_.min_terms, r.min_terms) : r.min_terms;
+    report_.max_condition = std::max(report_.max_condition, r.max_condition);
   }
 }
 
@@ -821,7 +872,10 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f,
   const double volume = grid_.cell_volume();  // |Omega_e| (D eq. 6.7)
   // Elements are independent within a pass (pass 1 reads only pass-0 coefficients): parallel,
   // the same bits for any thread count.
-  for (int pass = 0; pass < 2; ++pass) {
+  // Only the virtual completion adds virtual points: the other completions need no second pass
+  // (a parallel loop over the elements, three per step, saved).
+  const int passes = settings_.completion == TlsCompletion::Virtual ? 2 : 1;
+  for (int pass = 0; pass < passes; ++pass) {
     parallel_for(ne, [&](Index e) {
       const auto ei = static_cast<std::size_t>(e);
       const System& sys = systems_[ei];

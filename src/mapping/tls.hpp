@@ -460,6 +460,7 @@ class BasicTlsReconstruction {
   std::vector<Datum> data_;
   std::vector<DatumSource> from_;  // data_[k] virtual: its source
   std::vector<Index> fill_;        // binning cursors (standalone point sets)
+  std::vector<Index> slots_;       // build_systems: each element's first slot in data_ (CSR)
   TlsReport report_;
 };
 
@@ -479,6 +480,7 @@ struct TlsMappingState {
   std::vector<Vec<Dim>> xi;            // Gauss points in [-1, 1]^Dim
   std::vector<Vec<Dim>> w;             // their 1D weights per direction (product: the weight)
   std::vector<TaylorVector<Dim>> psi;  // Taylor basis at xi
+  std::vector<Index> gauss_first;      // per element of the last fit_mass's range: its first point
   BasicTlsCoefficients<Dim> coef;
   // The fields fitted together (TlsMapping::fit_momentum, fit_forces): at most the stress
   // components and the body-force density.
@@ -759,14 +761,26 @@ class TlsMapping {
   // For the n fields j: integrals_[j * E + e] = sum over the element's particles of value(p, j)
   // (E elements); with TlsSettings::domain_integrals (on the grid's cells), sum over the
   // particles whose domain overlaps e of value(p, j) times the overlap fraction (split_, built
-  // by split_domains). One pass over the particle lists for all fields.
-  template <class Recon, class Value>
-  void element_sums(const Recon& recon, int n, Value&& value) {
+  // by split_domains). One pass over the particle lists for all fields. And values_[i * nv + j] =
+  // point(i, j) for the N particles and nv fields (values() is that part of values_), in the
+  // same parallel region (parallel_for_both).
+  template <class Recon, class Point, class Value>
+  void values_and_sums(const Recon& recon, std::size_t N, int nv, Point&& point, int n,
+                       Value&& value) {
     const auto& bins = recon.bins();
     const auto ne = static_cast<std::size_t>(recon.num_elements());
     integrals_.resize(ne * static_cast<std::size_t>(n));
     constexpr int kMax = 9;  // the stress and body-force density in 3D (fit_forces)
-    if (n > kMax) throw std::logic_error("TlsMapping::element_sums: too many fields");
+    if (n > kMax) throw std::logic_error("TlsMapping::values_and_sums: too many fields");
+    // The buffer only grows: the three fits of a step use 1, Dim and Dim (Dim + 1) / 2 + Dim
+    // fields, and resizing it up again each step zeroed what is written next (1 % of a TLS
+    // step, serial).
+    values_used_ = N * static_cast<std::size_t>(nv);
+    if (values_.size() < values_used_) values_.resize(values_used_);
+    auto fill = [&](Index i) {
+      const auto p = static_cast<std::size_t>(i);
+      for (int j = 0; j < nv; ++j) values_[p * static_cast<std::size_t>(nv) + j] = point(p, j);
+    };
     auto sum = [&](Index e, auto&& each) {
       std::array<double, kMax> c{};
       each([&](std::size_t p, double fraction) {
@@ -777,7 +791,7 @@ class TlsMapping {
             c[static_cast<std::size_t>(j)];
     };
     if (settings_.domain_integrals) {
-      parallel_for(recon.num_elements(), [&](Index e) {
+      parallel_for_both(static_cast<Index>(N), fill, recon.num_elements(), [&](Index e) {
         const auto ei = static_cast<std::size_t>(e);
         sum(e, [&](auto&& add) {
           for (std::size_t k = split_.start[ei]; k < split_.start[ei + 1]; ++k)
@@ -786,14 +800,14 @@ class TlsMapping {
       });
       return;
     }
-    parallel_for(recon.num_elements(), [&](Index e) {
+    parallel_for_both(static_cast<Index>(N), fill, recon.num_elements(), [&](Index e) {
       sum(e, [&](auto&& add) {
         for (const Index* p = bins.begin(e); p != bins.end(e); ++p)
           add(static_cast<std::size_t>(*p), 1.0);
       });
     });
   }
-  // The integrals of field j of the last element_sums.
+  // The integrals of field j of the last values_and_sums.
   const double* integrals_of(int j, Index elements) const {
     return integrals_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(elements);
   }
@@ -801,15 +815,7 @@ class TlsMapping {
   // active elements, by element (CSR), rebuilt by fit_mass each step (tls_mapping.cpp).
   template <int Dim>
   void split_domains(const RunState<Dim>& sim, const BasicTlsReconstruction<Dim>& recon);
-  // values_[i * n + j] = value(i, j) for the N particles and n fields (values_ sized here).
-  template <class Value>
-  void fill_values(std::size_t N, int n, Value&& value) {
-    values_.resize(N * static_cast<std::size_t>(n));
-    parallel_for(static_cast<Index>(N), [&](Index i) {
-      const auto p = static_cast<std::size_t>(i);
-      for (int j = 0; j < n; ++j) values_[p * static_cast<std::size_t>(n) + j] = value(p, j);
-    });
-  }
+  std::span<const double> values() const { return std::span(values_).first(values_used_); }
   // The reconstruction st.coef at every Gauss point: element e, local point k = g mod n^Dim.
   template <int Dim, class Store>
   static void at_gauss(const TlsMappingState<Dim>& st, const GaussPoints<Dim>& q, Store&& store) {
@@ -836,13 +842,12 @@ class TlsMapping {
   // points placed in q, rho^ there), map_momentum ((rho v)^) and map_forces (sigma^, (rho b)^).
   template <int Dim>
   void fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q);
-  // tls_mapping.cpp: TlsSettings::surface_volume's element flags and positivity's theta (both
-  // from the density fit in st.coef), and theta applied to a conservative fit in st.coef.
-  // Both return how many elements of `own` (RunState::own_cells) they flagged or limited.
+  // tls_mapping.cpp: TlsSettings::surface_volume's element flags and positivity's theta (from
+  // the density fit in st.coef), in one parallel loop; returns how many elements of `own`
+  // (RunState::own_cells) each flagged or limited. apply_theta: theta applied to a conservative
+  // fit in st.coef.
   template <int Dim>
-  Index mark_surface(TlsMappingState<Dim>& st, const std::array<Index, 2>& own);
-  template <int Dim>
-  Index limit_density(TlsMappingState<Dim>& st, const std::array<Index, 2>& own);
+  std::array<Index, 2> flag_elements(TlsMappingState<Dim>& st, const std::array<Index, 2>& own);
   template <int Dim>
   double reach(const RunState<Dim>& sim) const;
   template <int Dim>
@@ -866,6 +871,7 @@ class TlsMapping {
   TlsReport triangle_report_;                         // of the last step there
   QuadratureStore quad_;
   std::vector<double> values_, integrals_;  // per particle, per element
+  std::size_t values_used_ = 0;             // of values_: the last values_and_sums
   struct DomainSplit {
     std::vector<std::size_t> start;  // element e: entries start[e] .. start[e + 1]
     std::vector<Index> point;        // particle

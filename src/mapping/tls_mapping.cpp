@@ -14,54 +14,52 @@ namespace mpm {
 
 // TlsSettings::surface_volume: an active element with an inactive one among the 3^Dim - 1
 // around it (inside the grid) is cut by a free surface.
+// TlsSettings::positivity (Zhang and Shu 2010): with m = min_g rho^(x_g) < 0 over the element's
+// Gauss points, rho^ = a_1 + theta (rho^ - a_1) with theta = a_1 / (a_1 - m) is zero there and
+// non-negative at the others; a_1 = sum m_p / |Omega_e| > 0 is kept, so mass is conserved.
+// st.surface is read only with surface_volume, st.theta only with positivity (apply_theta).
 template <int Dim>
-Index TlsMapping::mark_surface(TlsMappingState<Dim>& st, const std::array<Index, 2>& own) {
-  if (!settings_.surface_volume) return 0;  // st.surface is read only with it
+std::array<Index, 2> TlsMapping::flag_elements(TlsMappingState<Dim>& st,
+                                               const std::array<Index, 2>& own) {
+  const bool surface = settings_.surface_volume, positivity = settings_.positivity;
+  if (!surface && !positivity) return {0, 0};
   const auto& recon = st.recon;
   const Index ne = recon.num_elements();
-  st.surface.assign(static_cast<std::size_t>(ne), 0);
+  if (surface) st.surface.assign(static_cast<std::size_t>(ne), 0);
+  if (positivity) st.theta.assign(static_cast<std::size_t>(ne), 1.0);
   const auto& grid = recon.grid();
   int around = 1;
   for (int d = 0; d < Dim; ++d) around *= 3;
   parallel_for(ne, [&](Index e) {
     if (!recon.active(e)) return;
-    const IVec<Dim> c = recon.cell(e);
-    for (int k = 0; k < around; ++k) {
-      IVec<Dim> n = c;
-      for (int d = 0, r = k; d < Dim; ++d, r /= 3) n[d] += r % 3 - 1;
-      if (grid.has_cell(n) && !recon.active(grid.cell_index(n))) {
-        st.surface[static_cast<std::size_t>(e)] = 1;
-        return;
+    if (surface) {
+      const IVec<Dim> c = recon.cell(e);
+      for (int k = 0; k < around; ++k) {
+        IVec<Dim> n = c;
+        for (int d = 0, r = k; d < Dim; ++d, r /= 3) n[d] += r % 3 - 1;
+        if (grid.has_cell(n) && !recon.active(grid.cell_index(n))) {
+          st.surface[static_cast<std::size_t>(e)] = 1;
+          break;
+        }
+      }
+    }
+    if (positivity) {
+      auto& a = st.coef[static_cast<std::size_t>(e)];
+      double lowest = 0.0;
+      for (const auto& psi : st.psi) lowest = std::min(lowest, a.dot(psi));
+      if (lowest < 0.0) {
+        const double theta = a[0] / (a[0] - lowest);
+        st.theta[static_cast<std::size_t>(e)] = theta;
+        a.tail(a.size() - 1) *= theta;
       }
     }
   });
-  Index flagged = 0;
-  for (Index e = own[0]; e < own[1]; ++e) flagged += st.surface[static_cast<std::size_t>(e)];
+  std::array<Index, 2> flagged{0, 0};
+  for (Index e = own[0]; e < own[1]; ++e) {
+    if (surface) flagged[0] += st.surface[static_cast<std::size_t>(e)];
+    if (positivity) flagged[1] += st.theta[static_cast<std::size_t>(e)] < 1.0;
+  }
   return flagged;
-}
-
-// TlsSettings::positivity (Zhang and Shu 2010): with m = min_g rho^(x_g) < 0 over the element's
-// Gauss points, rho^ = a_1 + theta (rho^ - a_1) with theta = a_1 / (a_1 - m) is zero there and
-// non-negative at the others; a_1 = sum m_p / |Omega_e| > 0 is kept, so mass is conserved.
-template <int Dim>
-Index TlsMapping::limit_density(TlsMappingState<Dim>& st, const std::array<Index, 2>& own) {
-  if (!settings_.positivity) return 0;  // st.theta is read only with it (apply_theta)
-  const Index ne = st.recon.num_elements();
-  st.theta.assign(static_cast<std::size_t>(ne), 1.0);
-  parallel_for(ne, [&](Index e) {
-    if (!st.recon.active(e)) return;
-    auto& a = st.coef[static_cast<std::size_t>(e)];
-    double lowest = 0.0;
-    for (const auto& psi : st.psi) lowest = std::min(lowest, a.dot(psi));
-    if (lowest < 0.0) {
-      const double theta = a[0] / (a[0] - lowest);
-      st.theta[static_cast<std::size_t>(e)] = theta;
-      a.tail(a.size() - 1) *= theta;
-    }
-  });
-  Index limited = 0;
-  for (Index e = own[0]; e < own[1]; ++e) limited += st.theta[static_cast<std::size_t>(e)] < 1.0;
-  return limited;
 }
 
 template <int Dim>
@@ -226,29 +224,44 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   if (rep.failed > 0)
     throw_fit_failure(sim.step, sim.time, rep, "element", st.recon.describe(rep.failed_element),
                       "reduce, virtual or neighbour");
-  q.clear();
   // D 6.3: the same Gauss rule in every element of the uniform grid, weights scaled by the
-  // half-widths (the Jacobian of the map from [-1, 1]^Dim).
+  // half-widths (the Jacobian of the map from [-1, 1]^Dim). The active elements' first points
+  // by a serial count over the elements, then the points in parallel (in a serial loop they
+  // were 1 % of a step).
   const Vec<Dim> hw = st.recon.half_width_vec();
+  const std::size_t nk = st.xi.size();
+  std::vector<Index>& first = st.gauss_first;
+  first.resize(static_cast<std::size_t>(std::max<Index>(own[1] - own[0], 0)));
+  std::size_t points = 0;
   for (Index e = own[0]; e < own[1]; ++e) {
-    if (!st.recon.active(e)) continue;  // no particles: no reconstruction, no mass
+    first[static_cast<std::size_t>(e - own[0])] = static_cast<Index>(points);
+    if (st.recon.active(e)) points += nk;  // no particles: no reconstruction, no mass
+  }
+  q.resize(points);
+  parallel_for(static_cast<Index>(first.size()), [&](Index k0) {
+    const Index e = own[0] + k0;
+    if (!st.recon.active(e)) return;
     const Vec<Dim> c = st.recon.centre_vec(e);
-    for (std::size_t k = 0; k < st.xi.size(); ++k) {
+    const auto g0 = static_cast<std::size_t>(first[static_cast<std::size_t>(k0)]);
+    for (std::size_t k = 0; k < nk; ++k) {
       Vec<Dim> x;
       double wg = 1.0;
       for (int d = 0; d < Dim; ++d) {
         x[d] = c[d] + hw[d] * st.xi[k][d];
         wg *= hw[d] * st.w[k][d];
       }
-      q.add(x, wg, e);
+      q.x[g0 + k] = x;
+      q.w[g0 + k] = wg;
+      q.element[g0 + k] = e;
     }
-  }
+  });
   split_domains(sim, st.recon);
-  element_sums(st.recon, 1, [&](std::size_t i, int) { return P.mass[i]; });
-  fill_values(P.x.size(), 1, [&](std::size_t i, int) { return P.density(i); });
-  st.recon.fit_conservative(values_, integrals_, st.coef);
-  std::array<double, 2> flagged{static_cast<double>(mark_surface(st, own)),
-                                static_cast<double>(limit_density(st, own))};
+  values_and_sums(
+      st.recon, P.x.size(), 1, [&](std::size_t i, int) { return P.density(i); }, 1,
+      [&](std::size_t i, int) { return P.mass[i]; });
+  st.recon.fit_conservative(values(), integrals_, st.coef);
+  const std::array<Index, 2> flags = flag_elements(st, own);
+  std::array<double, 2> flagged{static_cast<double>(flags[0]), static_cast<double>(flags[1])};
   if (sim.comm) sim.comm->sum(std::span<double>(flagged));
   totals_.surface += static_cast<Index>(flagged[0]);
   totals_.limited += static_cast<Index>(flagged[1]);
@@ -262,13 +275,14 @@ void TlsMapping::fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   auto& st = state<Dim>();
   const auto& P = sim.particles;
   const Index ne = st.recon.num_elements();
-  fill_values(P.x.size(), Dim, [&](std::size_t i, int d) { return P.density(i) * P.v[i][d]; });
-  element_sums(st.recon, Dim, [&](std::size_t i, int d) { return P.mass[i] * P.v[i][d]; });
+  values_and_sums(
+      st.recon, P.x.size(), Dim, [&](std::size_t i, int d) { return P.density(i) * P.v[i][d]; },
+      Dim, [&](std::size_t i, int d) { return P.mass[i] * P.v[i][d]; });
   std::array<typename BasicTlsReconstruction<Dim>::Field, Dim> fields;
   for (int d = 0; d < Dim; ++d)
     fields[static_cast<std::size_t>(d)] = {integrals_of(d, ne), nullptr,
                                            &st.fields[static_cast<std::size_t>(d)]};
-  st.recon.fit_fields(values_, fields);
+  st.recon.fit_fields(values(), fields);
   for (int d = 0; d < Dim; ++d) apply_theta(st, st.fields[static_cast<std::size_t>(d)], nullptr);
   st.rhov.resize(q.size());
   at_gauss(st, Dim, q, [&](std::size_t g, int d, double v) { st.rhov[g][d] = v; });
@@ -294,26 +308,29 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
       return comp[static_cast<std::size_t>(j)];
     }
   };
-  fill_values(P.x.size(), nf, [&](std::size_t i, int j) {
-    if (j < ns) {
-      const auto [r, c] = rc(j);
-      return P.stress[i](r, c);
-    }
-    return P.density(i) * P.body[i][j - ns];
-  });
   // Surface elements (surface_volume): the stress of their material, int_e sigma^ =
   // sum_p V_p sigma_p (fitted conservatively there, plain elsewhere). With the adjoint strain
   // rate every element fits the stress so, which makes each particle's weight in the fits its
   // volume (omega_p = V_p, adjoint_gradients).
   const bool surface = settings_.surface_volume, everywhere = settings_.adjoint_strain_rate;
-  element_sums(st.recon, nf, [&](std::size_t i, int j) {
-    if (j < ns) {
-      if (!surface && !everywhere) return 0.0;
-      const auto [r, c] = rc(j);
-      return P.volume[i] * P.stress[i](r, c);
-    }
-    return P.mass[i] * P.body[i][j - ns];
-  });
+  values_and_sums(
+      st.recon, P.x.size(), nf,
+      [&](std::size_t i, int j) {
+        if (j < ns) {
+          const auto [r, c] = rc(j);
+          return P.stress[i](r, c);
+        }
+        return P.density(i) * P.body[i][j - ns];
+      },
+      nf,
+      [&](std::size_t i, int j) {
+        if (j < ns) {
+          if (!surface && !everywhere) return 0.0;
+          const auto [r, c] = rc(j);
+          return P.volume[i] * P.stress[i](r, c);
+        }
+        return P.mass[i] * P.body[i][j - ns];
+      });
   std::array<typename BasicTlsReconstruction<Dim>::Field, nf> fields;
   for (int j = 0; j < nf; ++j) {
     auto& f = fields[static_cast<std::size_t>(j)];
@@ -321,7 +338,7 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
     if (j >= ns || surface || everywhere) f.integrals = integrals_of(j, ne);
     if (j < ns && surface && !everywhere) f.conservative = st.surface.data();
   }
-  st.recon.fit_fields(values_, fields);
+  st.recon.fit_fields(values(), fields);
   for (int j = 0; j < nf; ++j) {
     if (j < ns && !surface) continue;
     apply_theta(st, st.fields[static_cast<std::size_t>(j)], j < ns ? st.surface.data() : nullptr);
@@ -425,12 +442,12 @@ const std::vector<Index>& TlsMapping::adjoint_gradients(RunState<Dim>& sim,
   return no_weight_;
 }
 
-template Index TlsMapping::mark_surface<1>(TlsMappingState<1>&, const std::array<Index, 2>&);
-template Index TlsMapping::mark_surface<2>(TlsMappingState<2>&, const std::array<Index, 2>&);
-template Index TlsMapping::mark_surface<3>(TlsMappingState<3>&, const std::array<Index, 2>&);
-template Index TlsMapping::limit_density<1>(TlsMappingState<1>&, const std::array<Index, 2>&);
-template Index TlsMapping::limit_density<2>(TlsMappingState<2>&, const std::array<Index, 2>&);
-template Index TlsMapping::limit_density<3>(TlsMappingState<3>&, const std::array<Index, 2>&);
+template std::array<Index, 2> TlsMapping::flag_elements<1>(TlsMappingState<1>&,
+                                                           const std::array<Index, 2>&);
+template std::array<Index, 2> TlsMapping::flag_elements<2>(TlsMappingState<2>&,
+                                                           const std::array<Index, 2>&);
+template std::array<Index, 2> TlsMapping::flag_elements<3>(TlsMappingState<3>&,
+                                                           const std::array<Index, 2>&);
 template double TlsMapping::reach<1>(const RunState<1>&) const;
 template double TlsMapping::reach<2>(const RunState<2>&) const;
 template double TlsMapping::reach<3>(const RunState<3>&) const;

@@ -220,6 +220,91 @@ TEST(TlsReconstruction2D, ConservesElementIntegralsWithEveryCompletion) {
   EXPECT_TRUE(std::isnan(a[2][0]));
 }
 
+// The binning and the step report on a grid of several chunks of elements (1,600 cells, 4
+// chunks; 7,000 particles, more than a parallel loop's minimum): the bins hold each cell's
+// particles in index order, points outside the grid are counted and left out, and the report,
+// summed in parallel over chunks of elements, is the tally of the elements' own records (the
+// first failed element the lowest), the same on 1 and 2 threads.
+TEST(TlsReconstruction2D, BinsAndReportOverManyElementsAreTheElementwiseTally) {
+  const Index n = 40;
+  const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{n, n});
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.05, 0.95);
+  std::vector<Vec<2>> x;
+  for (Index j = 0; j < n; ++j)
+    for (Index i = 0; i < n; ++i)
+      for (Index k = 0; k < (i * 7 + j * 13) % 10; ++k)  // 0 to 9 points per cell
+        x.emplace_back((static_cast<double>(i) + u(rng)) / static_cast<double>(n),
+                       (static_cast<double>(j) + u(rng)) / static_cast<double>(n));
+  std::shuffle(x.begin(), x.end(), rng);
+  const auto N = static_cast<Index>(x.size());
+  ASSERT_GT(N, 4 * kParallelMin / 2);
+
+  // ElementBins on the points with three outside the grid.
+  std::vector<Vec<2>> with_outside = x;
+  with_outside.insert(with_outside.begin() + 5, Vec<2>(-0.1, 0.5));
+  with_outside.emplace_back(0.5, 1.5);
+  with_outside.emplace_back(2.0, 2.0);
+  for (int threads : {1, 2}) {
+    const ScopedThreads scope(threads);
+    ElementBins<2> bins;
+    EXPECT_EQ(bins.build(g, std::span<const Vec<2>>(with_outside)), 3);
+    std::vector<std::vector<Index>> expected(static_cast<std::size_t>(g.num_cells()));
+    for (std::size_t p = 0; p < with_outside.size(); ++p)
+      if (g.inside(with_outside[p]))
+        expected[static_cast<std::size_t>(g.cell_index(with_outside[p]))].push_back(
+            static_cast<Index>(p));
+    for (Index e = 0; e < g.num_cells(); ++e)
+      EXPECT_EQ(std::vector<Index>(bins.begin(e), bins.end(e)),
+                expected[static_cast<std::size_t>(e)])
+          << "cell " << e << ", " << threads << " thread(s)";
+  }
+
+  Particles<2> P;
+  P.resize(N);
+  for (Index p = 0; p < N; ++p) {
+    P.x[static_cast<std::size_t>(p)] = x[static_cast<std::size_t>(p)];
+    P.id[static_cast<std::size_t>(p)] = static_cast<CompactIndex>(p);
+  }
+  for (const TlsCompletion mode : {TlsCompletion::None, TlsCompletion::Reduce}) {
+    SCOPED_TRACE(std::string(tls_completion_name(mode)));
+    std::vector<TlsReport> reports;
+    for (int threads : {1, 2}) {
+      const ScopedThreads scope(threads);
+      TlsReconstruction2D r(settings(6, mode));
+      const TlsReport rep = r.set_points(g, P);
+      TlsReport tally;
+      for (Index e = 0; e < g.num_cells(); ++e) {
+        const TlsElementInfo& info = r.element(e);
+        if (info.points == 0) continue;
+        ++tally.active;
+        if (info.failed) {
+          if (tally.failed++ == 0) tally.failed_element = e, tally.failed_points = info.points;
+          continue;
+        }
+        tally.full += info.terms == 6;
+        tally.reduced += info.terms < 6;
+        tally.min_terms = tally.min_terms > 0 ? std::min(tally.min_terms, info.terms) : info.terms;
+        tally.max_condition = std::max(tally.max_condition, info.condition);
+      }
+      EXPECT_EQ(rep.elements, g.num_cells());
+      EXPECT_EQ(rep.active, tally.active);
+      EXPECT_EQ(rep.failed, tally.failed);
+      EXPECT_EQ(rep.failed_element, tally.failed_element);
+      EXPECT_EQ(rep.failed_points, tally.failed_points);
+      EXPECT_EQ(rep.full, tally.full);
+      EXPECT_EQ(rep.reduced, tally.reduced);
+      EXPECT_EQ(rep.min_terms, tally.min_terms);
+      EXPECT_EQ(rep.max_condition, tally.max_condition);
+      reports.push_back(rep);
+    }
+    // Cells with 1 to 5 points cannot hold 6 terms: both kinds occur in several chunks.
+    EXPECT_GT(reports[0].active, 1000);
+    EXPECT_GT(mode == TlsCompletion::None ? reports[0].failed : reports[0].reduced, 500);
+    EXPECT_EQ(reports[0].failed_condition, reports[1].failed_condition);
+  }
+}
+
 // fit_transpose (TlsSettings::adjoint_strain_rate) is the transpose of the fit: for data f,
 // element integrals c and coefficient weights abar, sum_e abar_e . a_e = sum_p z_p f_p +
 // sum_e ibar_e c_e, for plain, conservative and mixed fields, with elements of 0-12 points
