@@ -860,8 +860,8 @@ void BasicTlsReconstruction<Dim>::build_systems() {
 // Elements with virtual points need their neighbours' coefficients, and their neighbours never
 // have virtual points (they fit all terms from their own points), so two passes suffice.
 template <int Dim>
-void BasicTlsReconstruction<Dim>::fit(std::span<const double> f,
-                                      std::span<const Field> fields) const {
+void BasicTlsReconstruction<Dim>::fit(std::span<const double> f, std::span<const Field> fields,
+                                      const ElementDone& done) const {
   const std::size_t nf = fields.size();
   if (nf == 0 || nf > static_cast<std::size_t>(kMaxFields))
     throw std::invalid_argument("TlsReconstruction: 1 to kMaxFields fields per fit");
@@ -876,7 +876,7 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f,
   // (a parallel loop over the elements, three per step, saved).
   const int passes = settings_.completion == TlsCompletion::Virtual ? 2 : 1;
   for (int pass = 0; pass < passes; ++pass) {
-    parallel_for(ne, [&](Index e) {
+    auto element = [&](Index e) {
       const auto ei = static_cast<std::size_t>(e);
       const System& sys = systems_[ei];
       if (pass == 0) {
@@ -937,29 +937,39 @@ void BasicTlsReconstruction<Dim>::fit(std::span<const double> f,
         }
         (*fields[j].a)[ei] = coef;
       }
-    });
+    };
+    if (done && passes == 1) {
+      parallel_for(ne, [&](Index e) {
+        element(e);
+        done(e);
+      });
+    } else {
+      parallel_for(ne, element);
+    }
   }
+  if (done && passes > 1) parallel_for(ne, done);
 }
 
 template <int Dim>
 void BasicTlsReconstruction<Dim>::fit_fields(std::span<const double> f,
-                                             std::span<const Field> fields) const {
+                                             std::span<const Field> fields,
+                                             const ElementDone& done) const {
   for (const Field& fd : fields) {
     if (fd.a == nullptr) throw std::invalid_argument("TlsReconstruction::fit_fields: no output");
     if (fd.integrals == nullptr && settings_.conservative_only)
       throw std::logic_error("TlsReconstruction::fit_fields: a plain field with conservative_only");
   }
-  fit(f, fields);
+  fit(f, fields, done);
 }
 
 template <int Dim>
 void BasicTlsReconstruction<Dim>::fit_conservative(std::span<const double> f,
                                                    std::span<const double> integrals,
-                                                   Coefficients& a) const {
+                                                   Coefficients& a, const ElementDone& done) const {
   if (integrals.size() < static_cast<std::size_t>(grid_.num_cells()))
     throw std::invalid_argument("TlsReconstruction::fit_conservative: one integral per element");
   const Field fd{integrals.data(), nullptr, &a};
-  fit(f, std::span<const Field>(&fd, 1));
+  fit(f, std::span<const Field>(&fd, 1), done);
 }
 
 template <int Dim>

@@ -22,6 +22,7 @@
 #include <Eigen/Dense>
 #include <any>
 #include <array>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <span>
@@ -279,8 +280,15 @@ class BasicTlsReconstruction {
   // f: one value per point of set_points. integrals: c_e per element; a_1 = c_e / |Omega_e|
   // (D eq. 5.9) whatever the data, which (own and completion points alike) fit a_2.. only, so
   // int_e f^ = c_e to round-off.
+  //
+  // done (fit_conservative, fit_fields): called once for every element when its coefficients
+  // are final, and, without the virtual completion (whose elements read their neighbours'
+  // coefficients), right after they are, in the same parallel loop; done(e) may change element
+  // e's coefficients and read no other element's (TlsMapping's positivity limit and values at
+  // the Gauss points: a parallel region and a sweep over the elements saved per fit).
+  using ElementDone = std::function<void(Index)>;
   void fit_conservative(std::span<const double> f, std::span<const double> integrals,
-                        Coefficients& a) const;
+                        Coefficients& a, const ElementDone& done = nullptr) const;
   // All coefficients from least squares (D eq. 5.1). Not with settings().conservative_only.
   void fit_plain(std::span<const double> f, Coefficients& a) const;
   // Conservative in the elements with conservative[e] != 0 (integral integrals[e]), plain in the
@@ -302,7 +310,8 @@ class BasicTlsReconstruction {
   // Up to kMaxFields fields of the same points in one pass over the element data: field j's
   // value at point p is f[p * fields.size() + j]. The same numbers as one fit per field (each
   // field's sums run in the same order); it reads the data once instead of once per field.
-  void fit_fields(std::span<const double> f, std::span<const Field> fields) const;
+  void fit_fields(std::span<const double> f, std::span<const Field> fields,
+                  const ElementDone& done = nullptr) const;
   // The transpose of fit_fields for nf fields fitted alike (each plain, or conservative in the
   // elements with conservative[e] != 0 when conservative is given): abar[j][e] is the derivative
   // of a functional with respect to element e's coefficients of field j (used as scratch:
@@ -442,7 +451,8 @@ class BasicTlsReconstruction {
   static const Taylor& scales();
   // s_inv: the inverse of the fitted block of D on the orthonormal basis, if known (Own).
   void factorise(System& sys, const Matrix& D, const Matrix* s_inv = nullptr) const;
-  void fit(std::span<const double> f, std::span<const Field> fields) const;
+  void fit(std::span<const double> f, std::span<const Field> fields,
+           const ElementDone& done = nullptr) const;
 
   TlsSettings settings_;
   int nb_ = 0;  // terms requested
@@ -481,6 +491,7 @@ struct TlsMappingState {
   std::vector<Vec<Dim>> w;             // their 1D weights per direction (product: the weight)
   std::vector<TaylorVector<Dim>> psi;  // Taylor basis at xi
   std::vector<Index> gauss_first;      // per element of the last fit_mass's range: its first point
+  std::array<Index, 2> gauss_range{0, 0};  // that range of elements [first, end)
   BasicTlsCoefficients<Dim> coef;
   // The fields fitted together (TlsMapping::fit_momentum, fit_forces): at most the stress
   // components and the body-force density.
@@ -816,43 +827,36 @@ class TlsMapping {
   template <int Dim>
   void split_domains(const RunState<Dim>& sim, const BasicTlsReconstruction<Dim>& recon);
   std::span<const double> values() const { return std::span(values_).first(values_used_); }
-  // The reconstruction st.coef at every Gauss point: element e, local point k = g mod n^Dim.
+  // store(g, k) for the Gauss points g of element e, k its local point (fit_mass places n^Dim
+  // consecutive points from st.gauss_first in each active element of its range; none elsewhere).
   template <int Dim, class Store>
-  static void at_gauss(const TlsMappingState<Dim>& st, const GaussPoints<Dim>& q, Store&& store) {
-    const std::size_t n = st.psi.size();
-    parallel_for(static_cast<Index>(q.size()), [&](Index gi) {
-      const auto g = static_cast<std::size_t>(gi);
-      store(g, st.coef[static_cast<std::size_t>(q.element[g])].dot(st.psi[g % n]));
-    });
-  }
-  // The same for the fields st.fields[0..nf): store(g, j, value).
-  template <int Dim, class Store>
-  static void at_gauss(const TlsMappingState<Dim>& st, int nf, const GaussPoints<Dim>& q,
-                       Store&& store) {
-    const std::size_t n = st.psi.size();
-    parallel_for(static_cast<Index>(q.size()), [&](Index gi) {
-      const auto g = static_cast<std::size_t>(gi);
-      const auto e = static_cast<std::size_t>(q.element[g]);
-      for (int j = 0; j < nf; ++j)
-        store(g, j, st.fields[static_cast<std::size_t>(j)][e].dot(st.psi[g % n]));
-    });
+  static void gauss_points_of(const TlsMappingState<Dim>& st, Index e, Store&& store) {
+    const Index k0 = e - st.gauss_range[0];
+    if (k0 < 0 || e >= st.gauss_range[1] || !st.recon.active(e)) return;
+    const auto g0 = static_cast<std::size_t>(st.gauss_first[static_cast<std::size_t>(k0)]);
+    for (std::size_t k = 0; k < st.psi.size(); ++k) store(g0 + k, k);
   }
 
   // tls_mapping.cpp, for Dim 1 to 3: the fits of map_mass (binning, element systems, Gauss
   // points placed in q, rho^ there), map_momentum ((rho v)^) and map_forces (sigma^, (rho b)^).
   template <int Dim>
   void fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q);
-  // tls_mapping.cpp: TlsSettings::surface_volume's element flags and positivity's theta (from
-  // the density fit in st.coef), in one parallel loop; returns how many elements of `own`
-  // (RunState::own_cells) each flagged or limited. apply_theta: theta applied to a conservative
-  // fit in st.coef.
+  // tls_mapping.cpp: TlsSettings::surface_volume's flag and positivity's theta of element e
+  // (from the density fit in st.coef), sized by prepare_flags; count_flags: how many elements of
+  // `own` (RunState::own_cells) each flagged or limited. apply_theta: theta applied to element
+  // e of a conservative fit.
   template <int Dim>
-  std::array<Index, 2> flag_elements(TlsMappingState<Dim>& st, const std::array<Index, 2>& own);
+  void prepare_flags(TlsMappingState<Dim>& st);
+  template <int Dim>
+  void flag_element(TlsMappingState<Dim>& st, Index e) const;
+  template <int Dim>
+  std::array<Index, 2> count_flags(const TlsMappingState<Dim>& st,
+                                   const std::array<Index, 2>& own) const;
   template <int Dim>
   double reach(const RunState<Dim>& sim) const;
   template <int Dim>
   void apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficients<Dim>& coef,
-                   const unsigned char* only);
+                   const unsigned char* only, Index e) const;
   template <int Dim>
   void fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q);
   template <int Dim>

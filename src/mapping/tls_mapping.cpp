@@ -19,45 +19,49 @@ namespace mpm {
 // non-negative at the others; a_1 = sum m_p / |Omega_e| > 0 is kept, so mass is conserved.
 // st.surface is read only with surface_volume, st.theta only with positivity (apply_theta).
 template <int Dim>
-std::array<Index, 2> TlsMapping::flag_elements(TlsMappingState<Dim>& st,
-                                               const std::array<Index, 2>& own) {
-  const bool surface = settings_.surface_volume, positivity = settings_.positivity;
-  if (!surface && !positivity) return {0, 0};
+void TlsMapping::prepare_flags(TlsMappingState<Dim>& st) {
+  const auto ne = static_cast<std::size_t>(st.recon.num_elements());
+  if (settings_.surface_volume) st.surface.assign(ne, 0);
+  if (settings_.positivity) st.theta.assign(ne, 1.0);
+}
+
+template <int Dim>
+void TlsMapping::flag_element(TlsMappingState<Dim>& st, Index e) const {
   const auto& recon = st.recon;
-  const Index ne = recon.num_elements();
-  if (surface) st.surface.assign(static_cast<std::size_t>(ne), 0);
-  if (positivity) st.theta.assign(static_cast<std::size_t>(ne), 1.0);
-  const auto& grid = recon.grid();
-  int around = 1;
-  for (int d = 0; d < Dim; ++d) around *= 3;
-  parallel_for(ne, [&](Index e) {
-    if (!recon.active(e)) return;
-    if (surface) {
-      const IVec<Dim> c = recon.cell(e);
-      for (int k = 0; k < around; ++k) {
-        IVec<Dim> n = c;
-        for (int d = 0, r = k; d < Dim; ++d, r /= 3) n[d] += r % 3 - 1;
-        if (grid.has_cell(n) && !recon.active(grid.cell_index(n))) {
-          st.surface[static_cast<std::size_t>(e)] = 1;
-          break;
-        }
+  if (!recon.active(e)) return;
+  if (settings_.surface_volume) {
+    const auto& grid = recon.grid();
+    int around = 1;
+    for (int d = 0; d < Dim; ++d) around *= 3;
+    const IVec<Dim> c = recon.cell(e);
+    for (int k = 0; k < around; ++k) {
+      IVec<Dim> n = c;
+      for (int d = 0, r = k; d < Dim; ++d, r /= 3) n[d] += r % 3 - 1;
+      if (grid.has_cell(n) && !recon.active(grid.cell_index(n))) {
+        st.surface[static_cast<std::size_t>(e)] = 1;
+        break;
       }
     }
-    if (positivity) {
-      auto& a = st.coef[static_cast<std::size_t>(e)];
-      double lowest = 0.0;
-      for (const auto& psi : st.psi) lowest = std::min(lowest, a.dot(psi));
-      if (lowest < 0.0) {
-        const double theta = a[0] / (a[0] - lowest);
-        st.theta[static_cast<std::size_t>(e)] = theta;
-        a.tail(a.size() - 1) *= theta;
-      }
+  }
+  if (settings_.positivity) {
+    auto& a = st.coef[static_cast<std::size_t>(e)];
+    double lowest = 0.0;
+    for (const auto& psi : st.psi) lowest = std::min(lowest, a.dot(psi));
+    if (lowest < 0.0) {
+      const double theta = a[0] / (a[0] - lowest);
+      st.theta[static_cast<std::size_t>(e)] = theta;
+      a.tail(a.size() - 1) *= theta;
     }
-  });
+  }
+}
+
+template <int Dim>
+std::array<Index, 2> TlsMapping::count_flags(const TlsMappingState<Dim>& st,
+                                             const std::array<Index, 2>& own) const {
   std::array<Index, 2> flagged{0, 0};
   for (Index e = own[0]; e < own[1]; ++e) {
-    if (surface) flagged[0] += st.surface[static_cast<std::size_t>(e)];
-    if (positivity) flagged[1] += st.theta[static_cast<std::size_t>(e)] < 1.0;
+    if (settings_.surface_volume) flagged[0] += st.surface[static_cast<std::size_t>(e)];
+    if (settings_.positivity) flagged[1] += st.theta[static_cast<std::size_t>(e)] < 1.0;
   }
   return flagged;
 }
@@ -79,11 +83,11 @@ double TlsMapping::reach(const RunState<Dim>& sim) const {
 // and the element's integral is kept.
 template <int Dim>
 void TlsMapping::apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficients<Dim>& coef,
-                             const unsigned char* only) {
+                             const unsigned char* only, Index e) const {
   if (!settings_.positivity) return;
-  for (std::size_t e = 0; e < st.theta.size(); ++e)
-    if (st.theta[e] < 1.0 && (only == nullptr || only[e] != 0))
-      coef[e].tail(coef[e].size() - 1) *= st.theta[e];
+  const auto i = static_cast<std::size_t>(e);
+  if (st.theta[i] < 1.0 && (only == nullptr || only[i] != 0))
+    coef[i].tail(coef[i].size() - 1) *= st.theta[i];
 }
 
 // TlsSettings::domain_integrals. A particle's domain is the cpGIMP box (basis/gimp.hpp): side
@@ -238,6 +242,7 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
     if (st.recon.active(e)) points += nk;  // no particles: no reconstruction, no mass
   }
   q.resize(points);
+  st.gauss_range = own;
   parallel_for(static_cast<Index>(first.size()), [&](Index k0) {
     const Index e = own[0] + k0;
     if (!st.recon.active(e)) return;
@@ -259,14 +264,20 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   values_and_sums(
       st.recon, P.x.size(), 1, [&](std::size_t i, int) { return P.density(i); }, 1,
       [&](std::size_t i, int) { return P.mass[i]; });
-  st.recon.fit_conservative(values(), integrals_, st.coef);
-  const std::array<Index, 2> flags = flag_elements(st, own);
+  // Each element's flags, positivity limit and density at its Gauss points as soon as its fit
+  // is done (fit_conservative's done).
+  prepare_flags(st);
+  st.rho.resize(q.size());
+  st.recon.fit_conservative(values(), integrals_, st.coef, [&](Index e) {
+    flag_element(st, e);
+    const auto& a = st.coef[static_cast<std::size_t>(e)];
+    gauss_points_of(st, e, [&](std::size_t g, std::size_t k) { st.rho[g] = a.dot(st.psi[k]); });
+  });
+  const std::array<Index, 2> flags = count_flags(st, own);
   std::array<double, 2> flagged{static_cast<double>(flags[0]), static_cast<double>(flags[1])};
   if (sim.comm) sim.comm->sum(std::span<double>(flagged));
   totals_.surface += static_cast<Index>(flagged[0]);
   totals_.limited += static_cast<Index>(flagged[1]);
-  st.rho.resize(q.size());
-  at_gauss(st, q, [&](std::size_t g, double v) { st.rho[g] = v; });
 }
 
 // Both components in one fit (BasicTlsReconstruction::fit_fields).
@@ -282,10 +293,16 @@ void TlsMapping::fit_momentum(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
   for (int d = 0; d < Dim; ++d)
     fields[static_cast<std::size_t>(d)] = {integrals_of(d, ne), nullptr,
                                            &st.fields[static_cast<std::size_t>(d)]};
-  st.recon.fit_fields(values(), fields);
-  for (int d = 0; d < Dim; ++d) apply_theta(st, st.fields[static_cast<std::size_t>(d)], nullptr);
   st.rhov.resize(q.size());
-  at_gauss(st, Dim, q, [&](std::size_t g, int d, double v) { st.rhov[g][d] = v; });
+  st.recon.fit_fields(values(), fields, [&](Index e) {
+    for (int d = 0; d < Dim; ++d) {
+      auto& a = st.fields[static_cast<std::size_t>(d)];
+      apply_theta(st, a, nullptr, e);
+      gauss_points_of(st, e, [&](std::size_t g, std::size_t k) {
+        st.rhov[g][d] = a[static_cast<std::size_t>(e)].dot(st.psi[k]);
+      });
+    }
+  });
 }
 
 // The stress and the body-force density in one fit. The Cauchy stress is symmetric (every law
@@ -338,20 +355,22 @@ void TlsMapping::fit_forces(RunState<Dim>& sim, const GaussPoints<Dim>& q) {
     if (j >= ns || surface || everywhere) f.integrals = integrals_of(j, ne);
     if (j < ns && surface && !everywhere) f.conservative = st.surface.data();
   }
-  st.recon.fit_fields(values(), fields);
-  for (int j = 0; j < nf; ++j) {
-    if (j < ns && !surface) continue;
-    apply_theta(st, st.fields[static_cast<std::size_t>(j)], j < ns ? st.surface.data() : nullptr);
-  }
   st.sigma.resize(q.size());
   st.rhob.resize(q.size());
-  at_gauss(st, nf, q, [&](std::size_t g, int j, double v) {
-    if (j < ns) {
-      const auto [r, c] = rc(j);
-      st.sigma[g](r, c) = v;
-      st.sigma[g](c, r) = v;
-    } else {
-      st.rhob[g][j - ns] = v;
+  st.recon.fit_fields(values(), fields, [&](Index e) {
+    for (int j = 0; j < nf; ++j) {
+      auto& a = st.fields[static_cast<std::size_t>(j)];
+      if (j >= ns || surface) apply_theta(st, a, j < ns ? st.surface.data() : nullptr, e);
+      gauss_points_of(st, e, [&](std::size_t g, std::size_t k) {
+        const double v = a[static_cast<std::size_t>(e)].dot(st.psi[k]);
+        if (j < ns) {
+          const auto [r, c] = rc(j);
+          st.sigma[g](r, c) = v;
+          st.sigma[g](c, r) = v;
+        } else {
+          st.rhob[g][j - ns] = v;
+        }
+      });
     }
   });
 }
@@ -442,12 +461,18 @@ const std::vector<Index>& TlsMapping::adjoint_gradients(RunState<Dim>& sim,
   return no_weight_;
 }
 
-template std::array<Index, 2> TlsMapping::flag_elements<1>(TlsMappingState<1>&,
-                                                           const std::array<Index, 2>&);
-template std::array<Index, 2> TlsMapping::flag_elements<2>(TlsMappingState<2>&,
-                                                           const std::array<Index, 2>&);
-template std::array<Index, 2> TlsMapping::flag_elements<3>(TlsMappingState<3>&,
-                                                           const std::array<Index, 2>&);
+template void TlsMapping::prepare_flags<1>(TlsMappingState<1>&);
+template void TlsMapping::prepare_flags<2>(TlsMappingState<2>&);
+template void TlsMapping::prepare_flags<3>(TlsMappingState<3>&);
+template void TlsMapping::flag_element<1>(TlsMappingState<1>&, Index) const;
+template void TlsMapping::flag_element<2>(TlsMappingState<2>&, Index) const;
+template void TlsMapping::flag_element<3>(TlsMappingState<3>&, Index) const;
+template std::array<Index, 2> TlsMapping::count_flags<1>(const TlsMappingState<1>&,
+                                                         const std::array<Index, 2>&) const;
+template std::array<Index, 2> TlsMapping::count_flags<2>(const TlsMappingState<2>&,
+                                                         const std::array<Index, 2>&) const;
+template std::array<Index, 2> TlsMapping::count_flags<3>(const TlsMappingState<3>&,
+                                                         const std::array<Index, 2>&) const;
 template double TlsMapping::reach<1>(const RunState<1>&) const;
 template double TlsMapping::reach<2>(const RunState<2>&) const;
 template double TlsMapping::reach<3>(const RunState<3>&) const;
