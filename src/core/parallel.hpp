@@ -57,9 +57,10 @@ void parallel_for(Index n, F&& f) {
 
 // f(i) for i in [0, n), then g(j) for j in [0, m), in one parallel region: the two loops must be
 // independent (a thread goes on to its share of the second loop when done with its share of the
-// first, with no barrier between). Each region's fork and join cost, with sleeping threads
-// (OMP_WAIT_POLICY=passive) on a 2-core virtual machine, about 80 us (issue 22 item 5: a TLS
-// step had 36 regions).
+// first, with no barrier between). A region's fork and join cost 15-130 us on a 2-core virtual
+// machine with sleeping threads (OMP_WAIT_POLICY=passive: the longer the threads slept since the
+// last region, the more), 2-14 us with spinning ones (BENCHMARKS.md, issue 22 item 5: a TLS step
+// had 36 regions).
 template <class F, class G>
 void parallel_for_both(Index n, F&& f, Index m, G&& g) {
 #pragma omp parallel if (n + m >= kParallelMin)
