@@ -808,8 +808,8 @@ void BasicTlsReconstruction<Dim>::build_systems() {
   }
 
   // The report over the elements of set_focus: partial reports of fixed chunks of elements in
-  // parallel, combined in chunk order (counts, extremes and the first failed element, the
-  // lowest index: the same for any thread count; a serial pass was 1 % of a step).
+  // parallel, combined in chunk order by accumulate (counts, extremes and the first failed element,
+  // the lowest index: the same for any thread count; a serial pass was 1 % of a step).
   const Index lo = std::max<Index>(0, focus_[0]),
               span = std::max<Index>(std::min(ne, focus_[1]) - lo, 0);
   std::array<TlsReport, ParticleChunks::kMax> part;
@@ -837,24 +837,8 @@ void BasicTlsReconstruction<Dim>::build_systems() {
       r.max_condition = std::max(r.max_condition, info.condition);
     }
   });
-  for (int c = 0; c < ParticleChunks::count(span); ++c) {
-    const TlsReport& r = part[static_cast<std::size_t>(c)];
-    if (r.failed > 0 && report_.failed == 0) {
-      report_.failed_element = r.failed_element;
-      report_.failed_points = r.failed_points;
-      report_.failed_condition = r.failed_condition;
-    }
-    report_.active += r.active;
-    report_.failed += r.failed;
-    report_.full += r.full;
-    report_.reduced += r.reduced;
-    report_.with_virtual += r.with_virtual;
-    report_.with_neighbours += r.with_neighbours;
-    if (r.min_terms > 0)
-      report_.min_terms =
-          report_.min_terms > 0 ? std::min(report_.min_terms, r.min_terms) : r.min_terms;
-    report_.max_condition = std::max(report_.max_condition, r.max_condition);
-  }
+  for (int c = 0; c < ParticleChunks::count(span); ++c)
+    accumulate(report_, part[static_cast<std::size_t>(c)]);
 }
 
 // Elements with virtual points need their neighbours' coefficients, and their neighbours never
