@@ -46,6 +46,11 @@ THROWN_BAR = ["grid.max=2.0", "grid.cells=40", "body.max=0.5", "initial.velocity
               "boundary.left=free", "loading.body_force=0", "time.end=0.02",
               "method.basis=bspline", "method.degree=2"]
 
+# Cases whose processes may hold every DOF in their grid window: max-ent's 6 nodes per direction
+# with the window's margins cover the 9 DOF layers of the 8-cell plate, and the criss-cross
+# triangles number the cells' centres after the corners, so a slab's DOFs span both blocks.
+WHOLE_WINDOW = {"2d_plate_maxent", "2d_plate_p1_triangles_criss_cross"}
+
 # (name, config, --set overrides, how particles move between processes: "both" ways with 2,
 # "any", "none" required (a body that need not cross a cut), or "rebalance": the slabs are cut
 # anew (parallel.rebalance))
@@ -448,8 +453,13 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
                                 f"(largest imbalance {mpi.get('largest_imbalance')})")
             if both_ways == "both" and n == 2 and not all(x > 0 for x in sent):
                 failures.append(f"{name} -n 2: particles moved one way only ({sent})")
+            # Each process holds the grid arrays of its slab's window, not the whole grid (but
+            # in the cases of WHOLE_WINDOW).
+            window, dofs = mpi.get("grid_window_dofs_per_process", []), mpi.get("grid_dofs", 0)
+            if len(window) != n or (name not in WHOLE_WINDOW and not all(w < dofs for w in window)):
+                failures.append(f"{name} -n {n}: grid windows {window} of {dofs} DOFs")
             moved = (f", particles sent per process {sent}, final cuts {mpi.get('cuts')}, "
-                     f"{mpi.get('rebalances')} re-cuts")
+                     f"{mpi.get('rebalances')} re-cuts, grid windows {window} of {dofs} DOFs")
         if repeated(name, n, ranks):
             # The same rank count again (another start of the program): the same bytes.
             d2 = d + "_again"

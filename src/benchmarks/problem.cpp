@@ -298,7 +298,8 @@ template <int Dim>
 void check_grid_memory(const Config& cfg, const Grid<Dim>& g) {
   double nodes = 1.0;
   for (int d = 0; d < Dim; ++d) nodes *= static_cast<double>(g.cells[d]) + 1.0;
-  const double bytes = nodes * static_cast<double>(GridState<Dim>::bytes_per_dof());
+  // The windowed arrays over every DOF (one process) and the fixed bits.
+  const double bytes = nodes * static_cast<double>(GridState<Dim>::bytes_per_dof() + 1);
   const double memory = physical_memory();
   if (memory > 0.0 && bytes > memory)
     throw InputError(fmt::format(

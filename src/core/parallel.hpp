@@ -13,9 +13,11 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <stdexcept>
 #include <tuple>
 #include <vector>
 
+#include "core/dof_array.hpp"
 #include "core/types.hpp"
 
 namespace mpm {
@@ -129,11 +131,21 @@ struct ChunkDofRanges {
     return {first, last};
   }
 
-  // [first, end) of the DOFs the scatters write: all of them unless `bounded`.
-  std::array<Index, 2> written(Index dofs) const {
-    if (!bounded) return {0, dofs};
-    const auto [first, last] = span();
-    return first <= last ? std::array<Index, 2>{first, last + 1} : std::array<Index, 2>{0, 0};
+  // [first, end) of the DOFs the scatters write into an output whose window (core/dof_array.hpp)
+  // is [first, end): all of them unless `bounded`.
+  std::array<Index, 2> written(Index first, Index end) const {
+    if (!bounded) return {first, end};
+    const auto [lo, hi] = span();
+    return lo <= hi ? std::array<Index, 2>{lo, hi + 1} : std::array<Index, 2>{first, first};
+  }
+  // Whether every chunk's DOFs lie in the window [first, end) (a distributed run's grid arrays
+  // hold only the DOFs of its slab: RunState::fit_dof_window).
+  bool within(Index first, Index end) const {
+    for (int c = 0; c < ParticleChunks::count(particles); ++c) {
+      const auto cc = static_cast<std::size_t>(c);
+      if (lo[cc] <= hi[cc] && (lo[cc] < first || hi[cc] >= end)) return false;
+    }
+    return true;
   }
 
   // Scans the stencils (fallback when evaluate_basis did not record them).
@@ -175,7 +187,7 @@ class GridAccumulator {
   // slice[dof]. Every chunk sums its particles in order into its own slice; the slices are
   // then added into `out` in chunk order. DOFs outside every range are set to zero.
   template <class F>
-  void scatter(std::vector<T>& out, const T& zero, const ChunkDofRanges& r, F&& scatter);
+  void scatter(DofArray<T>& out, const T& zero, const ChunkDofRanges& r, F&& scatter);
 
   // Lays out one slice per chunk of r (grows the buffer only: no allocation once steady).
   void reserve(const ChunkDofRanges& r) {
@@ -196,14 +208,14 @@ class GridAccumulator {
     return {data, r.lo[cc], c};
   }
   // out[b, e) = the sum of the slices over those DOFs, in chunk order.
-  void reduce(std::vector<T>& out, const T& zero, const ChunkDofRanges& r, Index b, Index e) const {
-    std::fill(out.begin() + b, out.begin() + e, zero);
+  void reduce(DofArray<T>& out, const T& zero, const ChunkDofRanges& r, Index b, Index e) const {
+    for (Index i = b; i < e; ++i) out[i] = zero;
     const int k = ParticleChunks::count(r.particles);
     for (int c = 0; c < k; ++c) {
       const auto cc = static_cast<std::size_t>(c);
       const Index lo = std::max(b, r.lo[cc]), hi = std::min(e, r.hi[cc] + 1);
       const T* data = buf_.data() + offset_[cc];
-      for (Index i = lo; i < hi; ++i) out[static_cast<std::size_t>(i)] += data[i - r.lo[cc]];
+      for (Index i = lo; i < hi; ++i) out[i] += data[i - r.lo[cc]];
     }
   }
 
@@ -216,7 +228,7 @@ class GridAccumulator {
 template <class T>
 struct ScatterTarget {
   GridAccumulator<T>& acc;
-  std::vector<T>& out;
+  DofArray<T>& out;
   T zero;
 };
 
@@ -229,7 +241,12 @@ void scatter_fused(const ChunkDofRanges& r, F&& scatter, ScatterTarget<T>... t) 
   const Index n = r.particles;
   const int k = ParticleChunks::count(n);
   (t.acc.reserve(r), ...);
-  const auto written = r.written(static_cast<Index>(std::get<0>(std::tie(t.out...)).size()));
+  const auto& out0 = std::get<0>(std::tie(t.out...));
+  // The outputs share one window; a sum reaching past it would lose what falls outside.
+  if (((t.out.first() != out0.first() || t.out.stop() != out0.stop()) || ...) ||
+      !r.within(out0.first(), out0.stop()))
+    throw std::logic_error("a particle-to-grid sum reaches DOFs outside its grid arrays' window");
+  const auto written = r.written(out0.first(), out0.stop());
   const Index first = written[0], end = written[1];
   constexpr Index kBlock = 4096;  // DOFs per reduction task
   const Index blocks = (end - first + kBlock - 1) / kBlock;
@@ -255,8 +272,7 @@ void scatter_fused(const ChunkDofRanges& r, F&& scatter, ScatterTarget<T>... t) 
 
 template <class T>
 template <class F>
-void GridAccumulator<T>::scatter(std::vector<T>& out, const T& zero, const ChunkDofRanges& r,
-                                 F&& f) {
+void GridAccumulator<T>::scatter(DofArray<T>& out, const T& zero, const ChunkDofRanges& r, F&& f) {
   scatter_fused(r, f, ScatterTarget<T>{*this, out, zero});
 }
 

@@ -419,12 +419,14 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   nlohmann::ordered_json mpi_json;
   if (comm) {
     res.diag.grid_crossings = comm->sum(res.diag.grid_crossings);
-    const std::vector<Index> counts = comm->allgather(
-        std::span<const Index>(std::array<Index, 2>{sim.particles.size(), migrated}));
-    std::vector<Index> per_rank, sent;
-    for (std::size_t r = 0; r < counts.size(); r += 2) {
+    const auto [window_first, window_end] = sim.nodes.window();
+    const std::vector<Index> counts = comm->allgather(std::span<const Index>(
+        std::array<Index, 3>{sim.particles.size(), migrated, window_end - window_first}));
+    std::vector<Index> per_rank, sent, window;
+    for (std::size_t r = 0; r < counts.size(); r += 3) {
       per_rank.push_back(counts[r]);
       sent.push_back(counts[r + 1]);
+      window.push_back(counts[r + 2]);
     }
     mpi_json = {{"processes", comm->size()},
                 {"decomposition", fmt::format("slabs of whole cell layers along {}, cut to "
@@ -435,7 +437,11 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
                 {"particles_sent_per_process", sent},
                 {"rebalance_threshold", settings.parallel.rebalance},
                 {"rebalances", rebalances},
-                {"largest_imbalance", worst_imbalance}};
+                {"largest_imbalance", worst_imbalance},
+                // The grid arrays each process holds at the end (GridState's window) against
+                // the basis's DOFs.
+                {"grid_dofs", sim.nodes.size()},
+                {"grid_window_dofs_per_process", window}};
   }
   res.wall_seconds = seconds_since(t_start);
 

@@ -111,7 +111,10 @@ class TypedStepper final : public Stepper<Dim> {
   TypedStepper(const StepperInput<Dim>& in, Basis basis, Mapping mapping)
       : scheme_(in.method.scheme),
         sim_(in.problem.grid, std::move(basis), std::move(mapping), std::move(in.problem.particles),
-             in.problem.material) {
+             in.problem.material,
+             // A process of a distributed run allocates the grid arrays of its slab only, from
+             // the first step on (RunState::fit_dof_window).
+             /*whole_grid=*/in.comm == nullptr || !in.comm->distributed()) {
     const MethodSettings& method = in.method;
     const Problem<Dim>& pb = in.problem;
     if (in.check_input)

@@ -128,11 +128,10 @@ struct DirectMapping {
     auto& P = sim.particles;
     const auto i = static_cast<std::size_t>(p);
     if constexpr ((What & kVelocityFirst) != 0) {  // as stages::update_particles<kVelocity>
-      const auto& a = sim.nodes.accel;
+      const auto a = sim.nodes.accel.view();
       V acc = V::Zero();
-      for_each_entry(sim.stencils[i], sim.dof_stride, [&](Index dof, double w, const auto&) {
-        acc += w * a[static_cast<std::size_t>(dof)];
-      });
+      for_each_entry(sim.stencils[i], sim.dof_stride,
+                     [&](Index dof, double w, const auto&) { acc += w * a[dof]; });
       P.v[i] += dt * acc;
     }
     const double mp = P.mass[i];

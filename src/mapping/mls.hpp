@@ -413,11 +413,13 @@ class MlsFamilyMapping {
       node_mass_.clear();
       auto& xn = std::get<Dim - 1>(work_).node_x;
       xn.clear();
+      // The DOFs of the grid arrays' window (every DOF on one process; the sums of a
+      // distributed run's process lie in it).
       const auto& m = sim.nodes.mass;
-      for (Index i = 0; i < sim.basis.num_dofs(); ++i)
-        if (m[static_cast<std::size_t>(i)] > 0.0) {
+      for (Index i = m.first(); i < m.stop(); ++i)
+        if (m[i] > 0.0) {
           node_dof_.push_back(i);
-          node_mass_.push_back(m[static_cast<std::size_t>(i)]);
+          node_mass_.push_back(m[i]);
           xn.push_back(sim.basis.dof_position(i));
         }
     }

@@ -209,16 +209,14 @@ T over_ranks(const Comm* comm, T v) {
 // sum over the DOFs of a grid array, each DOF counted once over the ranks of a distributed run
 // (by the lowest rank whose range holds it), combined in rank order. T: double or Vec<Dim>.
 template <int Dim, class T>
-T grid_total(const RunState<Dim>& sim, const std::vector<T>& a, const T& zero) {
+T grid_total(const RunState<Dim>& sim, const DofArray<T>& a, const T& zero) {
   if (sim.comm == nullptr || !sim.comm->distributed())
     return deterministic_sum(static_cast<Index>(a.size()), zero,
-                             [&](Index i) { return a[static_cast<std::size_t>(i)]; });
+                             [&](Index i) { return a[a.first() + i]; });
   const auto [lo, end] = sim.dof_window();
   const Index first = lo;
   return over_ranks(sim.comm, deterministic_sum(end - lo, zero, [&](Index k) {
-                      return sim.shared.owns(sim.comm->rank(), first + k)
-                                 ? a[static_cast<std::size_t>(first + k)]
-                                 : zero;
+                      return sim.shared.owns(sim.comm->rank(), first + k) ? a[first + k] : zero;
                     }));
 }
 
@@ -281,7 +279,8 @@ void after_mass(RunState<Dim>& sim) {
   const double total = grid_total(sim, m, 0.0);
   const auto [first, end] = sim.dof_window();
   double largest = 0.0;
-  if (first < end) largest = *std::max_element(m.begin() + first, m.begin() + end);
+  if (first < end)
+    largest = *std::max_element(m.begin() + (first - m.first()), m.begin() + (end - m.first()));
   if (sim.comm) largest = sim.comm->max(largest);
   // sum m_p: taken by the mapping's scatter when it has one (the same bits), else a pass here.
   auto& sc = sim.scatter;
@@ -465,9 +464,11 @@ void share_vector(const RunState<Dim>& sim, Eigen::VectorXd& v) {
 // same iterations. The same system as the one process's CG on the assembled matrix; "pmg":
 // the same system by the V-cycles of DistributedPmg (built in after_mass).
 template <int Dim, class V>
-void solve_distributed(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) {
+void solve_distributed(RunState<Dim>& sim, const DofArray<V>& r, DofArray<V>& y) {
   const auto& nd = sim.nodes;
-  const auto n = static_cast<Index>(r.size());
+  // The solver's vectors span every DOF (the assembled matrix's numbering), the grid arrays
+  // this rank's window.
+  const Index n = nd.size();
   const auto [first, end] = sim.dof_window();
   const Index lo = first, count = end - first;
   std::vector<unsigned char> owned(static_cast<std::size_t>(count));
@@ -516,9 +517,10 @@ void solve_distributed(RunState<Dim>& sim, const std::vector<V>& r, std::vector<
 
 // y = M^{-1} r on the active, unconstrained DOFs; zero elsewhere (D eq. 2.46 / 2.49).
 template <int Dim, class V>
-void solve_grid(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) {
+void solve_grid(RunState<Dim>& sim, const DofArray<V>& r, DofArray<V>& y) {
   const auto& nd = sim.nodes;
-  const auto n = r.size();
+  // One process (the consistent paths below): the window is every DOF.
+  const auto n = static_cast<std::size_t>(nd.size());
   if (sim.mass_type == MassType::Lumped) {
     const Index offset = sim.dof_window()[0], count = sim.dof_window()[1] - offset;
     parallel_for(count, [&](Index k) {
@@ -568,7 +570,8 @@ void solve_grid(RunState<Dim>& sim, const std::vector<V>& r, std::vector<V>& y) 
   // v . n = 0 on the inclined rollers: exact for lumped mass (the reaction acts along n alone),
   // round-off clean-up of the coupled solve.
   for (const auto& e : nd.projected) {
-    auto& yi = y[static_cast<std::size_t>(e.dof)];
+    if (!y.holds(e.dof)) continue;
+    auto& yi = y[e.dof];
     yi = V(e.free * yi);
   }
 }

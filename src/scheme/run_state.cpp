@@ -60,6 +60,25 @@ void RunState<Dim>::constrain(const std::vector<Index>& dofs, const Mat<Dim>& c)
   }
 }
 
+template <int Dim>
+void RunState<Dim>::fit_dof_window() {
+  if (comm == nullptr) return;
+  const auto [lo, hi] = scatter.ranges.span();
+  if (lo > hi) {  // no particle: nothing is summed here
+    nodes.set_window(0, 0);
+    return;
+  }
+  const Index n = nodes.size();
+  // The DOFs of one layer of grid vertices across the cuts (rounded up): a B-spline's DOFs per
+  // layer, a triangle basis's corners and centres of a row of cells.
+  const Index cuts = grid.cells[Dim - 1] + 1;
+  const Index layer = (n + cuts - 1) / cuts;
+  const auto [first, end] = nodes.window();
+  const bool covers = first <= std::max<Index>(0, lo - layer) && std::min(n, hi + 1 + layer) <= end;
+  if (covers && end - first <= hi + 1 - lo + 8 * layer) return;
+  nodes.set_window(std::max<Index>(0, lo - 2 * layer), std::min(n, hi + 1 + 2 * layer));
+}
+
 template struct RunState<1>;
 template struct RunState<2>;
 template struct RunState<3>;

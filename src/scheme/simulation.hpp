@@ -142,6 +142,17 @@ struct RunState {
     if (comm == nullptr || shared.lo.empty()) return {0, nodes.size()};
     return shared.window(comm->rank());
   }
+  // A distributed run: moves the grid arrays' window (GridState::set_window, core/dof_array.hpp)
+  // to hold the DOFs this process's particle stencils touch (scatter.ranges, just recorded by
+  // evaluate_basis) and two layers of grid vertices' DOFs more on each side, so that a process
+  // allocates its slab's share of the grid, not the whole grid. The margin holds a
+  // reconstruction's quadrature points in the cells of its particles' layers (quadrature_dofs:
+  // the same DOF layers, other columns) and a step's motion without a move; the window moves
+  // when it no longer holds a layer either side or is wider than eight layers beyond them
+  // (after a re-cut of the slabs); a process without particles holds none. A particle-to-grid
+  // sum reaching past it stops the run with a logic error (scatter_fused) instead of losing a
+  // contribution. Nothing on one process.
+  void fit_dof_window();
 
   // Ghost particles (issue 21): a mapping that reads the particles of neighbouring cells
   // (MappingFor's kGhostParticles: TLS) sees, during each of its particle-to-grid sums, copies of
@@ -197,10 +208,13 @@ struct BasisState : RunState<Dim> {
   // The per-particle cache: the compact 1D factors for tensor-product bases, else StencilT.
   using CachedT = typename CachedStencilOf<Basis>::type;
 
-  BasisState(const Grid<Dim>& g, Basis b, Particles<Dim> p, Material mat)
+  // whole_grid = false (a process of a distributed run): the grid arrays start with an empty
+  // window, placed by the first evaluate_basis (RunState::fit_dof_window), so that no process
+  // allocates them for the whole grid.
+  BasisState(const Grid<Dim>& g, Basis b, Particles<Dim> p, Material mat, bool whole_grid = true)
       : RunState<Dim>(g, std::move(p), std::move(mat)), basis(std::move(b)) {
     auto& particles = this->particles;
-    this->nodes.resize(basis.num_dofs());
+    this->nodes.resize(basis.num_dofs(), whole_grid);
     stencils.resize(static_cast<std::size_t>(particles.size()));
     this->dof_stride = dof_strides<Dim>(basis.dofs_per_dim());
     this->cell.assign(static_cast<std::size_t>(particles.size()), -1);
@@ -269,8 +283,9 @@ template <int Dim, class Basis, class Mapping>
 struct Simulation : BasisState<Dim, Basis> {
   using MappingT = Mapping;
 
-  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat)
-      : BasisState<Dim, Basis>(g, std::move(b), std::move(p), std::move(mat)),
+  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat,
+             bool whole_grid = true)
+      : BasisState<Dim, Basis>(g, std::move(b), std::move(p), std::move(mat), whole_grid),
         mapping(std::move(m)) {}
 
   Mapping mapping;

@@ -167,6 +167,7 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
       detail::throw_left_grid(sim);
   }
   if constexpr (B::kIterative) basis.throw_if_failed(sim.step, sim.time, "particles");
+  if (sim.comm) sim.fit_dof_window();  // the grid arrays of this process's slab
 }
 
 // Body force b_p(x, t) for this step (constant forces were filled once at set-up).
@@ -318,8 +319,8 @@ template <unsigned What, int Dim, class B>
 void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
   using namespace particle_update;
   auto& P = sim.particles;
-  const auto& a = sim.nodes.accel;
-  const auto& v = sim.nodes.velocity;
+  const auto a = sim.nodes.accel.view();
+  const auto v = sim.nodes.velocity.view();
   // The mapping's velocity gradients, where it gave them (RunState::mapped_gradient).
   const Mat<Dim>* mapped = nullptr;
   if constexpr ((What & kStress) != 0) {

@@ -358,7 +358,7 @@ Simulation<1, Basis, CubicSplineMapping> cs_sim(const Grid<1>& g, Particles<1> P
                                                   elastic_bar());
 }
 
-double total(const std::vector<double>& v) {
+double total(const DofArray<double>& v) {
   double s = 0.0;
   for (double a : v) s += a;
   return s;

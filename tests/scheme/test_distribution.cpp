@@ -1,11 +1,13 @@
 // Distributed runs (issue 21), the parts that do not need several processes: the slab cuts
 // balance the particles and give every process a layer, a particle's owner follows its cell,
 // particles travel between processes as bytes that restore every field, the traction lists
-// follow their particles by id, and the collective
-// operations are plain copies on one process. The runs on several processes are checked in
-// Mpi.SameAnswersAsOneProcess (scripts/mpi_check.py, under mpirun).
+// follow their particles by id, a process's grid arrays hold the window of its particles' DOFs,
+// and the collective operations are plain copies on one process. The runs on several processes are
+// checked in Mpi.SameAnswersAsOneProcess (scripts/mpi_check.py, under mpirun).
 #include <gtest/gtest.h>
 
+#include <array>
+#include <limits>
 #include <vector>
 
 #include "core/comm.hpp"
@@ -105,6 +107,51 @@ TEST(Comm, OneProcessIsAPlainCopy) {
   EXPECT_EQ(c.agree(&f)->exit_code, 4);
   EXPECT_NO_THROW(c.check());
   EXPECT_TRUE(c.any(true));
+}
+
+// RunState::fit_dof_window (a distributed run's grid arrays: GridState's window) on a 10 x 40
+// grid of linear functions (11 x 41 DOFs numbered x fastest, 11 per layer): the window holds the
+// DOFs the particles' stencils touched and two layers either side, stays while it holds a layer
+// either side and is not eight layers wider, keeps the values of the DOFs both windows hold, and
+// is empty on a process without particles. On one process (no comm) it stays every DOF.
+TEST(GridWindow, FollowsTheDofsOfTheParticles) {
+  Particles<2> P;
+  P.resize(1);
+  RunState<2> sim(Grid<2>(Vec<2>(0.0, 0.0), Vec<2>(1.0, 4.0), IVec<2>{10, 40}), std::move(P),
+                  NeoHookean{});
+  sim.nodes.resize(11 * 41);
+  auto& r = sim.scatter.ranges;
+  const auto touch = [&](Index lo, Index hi) {
+    r.particles = 1;
+    r.lo[0] = lo;
+    r.hi[0] = hi;
+    sim.fit_dof_window();
+  };
+  using W = std::array<Index, 2>;
+  touch(113, 225);  // no comm: one process, every DOF
+  EXPECT_EQ(sim.nodes.window(), (W{0, 451}));
+  sim.comm = &Comm::world();
+  touch(113, 225);
+  EXPECT_EQ(sim.nodes.window(), (W{113 - 22, 226 + 22}));
+  sim.nodes.mass[200] = 7.0;
+  sim.nodes.velocity[120] = Vec<2>(1.0, 2.0);
+  touch(120, 230);  // within the margins: the same window and values
+  EXPECT_EQ(sim.nodes.window(), (W{91, 248}));
+  touch(125, 240);  // past the upper margin: moved, the values of both windows kept
+  EXPECT_EQ(sim.nodes.window(), (W{125 - 22, 241 + 22}));
+  EXPECT_EQ(sim.nodes.mass[200], 7.0);
+  EXPECT_EQ(sim.nodes.velocity[120], Vec<2>(1.0, 2.0));
+  EXPECT_EQ(sim.nodes.mass.size(), sim.nodes.velocity.size());
+  touch(180, 190);  // much narrower (a re-cut of the slabs): shrunk
+  EXPECT_EQ(sim.nodes.window(), (W{180 - 22, 191 + 22}));
+  EXPECT_EQ(sim.nodes.mass[200], 7.0);
+  touch(0, 20);  // at the grid's side: clipped
+  EXPECT_EQ(sim.nodes.window(), (W{0, 21 + 22}));
+  r.lo[0] = std::numeric_limits<Index>::max();  // no particle
+  r.hi[0] = -1;
+  sim.fit_dof_window();
+  EXPECT_EQ(sim.nodes.window(), (W{0, 0}));
+  EXPECT_EQ(sim.nodes.size(), 451);  // the basis's DOFs, whatever the window
 }
 
 TEST(Tractions, LoadedPointsFollowTheirParticlesById) {

@@ -205,17 +205,71 @@ TEST(Parallel, GridAccumulatorMatchesSerialSum) {
   for (int threads = 1; threads <= 3; ++threads) {
     const Threads t(threads);
     GridAccumulator<double> acc;
-    std::vector<double> out(nodes, 99.0);  // stale values must be overwritten
+    DofArray<double> out;
+    out.assign(0, static_cast<Index>(nodes), 99.0);  // stale values must be overwritten
     acc.scatter(out, 0.0, r, [&](Index p, const auto& slice) {
       for (Index d : st[static_cast<std::size_t>(p)].dof)
         slice[d] += w[static_cast<std::size_t>(p)];
     });
     for (std::size_t i = 0; i < out.size(); ++i) EXPECT_NEAR(out[i], serial[i], 1e-12);
+    const std::vector<double> values(out.begin(), out.end());
     if (threads == 1)
-      first = out;
+      first = values;
     else
-      EXPECT_TRUE(same_bits(first, out));
+      EXPECT_TRUE(same_bits(first, values));
   }
+}
+
+// Grid arrays over a window of the DOFs (core/dof_array.hpp; a distributed run's slab, issue 21):
+// the scatter sums into the window by global DOF number with the bits of the whole-grid sum; a
+// bounded scatter writes only the DOFs its chunks touch, an unbounded one zeroes the rest of the
+// window; a sum reaching past the window is refused, not cut; moving the window keeps the values
+// of the DOFs in both windows.
+TEST(Parallel, GridAccumulatorIntoAWindowOfTheDofs) {
+  constexpr Index n = 3000, nodes = 700, lo = 300, hi = 497;
+  std::mt19937 gen(11);
+  std::uniform_int_distribution<Index> node(lo, hi - 2);
+  std::uniform_real_distribution<double> val(-1.0, 1.0);
+  std::vector<ThreeDofs> st(static_cast<std::size_t>(n));
+  std::vector<double> w(static_cast<std::size_t>(n));
+  for (std::size_t p = 0; p < st.size(); ++p) {
+    const Index j = node(gen);
+    st[p].dof = {j, j + 1, j + 2};
+    w[p] = val(gen);
+  }
+  const auto add = [&](Index p, const auto& slice) {
+    for (Index d : st[static_cast<std::size_t>(p)].dof) slice[d] += w[static_cast<std::size_t>(p)];
+  };
+  ChunkDofRanges r;
+  r.scan(st, nullptr);
+  const auto [first, last] = r.span();  // [lo, hi] unless a DOF at the ends was never drawn
+  const Threads t(2);
+  GridAccumulator<double> acc;
+  DofArray<double> whole;
+  whole.assign(0, nodes, 99.0);
+  acc.scatter(whole, 0.0, r, add);
+  for (const bool bounded : {false, true}) {
+    r.bounded = bounded;
+    DofArray<double> part;
+    part.assign(250, 310, 99.0);  // DOFs [250, 560)
+    acc.scatter(part, 0.0, r, add);
+    ASSERT_EQ(part.first(), 250);
+    ASSERT_EQ(part.stop(), 560);
+    for (Index i = part.first(); i < part.stop(); ++i) {
+      const bool touched = i >= first && i <= last;
+      const double expect = touched ? whole[i] : bounded ? 99.0 : 0.0;
+      EXPECT_EQ(std::memcmp(&part[i], &expect, sizeof(double)), 0) << i << " bounded " << bounded;
+    }
+    DofArray<double> narrow;
+    narrow.assign(first + 1, last - first, 0.0);  // misses the lowest DOF touched
+    EXPECT_THROW(acc.scatter(narrow, 0.0, r, add), std::logic_error);
+  }
+  DofArray<double> a;
+  a.assign(10, 5, 0.0);
+  for (Index i = 10; i < 15; ++i) a[i] = static_cast<double>(i);
+  a.rewindow(12, 6, -1.0);
+  EXPECT_EQ(std::vector<double>(a.begin(), a.end()),
+            (std::vector<double>{12.0, 13.0, 14.0, -1.0, -1.0, -1.0}));
 }
 
 }  // namespace

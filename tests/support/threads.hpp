@@ -19,5 +19,11 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() &&
          (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
+// The same for grid arrays (core/dof_array.hpp), which must hold the same window.
+template <class T>
+bool same_bits(const DofArray<T>& a, const DofArray<T>& b) {
+  return a.first() == b.first() && a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
 
 }  // namespace mpm::test
