@@ -185,7 +185,8 @@ class GridAccumulator {
 
   // out_i = sum_p contributions, where scatter(p, slice) adds particle p's contributions into
   // slice[dof]. Every chunk sums its particles in order into its own slice; the slices are
-  // then added into `out` in chunk order. DOFs outside every range are set to zero.
+  // then added into `out` in chunk order. DOFs of out's window outside every range are set to
+  // zero (or, with ChunkDofRanges::bounded, keep their values).
   template <class F>
   void scatter(DofArray<T>& out, const T& zero, const ChunkDofRanges& r, F&& scatter);
 

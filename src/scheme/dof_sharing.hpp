@@ -74,15 +74,40 @@ void sum_over_sharing_ranks(const Comm& comm, const DofRanges& sh, std::size_t w
     send.push_back(pack(a, b));
   }
   const auto recv = comm.exchange(peers, send, tag);
-  if (lo > hi) return;
-  const std::vector<std::byte> own = pack(lo, hi);
-  for (Index i = lo; i <= hi; ++i) values(i, [](double& x) { x = 0.0; });
+  if (lo > hi || peers.empty()) return;
+  // Only the functions some other rank holds take the sum in rank order: the union of the
+  // overlaps, as sorted disjoint intervals (with slabs, one at each end of the range). A function
+  // no other rank holds keeps its value, which is its sum (until 2026-11-29 every function of the
+  // range was packed, zeroed and added again: a copy of the whole range per exchange, and 0 + x
+  // turned a -0 into +0).
+  std::vector<std::array<Index, 2>> both;
+  for (int r : peers) both.push_back(overlap(r));
+  std::sort(both.begin(), both.end());
+  std::size_t m = 0;
+  for (std::size_t k = 1; k < both.size(); ++k) {
+    if (both[k][0] <= both[m][1] + 1)
+      both[m][1] = std::max(both[m][1], both[k][1]);
+    else
+      both[++m] = both[k];
+  }
+  both.resize(m + 1);
+  std::vector<std::vector<std::byte>> own;
+  for (const auto& [a, b] : both) {
+    own.push_back(pack(a, b));
+    for (Index i = a; i <= b; ++i) values(i, [](double& x) { x = 0.0; });
+  }
   std::size_t next = 0;
   for (int r = 0; r < comm.size(); ++r) {
-    const bool peer = next < peers.size() && peers[next] == r;
-    if (r != me && !peer) continue;
-    const auto [a, b] = r == me ? std::array<Index, 2>{lo, hi} : overlap(r);
-    const auto* v = reinterpret_cast<const double*>(r == me ? own.data() : recv[next++].data());
+    if (r == me) {
+      for (std::size_t k = 0; k < both.size(); ++k) {
+        const auto* v = reinterpret_cast<const double*>(own[k].data());
+        for (Index i = both[k][0]; i <= both[k][1]; ++i) values(i, [&](double& x) { x += *v++; });
+      }
+      continue;
+    }
+    if (next >= peers.size() || peers[next] != r) continue;
+    const auto [a, b] = overlap(r);
+    const auto* v = reinterpret_cast<const double*>(recv[next++].data());
     for (Index i = a; i <= b; ++i) values(i, [&](double& x) { x += *v++; });
   }
 }
