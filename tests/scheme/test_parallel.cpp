@@ -182,20 +182,29 @@ std::array<Index, 2> dof_bounds(const ThreeDofs& s, std::nullptr_t /*stride*/) {
           *std::max_element(s.dof.begin(), s.dof.end())};
 }
 
-// The chunked scatter against a plain serial sum, with particles in random order so that the
-// chunks' DOF ranges overlap everywhere; equal to round-off, and the same bits for 1..3 threads.
-TEST(Parallel, GridAccumulatorMatchesSerialSum) {
-  constexpr Index n = 5000, nodes = 700;
-  std::mt19937 gen(7);
-  std::uniform_int_distribution<Index> node(0, nodes - 3);
+// n particles in random order, each with three consecutive DOFs from [lo, hi] and a weight in
+// [-1, 1] (seeded).
+void random_three_dof_particles(Index n, Index lo, Index hi, unsigned seed,
+                                std::vector<ThreeDofs>& st, std::vector<double>& w) {
+  std::mt19937 gen(seed);
+  std::uniform_int_distribution<Index> node(lo, hi - 2);
   std::uniform_real_distribution<double> val(-1.0, 1.0);
-  std::vector<ThreeDofs> st(static_cast<std::size_t>(n));
-  std::vector<double> w(static_cast<std::size_t>(n));
+  st.resize(static_cast<std::size_t>(n));
+  w.resize(static_cast<std::size_t>(n));
   for (std::size_t p = 0; p < st.size(); ++p) {
     const Index j = node(gen);
     st[p].dof = {j, j + 1, j + 2};
     w[p] = val(gen);
   }
+}
+
+// The chunked scatter against a plain serial sum, with particles in random order so that the
+// chunks' DOF ranges overlap everywhere; equal to round-off, and the same bits for 1..3 threads.
+TEST(Parallel, GridAccumulatorMatchesSerialSum) {
+  constexpr Index n = 5000, nodes = 700;
+  std::vector<ThreeDofs> st;
+  std::vector<double> w;
+  random_three_dof_particles(n, 0, nodes - 1, 7, st, w);
   std::vector<double> serial(nodes, 0.0);
   for (std::size_t p = 0; p < st.size(); ++p)
     for (Index d : st[p].dof) serial[static_cast<std::size_t>(d)] += w[p];
@@ -227,16 +236,9 @@ TEST(Parallel, GridAccumulatorMatchesSerialSum) {
 // of the DOFs in both windows.
 TEST(Parallel, GridAccumulatorIntoAWindowOfTheDofs) {
   constexpr Index n = 3000, nodes = 700, lo = 300, hi = 497;
-  std::mt19937 gen(11);
-  std::uniform_int_distribution<Index> node(lo, hi - 2);
-  std::uniform_real_distribution<double> val(-1.0, 1.0);
-  std::vector<ThreeDofs> st(static_cast<std::size_t>(n));
-  std::vector<double> w(static_cast<std::size_t>(n));
-  for (std::size_t p = 0; p < st.size(); ++p) {
-    const Index j = node(gen);
-    st[p].dof = {j, j + 1, j + 2};
-    w[p] = val(gen);
-  }
+  std::vector<ThreeDofs> st;
+  std::vector<double> w;
+  random_three_dof_particles(n, lo, hi, 11, st, w);
   const auto add = [&](Index p, const auto& slice) {
     for (Index d : st[static_cast<std::size_t>(p)].dof) slice[d] += w[static_cast<std::size_t>(p)];
   };
