@@ -306,13 +306,6 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
           fmt::format("grid.mesh: a mesh from a file does not run on several "
                       "processes yet (issue 21); {}",
                       kHow));
-    if (const auto* tls = std::get_if<TlsMapping>(&method.mapping);
-        tls != nullptr && tls->settings().adjoint_strain_rate)
-      throw InputError(fmt::format(
-          "{}: method.mapping = \"tls\" with method.tls_strain_rate = \"adjoint\" does not "
-          "run on several processes yet (its transposed fits reach the ghost particles of the "
-          "neighbouring processes); {}",
-          method.where_mapping, kHow));
     part = SlabPartition<Dim>::balanced(
         SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/true),
         comm->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));

@@ -74,16 +74,10 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
 // (share_grid_sums).
 // The bases on the grid's triangles (P1, Powell-Sabin) number their DOFs by grid vertex (the
 // criss-cross centres after the corners, which widens a process's DOF range but not what it
-// sums); their TLS fits every triangle holding particles, ghosts included, and is refused.
-template <class Basis, class Mapping>
-void check_distributed_run(const MethodSettings& method) {
+// sums); their TLS fits every triangle holding particles, ghosts included, and integrates the
+// triangles whose lowest particle id is its own (tls_triangle_mapping.cpp).
+inline void check_distributed_run(const MethodSettings& method) {
   constexpr std::string_view kHow = "run it on one process (without mpirun)";
-  if constexpr (Basis::kTriangleMesh && std::is_same_v<Mapping, TlsMapping>)
-    throw InputError(fmt::format(
-        "{}: method.mapping = \"tls\" on the {} basis does not run on several processes yet "
-        "(its fits per triangle are not restricted to a process's own triangles; issue 21); "
-        "use method.mapping = \"direct\" or {}",
-        method.where_mapping, Basis::kName, kHow));
   if (method.mass == MassType::Consistent && method.mass_solver.kind == MassSolver::Direct)
     throw InputError(fmt::format(
         "{}: method.mass = \"consistent\" runs on several processes with method.mass_solver = "
@@ -142,7 +136,7 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.tractions = pb.tractions;
     if (sim_.body_force.fill) sim_.body_force.fill(sim_.particles, 0.0, sim_.particles.body);
     if (in.comm != nullptr && in.comm->distributed()) {
-      check_distributed_run<Basis, Mapping>(method);
+      check_distributed_run(method);
       sim_.comm = in.comm;
       // The problem's traction points name their particles by id here (driver/run_mpm.cpp).
       sim_.all_tractions = std::move(sim_.tractions);

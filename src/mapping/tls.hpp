@@ -550,6 +550,11 @@ struct TlsTriangleMappingState {
   std::vector<Vec<2>> rhov, rhob;
   std::vector<Mat<2>> sigma;
   std::vector<double> values, integrals;  // per particle, per triangle
+  // Per triangle: 1 where this process integrates it (Gauss points, report). On one process every
+  // triangle holding particles; in a distributed run those whose particle of the lowest id is
+  // one of this process's own, so that each is integrated by exactly one process (tls_triangle_
+  // mapping.cpp, fit_mass_triangles).
+  std::vector<unsigned char> integrated;
 
   TlsTriangleMappingState(const TriangleMesh& mesh, const TlsSettings& s, int per_cell,
                           std::vector<std::array<Vec<2>, 3>> pieces);
@@ -659,6 +664,7 @@ class TlsMapping {
       }
       fit_mass_triangles(sim, q);
       q.evaluate(sim.basis, sim.step, sim.time);
+      sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs (issue 21)
       assemble_mass(sim, q, triangles_->rho);
     } else {
       fit_mass<Dim>(sim, q);
@@ -703,7 +709,8 @@ class TlsMapping {
   // TlsSettings::adjoint_strain_rate: the velocity gradients of the particles for the stress
   // update that follows, from the grid velocity and this step's fits, into
   // sim.mapped_gradient (stages::mapped_strain_rates); nothing otherwise. On the grid's cells
-  // of one process (the run set-up refuses triangles and several processes).
+  // (the run set-up refuses triangles); in a distributed run the transposed fits reach the ghost
+  // particles, whose parts go back to their processes (adjoint_gradients).
   template <class Sim>
   void strain_rates(Sim& sim) {
     if (!settings_.adjoint_strain_rate) return;
@@ -854,6 +861,10 @@ class TlsMapping {
                                    const std::array<Index, 2>& own) const;
   template <int Dim>
   double reach(const RunState<Dim>& sim) const;
+  // reach's value for the step reach_step_ (-1: none yet): one reach for all the ghost exchanges
+  // of a step (tls_mapping.cpp).
+  mutable Index reach_step_ = -1;
+  mutable double reach_ = 1.0;
   template <int Dim>
   void apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficients<Dim>& coef,
                    const unsigned char* only, Index e) const;

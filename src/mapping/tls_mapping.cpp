@@ -9,6 +9,7 @@
 #include "basis/gimp.hpp"
 #include "core/bytes.hpp"
 #include "mapping/tls.hpp"
+#include "scheme/distribution.hpp"
 
 namespace mpm {
 
@@ -69,13 +70,20 @@ std::array<Index, 2> TlsMapping::count_flags(const TlsMappingState<Dim>& st,
 template <int Dim>
 double TlsMapping::reach(const RunState<Dim>& sim) const {
   if (!settings_.domain_integrals) return 1.0;
+  // The reach of the step's first exchange (that of the mass sum, whose set_points bins the
+  // particles with their ghosts) for all its exchanges: the later sums of the step (USF, USAVG:
+  // the forces after the stress update, which stretches the boxes) and the adjoint rate read the
+  // points as binned, so the ghosts must be the same particles in the same order.
+  if (reach_step_ == sim.step) return reach_;
   const auto& g = sim.grid;
   double r = 0.0;  // the largest half-side in cells along the last axis
-  for (Index p = 0; p < sim.particles.size(); ++p) {
+  for (Index p = 0; p < sim.own_particles(); ++p) {
     const double half = 0.5 * cpgimp_side(g, sim.particles, p, Dim - 1) / g.h[Dim - 1];
     if (std::isfinite(half)) r = std::max(r, half);
   }
-  return std::max(1.0, 2.0 * std::ceil(r));
+  reach_step_ = sim.step;
+  reach_ = std::max(1.0, 2.0 * std::ceil(r));
+  return reach_;
 }
 
 // The same theta on the terms beyond a_1 of a conservative field fitted in coef (every element,
@@ -416,6 +424,17 @@ const std::vector<Index>& TlsMapping::adjoint_gradients(RunState<Dim>& sim,
   st.zbar.resize(np * nf);
   st.ibar.resize(E * nf);
   recon.fit_transpose(st.abar, st.conservative.data(), st.zbar, st.ibar);
+  // In a distributed run the step's fits read the ghost particles: the same ones again (no
+  // particle has moved since the mass sum's exchange, and reach() keeps the step's reach), with
+  // their current volumes; each process transposes the fits of all the elements it holds, from
+  // the Gauss points of its own (abar is zero in the others), and the parts at the ghosts go
+  // back to their processes (sums of linear parts, so the whole transpose, to round-off).
+  if (sim.comm) {
+    append_ghosts(sim, *sim.comm, reach<Dim>(sim));
+    if (static_cast<std::size_t>(sim.particles.size()) != np)
+      throw std::logic_error(fmt::format(
+          "TLS adjoint rate: {} particles with ghosts, the fits had {}", sim.particles.size(), np));
+  }
   const auto& P = sim.particles;
   {
     // c_e = sum_p V_p sigma_p (times the overlap fraction with the domains): Z_p += V_p frac
@@ -441,6 +460,10 @@ const std::vector<Index>& TlsMapping::adjoint_gradients(RunState<Dim>& sim,
       });
     }
   }
+  if (sim.comm) {
+    add_ghost_values_to_owners(sim, *sim.comm, std::span<double>(st.zbar), nf);
+    remove_ghosts(sim);
+  }
   const auto N = static_cast<std::size_t>(P.size());
   sim.mapped_gradient.resize(N);
   st.omega.resize(N);
@@ -457,7 +480,9 @@ const std::vector<Index>& TlsMapping::adjoint_gradients(RunState<Dim>& sim,
   no_weight_.clear();
   for (std::size_t p = 0; p < N; ++p)
     if (!(st.omega[p] > 0.0)) no_weight_.push_back(static_cast<Index>(p));
-  totals_.unweighted += static_cast<Index>(no_weight_.size());
+  double unweighted = static_cast<double>(no_weight_.size());
+  if (sim.comm) sim.comm->sum(std::span<double>(&unweighted, 1));
+  totals_.unweighted += static_cast<Index>(unweighted);
   return no_weight_;
 }
 

@@ -62,18 +62,50 @@ TlsTriangleMappingState::TlsTriangleMappingState(const TriangleMesh& mesh, const
 }
 
 namespace {
-// The mapping's summary of one step's fits: an element counts once, by the worse of its two
-// systems (plain: stress; conservative: density, momentum, body force).
-TlsReport summarise(const TlsTriangleReconstruction& recon) {
+// st.integrated (TlsTriangleMappingState): the triangles this process integrates. In a
+// distributed run a triangle's points are all here, own particles or ghosts (the ghost reach of
+// one cell layer covers the triangles of a cell's neighbours, where a particle on a shared edge
+// may be counted), and every process holding one of them sees the same lowest id: the triangle
+// goes to the process that owns that particle. (Not the process of the triangle's cell layer, as
+// the grid's elements go: a particle on a horizontal cell edge belongs to the layer above by
+// Grid::cell_of but to the lower triangle by TriangleMesh::cell_index, and that layer may hold
+// no particle of any process.)
+void mark_integrated(const RunState<2>& sim, TlsTriangleMappingState& st) {
+  const auto& recon = st.recon;
+  const Index ne = recon.num_elements();
+  st.integrated.assign(static_cast<std::size_t>(ne), 0);
+  const Index own = sim.own_particles();
+  const auto& id = sim.particles.id;
+  parallel_for(ne, [&](Index e) {
+    const auto pts = recon.points(e);
+    if (pts.empty()) return;
+    Index lowest = pts.front();
+    if (sim.comm)
+      for (const Index p : pts)
+        if (id[static_cast<std::size_t>(p)] < id[static_cast<std::size_t>(lowest)]) lowest = p;
+    st.integrated[static_cast<std::size_t>(e)] = lowest < own ? 1 : 0;
+  });
+}
+
+// The mapping's summary of one step's fits over the triangles this process integrates: an
+// element counts once, by the worse of its two systems (plain: stress; conservative: density,
+// momentum, body force).
+TlsReport summarise(const RunState<2>& sim, const TlsTriangleMappingState& st) {
+  const TlsTriangleReconstruction& recon = st.recon;
   const TlsTriangleReport& rep = recon.report();
   TlsReport r;
   r.elements = rep.elements;
-  r.active = rep.active;
   r.outside = rep.outside;
+  if (sim.comm != nullptr && rep.outside > 0) {  // this process's own particles only
+    r.outside = 0;
+    for (Index p = 0; p < sim.own_particles(); ++p)
+      if (recon.mesh().cell_index(sim.particles.x[static_cast<std::size_t>(p)]) < 0) ++r.outside;
+  }
   const int nb = recon.terms();
   for (Index e = 0; e < recon.num_elements(); ++e) {
+    if (st.integrated[static_cast<std::size_t>(e)] == 0) continue;
+    ++r.active;
     const TlsTriangleElementInfo& info = recon.element(e);
-    if (info.points == 0) continue;
     const auto& a = info.plain;
     const auto& b = info.conservative;
     if (a.failed || b.failed) {
@@ -129,7 +161,9 @@ void TlsMapping::fit_mass_triangles(RunState<2>& sim, GaussPoints<2>& q) {
   auto& st = *triangles_;
   const auto& P = sim.particles;
   st.recon.set_points(P.x);
-  triangle_report_ = summarise(st.recon);
+  mark_integrated(sim, st);
+  triangle_report_ = summarise(sim, st);
+  if (sim.comm) triangle_report_ = over_ranks(*sim.comm, triangle_report_);
   const TlsReport& rep = triangle_report_;
   accumulate(totals_, rep);
   if (rep.failed > 0)
@@ -138,7 +172,8 @@ void TlsMapping::fit_mass_triangles(RunState<2>& sim, GaussPoints<2>& q) {
   q.clear();
   st.psi.clear();
   for (Index e = 0; e < st.recon.num_elements(); ++e) {
-    if (st.recon.element(e).points == 0) continue;  // no particles: no reconstruction, no mass
+    // No particles: no reconstruction, no mass; another process's triangle: its Gauss points.
+    if (st.integrated[static_cast<std::size_t>(e)] == 0) continue;
     for (int k = 0; k < st.per_cell; ++k) {
       const auto& v = st.pieces[static_cast<std::size_t>(e * st.per_cell + k)];
       const Vec<2> e1 = v[1] - v[0], e2 = v[2] - v[0];

@@ -184,7 +184,8 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
   }
   const auto layers = static_cast<Index>(std::ceil(most));
   const int me = comm.rank();
-  std::vector<int> peers;
+  auto& gh = sim.ghosts;
+  std::vector<int>& peers = gh.peers;
   std::vector<std::vector<std::byte>> send;
   if (lo <= hi)
     for (int r = 0; r < comm.size(); ++r) {
@@ -194,19 +195,61 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
       if (r == me || rlo > rhi || std::max(rlo - hi, lo - rhi) > layers) continue;
       peers.push_back(r);
       auto& out = send.emplace_back();
+      auto& sent = gh.sent.emplace_back();
       for (std::size_t i = 0; i < n; ++i)
-        if (layer[i] >= rlo - layers && layer[i] <= rhi + layers) P.pack(i, out);
+        if (layer[i] >= rlo - layers && layer[i] <= rhi + layers) {
+          P.pack(i, out);
+          sent.push_back(static_cast<Index>(i));
+        }
     }
   const auto recv = comm.exchange(peers, send, 400);
-  sim.ghosts.owned = static_cast<Index>(n);
-  for (const auto& buf : recv) P.unpack_append(buf);
+  gh.owned = static_cast<Index>(n);
+  for (const auto& buf : recv) {
+    const Index before = P.size();
+    P.unpack_append(buf);
+    gh.received.push_back(P.size() - before);
+  }
+}
+
+template <int Dim>
+void add_ghost_values_to_owners(const RunState<Dim>& sim, const Comm& comm,
+                                std::span<double> values, std::size_t width) {
+  comm.check();
+  const auto& gh = sim.ghosts;
+  if (gh.owned < 0 || values.size() != static_cast<std::size_t>(sim.particles.size()) * width)
+    throw std::logic_error("add_ghost_values_to_owners: values of the particles with ghosts");
+  std::vector<std::vector<std::byte>> send(gh.peers.size());
+  auto at = static_cast<std::size_t>(gh.owned);
+  for (std::size_t k = 0; k < gh.peers.size(); ++k) {
+    const std::size_t count = static_cast<std::size_t>(gh.received[k]) * width;
+    send[k].resize(count * sizeof(double));
+    std::memcpy(send[k].data(), values.data() + at * width, count * sizeof(double));
+    at += static_cast<std::size_t>(gh.received[k]);
+  }
+  const auto recv = comm.exchange(gh.peers, send, 500);
+  // The peers' values in rank order, each peer's in the order its particles were sent.
+  for (std::size_t k = 0; k < gh.peers.size(); ++k) {
+    const auto& sent = gh.sent[k];
+    if (recv[k].size() != sent.size() * width * sizeof(double))
+      throw std::logic_error("add_ghost_values_to_owners: another count of ghosts came back");
+    for (std::size_t j = 0; j < sent.size(); ++j)
+      for (std::size_t c = 0; c < width; ++c) {
+        double v;
+        std::memcpy(&v, recv[k].data() + (j * width + c) * sizeof(double), sizeof(double));
+        values[static_cast<std::size_t>(sent[j]) * width + c] += v;
+      }
+  }
 }
 
 template <int Dim>
 void remove_ghosts(RunState<Dim>& sim) {
-  if (sim.ghosts.owned < 0) return;
-  sim.particles.truncate(sim.ghosts.owned);
-  sim.ghosts.owned = -1;
+  auto& gh = sim.ghosts;
+  gh.peers.clear();
+  gh.sent.clear();
+  gh.received.clear();
+  if (gh.owned < 0) return;
+  sim.particles.truncate(gh.owned);
+  gh.owned = -1;
 }
 
 template <int Dim>
@@ -289,6 +332,12 @@ template void unpack_particles<3>(std::span<const std::byte>, Particles<3>&,
 template void append_ghosts<1>(RunState<1>&, const Comm&, double);
 template void append_ghosts<2>(RunState<2>&, const Comm&, double);
 template void append_ghosts<3>(RunState<3>&, const Comm&, double);
+template void add_ghost_values_to_owners<1>(const RunState<1>&, const Comm&, std::span<double>,
+                                            std::size_t);
+template void add_ghost_values_to_owners<2>(const RunState<2>&, const Comm&, std::span<double>,
+                                            std::size_t);
+template void add_ghost_values_to_owners<3>(const RunState<3>&, const Comm&, std::span<double>,
+                                            std::size_t);
 template void remove_ghosts<1>(RunState<1>&);
 template void remove_ghosts<2>(RunState<2>&);
 template void remove_ghosts<3>(RunState<3>&);

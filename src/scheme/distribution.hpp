@@ -76,6 +76,14 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach);
 // Drops the ghost copies again (nothing when none are appended).
 template <int Dim>
 void remove_ghosts(RunState<Dim>& sim);
+// While ghosts are appended: `values` holds `width` doubles per particle, own and ghosts (the
+// order of sim.particles); each process sends the values at its ghosts to the processes that own
+// them, which add them to those of the particles they sent, peer after peer in rank order (the
+// same bits on every run). For a sum a mapping makes over its fits' points that belongs to the
+// particles (TLS's adjoint strain rate). Collective; starts with comm.check().
+template <int Dim>
+void add_ghost_values_to_owners(const RunState<Dim>& sim, const Comm& comm,
+                                std::span<double> values, std::size_t width);
 
 // A distributed run's tractions: sim.tractions from sim.all_tractions (whose loaded points name
 // their particles by id), the points of this process's particles with their indices, in the

@@ -160,9 +160,15 @@ struct RunState {
   // after them (stages::GhostParticles); `owned` is then this process's particle count (-1: no
   // ghosts appended). `layers`: the cell layers [lo, hi] along the last axis that this process's
   // particles occupy at the last exchange (no other process has particles there).
+  // `peers`, `sent` and `received` (per peer, in rank order): which of this process's particles
+  // went to each, and how many ghosts came from each (appended in that order), for sums a
+  // mapping makes at the ghosts that belong to their owners (add_ghost_values_to_owners).
   struct Ghosts {
     Index owned = -1;
     std::array<Index, 2> layers{0, -1};
+    std::vector<int> peers;
+    std::vector<std::vector<Index>> sent;
+    std::vector<Index> received;
   } ghosts;
   // Per-particle state of the basis that travels with the particles between processes (CPDI2's
   // tracked corners): `carried_width` doubles per particle in particle order, filled by the
