@@ -301,11 +301,6 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
           fmt::format("{}: method.solver = \"{}\" does not run on several "
                       "processes yet (issue 21); {}",
                       method.where_solver, otm ? "otm" : "unified", kHow));
-    if (pb.mesh)
-      throw InputError(
-          fmt::format("grid.mesh: a mesh from a file does not run on several "
-                      "processes yet (issue 21); {}",
-                      kHow));
     part = SlabPartition<Dim>::balanced(
         SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/true),
         comm->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));

@@ -610,9 +610,14 @@ class TlsMapping {
   // largest half-side of a particle's box in cells along the last axis (a particle that far
   // reaches this process's elements, and its fractions depend on the elements its box overlaps,
   // as far again). tls_mapping.cpp.
+  // On triangles: every particle of a triangle that holds one of this process's, the most cell
+  // layers a triangle spans (1 on the grid's triangles; a mesh from a file may have larger ones).
   template <class Sim>
   double ghost_reach(const Sim& sim) const {
-    return reach<Sim::kDim>(sim);
+    if constexpr (Sim::BasisT::kTriangleMesh)
+      return triangle_reach(sim.basis.mesh(), sim.grid);
+    else
+      return reach<Sim::kDim>(sim);
   }
 
   const TlsReport& last_report() const {
@@ -865,6 +870,11 @@ class TlsMapping {
   // of a step (tls_mapping.cpp).
   mutable Index reach_step_ = -1;
   mutable double reach_ = 1.0;
+  // The most cell layers between the lowest and the highest corner of a triangle (at least 1),
+  // computed once for the mesh triangle_reach_mesh_ (tls_triangle_mapping.cpp).
+  double triangle_reach(const TriangleMesh& mesh, const Grid<2>& grid) const;
+  mutable const TriangleMesh* triangle_reach_mesh_ = nullptr;
+  mutable double triangle_reach_ = 1.0;
   template <int Dim>
   void apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficients<Dim>& coef,
                    const unsigned char* only, Index e) const;
