@@ -21,6 +21,14 @@ double velocity_time(const Scheme& scheme) {
   return std::visit([](auto s) { return decltype(s)::kVelocityTime; }, scheme);
 }
 
+// After a process has kept its share of the whole problem's particles (set-up, a restart):
+// keep_with_ids keeps the vectors' capacity, so without this every process would hold the
+// storage of every particle of the problem for the whole run.
+template <int Dim>
+void release_the_rest(Particles<Dim>& p) {
+  p.for_each_field([](auto& field) { field.shrink_to_fit(); });
+}
+
 // Checkpoints (io/checkpoint.hpp). The state of an MPM run with its FEM reference: everything a
 // step reads that an earlier step wrote (the grid quantities and stencils are rebuilt per step).
 // A distributed run (comm, part) gathers its ranks' particles at rank 0, rank after rank, each in
@@ -209,6 +217,7 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
     keep_carried([&](std::size_t i) { return i >= first && i < first + n; });
     p.keep_with_ids(
         [&](const Particles<Dim>&, std::size_t i) { return i >= first && i < first + n; });
+    release_the_rest(p);
     cell = std::vector<CompactIndex>(cell.begin() + static_cast<std::ptrdiff_t>(first),
                                      cell.begin() + static_cast<std::ptrdiff_t>(first + n));
     part.cuts = dist.cuts;
@@ -230,6 +239,7 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
     p.keep_with_ids([&](const Particles<Dim>& P, std::size_t i) {
       return part.owner(sim.grid, P.x[i], 0) == me;
     });
+    release_the_rest(p);
     sim.sorting.reference = -1;
     if (!comm->root()) {
       sim.sorting.sorts = 0;
@@ -312,6 +322,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
     pb.particles.keep_with_ids([&](const Particles<Dim>& P, std::size_t i) {
       return part.owner(pb.grid, P.x[i], 0) == me;
     });
+    release_the_rest(pb.particles);
   }
   // An input error that only some processes meet (the stepper's checks of their own particles,
   // rank 0's output directory) stops every process with the message of the lowest.
