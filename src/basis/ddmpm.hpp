@@ -30,11 +30,13 @@
 // ones carry zero value and only the smoothed gradient.
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <string_view>
 #include <vector>
 
 #include "basis/basis.hpp"
 #include "basis/linear.hpp"
+#include "core/dof_array.hpp"
 
 namespace mpm {
 
@@ -53,12 +55,8 @@ class DdmpmBasis {
                         kTriangleMesh = false;
   using StencilT = Stencil<Dim, ipow(kPerDim, Dim)>;
 
-  explicit DdmpmBasis(const Grid<Dim>& g) : p1_(g), n_(p1_.dofs_per_dim()) {
-    Neighbours zero;
-    zero.fill(Vec<Dim>::Zero());
-    G_.assign(static_cast<std::size_t>(p1_.num_dofs()), zero);
-    V_.assign(G_.size(), 0.0);
-  }
+  // No node holds a smoothed gradient before the first prepare().
+  explicit DdmpmBasis(const Grid<Dim>& g) : p1_(g), n_(p1_.dofs_per_dim()) {}
 
   const Grid<Dim>& grid() const { return p1_.grid(); }
   IVec<Dim> dofs_per_dim() const { return p1_.dofs_per_dim(); }
@@ -68,10 +66,26 @@ class DdmpmBasis {
 
   // G_j[k] = (1/V_j) sum_p V_p phi_j(x_p) grad phi_i(x_p) [1/m], node i = j + o with
   // k = sum_d (o_d + 1) 3^d. Particles outside the grid are skipped; the time step reports them.
+  // G_ and V_ hold the window of the nodes of the particles' cells (DofArray): 3^Dim gradients a
+  // node (152 bytes in 2D, 656 in 3D) over the whole grid were more than the step's grid arrays,
+  // held by every process of a distributed run and zeroed every step; a node outside has no
+  // particle near it, so its G_j is zero (evaluate_point).
   void prepare(const Particles<Dim>& P) {
-    std::fill(V_.begin(), V_.end(), 0.0);
-    for (auto& g : G_) g.fill(Vec<Dim>::Zero());
     typename LinearBasis<Dim>::StencilT s;
+    Index lo = std::numeric_limits<Index>::max(), hi = -1;
+    for (Index p = 0; p < P.size(); ++p) {
+      if (!grid().inside(P.x[static_cast<std::size_t>(p)])) continue;
+      p1_.evaluate(P, p, s);
+      for (const Index j : s.dof) {
+        lo = std::min(lo, j);
+        hi = std::max(hi, j);
+      }
+    }
+    Neighbours zero;
+    zero.fill(Vec<Dim>::Zero());
+    const Index count = hi >= lo ? hi - lo + 1 : 0;
+    G_.assign(count > 0 ? lo : 0, count, zero);
+    V_.assign(count > 0 ? lo : 0, count, 0.0);
     for (Index p = 0; p < P.size(); ++p) {
       const auto i = static_cast<std::size_t>(p);
       if (!grid().inside(P.x[i])) continue;
@@ -92,7 +106,7 @@ class DdmpmBasis {
         }
       }
     }
-    for (std::size_t j = 0; j < G_.size(); ++j)
+    for (Index j = G_.first(); j < G_.stop(); ++j)
       for (auto& g : G_[j]) g = V_[j] > 0.0 ? Vec<Dim>(g / V_[j]) : Vec<Dim>::Zero();
   }
 
@@ -149,10 +163,9 @@ class DdmpmBasis {
           off += static_cast<int>(o + 1) * ostride;
           ostride *= 3;
         }
-        if (near && inside)
-          smooth += q.w[static_cast<std::size_t>(b)] *
-                    G_[static_cast<std::size_t>(q.dof[static_cast<std::size_t>(b)])]
-                      [static_cast<std::size_t>(off)];
+        const Index j = q.dof[static_cast<std::size_t>(b)];
+        if (near && inside && G_.holds(j))
+          smooth += q.w[static_cast<std::size_t>(b)] * G_[j][static_cast<std::size_t>(off)];
       }
       const Vec<Dim> plain = in_cell ? q.grad[static_cast<std::size_t>(a)] : Vec<Dim>::Zero();
       s.grad[ku] = inside ? Vec<Dim>(alpha * plain + (1.0 - alpha) * smooth) : Vec<Dim>::Zero();
@@ -163,8 +176,8 @@ class DdmpmBasis {
   using Neighbours = std::array<Vec<Dim>, kNeighbours>;
   LinearBasis<Dim> p1_;
   IVec<Dim> n_;
-  std::vector<Neighbours> G_;  // per node j: (1/V_j) int phi_j grad phi_{j+o}, o in {-1,0,1}^Dim
-  std::vector<double> V_;      // V_j [m^Dim], scratch of prepare()
+  DofArray<Neighbours> G_;  // per node j: (1/V_j) int phi_j grad phi_{j+o}, o in {-1,0,1}^Dim
+  DofArray<double> V_;      // V_j [m^Dim], scratch of prepare()
 };
 
 // The basis concept (basis/basis.hpp).

@@ -4,6 +4,11 @@
 // and the interior closed form for uniformly spaced particles.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
 #include "basis/ddmpm.hpp"
 #include "model/problem.hpp"
 
@@ -78,6 +83,62 @@ TEST(Ddmpm, InteriorNodesGiveCentralDifferenceGradients) {
       EXPECT_NEAR(st.grad[a][0], -1.0 / (2 * h), 1e-9);
     }
   }
+}
+
+TEST(Ddmpm, ABodyInPartOfTheGridSmoothsOnlyNearItsParticles) {
+  // The smoothed gradients are held for the nodes of the particles' cells only (DofArray): at
+  // any point of the grid the gradient is alpha grad phi + (1 - alpha) sum_j phi_j G_j, with G_j
+  // the particle sums of D 2.6.4 computed here over every node (zero where no particle is).
+  const Grid<1> g{Vec<1>(0.0), Vec<1>(1.0), IVec<1>{10}};
+  const Particles<1> P = seed_particles<1>(g, Vec<1>(0.3), Vec<1>(0.55), 3, 1.0);
+  DdmpmBasis<1> basis{g};
+  basis.prepare(P);
+  const double h = 0.1;
+  const auto phi = [&](Index j, double x) { return std::max(0.0, 1.0 - std::abs(x / h - j)); };
+  const auto dphi = [&](Index j, double x) {
+    const double s = x / h - static_cast<double>(j);
+    return s > -1.0 && s < 0.0 ? 1.0 / h : s >= 0.0 && s < 1.0 ? -1.0 / h : 0.0;
+  };
+  // G[j][o + 1] = (1/V_j) sum_p V_p phi_j(x_p) dphi_{j+o}(x_p), nodes 0..10.
+  std::vector<std::array<double, 3>> G(11, {0.0, 0.0, 0.0});
+  std::vector<double> V(11, 0.0);
+  for (Index p = 0; p < P.size(); ++p) {
+    const double x = P.x[static_cast<std::size_t>(p)][0],
+                 Vp = P.volume[static_cast<std::size_t>(p)];
+    for (Index j = 0; j <= 10; ++j) {
+      V[static_cast<std::size_t>(j)] += Vp * phi(j, x);
+      for (int o = -1; o <= 1; ++o)
+        if (j + o >= 0 && j + o <= 10)
+          G[static_cast<std::size_t>(j)][static_cast<std::size_t>(o + 1)] +=
+              Vp * phi(j, x) * dphi(j + o, x);
+    }
+  }
+  int away = 0;
+  for (int k = 1; k < 200; ++k) {
+    const double x = 0.005 * k;
+    DdmpmBasis<1>::StencilT st;
+    basis.evaluate_point(Vec<1>(x), st);
+    const Index c = std::min<Index>(static_cast<Index>(std::floor(x / h)), 9);
+    const double xi = x / h - static_cast<double>(c), alpha = 2.0 * (1.0 - xi) * xi;
+    double smoothing = 0.0;
+    for (int a = 0; a < st.kSize; ++a) {
+      const Index i = st.dof[a];
+      if (st.w[a] == 0.0 && (i == c || i == c + 1)) continue;  // a node clamped at the side
+      double smooth = 0.0;
+      for (const Index j : {c, c + 1})
+        if (std::abs(i - j) <= 1 && V[static_cast<std::size_t>(j)] > 0.0)
+          smooth += phi(j, x) *
+                    G[static_cast<std::size_t>(j)][static_cast<std::size_t>(i - j + 1)] /
+                    V[static_cast<std::size_t>(j)];
+      smoothing += std::abs(smooth);
+      const double plain = (i == c || i == c + 1) ? dphi(i, x) : 0.0;
+      EXPECT_NEAR(st.grad[a][0], alpha * plain + (1.0 - alpha) * smooth, 1e-9)
+          << "x = " << x << ", node " << i;
+    }
+    if (smoothing == 0.0) ++away;
+  }
+  // Cells 0-1 and 7-9 (x < 0.2, x >= 0.7): no particle reaches their nodes; half the points.
+  EXPECT_GE(away, 95);
 }
 
 }  // namespace
