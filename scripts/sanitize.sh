@@ -23,10 +23,11 @@
 # the tests run; either failing fails the script, and the fuzzers' log is printed at the end.
 # Their own tree (build-fuzz/, -O2 -g) took about 170 s of CPU beside this build in CI.
 #
-# Built with MPI (issue 21): after the tests, two short distributed runs under mpirun (MPI_SMOKE
+# Built with MPI (issue 21): after the tests, three short distributed runs under mpirun (MPI_SMOKE
 # below) put the distributed code under the sanitizers: the halo sums, the particle migration,
 # the reductions over the processes (3 processes: the fold of the processes beyond a power of
-# two) and TLS's ghost particles. Their answers are checked against one process by the Release
+# two), TLS's ghost particles with the adjoint strain rate's sums sent back to their owners, and
+# TLS on triangles. Their answers are checked against one process by the Release
 # suite (scripts/mpi_check.py), not here; here any sanitizer report or a non-zero exit fails.
 # Open MPI keeps allocations it never frees; they are suppressed by library
 # (scripts/lsan_suppressions.txt), which needs the slow unwinder for these runs (the fast one stops
@@ -233,7 +234,8 @@ if [ "${SANITIZE_ALL:-0}" = 1 ]; then
 else
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -E "$SLOW" || test_status=$?
 fi
-# MPI_SMOKE: the distributed runs (see the top of this file); 6.7 s and about 5 s here. Without
+# MPI_SMOKE: the distributed runs (see the top of this file); 6.7 s and about 5 s here (on a
+# slower machine), and TLS on the grid's triangles. Without
 # mpirun (openmpi-bin, which scripts/deps.sh installs) the job fails rather than skip them.
 if [ "$test_status" -eq 0 ] && ! command -v mpirun >/dev/null; then
   echo "scripts/sanitize.sh: mpirun not found for the distributed runs: install openmpi-bin" >&2
@@ -252,8 +254,11 @@ if [ "$test_status" -eq 0 ]; then
     --out "$smoke/b2" || test_status=$?
   env "${mpi_env[@]}" mpirun -n 2 build-asan/mpm run "${vortex[@]}" --set time.end=0.04 \
     --set method.mapping=tls --set method.tls_completion=neighbour --set method.scheme=usl \
-    --out "$smoke/tls" || test_status=$?
-  echo "== MPI under the sanitizers (3 and 2 processes): status $test_status, $((SECONDS - smoke_t0)) s"
+    --set method.tls_strain_rate=adjoint --out "$smoke/tls" || test_status=$?
+  env "${mpi_env[@]}" mpirun -n 2 build-asan/mpm run examples/plate_tls_triangles_2d.toml -q \
+    --set grid.cells=8 --set time.end=5e-4 --set output.frames=1 --out "$smoke/tri" ||
+    test_status=$?
+  echo "== MPI under the sanitizers (3, 2 and 2 processes): status $test_status, $((SECONDS - smoke_t0)) s"
   rm -rf "$smoke"
 fi
 if [ "$fuzz" = ON ]; then
