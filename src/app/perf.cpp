@@ -49,7 +49,7 @@ double bytes_per_particle(const BenchOptions& opt, Index cells, Index particles)
 }
 
 // The re-sorting buffers (SortState): order and inverse permutation, the scratch of the largest
-// particle field (F or stress), one cursor per cell.
+// particle field (F or stress), one cursor per cell the particles span (every cell here).
 template <int Dim>
 double sort_bytes_per_particle(Index cells, Index particles) {
   return static_cast<double>(2 * sizeof(CompactIndex) + sizeof(Mat<Dim>)) +

@@ -14,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
+#include <numeric>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -159,6 +160,23 @@ void expect_shuffled_matches_seeded(const std::string& name, const std::vector<s
   EXPECT_LE(d, kRoundOff);
   EXPECT_GT(d, 0.0);  // the sums were really regrouped (else the test would prove nothing)
   EXPECT_EQ(a.diag.grid_crossings, b.diag.grid_crossings);
+}
+
+TEST(Sort, CellOrderIsStableWithCursorsOverTheOccupiedCellsOnly) {
+  // A body in cells 5..9 of a 100,000-cell grid: the counting sort's cursors span those cells
+  // (6 entries), and the order is the stable sort by cell.
+  const std::vector<CompactIndex> cell{9, 5, 7, 5, 9, 6, 7, 5};
+  SortState st;
+  cell_order(cell, 100000, st);
+  EXPECT_EQ(st.cursor.size(), 6u);
+  std::vector<CompactIndex> expect(cell.size());
+  std::iota(expect.begin(), expect.end(), CompactIndex{0});
+  std::stable_sort(expect.begin(), expect.end(),
+                   [&](CompactIndex a, CompactIndex b) { return cell[a] < cell[b]; });
+  EXPECT_EQ(st.perm.order, expect);
+  cell_order({}, 100000, st);  // no particles: nothing to order
+  EXPECT_TRUE(st.perm.order.empty());
+  EXPECT_EQ(st.cursor.size(), 1u);
 }
 
 TEST(Sort, ShuffledBar1DQuadraticBSplineMatchesSeeded) {
