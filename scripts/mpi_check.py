@@ -489,6 +489,10 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
                 failures.append(f"{name} -n 2: particles moved one way only ({sent})")
             # Each process holds the grid arrays of its slab's window, not the whole grid (but
             # in the cases of WHOLE_WINDOW).
+            memory = mpi.get("peak_memory_bytes_per_process", [])
+            if len(memory) != n or max(memory) != s.get("peak_memory_bytes"):
+                failures.append(f"{name} -n {n}: peak memory per process {memory}, "
+                                f"summary's {s.get('peak_memory_bytes')}")
             window, dofs = mpi.get("grid_window_dofs_per_process", []), mpi.get("grid_dofs", 0)
             if len(window) != n or (name not in WHOLE_WINDOW and not all(w < dofs for w in window)):
                 failures.append(f"{name} -n {n}: grid windows {window} of {dofs} DOFs")

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "benchmarks/benchmarks.hpp"
+#include "core/memory.hpp"
 #include "core/parallel.hpp"
 #include "driver/driver.hpp"
 #include "driver/run_mpm.hpp"
@@ -89,6 +90,9 @@ int run_threads(int requested, Index particles, int dim, int available) {
 }
 
 RunResult run(const Config& cfg, const RunOptions& opt) {
+  // summary.json's peak_memory_bytes: this run's, the problem's set-up included (a batch runs
+  // several in one process).
+  reset_peak_memory();
   AnyProblem problem = make_problem(cfg);
   const int dim =
       std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);

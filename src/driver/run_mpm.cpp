@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <optional>
 
+#include "core/memory.hpp"
 #include "driver/driver.hpp"
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
@@ -416,17 +417,23 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   }
   res.diag = sim.diag;
   nlohmann::ordered_json mpi_json;
+  // Resident memory at its peak [bytes] (-1: not known on this system): the process's on one,
+  // the most of one process on several (each process's in "mpi").
+  double peak_memory = peak_memory_bytes();
   if (comm) {
     res.diag.grid_crossings = comm->sum(res.diag.grid_crossings);
     const auto [window_first, window_end] = sim.nodes.window();
     const std::vector<Index> counts = comm->allgather(std::span<const Index>(
-        std::array<Index, 3>{sim.particles.size(), migrated, window_end - window_first}));
-    std::vector<Index> per_rank, sent, window;
-    for (std::size_t r = 0; r < counts.size(); r += 3) {
+        std::array<Index, 4>{sim.particles.size(), migrated, window_end - window_first,
+                             static_cast<Index>(peak_memory)}));
+    std::vector<Index> per_rank, sent, window, memory;
+    for (std::size_t r = 0; r < counts.size(); r += 4) {
       per_rank.push_back(counts[r]);
       sent.push_back(counts[r + 1]);
       window.push_back(counts[r + 2]);
+      memory.push_back(counts[r + 3]);
     }
+    peak_memory = static_cast<double>(*std::max_element(memory.begin(), memory.end()));
     mpi_json = {{"processes", comm->size()},
                 {"decomposition", fmt::format("slabs of whole cell layers along {}, cut to "
                                               "balance the initial particles",
@@ -440,7 +447,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
                 // The grid arrays each process holds at the end (GridState's window) against
                 // the basis's DOFs.
                 {"grid_dofs", sim.nodes.size()},
-                {"grid_window_dofs_per_process", window}};
+                {"grid_window_dofs_per_process", window},
+                {"peak_memory_bytes_per_process", memory}};
   }
   res.wall_seconds = seconds_since(t_start);
 
@@ -476,6 +484,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   res.summary = make_summary(res, settings, sim.material, sim.time, std::move(method_json),
                              scheme_velocity_time);
   stepper->report(res.summary);
+  res.summary["peak_memory_bytes"] = peak_memory;
   if (comm) res.summary["mpi"] = std::move(mpi_json);
   if (reference)
     res.summary["reference"] = {{"solver", "ulfem"},

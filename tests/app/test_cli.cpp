@@ -600,6 +600,8 @@ TEST(Cli, RunWritesSummaryFramesHistoryAndVtk) {
   EXPECT_EQ(j["method"]["scheme"], "musl");
   EXPECT_EQ(j["steps"], 19);
   EXPECT_EQ(j["particles"], 240);
+  // The process's peak resident memory (Linux's VmHWM): at least what the executable maps.
+  EXPECT_GT(j["peak_memory_bytes"].get<double>(), 1e6);
   for (const char* e :
        {"displacement_rms", "velocity_rms", "velocity_rms_midstep", "stress_rms", "stress_rel_l2"})
     EXPECT_TRUE(j["errors"][e].is_number()) << e;
