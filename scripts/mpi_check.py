@@ -95,12 +95,14 @@ CASES = [
     ("3d_cube_tls", "examples/cube_mms_3d.toml",
      ["grid.cells=6", "time.end=4e-3", "method.mapping=tls", "output.frames=1"], "none"),
     # TLS's adjoint strain rate: the transposed fits' parts at the ghost particles go back to
-    # their processes. USAVG with the 2D defaults (the particles' domains): two strain rates a
-    # step, the second after a stress update that stretches the boxes (the ghost reach kept for
-    # the step); in 1D the virtual completion, whose elements push parts to their sources.
-    ("2d_vortex_tls_adjoint_usavg", "examples/vortex_2d.toml",
+    # their processes. USAVG with the particles' domains (the 2D default) and the neighbour
+    # completion (points borrowed across the cuts): two strain rates a step, the second after a
+    # stress update that stretches the boxes (the ghost reach kept for the step); in 1D the
+    # virtual completion, whose elements push parts to their sources.
+    ("2d_vortex_tls_adjoint_neighbour_usavg", "examples/vortex_2d.toml",
      ["grid.cells=16", "time.end=0.2", "time.dt=2e-3", "method.mapping=tls",
-      "method.tls_strain_rate=adjoint", "method.scheme=usavg", "output.frames=1"], "both"),
+      "method.tls_strain_rate=adjoint", "method.tls_completion=neighbour",
+      "method.scheme=usavg", "output.frames=1"], "both"),
     ("1d_tls_adjoint_virtual_musl", "examples/vibrating_bar_crossing.toml",
      ["grid.cells=60", "time.end=2e-3", "method.mapping=tls", "method.basis=bspline",
       "method.tls_strain_rate=adjoint", "method.tls_completion=virtual", "output.frames=1"],
