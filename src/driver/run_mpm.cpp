@@ -2,7 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
+#include <memory>
+#include <numeric>
 #include <span>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <optional>
@@ -10,6 +15,7 @@
 #include "core/memory.hpp"
 #include "driver/driver.hpp"
 #include "driver/stepper.hpp"
+#include "grid/triangle_mesh.hpp"
 #include "io/checkpoint.hpp"
 #include "scheme/distribution.hpp"
 #include "scheme/sort.hpp"
@@ -28,6 +34,43 @@ double velocity_time(const Scheme& scheme) {
 template <int Dim>
 void release_the_rest(Particles<Dim>& p) {
   p.for_each_field([](auto& field) { field.shrink_to_fit(); });
+}
+
+// A distributed run on a mesh from a file: the mesh with its vertices numbered along the slabs'
+// axis (y, then x; ties in the file's order), the triangles and boundaries the same, so that a
+// process's DOFs (P1: its vertices; Powell-Sabin: three a vertex) form a short window instead of
+// the file's order spanning the mesh. Each triangle keeps its vertices' order, so every basis
+// function is the same function; only sums over the DOFs (CG's inner products, conservation)
+// change order, to round-off. old_to_new[v]: vertex v's new number.
+std::shared_ptr<const TriangleMesh> numbered_along_y(const TriangleMesh& m,
+                                                     std::vector<Index>& old_to_new) {
+  const Index nv = m.num_vertices();
+  std::vector<Index> order(static_cast<std::size_t>(nv));
+  std::iota(order.begin(), order.end(), Index{0});
+  std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
+    const Vec<2>&pa = m.vertex(a), &pb = m.vertex(b);
+    return pa[1] < pb[1] || (pa[1] == pb[1] && pa[0] < pb[0]);
+  });
+  old_to_new.assign(static_cast<std::size_t>(nv), 0);
+  std::vector<Vec<2>> vertices(static_cast<std::size_t>(nv));
+  for (Index k = 0; k < nv; ++k) {
+    old_to_new[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
+    vertices[static_cast<std::size_t>(k)] = m.vertex(order[static_cast<std::size_t>(k)]);
+  }
+  const auto to_new = [&](Index v) { return old_to_new[static_cast<std::size_t>(v)]; };
+  std::vector<TriangleMesh::Triangle> triangles;
+  triangles.reserve(static_cast<std::size_t>(m.num_cells()));
+  for (Index c = 0; c < m.num_cells(); ++c) {
+    const auto& t = m.cell_vertices(c);
+    triangles.push_back({to_new(t[0]), to_new(t[1]), to_new(t[2])});
+  }
+  std::map<std::string, std::vector<TriangleMesh::Edge>> boundaries;
+  for (const std::string& name : m.boundary_names()) {
+    auto& edges = boundaries[name];
+    for (const auto& e : m.boundary(name).edges) edges.push_back({to_new(e[0]), to_new(e[1])});
+  }
+  return std::make_shared<const TriangleMesh>(std::move(vertices), std::move(triangles),
+                                              std::move(boundaries), m.source());
 }
 
 // Checkpoints (io/checkpoint.hpp). The state of an MPM run with its FEM reference: everything a
@@ -312,6 +355,13 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
           fmt::format("{}: method.solver = \"{}\" does not run on several "
                       "processes yet (issue 21); {}",
                       method.where_solver, otm ? "otm" : "unified", kHow));
+    if constexpr (Dim == 2)
+      if (pb.mesh) {
+        std::vector<Index> old_to_new;
+        pb.mesh = numbered_along_y(*pb.mesh, old_to_new);
+        for (auto& f : pb.fixed_sides)
+          for (auto& [v, n] : f.vertex_normals) v = old_to_new[static_cast<std::size_t>(v)];
+      }
     part = SlabPartition<Dim>::balanced(
         SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/true),
         comm->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
