@@ -202,6 +202,12 @@ CASES = [
     # at the check's tolerance; the distributed CG is checked on the grid's plates).
     ("2d_incline_mesh_file_p1", "examples/incline_pressure_2d.toml",
      ["time.end=0.05", "output.frames=1"], "none"),
+    # A roller along a bent boundary (the unit square's top and left sides, tests/data/meshes/
+    # square_v41.msh): each vertex of it keeps its normals (FixedSide::vertex_normals) under the
+    # numbering along y; the incline's pressure on the square's bottom.
+    ("2d_square_mesh_file_bent_roller", "examples/incline_pressure_2d.toml",
+     ["grid.mesh=../tests/data/meshes/square_v41.msh", "boundary.roller=top_left",
+      "boundary.loaded=bottom", "time.end=0.02", "output.frames=1"], "none"),
     ("2d_plate_mesh_file_ps_tls", "examples/plate_ps_unstructured_2d.toml",
      ["time.end=2e-3", "grid.cells=32", "method.mass=lumped", "method.mapping=tls",
       "output.frames=1"], "none"),
