@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -19,6 +20,7 @@
 #include "app/study.hpp"
 #include "core/comm.hpp"
 #include "core/interrupt.hpp"
+#include "core/memory.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
 #include "mpm/version.hpp"
@@ -172,6 +174,8 @@ int cmd_bench(const mpm::BenchOptions& opt) {
   const auto r = opt.dim == 3   ? mpm::bench_3d(opt)
                  : opt.dim == 2 ? mpm::bench_2d(opt)
                                 : mpm::bench_1d(opt);
+  // Of the last repeat's run (each run of the repeats starts a new record: driver::run).
+  const double peak = mpm::peak_memory_bytes();
   const std::string basis =
       opt.basis == "bspline" ? fmt::format("bspline degree {}", opt.degree) : opt.basis;
   std::cout << fmt::format(
@@ -196,6 +200,12 @@ int cmd_bench(const mpm::BenchOptions& opt) {
   std::cout << fmt::format(
       "  {:.1f} bytes per particle (particle state, cached stencil, grid share)\n",
       r.bytes_per_particle);
+  // Measured: everything the process held at the peak of a run (the set-up, the program and its
+  // libraries, the outputs' buffers), which the count above leaves out.
+  if (peak > 0.0)
+    std::cout << fmt::format(
+        "  peak resident memory of a run {:.1f} MB, {:.1f} bytes per particle\n", peak / 1e6,
+        peak / static_cast<double>(std::max<mpm::Index>(r.particles, 1)));
   std::cout << fmt::format(
       "  particles {}, method.sort = \"{}\": {} sort(s) per run{}; sort buffers {:.1f} bytes per "
       "particle\n",

@@ -721,6 +721,8 @@ TEST(Cli, BenchRunsAShortCaseIn1D2DAnd3D) {
   ASSERT_EQ(two.code, 0) << two.out;
   EXPECT_NE(two.out.find("2D musl step"), std::string::npos) << two.out;
   EXPECT_NE(two.out.find("bytes per particle"), std::string::npos) << two.out;
+  // The measured peak beside the counted bytes (Linux's VmHWM).
+  EXPECT_NE(two.out.find("peak resident memory of a run"), std::string::npos) << two.out;
   auto three = sh("bench --dim 3 --particles 1000 --steps 2 --repeats 1 --threads 1");
   ASSERT_EQ(three.code, 0) << three.out;
   EXPECT_NE(three.out.find("3D musl step"), std::string::npos) << three.out;
