@@ -71,16 +71,20 @@ class DdmpmBasis {
   // held by every process of a distributed run and zeroed every step; a node outside has no
   // particle near it, so its G_j is zero (evaluate_point).
   void prepare(const Particles<Dim>& P) {
-    typename LinearBasis<Dim>::StencilT s;
+    // The window from P1's compact stencils (the first node and the 1D factors, no products).
+    IVec<Dim> stride;
+    stride[0] = 1;
+    for (int d = 1; d < Dim; ++d) stride[d] = stride[d - 1] * n_[d - 1];
+    typename LinearBasis<Dim>::CachedStencilT cell;
     Index lo = std::numeric_limits<Index>::max(), hi = -1;
     for (Index p = 0; p < P.size(); ++p) {
       if (!grid().inside(P.x[static_cast<std::size_t>(p)])) continue;
-      p1_.evaluate(P, p, s);
-      for (const Index j : s.dof) {
-        lo = std::min(lo, j);
-        hi = std::max(hi, j);
-      }
+      p1_.evaluate(P, p, cell);
+      const auto [a, b] = dof_bounds(cell, stride);
+      lo = std::min(lo, a);
+      hi = std::max(hi, b);
     }
+    typename LinearBasis<Dim>::StencilT s;
     Neighbours zero;
     zero.fill(Vec<Dim>::Zero());
     const Index count = hi >= lo ? hi - lo + 1 : 0;
