@@ -599,6 +599,22 @@ def check_failure(mpm, tmp, failures):
         if s["status"] != "failed" or s["exit_code"] != 4:
             failures.append(f"failing run: summary status {s['status']}")
         print(f"failure: exit 4 and one message: {msgs[0][:160]}")
+    # A bad input that only one process meets while it sets up its particles (an initial
+    # velocity that is not finite in the right end of the bar, rank 1's slab): every process
+    # stops with exit code 2 and one message naming the key and the particle, no hang.
+    d = os.path.join(tmp, "bad_input")
+    try:
+        r = run(mpm_cmd(mpm, 2, "examples/custom_bar.toml",
+                        ["initial.velocity=x > 0.9 ? 1/0 : 0"], d), timeout=60)
+    except subprocess.TimeoutExpired:
+        failures.append("a bad input on one process hung (no end within 60 s)")
+        return
+    lines = [l for l in r.stderr.splitlines() if "error" in l]
+    if (r.returncode != 2 or len(lines) != 1 or "initial.velocity" not in lines[0]
+            or "particle 72" not in lines[0]):
+        failures.append(f"bad input on one process: exit {r.returncode}, stderr {r.stderr!r}")
+    else:
+        print(f"bad input on one process: {lines[0][:160]}")
     # Another command than `mpm run` under mpirun: refused, once.
     r = run(["mpirun", "-n", "2", "--oversubscribe", mpm, "bench", "--dim", "1", "--steps", "1"])
     lines = [l for l in r.stderr.splitlines() if "error" in l]

@@ -12,14 +12,16 @@ namespace mpm {
 class Config;
 
 // Builds the problem selected by `benchmark` (registry::kBenchmarks). Throws InputError.
-AnyProblem make_problem(const Config& cfg);
+// `scope`: which of its particles this process stores (SeedScope; every one by default). Each
+// constructor below passes its scope to its seeder.
+AnyProblem make_problem(const Config& cfg, const SeedScope& scope = {});
 
 // Vibrating bar with fixed ends (D 3.4.1, 5.4.1; 004 4.5). Small deformation: exact solution
 // u = v0/omega sin(omega t) sin(pi X/L), v = v0 cos(omega t) sin(pi X/L),
 // sigma = v0 rho c sin(omega t) cos(pi X/L), omega = pi c / L (MEHODS.md closed forms; D 3.4.1
 // writes the stress amplitude as v0 sqrt(E/rho), an erratum: it is v0 sqrt(E rho)).
 // large = true: the same set-up without an exact solution (D Table 5.4).
-Problem<1> make_vibrating_bar(const Config& cfg, bool large);
+Problem<1> make_vibrating_bar(const Config& cfg, bool large, const SeedScope& scope = {});
 
 struct VibratingBarExact {
   double length, v0, density, wave_speed;
@@ -31,7 +33,7 @@ struct VibratingBarExact {
 // empty cell above the column (h = H / grid.cells). Quasi-static exact solution of the 1D
 // large-deformation law at the current load: sigma(X) = rho0 b (H - X), F = 1/(1 - sigma/E),
 // u(X) = int_0^X (F - 1) dX' = (1/k) ln((1 - k (H - X)) / (1 - k H)) - X with k = rho0 b / E.
-Problem<1> make_column_compaction(const Config& cfg);
+Problem<1> make_column_compaction(const Config& cfg, const SeedScope& scope = {});
 
 struct ColumnExact {
   double height, density, youngs_modulus, body_force_max, ramp_time;
@@ -44,7 +46,7 @@ struct ColumnExact {
 // exact stress is D eq. 4.93 (written there for c = 1 and A = 1; here t -> c t, amplitude A),
 // the linear-wave (d'Alembert) solution, valid for c t <= 4 L; velocity and displacement follow
 // from the same travelling waves (v = +-sigma / (rho0 c) for left/right-going waves).
-Problem<1> make_traction_bar(const Config& cfg);
+Problem<1> make_traction_bar(const Config& cfg, const SeedScope& scope = {});
 
 struct TractionBarExact {
   double length, density, wave_speed, amplitude;
@@ -54,7 +56,7 @@ struct TractionBarExact {
 // 1D neo-Hookean manufactured solution (003 eq. 41-47): u = A sin(2 pi X/L) sin(c pi t/L),
 // c = sqrt(E / rho0), fixed ends, body force b(X, t) = u_tt - (1/rho0) dP/dX evaluated at each
 // particle's material position (closed form; 003 eq. 47 with pi^2 u / L^2, METHODS.md errata).
-Problem<1> make_mms_1d(const Config& cfg);
+Problem<1> make_mms_1d(const Config& cfg, const SeedScope& scope = {});
 
 struct Mms1DExact {
   double length, density, lambda, mu, wave_speed, amplitude;
@@ -68,7 +70,7 @@ struct Mms1DExact {
 // after Sadeghirad et al. 2011), plane-strain neo-Hookean:
 //   u = (A sin(2 pi X/L) sin(omega t), -A sin(2 pi Y/L) sin(omega t)), omega = c pi / L,
 // c = sqrt(E / rho0); rollers on all four sides; body force b = u_tt - Div P / rho0.
-Problem<2> make_plate_mms_2d(const Config& cfg);
+Problem<2> make_plate_mms_2d(const Config& cfg, const SeedScope& scope = {});
 
 struct PlateMms2DExact {
   double length, density, lambda, mu, wave_speed, amplitude;
@@ -84,7 +86,7 @@ struct PlateMms2DExact {
 // extended to 3D), neo-Hookean:
 //   u_i = A sin(2 pi X_i/L) sin(omega t),   omega = c pi / L,   c = sqrt(E / rho0),
 // rollers on all six faces; body force b = u_tt - Div P / rho0 (scripts/cube_mms.py derives it).
-Problem<3> make_cube_mms_3d(const Config& cfg);
+Problem<3> make_cube_mms_3d(const Config& cfg, const SeedScope& scope = {});
 
 struct CubeMms3DExact {
   double length, density, lambda, mu, wave_speed, amplitude;
@@ -105,12 +107,13 @@ struct CubeMms3DExact {
 // scripts/vortex_mms.py. The grid is [-half_width, half_width]^2, the body its particles whose
 // centre lies in the annulus (vortex.seeding = "cells") or rings of particles that tile it
 // (seed_annulus, "polar", the default); no boundary condition.
-Problem<2> make_vortex_2d(const Config& cfg);
+Problem<2> make_vortex_2d(const Config& cfg, const SeedScope& scope = {});
 
 // Particles tiling the annulus inner <= R <= outer (centred at the origin) in rings of annular
 // sectors about h / per_cell wide in both directions (h: the grid's cell size), each carrying
 // its sector's area; mass = rho0 V, F = I.
-Particles<2> seed_annulus(const Grid<2>& g, double inner, double outer, int per_cell, double rho0);
+Particles<2> seed_annulus(const Grid<2>& g, double inner, double outer, int per_cell, double rho0,
+                          const SeedScope& scope = {});
 
 struct Vortex2DExact {
   double inner_radius, outer_radius, amplitude, period, density, lambda, mu;
@@ -127,22 +130,22 @@ struct Vortex2DExact {
 // 1D problem from the configuration alone: grid and body extents, initial velocity and stress
 // as expressions of x, body force as an expression of x and t, fixed or free ends, tractions on
 // the body ends (traction.left/right, expressions of t), an exact solution by expressions.
-Problem<1> make_custom_1d(const Config& cfg);
+Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope = {});
 
 // The same in 2D (grid.dimension = 2): a box body in a box grid, vector keys as arrays
 // (body_force = ["0", "-9.81"]), per-side conditions fixed / roller / free, tractions on the
 // four body faces through the particles next to them (Traction), exact.* by expressions.
-Problem<2> make_custom_2d(const Config& cfg);
+Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope = {});
 
 // The same in 3D (grid.dimension = 3): vector keys with three values or expressions of x, y, z
 // (and t), initial.stress and exact.stress as [xx, yy, zz, yz, xz, xy], per-side conditions on
 // the six sides (boundary.back: z = grid.min, boundary.front: z = grid.max), tractions and
 // pressures on the six body faces; no mesh file, so no named boundaries.
-Problem<3> make_custom_3d(const Config& cfg);
+Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope = {});
 
 // A bar on [0, L] filling a grid of grid.cells cells with particles.per_cell particles per
 // cell, density rho, fixed at both ends, released with velocity v(X) (vibrating bar, mms_1d).
-void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,
+void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho, const SeedScope& scope,
                     std::function<Vec<1>(const Vec<1>&)> velocity);
 
 // The triangles of grid.mesh (a Gmsh file; a relative path is taken from the configuration
@@ -158,9 +161,20 @@ void check_mesh_box(const Config& cfg, const TriangleMesh& m, const Grid<2>& g);
 // with particles.per_triangle > 0 that many in every triangle of the grid's triangulation
 // (method.basis p1_triangles or powell_sabin, method.triangles; the body must be the grid), or
 // of `mesh` when the triangles come from a file (then particles.per_cell's particles must all
-// lie in the mesh). InputError naming the key otherwise.
+// lie in the mesh). InputError naming the key otherwise. `scope`: the particles this process
+// stores (SeedScope); `body` (optional): only the points X with body(X) belong to the body,
+// numbered among themselves (the vortex's annulus cut out of the grid's cells).
 Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
-                          double rho0, const TriangleMesh* mesh = nullptr);
+                          double rho0, const TriangleMesh* mesh = nullptr,
+                          const SeedScope& scope = {},
+                          const std::function<bool(const Vec<2>& X)>& body = {});
+// The points of seed_body_2d's body in its order, f(X, volume), after its checks, storing none;
+// begin(total) first with the number of points to come (when given). For what needs the
+// whole body's particles but not their state (the loaded points of a mesh's named boundaries).
+void for_each_body_seed_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
+                           const TriangleMesh* mesh, double machine_share,
+                           const std::function<void(const Vec<2>& X, double volume)>& f,
+                           const std::function<void(Index total)>& begin = {});
 
 // A manufactured solution `ex` (plate_mms_2d, vortex_2d, cube_mms_3d) on pb's particles: their
 // initial velocity ex(X, 0).v, the body force ex.body_force(X, t) at their material positions

@@ -26,7 +26,7 @@ ExactState<1> ColumnExact::operator()(const Vec<1>& X, double t) const {
   return e;
 }
 
-Problem<1> make_column_compaction(const Config& cfg) {
+Problem<1> make_column_compaction(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "column_compaction";
   pb.material = material_from_config(cfg, 1);
@@ -41,8 +41,9 @@ Problem<1> make_column_compaction(const Config& cfg) {
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
   const double h = ex.height / static_cast<double>(cells);
   pb.grid = Grid<1>(Vec<1>(0.0), Vec<1>(ex.height + h), IVec<1>{cells + 1});
-  pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(ex.height),
-                                   static_cast<int>(cfg.get_int("particles.per_cell")), ex.density);
+  pb.particles =
+      seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(ex.height),
+                        static_cast<int>(cfg.get_int("particles.per_cell")), ex.density, scope);
   pb.body_min = Vec<1>(0.0);
   pb.body_max = Vec<1>(ex.height);
   pb.initial_velocity = [](const Vec<1>&) { return Vec<1>(0.0); };

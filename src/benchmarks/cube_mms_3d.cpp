@@ -55,7 +55,7 @@ ExactState<3> CubeMms3DExact::operator()(const Vec<3>& X, double t) const {
   return e;
 }
 
-Problem<3> make_cube_mms_3d(const Config& cfg) {
+Problem<3> make_cube_mms_3d(const Config& cfg, const SeedScope& scope) {
   Problem<3> pb;
   pb.benchmark = "cube_mms_3d";
   pb.material = material_from_config(cfg, 3);
@@ -72,7 +72,7 @@ Problem<3> make_cube_mms_3d(const Config& cfg) {
   const auto n = static_cast<Index>(cfg.get_int("grid.cells"));
   pb.grid = Grid<3>(Vec<3>::Zero(), Vec<3>::Constant(L), IVec<3>{n, n, n});
   pb.particles = seed_particles<3>(pb.grid, Vec<3>::Zero(), Vec<3>::Constant(L),
-                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho, scope);
   pb.body_min = Vec<3>::Zero();
   pb.body_max = Vec<3>::Constant(L);
   // Rollers on the six faces: u_i = 0 on X_i = 0 and X_i = L; the tangential components follow

@@ -146,13 +146,12 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
       // A pressure p pushes against the outward normal n = sign e_d of the reference face:
       // tau = -p n (a dead load, like the traction).
       const double sign = side == 0 ? -1.0 : 1.0;
-      pb.tractions.push_back(
-          body_face_traction<Dim>(pb.grid, pb.particles, b0, b1, per_cell, d, side == 0 ? -1 : +1,
-                                  [tau, p, d, sign](double t) {
-                                    Vec<Dim> v = vector_from<Dim>(tau, 0.0, 0.0, 0.0, t);
-                                    v[d] -= sign * p(0.0, 0.0, 0.0, t);
-                                    return v;
-                                  }));
+      pb.tractions.push_back(body_face_traction<Dim>(
+          pb.grid, b0, b1, per_cell, d, side == 0 ? -1 : +1, [tau, p, d, sign](double t) {
+            Vec<Dim> v = vector_from<Dim>(tau, 0.0, 0.0, 0.0, t);
+            v[d] -= sign * p(0.0, 0.0, 0.0, t);
+            return v;
+          }));
     }
 }
 
@@ -299,7 +298,7 @@ void named_boundaries(Problem<2>& pb, const Config& cfg) {
 // boundary edge gets q points at the midpoints of q equal pieces, q the edge length over the
 // mean particle spacing of its triangle (sqrt(area / particles), at least 1); each point rides on
 // the nearest particle of that triangle and carries the length of its piece.
-void named_loads(Problem<2>& pb, const Config& cfg) {
+void named_loads(Problem<2>& pb, const Config& cfg, const SeedScope& scope) {
   const auto names = names_of(cfg, "boundary.loaded");
   const bool traction = !is_zero(cfg, "traction.loaded");
   const Expression p = cfg.get_expression("pressure.loaded");
@@ -335,19 +334,30 @@ void named_loads(Problem<2>& pb, const Config& cfg) {
                     "only, not on x, y or z (uniform over the boundary)",
                     cfg.where("pressure.loaded"), p.text()));
   const TriangleMesh& mesh = *pb.mesh;
-  const auto& P = pb.particles;
-  // The particles of each triangle, by reference position.
-  std::vector<std::vector<Index>> in_cell(static_cast<std::size_t>(mesh.num_cells()));
-  for (Index k = 0; k < P.size(); ++k) {
-    const Index c = mesh.cell_index(P.x0[static_cast<std::size_t>(k)]);
-    if (c >= 0) in_cell[static_cast<std::size_t>(c)].push_back(k);
-  }
   const auto cells_at = cells_at_vertices(mesh);
+  for (const auto& name : names) check_boundary_name(mesh, cfg, name, "boundary.loaded");
+  // The body's particles (id, reference position) in each triangle next to a loaded edge, from
+  // the seeding itself: a process of a distributed run stores only its slab's particles, and
+  // every process needs these (each loaded point names its particle by id).
+  std::vector<char> loaded_cell(static_cast<std::size_t>(mesh.num_cells()), 0);
+  for (const auto& name : names)
+    for (const auto& e : mesh.boundary(name).edges)
+      if (const Index cell = edge_cell_and_normal(mesh, cells_at, e).first; cell >= 0)
+        loaded_cell[static_cast<std::size_t>(cell)] = 1;
+  std::vector<std::vector<std::pair<Index, Vec<2>>>> in_cell(
+      static_cast<std::size_t>(mesh.num_cells()));
+  Index id = 0;
+  for_each_body_seed_2d(cfg, pb.grid, pb.body_min, pb.body_max, pb.mesh.get(), scope.machine_share,
+                        [&](const Vec<2>& X, double) {
+                          const Index c = mesh.cell_index(X);
+                          if (c >= 0 && loaded_cell[static_cast<std::size_t>(c)])
+                            in_cell[static_cast<std::size_t>(c)].push_back({id, X});
+                          ++id;
+                        });
   Traction<2> tr;
   tr.value = [tau](double t) { return vector_from<2>(tau, 0.0, 0.0, 0.0, t); };
   if (pressure) tr.pressure = [p](double t) { return p(0.0, 0.0, 0.0, t); };
   for (const auto& name : names) {
-    check_boundary_name(mesh, cfg, name, "boundary.loaded");
     for (const auto& e : mesh.boundary(name).edges) {
       const Vec<2> a = mesh.vertex(e[0]), b = mesh.vertex(e[1]);
       const auto [cell, n] = edge_cell_and_normal(mesh, cells_at, e);
@@ -367,18 +377,18 @@ void named_loads(Problem<2>& pb, const Config& cfg) {
         const Vec<2> X = a + ((static_cast<double>(j) + 0.5) / static_cast<double>(q)) * (b - a);
         // The nearest particle; among those as near to round-off, the first (so that a turned
         // copy of the mesh picks the same one).
-        auto d2 = [&](Index k) { return (P.x0[static_cast<std::size_t>(k)] - X).squaredNorm(); };
+        auto d2 = [&](const std::pair<Index, Vec<2>>& k) { return (k.second - X).squaredNorm(); };
         double nearest = d2(own[0]);
-        for (Index k : own) nearest = std::min(nearest, d2(k));
-        Index host = own[0];
-        for (Index k : own)
+        for (const auto& k : own) nearest = std::min(nearest, d2(k));
+        const std::pair<Index, Vec<2>>* host = &own[0];
+        for (const auto& k : own)
           if (d2(k) <= nearest * (1.0 + 1e-9)) {
-            host = k;
+            host = &k;
             break;
           }
-        tr.particles.push_back(host);
+        tr.particles.push_back(host->first);
         tr.area.push_back(length / static_cast<double>(q));
-        tr.offset.push_back(X - P.x0[static_cast<std::size_t>(host)]);
+        tr.offset.push_back(X - host->second);
         tr.normal.push_back(n);
       }
     }
@@ -463,7 +473,7 @@ void check_boxes(const Config& cfg, const Vec<Dim>& g0, const Vec<Dim>& g1, cons
 
 }  // namespace
 
-Problem<1> make_custom_1d(const Config& cfg) {
+Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "custom";
   const double g0 = cfg.get_real("grid.min"), g1 = cfg.get_real("grid.max");
@@ -483,7 +493,7 @@ Problem<1> make_custom_1d(const Config& cfg) {
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
   pb.grid = Grid<1>(Vec<1>(g0), Vec<1>(g1), IVec<1>{cells});
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(b0), Vec<1>(b1),
-                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho, scope);
 
   const auto& constants = cfg.constants();
   const Expression v0(cfg.get_string("initial.velocity"), constants);
@@ -508,7 +518,8 @@ Problem<1> make_custom_1d(const Config& cfg) {
          {std::pair{"initial.velocity", P.v[i][0]}, std::pair{"initial.stress", P.stress[i](0, 0)}})
       if (!std::isfinite(value))
         throw InputError(fmt::format("{}: {} = \"{}\" is not finite at x = {:.6g} (particle {})",
-                                     cfg.where(key), key, cfg.get_string(key), P.x0[i][0], i));
+                                     cfg.where(key), key, cfg.get_string(key), P.x0[i][0],
+                                     P.id[i]));
     if (P.stress[i](0, 0) != 0.0 && !incremental_law)
       throw InputError(
           fmt::format("{}: an initial stress needs an incremental law (elastic_1d_small or "
@@ -535,7 +546,7 @@ Problem<1> make_custom_1d(const Config& cfg) {
   return pb;
 }
 
-Problem<2> make_custom_2d(const Config& cfg) {
+Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   Problem<2> pb;
   pb.benchmark = "custom";
   refuse_keys_of_more_dimensions(cfg, 2);
@@ -557,7 +568,7 @@ Problem<2> make_custom_2d(const Config& cfg) {
   pb.grid = Grid<2>(g0, g1, IVec<2>{cx, cy});
   if (pb.mesh) check_mesh_box(cfg, *pb.mesh, pb.grid);
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
-  pb.particles = seed_body_2d(cfg, pb.grid, b0, b1, rho, pb.mesh.get());
+  pb.particles = seed_body_2d(cfg, pb.grid, b0, b1, rho, pb.mesh.get(), scope);
   pb.body_min = b0;
   pb.body_max = b1;
 
@@ -576,7 +587,7 @@ Problem<2> make_custom_2d(const Config& cfg) {
       if (!finite)
         throw InputError(
             fmt::format("{}: {} is not finite at (x, y) = ({:.6g}, {:.6g}) (particle {})",
-                        cfg.where(key), key, P.x0[i][0], P.x0[i][1], i));
+                        cfg.where(key), key, P.x0[i][0], P.x0[i][1], P.id[i]));
     if (P.stress[i] != Mat<2>::Zero() && !incremental_law)
       throw InputError(fmt::format(
           "{}: an initial stress needs an incremental law; material.model = \"{}\" computes "
@@ -601,12 +612,12 @@ Problem<2> make_custom_2d(const Config& cfg) {
 
   sides_from_config<2>(pb, cfg, b0, b1, per_cell);
   named_boundaries(pb, cfg);
-  named_loads(pb, cfg);
+  named_loads(pb, cfg, scope);
   pb.exact = exact_from_config<2>(cfg);
   return pb;
 }
 
-Problem<3> make_custom_3d(const Config& cfg) {
+Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
   Problem<3> pb;
   pb.benchmark = "custom";
   // Named boundaries and their loads are the physical groups of a Gmsh file of triangles, which
@@ -642,7 +653,7 @@ Problem<3> make_custom_3d(const Config& cfg) {
       Grid<3>(g0, g1, IVec<3>{cx, cells_along("grid.cells_y", 1), cells_along("grid.cells_z", 2)});
   // particles.per_cell per cell and direction, as in 2D and cube_mms_3d (x fastest, then y, z).
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
-  pb.particles = seed_particles<3>(pb.grid, b0, b1, per_cell, rho);
+  pb.particles = seed_particles<3>(pb.grid, b0, b1, per_cell, rho, scope);
   pb.body_min = b0;
   pb.body_max = b1;
 
@@ -659,7 +670,7 @@ Problem<3> make_custom_3d(const Config& cfg) {
       if (!finite)
         throw InputError(fmt::format(
             "{}: {} is not finite at (x, y, z) = ({:.6g}, {:.6g}, {:.6g}) (particle {})",
-            cfg.where(key), key, P.x0[i][0], P.x0[i][1], P.x0[i][2], i));
+            cfg.where(key), key, P.x0[i][0], P.x0[i][1], P.x0[i][2], P.id[i]));
     // The 3D laws (linear_elastic, neo_hookean) compute the stress from F, which is I here.
     if (P.stress[i] != Mat<3>::Zero())
       throw InputError(fmt::format(

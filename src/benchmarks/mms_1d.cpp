@@ -45,7 +45,7 @@ ExactState<1> Mms1DExact::operator()(const Vec<1>& X, double t) const {
   return s;
 }
 
-Problem<1> make_mms_1d(const Config& cfg) {
+Problem<1> make_mms_1d(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "mms_1d";
   pb.material = material_from_config(cfg, 1);
@@ -61,7 +61,7 @@ Problem<1> make_mms_1d(const Config& cfg) {
                       cfg.get_real("mms.amplitude")};
   // u(X, 0) = 0, F = 1, zero stress; v(X, 0) = A c pi / L sin(2 pi X / L); u = 0 at X = 0 and
   // X = L for all t (fixed ends).
-  fill_fixed_bar(pb, cfg, L, rho, [ex](const Vec<1>& X) { return Vec<1>(ex(X, 0.0).v[0]); });
+  fill_fixed_bar(pb, cfg, L, rho, scope, [ex](const Vec<1>& X) { return Vec<1>(ex(X, 0.0).v[0]); });
   // b depends on the material position X (P.x0, fixed), so only time-dependence is flagged.
   pb.body_force.time_dependent = true;
   pb.body_force.fill = [ex](const Particles<1>& P, double t, std::vector<Vec<1>>& b) {

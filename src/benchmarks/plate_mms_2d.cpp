@@ -68,7 +68,7 @@ ExactState<2> PlateMms2DExact::operator()(const Vec<2>& X, double t) const {
   return s;
 }
 
-Problem<2> make_plate_mms_2d(const Config& cfg) {
+Problem<2> make_plate_mms_2d(const Config& cfg, const SeedScope& scope) {
   Problem<2> pb;
   pb.benchmark = "plate_mms_2d";
   pb.material = material_from_config(cfg, 2);
@@ -87,7 +87,8 @@ Problem<2> make_plate_mms_2d(const Config& cfg) {
   // D Fig. 3.6, 3.9: the plate on an unstructured triangulation of the square (grid.mesh).
   pb.mesh = mesh_from_config(cfg);
   if (pb.mesh) check_mesh_box(cfg, *pb.mesh, pb.grid);
-  pb.particles = seed_body_2d(cfg, pb.grid, Vec<2>::Zero(), Vec<2>(L, L), rho, pb.mesh.get());
+  pb.particles =
+      seed_body_2d(cfg, pb.grid, Vec<2>::Zero(), Vec<2>(L, L), rho, pb.mesh.get(), scope);
   pb.body_min = Vec<2>::Zero();
   pb.body_max = Vec<2>(L, L);
   // "Fixed at the entire boundary" fixes the normal component only (rollers): u_x = 0 on X = 0

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 #include <system_error>
 #include <variant>
 
@@ -27,37 +28,36 @@ double physical_memory() {
 // Particles per direction of seed_particles: per_cell per cell width, at least one. A body
 // whose particle state alone would not fit in the machine's memory is refused here, before
 // anything is allocated, with the estimate (instead of std::bad_alloc or a machine swapping).
+// `share`: SeedScope::machine_share.
 template <int Dim>
-IVec<Dim> seed_counts(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi, int per_cell) {
+IVec<Dim> seed_counts(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi, int per_cell,
+                      double share = 1.0) {
   Vec<Dim> per_dim;
   double total = 1.0;
   for (int d = 0; d < Dim; ++d) {
     per_dim[d] = std::max(1.0, std::round((hi[d] - lo[d]) / g.h[d] * per_cell));
     total *= per_dim[d];
   }
-  const double bytes = total * static_cast<double>(Particles<Dim>::bytes_per_particle());
+  const double bytes = share * total * static_cast<double>(Particles<Dim>::bytes_per_particle());
   const double memory = physical_memory();
   if (!(total < 1e15) || (memory > 0.0 && bytes > memory))
     throw InputError(fmt::format(
         "grid.cells and particles.per_cell seed the body with {:.4g} particles, whose state "
-        "alone needs about {:.3g} GB; this machine has {:.3g} GB of memory: use fewer cells "
-        "or particles per cell",
-        total, bytes / 1e9, memory / 1e9));
+        "alone needs about {:.3g} GB{}; this machine has {:.3g} GB of memory: use fewer cells "
+        "or particles per cell{}",
+        total, bytes / 1e9, share < 1.0 ? " on the processes of this machine" : "", memory / 1e9,
+        share < 1.0 ? ", or more machines" : ""));
   IVec<Dim> n{};
   for (int d = 0; d < Dim; ++d) n[d] = static_cast<Index>(per_dim[d]);
   return n;
 }
-}  // namespace
 
-template <int Dim>
-Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
-                              int per_cell, double rho0) {
-  const IVec<Dim> n = seed_counts<Dim>(g, lo, hi, per_cell);
+// f(p, X) for the points of seed_particles' lattice in its order (p = 0, 1, ...; x fastest), n
+// points per direction over [lo, hi].
+template <int Dim, class F>
+void for_each_lattice_point(const IVec<Dim>& n, const Vec<Dim>& lo, const Vec<Dim>& hi, F&& f) {
   Index total = 1;
   for (int d = 0; d < Dim; ++d) total *= n[d];
-  Particles<Dim> P;
-  P.resize(total);
-  const double vol = (hi - lo).prod() / static_cast<double>(total);
   for (Index p = 0; p < total; ++p) {
     Index rem = p;
     Vec<Dim> x;
@@ -66,19 +66,34 @@ Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<
       rem /= n[d];
       x[d] = lo[d] + (hi[d] - lo[d]) * (static_cast<double>(k) + 0.5) / static_cast<double>(n[d]);
     }
-    const auto i = static_cast<std::size_t>(p);
-    P.x[i] = P.x0[i] = x;
-    P.volume[i] = P.volume0[i] = vol;
-    P.mass[i] = rho0 * vol;
+    f(p, x);
   }
-  return P;
+}
+
+}  // namespace
+
+template <int Dim>
+Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
+                              int per_cell, double rho0, const SeedScope& scope,
+                              const std::function<bool(const Vec<Dim>& X)>& body) {
+  const IVec<Dim> n = seed_counts<Dim>(g, lo, hi, per_cell, scope.machine_share);
+  Index total = 1;
+  for (int d = 0; d < Dim; ++d) total *= n[d];
+  const double vol = (hi - lo).prod() / static_cast<double>(total);
+  SeedSink<Dim> sink(&g, rho0, scope);
+  sink.reserve(total);
+  for_each_lattice_point<Dim>(n, lo, hi, [&](Index, const Vec<Dim>& x) {
+    if (!body || body(x)) sink.add(x, vol);
+  });
+  return sink.finish();
 }
 
 template <int Dim>
-Traction<Dim> body_face_traction(const Grid<Dim>& g, const Particles<Dim>& P, const Vec<Dim>& lo,
-                                 const Vec<Dim>& hi, int per_cell, int direction, int side,
+Traction<Dim> body_face_traction(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
+                                 int per_cell, int direction, int side,
                                  std::function<Vec<Dim>(double t)> value) {
-  const IVec<Dim> n = seed_counts<Dim>(g, lo, hi, per_cell);
+  // (It stores no particle: no memory check.)
+  const IVec<Dim> n = seed_counts<Dim>(g, lo, hi, per_cell, /*share=*/0.0);
   Vec<Dim> spacing;
   for (int d = 0; d < Dim; ++d) spacing[d] = (hi[d] - lo[d]) / static_cast<double>(n[d]);
   // Each particle's share of the face: the product of its spacings along the face (1D: 1).
@@ -91,30 +106,34 @@ Traction<Dim> body_face_traction(const Grid<Dim>& g, const Particles<Dim>& P, co
   tr.value = std::move(value);
   // The outer layer lies half a spacing inside the face, the next one and a half spacings.
   const double face = side > 0 ? hi[direction] : lo[direction];
-  for (Index p = 0; p < P.size(); ++p)
-    if (std::abs(P.x0[static_cast<std::size_t>(p)][direction] - face) < spacing[direction]) {
+  for_each_lattice_point<Dim>(n, lo, hi, [&](Index p, const Vec<Dim>& x) {
+    if (std::abs(x[direction] - face) < spacing[direction]) {
       tr.particles.push_back(p);
       tr.area.push_back(area);
       Vec<Dim> offset = Vec<Dim>::Zero();
       offset[direction] = side * (0.5 * spacing[direction]);
       tr.offset.push_back(offset);
     }
+  });
   return tr;
 }
 
-template Traction<1> body_face_traction<1>(const Grid<1>&, const Particles<1>&, const Vec<1>&,
-                                           const Vec<1>&, int, int, int,
-                                           std::function<Vec<1>(double)>);
-template Traction<2> body_face_traction<2>(const Grid<2>&, const Particles<2>&, const Vec<2>&,
-                                           const Vec<2>&, int, int, int,
-                                           std::function<Vec<2>(double)>);
-template Traction<3> body_face_traction<3>(const Grid<3>&, const Particles<3>&, const Vec<3>&,
-                                           const Vec<3>&, int, int, int,
-                                           std::function<Vec<3>(double)>);
+template Traction<1> body_face_traction<1>(const Grid<1>&, const Vec<1>&, const Vec<1>&, int, int,
+                                           int, std::function<Vec<1>(double)>);
+template Traction<2> body_face_traction<2>(const Grid<2>&, const Vec<2>&, const Vec<2>&, int, int,
+                                           int, std::function<Vec<2>(double)>);
+template Traction<3> body_face_traction<3>(const Grid<3>&, const Vec<3>&, const Vec<3>&, int, int,
+                                           int, std::function<Vec<3>(double)>);
 
-template Particles<1> seed_particles<1>(const Grid<1>&, const Vec<1>&, const Vec<1>&, int, double);
-template Particles<2> seed_particles<2>(const Grid<2>&, const Vec<2>&, const Vec<2>&, int, double);
-template Particles<3> seed_particles<3>(const Grid<3>&, const Vec<3>&, const Vec<3>&, int, double);
+template Particles<1> seed_particles<1>(const Grid<1>&, const Vec<1>&, const Vec<1>&, int, double,
+                                        const SeedScope&,
+                                        const std::function<bool(const Vec<1>&)>&);
+template Particles<2> seed_particles<2>(const Grid<2>&, const Vec<2>&, const Vec<2>&, int, double,
+                                        const SeedScope&,
+                                        const std::function<bool(const Vec<2>&)>&);
+template Particles<3> seed_particles<3>(const Grid<3>&, const Vec<3>&, const Vec<3>&, int, double,
+                                        const SeedScope&,
+                                        const std::function<bool(const Vec<3>&)>&);
 
 std::pair<int, int> triangle_seed_pattern(int per_triangle) {
   for (int m : {1, 3, 6}) {
@@ -126,7 +145,10 @@ std::pair<int, int> triangle_seed_pattern(int per_triangle) {
   return {0, 0};
 }
 
-Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_triangle, double rho0) {
+namespace {
+// The pattern of seed_particles_in_triangles in reference coordinates (xi, eta): the centroids
+// of the parts, each with the same share 1 / per_triangle of the area.
+std::vector<Vec<2>> triangle_seed_reference(int per_triangle) {
   // Not a structured binding: the lambda below captures m (clang 14 refuses that).
   const std::pair<int, int> mk = triangle_seed_pattern(per_triangle);
   const int m = mk.first, k = mk.second;
@@ -135,8 +157,6 @@ Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_trian
         fmt::format("{} particles per triangle is not of the form m k^2 with m = 1, "
                     "3 or 6 (3, 4, 6, 9, 12, 16, 24, 25, 27, 36, ...)",
                     per_triangle));
-  // The pattern in reference coordinates (xi, eta): the centroids of the parts, each with the
-  // same share 1 / per_triangle of the area.
   std::vector<Vec<2>> ref;
   const double inv = 1.0 / k;
   auto parts = [&](const Vec<2>& a, const Vec<2>& b, const Vec<2>& c) {
@@ -165,31 +185,52 @@ Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_trian
       if (i + j + 1 < k)                                     // pointing down
         parts(o + Vec<2>(inv, 0.0), o + Vec<2>(inv, inv), o + Vec<2>(0.0, inv));
     }
-  const auto per = static_cast<Index>(ref.size());
+  return ref;
+}
+
+// A triangulation whose particle state alone would not fit in memory (`share`:
+// SeedScope::machine_share) is refused before anything is allocated.
+void check_triangle_seed_memory(const TriangleMesh& mesh, Index per, double share) {
   const double total = static_cast<double>(mesh.num_cells()) * static_cast<double>(per);
+  const double bytes = share * total * static_cast<double>(Particles<2>::bytes_per_particle());
   const double memory = physical_memory();
-  if (memory > 0.0 && total * static_cast<double>(Particles<2>::bytes_per_particle()) > memory)
+  if (memory > 0.0 && bytes > memory)
     throw InputError(fmt::format(
-        "{} triangles with {} particles each need about {:.3g} GB for the particle state alone; "
-        "this machine has {:.3g} GB of memory",
-        mesh.num_cells(), per,
-        total * static_cast<double>(Particles<2>::bytes_per_particle()) / 1e9, memory / 1e9));
-  Particles<2> P;
-  P.resize(mesh.num_cells() * per);
+        "{} triangles with {} particles each need about {:.3g} GB for the particle state "
+        "alone{}; this machine has {:.3g} GB of memory",
+        mesh.num_cells(), per, bytes / 1e9, share < 1.0 ? " on the processes of this machine" : "",
+        memory / 1e9));
+}
+
+// seed_particles_in_triangles' points, triangle after triangle: f(X, volume).
+void triangle_seeds(const TriangleMesh& mesh, const std::vector<Vec<2>>& ref,
+                    const std::function<void(const Vec<2>&, double)>& f) {
+  const auto per = static_cast<Index>(ref.size());
   for (Index c = 0; c < mesh.num_cells(); ++c) {
     const auto& t = mesh.cell_vertices(c);
     const Vec<2>& x0 = mesh.vertex(t[0]);
     const Vec<2> e1 = mesh.vertex(t[1]) - x0, e2 = mesh.vertex(t[2]) - x0;
     const double vol = mesh.cell_volume(c) / static_cast<double>(per);
-    for (Index a = 0; a < per; ++a) {
-      const auto i = static_cast<std::size_t>(c * per + a);
-      const Vec<2>& r = ref[static_cast<std::size_t>(a)];
-      P.x[i] = P.x0[i] = x0 + r[0] * e1 + r[1] * e2;
-      P.volume[i] = P.volume0[i] = vol;
-      P.mass[i] = rho0 * vol;
-    }
+    for (const Vec<2>& r : ref) f(x0 + r[0] * e1 + r[1] * e2, vol);
   }
-  return P;
+}
+
+}  // namespace
+
+void for_each_triangle_seed(const TriangleMesh& m, int per_triangle,
+                            const std::function<void(const Vec<2>& X, double volume)>& f) {
+  triangle_seeds(m, triangle_seed_reference(per_triangle), f);
+}
+
+Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_triangle, double rho0) {
+  const std::vector<Vec<2>> ref = triangle_seed_reference(per_triangle);
+  const auto per = static_cast<Index>(ref.size());
+  check_triangle_seed_memory(mesh, per, 1.0);
+  const SeedScope every;
+  SeedSink<2> sink(nullptr, rho0, every);
+  sink.reserve(mesh.num_cells() * per);
+  triangle_seeds(mesh, ref, [&](const Vec<2>& x, double vol) { sink.add(x, vol); });
+  return sink.finish();
 }
 
 std::shared_ptr<const TriangleMesh> mesh_from_config(const Config& cfg) {
@@ -239,28 +280,35 @@ void check_mesh_box(const Config& cfg, const TriangleMesh& m, const Grid<2>& g) 
         g.upper()[0], g.origin[1], g.upper()[1]));
 }
 
-Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
-                          double rho0, const TriangleMesh* mesh) {
+void for_each_body_seed_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
+                           const TriangleMesh* mesh, double machine_share,
+                           const std::function<void(const Vec<2>& X, double volume)>& f,
+                           const std::function<void(Index total)>& begin) {
   const auto per_triangle = static_cast<int>(cfg.get_int("particles.per_triangle"));
   if (per_triangle == 0) {
-    Particles<2> P =
-        seed_particles<2>(g, lo, hi, static_cast<int>(cfg.get_int("particles.per_cell")), rho0);
-    if (mesh == nullptr) return P;
-    // A mesh need not fill its box: every particle must lie in a triangle.
-    std::vector<Index> outside;
-    for (Index p = 0; p < P.size(); ++p)
-      if (!mesh->inside(P.x[static_cast<std::size_t>(p)])) outside.push_back(p);
-    if (!outside.empty()) {
-      const Vec<2>& x = P.x[static_cast<std::size_t>(outside[0])];
-      throw InputError(fmt::format(
-          "{}: {} of the {} particles of the body [{:.6g}, {:.6g}] x [{:.6g}, {:.6g}] "
-          "(particles.per_cell) lie in no triangle of {} (the first at ({:.6g}, {:.6g})); make the "
-          "body (body.min, body.max) lie inside the mesh, or seed its triangles with "
-          "particles.per_triangle",
-          cfg.where("grid.mesh"), outside.size(), P.size(), lo[0], hi[0], lo[1], hi[1],
-          mesh->source(), x[0], x[1]));
+    const int per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
+    const IVec<2> n = seed_counts<2>(g, lo, hi, per_cell, machine_share);
+    const Index total = n[0] * n[1];
+    const double vol = (hi - lo).prod() / static_cast<double>(total);
+    if (mesh != nullptr) {
+      // A mesh need not fill its box: every particle must lie in a triangle.
+      Index outside = 0;
+      Vec<2> first;
+      for_each_lattice_point<2>(n, lo, hi, [&](Index, const Vec<2>& x) {
+        if (!mesh->inside(x) && outside++ == 0) first = x;
+      });
+      if (outside > 0)
+        throw InputError(fmt::format(
+            "{}: {} of the {} particles of the body [{:.6g}, {:.6g}] x [{:.6g}, {:.6g}] "
+            "(particles.per_cell) lie in no triangle of {} (the first at ({:.6g}, {:.6g})); make "
+            "the body (body.min, body.max) lie inside the mesh, or seed its triangles with "
+            "particles.per_triangle",
+            cfg.where("grid.mesh"), outside, total, lo[0], hi[0], lo[1], hi[1], mesh->source(),
+            first[0], first[1]));
     }
-    return P;
+    if (begin) begin(total);
+    for_each_lattice_point<2>(n, lo, hi, [&](Index, const Vec<2>& x) { f(x, vol); });
+    return;
   }
   const std::string basis = cfg.get_string("method.basis");
   if (basis != "p1_triangles" && basis != "powell_sabin")
@@ -282,12 +330,33 @@ Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo,
         "{}: particles.per_triangle = {} is not of the form m k^2 with m = 1, 3 or 6; choose "
         "one of 1, 3, 4, 6, 9, 12, 16, 24, 25, 27, 36, 48, 49, 54, 64, ...",
         cfg.where("particles.per_triangle"), per_triangle));
-  if (mesh != nullptr) return seed_particles_in_triangles(*mesh, per_triangle, rho0);
+  const std::vector<Vec<2>> ref = triangle_seed_reference(per_triangle);
+  const auto seed = [&](const TriangleMesh& m) {
+    check_triangle_seed_memory(m, static_cast<Index>(ref.size()), machine_share);
+    if (begin) begin(m.num_cells() * static_cast<Index>(ref.size()));
+    triangle_seeds(m, ref, f);
+  };
+  if (mesh != nullptr) {
+    seed(*mesh);
+    return;
+  }
   const TrianglePattern pattern = cfg.get_string("method.triangles") == "criss_cross"
                                       ? TrianglePattern::criss_cross
                                       : TrianglePattern::right;
-  return seed_particles_in_triangles(structured_triangles(g.origin, g.upper(), g.cells, pattern),
-                                     per_triangle, rho0);
+  seed(structured_triangles(g.origin, g.upper(), g.cells, pattern));
+}
+
+Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo, const Vec<2>& hi,
+                          double rho0, const TriangleMesh* mesh, const SeedScope& scope,
+                          const std::function<bool(const Vec<2>& X)>& body) {
+  SeedSink<2> sink(&g, rho0, scope);
+  for_each_body_seed_2d(
+      cfg, g, lo, hi, mesh, scope.machine_share,
+      [&](const Vec<2>& x, double vol) {
+        if (!body || body(x)) sink.add(x, vol);
+      },
+      [&](Index total) { sink.reserve(total); });
+  return sink.finish();
 }
 
 namespace {
@@ -308,34 +377,34 @@ void check_grid_memory(const Config& cfg, const Grid<Dim>& g) {
         cfg.where("grid.cells"), cfg.get_int("grid.cells"), nodes, bytes / 1e9, memory / 1e9));
 }
 
-AnyProblem make_any_problem(const Config& cfg) {
+AnyProblem make_any_problem(const Config& cfg, const SeedScope& scope) {
   const std::string name = cfg.get_string("benchmark");
   if (name != "custom" && cfg.get_int("grid.dimension") != 1)
     throw InputError(
         fmt::format("{}: grid.dimension applies to benchmark = \"custom\" only; "
                     "\"{}\" fixes its own dimension",
                     cfg.where("grid.dimension"), name));
-  if (name == "vibrating_bar") return make_vibrating_bar(cfg, /*large=*/false);
-  if (name == "vibrating_bar_large") return make_vibrating_bar(cfg, /*large=*/true);
-  if (name == "column_compaction") return make_column_compaction(cfg);
-  if (name == "traction_bar") return make_traction_bar(cfg);
-  if (name == "mms_1d") return make_mms_1d(cfg);
+  if (name == "vibrating_bar") return make_vibrating_bar(cfg, /*large=*/false, scope);
+  if (name == "vibrating_bar_large") return make_vibrating_bar(cfg, /*large=*/true, scope);
+  if (name == "column_compaction") return make_column_compaction(cfg, scope);
+  if (name == "traction_bar") return make_traction_bar(cfg, scope);
+  if (name == "mms_1d") return make_mms_1d(cfg, scope);
   if (name == "custom") {
     const auto dim = cfg.get_int("grid.dimension");
-    if (dim == 3) return make_custom_3d(cfg);
-    if (dim == 2) return make_custom_2d(cfg);
-    return make_custom_1d(cfg);
+    if (dim == 3) return make_custom_3d(cfg, scope);
+    if (dim == 2) return make_custom_2d(cfg, scope);
+    return make_custom_1d(cfg, scope);
   }
-  if (name == "plate_mms_2d") return make_plate_mms_2d(cfg);
-  if (name == "vortex_2d") return make_vortex_2d(cfg);
-  if (name == "cube_mms_3d") return make_cube_mms_3d(cfg);
+  if (name == "plate_mms_2d") return make_plate_mms_2d(cfg, scope);
+  if (name == "vortex_2d") return make_vortex_2d(cfg, scope);
+  if (name == "cube_mms_3d") return make_cube_mms_3d(cfg, scope);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));
 }
 }  // namespace
 
-AnyProblem make_problem(const Config& cfg) {
-  AnyProblem pb = make_any_problem(cfg);
+AnyProblem make_problem(const Config& cfg, const SeedScope& scope) {
+  AnyProblem pb = make_any_problem(cfg, scope);
   const int dim = std::visit([](const auto& p) { return std::decay_t<decltype(p)>::kDim; }, pb);
   if (cfg.get_int("particles.per_triangle") != 0 && dim != 2)
     throw InputError(fmt::format(

@@ -39,7 +39,7 @@ ExactState<1> TractionBarExact::operator()(const Vec<1>& X, double t) const {
   return e;
 }
 
-Problem<1> make_traction_bar(const Config& cfg) {
+Problem<1> make_traction_bar(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "traction_bar";
   pb.material = material_from_config(cfg, 1);
@@ -54,15 +54,15 @@ Problem<1> make_traction_bar(const Config& cfg) {
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
   pb.grid = Grid<1>(Vec<1>(g0), Vec<1>(g1), IVec<1>{cells});
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
-  pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L), per_cell, rho);
+  pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L), per_cell, rho, scope);
   pb.body_min = Vec<1>(0.0);
   pb.body_max = Vec<1>(L);
   pb.initial_velocity = [](const Vec<1>&) { return Vec<1>(0.0); };
   pb.fixed_sides = {{0, 0}};
   const TractionBarExact ex{L, rho, wave_speed(pb.material), cfg.get_real("traction.amplitude")};
   // The end particle's outer edge x_p + V_p / 2 at X = L (Traction, D 4.6.2).
-  const auto tr = body_face_traction<1>(
-      pb.grid, pb.particles, Vec<1>(0.0), Vec<1>(L), per_cell, 0, +1, [ex](double t) {
+  const auto tr =
+      body_face_traction<1>(pb.grid, Vec<1>(0.0), Vec<1>(L), per_cell, 0, +1, [ex](double t) {
         return Vec<1>(-ex.amplitude * std::sin(std::numbers::pi * ex.wave_speed * t / ex.length));
       });
   pb.tractions.push_back(tr);

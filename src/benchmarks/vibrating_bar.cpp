@@ -28,12 +28,12 @@ const NeoHookean& require_neo_hookean(const Config& cfg, const Material& m,
       cfg.where("material.model"), benchmark, source, material_name(m)));
 }
 
-void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho,
+void fill_fixed_bar(Problem<1>& pb, const Config& cfg, double L, double rho, const SeedScope& scope,
                     std::function<Vec<1>(const Vec<1>&)> velocity) {
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
   pb.grid = Grid<1>(Vec<1>(0.0), Vec<1>(L), IVec<1>{cells});
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(0.0), Vec<1>(L),
-                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+                                   static_cast<int>(cfg.get_int("particles.per_cell")), rho, scope);
   pb.body_min = Vec<1>(0.0);
   pb.body_max = Vec<1>(L);
   pb.initial_velocity = std::move(velocity);
@@ -53,7 +53,7 @@ ExactState<1> VibratingBarExact::operator()(const Vec<1>& X, double t) const {
   return s;
 }
 
-Problem<1> make_vibrating_bar(const Config& cfg, bool large) {
+Problem<1> make_vibrating_bar(const Config& cfg, bool large, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = large ? "vibrating_bar_large" : "vibrating_bar";
   const double L = cfg.get_real("bar.length");
@@ -67,7 +67,7 @@ Problem<1> make_vibrating_bar(const Config& cfg, bool large) {
         "which holds for material.model = \"elastic_1d_small\" or \"linear_elastic\", not \"{}\"; "
         "use benchmark = \"vibrating_bar_large\" for large deformation",
         cfg.where("material.model"), model));
-  fill_fixed_bar(pb, cfg, L, rho, [v0, L](const Vec<1>& X) {
+  fill_fixed_bar(pb, cfg, L, rho, scope, [v0, L](const Vec<1>& X) {
     return Vec<1>(v0 * std::sin(std::numbers::pi * X[0] / L));
   });
   if (!large)

@@ -15,7 +15,8 @@ Mat<2> rotation(double a) {
 }
 }  // namespace
 
-Particles<2> seed_annulus(const Grid<2>& g, double inner, double outer, int per_cell, double rho0) {
+Particles<2> seed_annulus(const Grid<2>& g, double inner, double outer, int per_cell, double rho0,
+                          const SeedScope& scope) {
   // Rings at the mid radii of n_r equal radial layers, n_r = ceil((R_o - R_i) / s) with the
   // particle spacing s = h / per_cell; ring k cut into n_k = ceil(2 pi R_k / s) equal sectors,
   // one particle at the sector's mid angle and mid radius carrying the sector's area
@@ -25,26 +26,24 @@ Particles<2> seed_annulus(const Grid<2>& g, double inner, double outer, int per_
   const double s = g.h.minCoeff() / per_cell;
   const auto n_r = static_cast<int>(std::ceil((outer - inner) / s - 1e-9));
   const double dR = (outer - inner) / n_r;
-  std::vector<Vec<2>> x;
-  std::vector<double> volume;
+  const auto sectors = [&](int k) {
+    return static_cast<int>(std::ceil(2.0 * pi * (inner + (k + 0.5) * dR) / s - 1e-9));
+  };
+  // Numbered ring after ring.
+  SeedSink<2> sink(&g, rho0, scope);
+  Index total = 0;
+  for (int k = 0; k < n_r; ++k) total += sectors(k);
+  sink.reserve(total);
   for (int k = 0; k < n_r; ++k) {
     const double R = inner + (k + 0.5) * dR;
-    const auto n = static_cast<int>(std::ceil(2.0 * pi * R / s - 1e-9));
+    const int n = sectors(k);
     const double dTheta = 2.0 * pi / n;
     for (int j = 0; j < n; ++j) {
       const double th = (j + 0.5) * dTheta;
-      x.emplace_back(R * std::cos(th), R * std::sin(th));
-      volume.push_back(R * dR * dTheta);
+      sink.add(Vec<2>(R * std::cos(th), R * std::sin(th)), R * dR * dTheta);
     }
   }
-  Particles<2> P;
-  P.resize(static_cast<Index>(x.size()));
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    P.x[i] = P.x0[i] = x[i];
-    P.volume[i] = P.volume0[i] = volume[i];
-    P.mass[i] = rho0 * volume[i];
-  }
-  return P;
+  return sink.finish();
 }
 
 double Vortex2DExact::g(double t) const {
@@ -116,7 +115,7 @@ ExactState<2> Vortex2DExact::operator()(const Vec<2>& X, double t) const {
   return s;
 }
 
-Problem<2> make_vortex_2d(const Config& cfg) {
+Problem<2> make_vortex_2d(const Config& cfg, const SeedScope& scope) {
   Problem<2> pb;
   pb.benchmark = "vortex_2d";
   pb.material = material_from_config(cfg, 2);
@@ -141,6 +140,7 @@ Problem<2> make_vortex_2d(const Config& cfg) {
         "[-half_width, half_width]^2 holds the annulus",
         cfg.where("vortex.half_width"), half, ex.outer_radius));
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
+  const Index seeded_before = scope.seeded;
   pb.grid = Grid<2>(Vec<2>(-half, -half), Vec<2>(half, half), IVec<2>{cells, cells});
   if (cfg.get_string("vortex.seeding") == "polar") {
     if (cfg.get_int("particles.per_triangle") != 0)
@@ -150,17 +150,18 @@ Problem<2> make_vortex_2d(const Config& cfg) {
           "triangles)",
           cfg.where("particles.per_triangle")));
     pb.particles = seed_annulus(pb.grid, ex.inner_radius, ex.outer_radius,
-                                static_cast<int>(cfg.get_int("particles.per_cell")), rho);
+                                static_cast<int>(cfg.get_int("particles.per_cell")), rho, scope);
   } else {
     // The grid's particles whose centre lies in the annulus, each with its cell's share of the
     // volume: a staircase along both circles.
-    pb.particles = seed_body_2d(cfg, pb.grid, pb.grid.origin, pb.grid.upper(), rho);
-    pb.particles.keep_if([&](const Particles<2>& P, std::size_t i) {
-      const double R = P.x0[i].norm();
-      return R > ex.inner_radius && R < ex.outer_radius;
-    });
+    pb.particles = seed_body_2d(cfg, pb.grid, pb.grid.origin, pb.grid.upper(), rho, nullptr, scope,
+                                [&](const Vec<2>& X) {
+                                  const double R = X.norm();
+                                  return R > ex.inner_radius && R < ex.outer_radius;
+                                });
   }
-  if (pb.particles.x.empty())
+  // (The body's particles, on every process of a distributed run alike, not those it keeps.)
+  if (scope.seeded == seeded_before)
     throw InputError(
         fmt::format("{}: no particle of the {} x {} grid lies in the annulus {} < R < {}",
                     cfg.where("grid.cells"), cells, cells, ex.inner_radius, ex.outer_radius));

@@ -4,6 +4,9 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "benchmarks/benchmarks.hpp"
 #include "core/memory.hpp"
@@ -11,6 +14,7 @@
 #include "driver/driver.hpp"
 #include "driver/run_mpm.hpp"
 #include "io/checkpoint.hpp"
+#include "scheme/distribution.hpp"
 #include "setup/config.hpp"
 #include "setup/run_settings.hpp"
 
@@ -80,6 +84,49 @@ RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::stri
   return res;
 }
 
+// A distributed run's problem (issue 21): each process stores only the particles of its slab,
+// so that no process holds the whole body, not even while the problem is set up. A counting pass
+// (the same on every process, storing no particle) gives the particles in each cell layer along
+// the grid's last axis; the slabs are cut from them (SlabPartition::balanced, as run_mpm cuts
+// them again from the stored particles' layers, summed over the processes) and every process
+// seeds again, keeping its slab's particles (SeedScope). Both passes generate every particle, so
+// the set-up takes twice one process's generation; what a process stores is its share.
+// `seeded`: the body's particles on all processes.
+AnyProblem make_distributed_problem(const Config& cfg, const Comm& comm, Index& seeded) {
+  std::vector<double> per_layer;
+  SeedScope counting;
+  counting.layer_counts = &per_layer;
+  counting.machine_share = static_cast<double>(comm.local_size()) / comm.size();
+  const AnyProblem counted = make_problem(cfg, counting);
+  seeded = counting.seeded;
+  SeedScope scope;
+  scope.machine_share = counting.machine_share;
+  std::visit(
+      [&](const auto& pb) {
+        constexpr int Dim = std::decay_t<decltype(pb)>::kDim;
+        // (The error names the key to change; every process meets it alike.)
+        const SlabPartition<Dim> part = SlabPartition<Dim>::balanced(
+            per_layer, comm.size(),
+            fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
+        // A particle outside the grid goes to process 0, as SlabPartition::owner sends it.
+        scope.keep = [part, me = comm.rank()](Index layer) {
+          return (layer < 0 ? 0 : part.owner_of_layer(layer)) == me;
+        };
+      },
+      counted);
+  // A check of the particles a process stores (a custom problem's initial fields) may fail on
+  // some processes only: every process stops with the message of the lowest.
+  std::optional<Comm::Failure> failed;
+  AnyProblem pb;
+  try {
+    pb = make_problem(cfg, scope);
+  } catch (const InputError& e) {
+    failed = Comm::Failure{comm.rank(), exit_code::kInput, e.what()};
+  }
+  if (const auto f = comm.agree(failed ? &*failed : nullptr)) throw InputError(f->message);
+  return pb;
+}
+
 }  // namespace
 
 int run_threads(int requested, Index particles, int dim, int available) {
@@ -93,10 +140,14 @@ RunResult run(const Config& cfg, const RunOptions& opt) {
   // summary.json's peak_memory_bytes: this run's, the problem's set-up included (a batch runs
   // several in one process).
   reset_peak_memory();
-  AnyProblem problem = make_problem(cfg);
+  const bool distributed = opt.comm != nullptr && opt.comm->distributed();
+  Index particles = 0;  // the body's, on all processes
+  AnyProblem problem =
+      distributed ? make_distributed_problem(cfg, *opt.comm, particles) : make_problem(cfg);
   const int dim =
       std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);
-  const Index particles = std::visit([](const auto& pb) { return pb.particles.size(); }, problem);
+  if (!distributed)
+    particles = std::visit([](const auto& pb) { return pb.particles.size(); }, problem);
   // A distributed run shares the cores of a machine among its processes there, and each holds
   // about its share of the particles.
   const int ranks = opt.comm ? opt.comm->size() : 1;

@@ -6,6 +6,7 @@
 #include <memory>
 #include <numeric>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -28,9 +29,10 @@ double velocity_time(const Scheme& scheme) {
   return std::visit([](auto s) { return decltype(s)::kVelocityTime; }, scheme);
 }
 
-// After a process has kept its share of the whole problem's particles (set-up, a restart):
-// keep_with_ids keeps the vectors' capacity, so without this every process would hold the
-// storage of every particle of the problem for the whole run.
+// After a process has kept its share of a checkpoint's particles (a restart): keep_with_ids
+// keeps the vectors' capacity, so without this every process would hold the storage of every
+// particle of the problem for the whole run. (The set-up stores only a process's share:
+// SeedScope.)
 template <int Dim>
 void release_the_rest(Particles<Dim>& p) {
   p.for_each_field([](auto& field) { field.shrink_to_fit(); });
@@ -341,12 +343,14 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
     check_stability(ts, pb.grid.h.minCoeff(), pb.material, stability_factor(basis), Dim,
                     fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
 
-  if (opt.shuffle_seed != 0 && !opt.restart)
-    shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
-
-  // A distributed run (issue 21): every process has built the whole problem; each keeps the
-  // particles of its slab (scheme/distribution.hpp), cut so that each holds about as many.
+  // A distributed run (issue 21): each process has set up only the particles of its slab
+  // (scheme/distribution.hpp), cut so that each holds about as many (driver/run.cpp).
   const Comm* comm = opt.comm != nullptr && opt.comm->distributed() ? opt.comm : nullptr;
+  if (opt.shuffle_seed != 0 && !opt.restart) {
+    // (The one process's random order cannot be had from a slab's particles.)
+    if (comm) throw InputError("shuffling the particles (mpm bench --shuffle) runs on one process");
+    shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
+  }
   SlabPartition<Dim> part;
   if (comm) {
     constexpr std::string_view kHow = "run it on one process (without mpirun)";
@@ -362,18 +366,15 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         for (auto& f : pb.fixed_sides)
           for (auto& [v, n] : f.vertex_normals) v = old_to_new[static_cast<std::size_t>(v)];
       }
+    // The cuts the set-up seeded by, from the same counts (each layer's particles are on one
+    // process). The traction points name their particles by id (RunState::all_tractions).
     part = SlabPartition<Dim>::balanced(
-        SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/true),
+        SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/false),
         comm->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
     const int me = comm->rank();
-    // The traction points name their particles by id from here (RunState::all_tractions).
-    for (auto& tr : pb.tractions)
-      for (auto& q : tr.particles)
-        q = static_cast<Index>(pb.particles.id[static_cast<std::size_t>(q)]);
-    pb.particles.keep_with_ids([&](const Particles<Dim>& P, std::size_t i) {
-      return part.owner(pb.grid, P.x[i], 0) == me;
-    });
-    release_the_rest(pb.particles);
+    for (const auto& x : pb.particles.x)
+      if (part.owner(pb.grid, x, 0) != me)
+        throw std::logic_error("run_mpm: a process set up a particle of another's slab");
   }
   // An input error that only some processes meet (the stepper's checks of their own particles,
   // rank 0's output directory) stops every process with the message of the lowest.

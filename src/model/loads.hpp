@@ -31,9 +31,11 @@ struct BodyForce {
 // cross-section).
 template <int Dim>
 struct Traction {
-  int direction = 0;             // box faces and 1D: the face normal is e_d
-  int side = 1;                  // +1: the upper face (outward normal +e_d); -1: the lower face
-  std::vector<Index> particles;  // the particle carrying each loaded point
+  int direction = 0;  // box faces and 1D: the face normal is e_d
+  int side = 1;       // +1: the upper face (outward normal +e_d); -1: the lower face
+  // The particle carrying each loaded point: in a Problem its id (which is its index as set
+  // up on one process); in a run's RunState::tractions its index there.
+  std::vector<Index> particles;
   std::vector<double> area;      // A_k [m^(Dim-1)] per loaded point (1D: 1)
   std::vector<Vec<Dim>> offset;  // X_k - X_p [m] per loaded point (unused in 1D)
   std::vector<Vec<Dim>> normal;  // n_k per loaded point; only read when `pressure` is set

@@ -6,6 +6,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <variant>
@@ -76,11 +77,86 @@ struct Problem {
 
 using AnyProblem = std::variant<Problem<1>, Problem<2>, Problem<3>>;
 
+// Which of a problem's particles this process stores (issue 21). On one process: every particle.
+// A process of a distributed run stores only those of its slab, so that no process holds the
+// whole body, not even while the problem is set up: every process generates every particle in
+// the one process's order and numbers them as one process does (Particles::id: the position in
+// that order), and keeps those `keep` accepts. A counting pass (`layer_counts` set) keeps none
+// and counts the particles in each cell layer, from which the slabs are cut (driver/run.cpp).
+// The seeders below take a scope; the problems' constructors (benchmarks/benchmarks.hpp) pass
+// theirs on.
+struct SeedScope {
+  // Keeps a particle whose cell layer along the grid's last axis is `layer` (Grid::last_layer;
+  // -1: outside the grid). Empty: every particle.
+  std::function<bool(Index layer)> keep;
+  // Not null: the counting pass. Each seeded particle inside the grid adds 1 to its layer's
+  // entry (resized to the grid's layers along its last axis); none is kept.
+  std::vector<double>* layer_counts = nullptr;
+  // The share of the body the processes on this machine hold together (1 on one process;
+  // processes here / processes in all for a distributed run): the memory checks of the seeders
+  // compare that share of the body's state with the machine's memory.
+  double machine_share = 1.0;
+  // Added to by the seeders: the particles of the body on all processes (mutable: counted
+  // through the const scope the constructors pass on).
+  mutable Index seeded = 0;
+};
+
+// Where a seeder puts its particles: each point of the body it generates, in its order, gets the
+// next id, and the scope decides which are stored (SeedScope; a counting pass stores none).
+template <int Dim>
+class SeedSink {
+ public:
+  // `g`: the grid whose layers the scope names (null only with the default scope: every
+  // particle kept, none counted).
+  SeedSink(const Grid<Dim>* g, double rho0, const SeedScope& scope)
+      : grid_(g), rho0_(rho0), scope_(scope) {
+    if ((scope.layer_counts || scope.keep) && g == nullptr)
+      throw std::logic_error("SeedSink: a scope that keeps or counts by layer needs the grid");
+    if (scope.layer_counts)
+      scope.layer_counts->assign(static_cast<std::size_t>(g->cells[Dim - 1]), 0.0);
+  }
+  // `total` points to come: room for them when every one is kept (one process).
+  void reserve(Index total) {
+    if (!scope_.keep && !scope_.layer_counts) particles_.reserve(total);
+  }
+  void add(const Vec<Dim>& x, double volume) {
+    const auto id = static_cast<CompactIndex>(next_++);
+    if (!scope_.layer_counts && !scope_.keep) {
+      particles_.append(x, volume, rho0_ * volume, id);
+      return;
+    }
+    const Index layer = grid_->last_layer(x);
+    if (scope_.layer_counts) {
+      if (layer >= 0) (*scope_.layer_counts)[static_cast<std::size_t>(layer)] += 1.0;
+      return;
+    }
+    if (scope_.keep && !scope_.keep(layer)) return;
+    particles_.append(x, volume, rho0_ * volume, id);
+  }
+  // The particles kept, with no capacity beyond them (a process that keeps some, a body cut
+  // out of a box).
+  Particles<Dim> finish() {
+    scope_.seeded += next_;
+    particles_.for_each_field([](auto& field) { field.shrink_to_fit(); });
+    return std::move(particles_);
+  }
+
+ private:
+  const Grid<Dim>* grid_;
+  double rho0_;
+  const SeedScope& scope_;
+  Index next_ = 0;
+  Particles<Dim> particles_;
+};
+
 // Particles evenly spaced over the body [lo, hi] (per direction), `per_cell` per grid cell
-// width, each carrying an equal share of the volume; mass = rho0 V, F = I, zero stress.
+// width, each carrying an equal share of the volume; mass = rho0 V, F = I, zero stress. Numbered
+// with x fastest, then y, then z. `body` (optional): only the points X with body(X) belong to
+// the body (numbered among themselves: a body cut out of the box).
 template <int Dim>
 Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
-                              int per_cell, double rho0);
+                              int per_cell, double rho0, const SeedScope& scope = {},
+                              const std::function<bool(const Vec<Dim>& X)>& body = {});
 
 // Particles in every triangle of m, per_triangle = m k^2 (m = 1, 3 or 6, k >= 1) each: the
 // triangle is cut into k^2 similar sub-triangles (lines parallel to its edges at 1/k steps) and
@@ -91,15 +167,20 @@ Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<
 // "uniformly distributed" points per triangle without saying how; 12 = 3 * 4, 16 = 1 * 16 and
 // 24 = 6 * 4 here. Particles are numbered by triangle, then by part. mass = rho0 V, F = I.
 Particles<2> seed_particles_in_triangles(const TriangleMesh& m, int per_triangle, double rho0);
+// The points of seed_particles_in_triangles in its order, f(X, volume), storing none.
+void for_each_triangle_seed(const TriangleMesh& m, int per_triangle,
+                            const std::function<void(const Vec<2>& X, double volume)>& f);
 // (m, k) of a count, or {0, 0} when it is not of the form m k^2.
 std::pair<int, int> triangle_seed_pattern(int per_triangle);
 
 // The traction tau(t) on the face of the body box [lo, hi] normal to `direction` (side +1: at
 // hi, -1: at lo), applied through the outer layer of the particles seed_particles(g, lo, hi,
-// per_cell, .) placed (P: those particles), each with its share of the face (Traction).
+// per_cell, .) places, each with its share of the face (Traction). The loaded points name their
+// particles by id (the position in seed_particles' order), from the seeding pattern alone: the
+// same points on every process of a distributed run, whichever particles it stores.
 template <int Dim>
-Traction<Dim> body_face_traction(const Grid<Dim>& g, const Particles<Dim>& P, const Vec<Dim>& lo,
-                                 const Vec<Dim>& hi, int per_cell, int direction, int side,
+Traction<Dim> body_face_traction(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
+                                 int per_cell, int direction, int side,
                                  std::function<Vec<Dim>(double t)> value);
 
 }  // namespace mpm

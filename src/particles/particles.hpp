@@ -51,6 +51,22 @@ struct Particles {
                 static_cast<CompactIndex>(old));
   }
 
+  // A new particle at rest at x (= x0), with F = I and zero stress, numbered `id_value`: how
+  // the set-up seeds a body, numbering its particles in the one process's order whichever of
+  // them a process keeps (model/problem.hpp, SeedScope).
+  // (Through resize, which gives every field its initial value.)
+  void append(const Vec<Dim>& at, double vol, double m, CompactIndex id_value) {
+    const std::size_t i = x.size();
+    resize(size() + 1);
+    x[i] = x0[i] = at;
+    volume[i] = volume0[i] = vol;
+    mass[i] = m;
+    id[i] = id_value;
+  }
+  void reserve(Index n) {
+    for_each_field([&](auto& field) { field.reserve(static_cast<std::size_t>(n)); });
+  }
+
   // Keeps the particles i with keep(*this, i), in order, with their ids: the particles one
   // process owns in a distributed run, or those that stay when others migrate (ids stay those of
   // the whole body).

@@ -37,7 +37,8 @@ struct SlabPartition {
   // fewer layers than ranks (`where`: the key to change).
   static SlabPartition balanced(const std::vector<double>& per_layer, int ranks,
                                 const std::string& where);
-  // The particles in each cell layer along kAxis, over all ranks (collective when comm is
+  // The particles in each cell layer along kAxis (those inside the grid: Grid::last_layer, the
+  // layer that decides the owner), over all ranks (collective when comm is
   // distributed; `replicated`: every rank holds every particle, as at set-up, so no sum).
   static std::vector<double> layer_counts(const Grid<Dim>& grid, const Particles<Dim>& P,
                                           const Comm& comm, bool replicated);
