@@ -109,9 +109,13 @@ AnyProblem make_distributed_problem(const Config& cfg, const Comm& comm, Index& 
             per_layer, comm.size(),
             fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
         // A particle outside the grid goes to process 0, as SlabPartition::owner sends it.
-        scope.keep = [part, me = comm.rank()](Index layer) {
+        const int me = comm.rank();
+        scope.keep = [part, me](Index layer) {
           return (layer < 0 ? 0 : part.owner_of_layer(layer)) == me;
         };
+        for (Index l = part.cuts[static_cast<std::size_t>(me)];
+             l < part.cuts[static_cast<std::size_t>(me) + 1]; ++l)
+          scope.expected += static_cast<Index>(per_layer[static_cast<std::size_t>(l)]);
       },
       counted);
   // A check of the particles a process stores (a custom problem's initial fields) may fail on

@@ -31,11 +31,11 @@ double velocity_time(const Scheme& scheme) {
 
 // After a process has kept its share of a checkpoint's particles (a restart): keep_with_ids
 // keeps the vectors' capacity, so without this every process would hold the storage of every
-// particle of the problem for the whole run. (The set-up stores only a process's share:
-// SeedScope.)
+// particle of the problem for the whole run; room for an eighth more stays (Particles::
+// keep_room, as after the set-up, which stores only a process's share: SeedScope).
 template <int Dim>
 void release_the_rest(Particles<Dim>& p) {
-  p.for_each_field([](auto& field) { field.shrink_to_fit(); });
+  p.keep_room(p.size() / 8);
 }
 
 // A distributed run on a mesh from a file: the mesh with its vertices numbered along the slabs'

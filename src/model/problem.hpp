@@ -96,6 +96,9 @@ struct SeedScope {
   // processes here / processes in all for a distributed run): the memory checks of the seeders
   // compare that share of the body's state with the machine's memory.
   double machine_share = 1.0;
+  // The particles `keep` accepts, when known (the counting pass's): the seeders reserve room for
+  // them and an eighth more (Particles::keep_room) before the first, so no array grows.
+  Index expected = 0;
   // Added to by the seeders: the particles of the body on all processes (mutable: counted
   // through the const scope the constructors pass on).
   mutable Index seeded = 0;
@@ -118,6 +121,7 @@ class SeedSink {
   // `total` points to come: room for them when every one is kept (one process).
   void reserve(Index total) {
     if (!scope_.keep && !scope_.layer_counts) particles_.reserve(total);
+    if (scope_.keep && scope_.expected > 0) particles_.reserve(scope_.expected * 9 / 8);
   }
   void add(const Vec<Dim>& x, double volume) {
     const auto id = static_cast<CompactIndex>(next_++);
@@ -133,11 +137,12 @@ class SeedSink {
     if (scope_.keep && !scope_.keep(layer)) return;
     particles_.append(x, volume, rho0_ * volume, id);
   }
-  // The particles kept, with no capacity beyond them (a process that keeps some, a body cut
-  // out of a box).
+  // The particles kept; a process of a distributed run with room for an eighth more
+  // (Particles::keep_room: particles that arrive from others).
   Particles<Dim> finish() {
     scope_.seeded += next_;
-    particles_.for_each_field([](auto& field) { field.shrink_to_fit(); });
+    if (scope_.keep && particles_.x.capacity() < particles_.x.size() * 9 / 8)
+      particles_.keep_room(particles_.size() / 8);
     return std::move(particles_);
   }
 

@@ -149,21 +149,6 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
     sim.carried.resize(k * w);
     P.keep_with_ids([&](const Particles<Dim>&, std::size_t i) { return owner[i] == me; });
   }
-  // Room for the arrivals with a margin of an eighth, not the vectors' doubling: after the
-  // set-up a process's arrays are exactly full, and the first particle to arrive would double
-  // every one of them (the edge slabs of the 4-process plate of BENCHMARKS.md: 367 MB at their
-  // peak against the others' 270). Still geometric growth, so appends stay amortised O(1).
-  const auto w = static_cast<std::size_t>(sim.carried_width);
-  const std::size_t record =
-      Particles<Dim>::bytes_per_particle() + sizeof(CompactIndex) + w * sizeof(double);
-  std::size_t need = P.x.size();
-  for (const auto& buf : recv) need += buf.size() / record;
-  if (need > P.x.capacity()) {
-    const std::size_t room = std::max(need, P.x.size() + P.x.size() / 8);
-    P.reserve(static_cast<Index>(room));
-    sim.cell.reserve(room);
-    sim.carried.reserve(room * w);
-  }
   for (const auto& buf : recv) unpack_particles(buf, P, sim.cell, sim.carried, sim.carried_width);
   return leaving;
 }

@@ -221,9 +221,14 @@ struct BasisState : RunState<Dim> {
       : RunState<Dim>(g, std::move(p), std::move(mat)), basis(std::move(b)) {
     auto& particles = this->particles;
     this->nodes.resize(basis.num_dofs(), whole_grid);
-    stencils.resize(static_cast<std::size_t>(particles.size()));
+    // Room for an eighth more particles (Particles::keep_room: particles arriving from other
+    // processes; the capacity beyond them is never written and takes no resident memory).
+    const auto n = static_cast<std::size_t>(particles.size());
+    stencils.reserve(n + n / 8);
+    stencils.resize(n);
     this->dof_stride = dof_strides<Dim>(basis.dofs_per_dim());
-    this->cell.assign(static_cast<std::size_t>(particles.size()), -1);
+    this->cell.reserve(n + n / 8);
+    this->cell.assign(n, -1);
     // Particle ids and cells are stored as CompactIndex (core/types.hpp).
     constexpr Index kMax = std::numeric_limits<CompactIndex>::max();
     if (particles.size() > kMax || this->grid.num_cells() > kMax)
