@@ -217,11 +217,6 @@ void triangle_seeds(const TriangleMesh& mesh, const std::vector<Vec<2>>& ref,
 
 }  // namespace
 
-void for_each_triangle_seed(const TriangleMesh& m, int per_triangle,
-                            const std::function<void(const Vec<2>& X, double volume)>& f) {
-  triangle_seeds(m, triangle_seed_reference(per_triangle), f);
-}
-
 Particles<2> seed_particles_in_triangles(const TriangleMesh& mesh, int per_triangle, double rho0) {
   const std::vector<Vec<2>> ref = triangle_seed_reference(per_triangle);
   const auto per = static_cast<Index>(ref.size());

@@ -172,9 +172,6 @@ Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<
 // "uniformly distributed" points per triangle without saying how; 12 = 3 * 4, 16 = 1 * 16 and
 // 24 = 6 * 4 here. Particles are numbered by triangle, then by part. mass = rho0 V, F = I.
 Particles<2> seed_particles_in_triangles(const TriangleMesh& m, int per_triangle, double rho0);
-// The points of seed_particles_in_triangles in its order, f(X, volume), storing none.
-void for_each_triangle_seed(const TriangleMesh& m, int per_triangle,
-                            const std::function<void(const Vec<2>& X, double volume)>& f);
 // (m, k) of a count, or {0, 0} when it is not of the form m k^2.
 std::pair<int, int> triangle_seed_pattern(int per_triangle);
 

@@ -104,14 +104,6 @@ struct Particles {
     for_each_field([&](auto& field) { field.resize(static_cast<std::size_t>(n)); });
   }
 
-  // The same, numbering the kept particles 0, 1, ... again: for set-up only (a body cut out of a
-  // seeded box), before any output names an id.
-  template <class Keep>
-  void keep_if(Keep&& keep) {
-    keep_with_ids(std::forward<Keep>(keep));
-    std::iota(id.begin(), id.end(), CompactIndex{0});
-  }
-
   // Particle i's fields appended to `out` as raw bytes, in the order of for_each_field
   // (bytes_per_particle() of them): migration and gathering between processes of one run, whose
   // machines share the representation.
