@@ -3,7 +3,8 @@
 // An input is a checkpoint payload: the target puts the header in front of it (magic, format
 // version, size and the right FNV-1a hash), so that the fuzzer reaches the payload decoder
 // instead of stopping at the checksum. Inputs starting with 'H' go to the decoder as they are
-// (the header checks themselves). Invalid input must be reported as an InputError; any other
+// (the header checks themselves); inputs starting with 'P' are the payload of a distributed
+// checkpoint's piece (io::decode_piece). Invalid input must be reported as an InputError; any other
 // exception, a crash, a sanitizer report or an allocation beyond libFuzzer's limit is a bug.
 // A payload that decodes must encode to the same bytes, and what a restart does with it next
 // (the particles unpacked in each dimension, the FEM state, the stored configuration compared
@@ -51,6 +52,25 @@ void fuzz(std::string_view bytes) {
   may_refuse([&] { (void)io::restart_config(c, "<fuzz>", nullptr); });
 }
 
+// A piece must encode back to its bytes, and its particles unpack or are refused.
+void fuzz_piece(std::string_view payload) {
+  namespace io = mpm::io;
+  mpm::ByteWriter w;
+  w.bytes().append(io::kPieceMagic);
+  w.u32(io::kCheckpointVersion);
+  w.u64(payload.size());
+  w.u64(io::fnv1a64(payload));
+  w.bytes().append(payload);
+  io::CheckpointPiece p;
+  try {
+    p = io::decode_piece(w.bytes(), "<fuzz piece>");
+  } catch (const mpm::InputError&) {
+    return;
+  }
+  if (io::encode_piece(p) != w.bytes()) bug("piece: decode then encode changes the bytes", "");
+  may_refuse([&] { (void)io::unpack_particles<2>(p.particles, "<fuzz piece>"); });
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -58,6 +78,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     if (!input.empty() && input.front() == 'H') {
       fuzz(input.substr(1));
+    } else if (!input.empty() && input.front() == 'P') {
+      fuzz_piece(input.substr(1));
     } else {
       mpm::ByteWriter w;
       w.bytes().append(mpm::io::kCheckpointMagic);

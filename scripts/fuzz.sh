@@ -38,7 +38,8 @@ python3 -c 'print("a." * 40000 + "a = 1")' >"$corpus/nested_dotted_key.toml"
 python3 -c 'print("[" + "a." * 40000 + "a]\nb = 1")' >"$corpus/nested_header.toml"
 
 # Checkpoint payloads (the file less its 28-byte header; fuzz/fuzz_checkpoint.cpp puts one back)
-# of small runs: 1D and 2D, a FEM reference, TLS and MLS totals, CPDI2 corners, the ULFEM solver.
+# of small runs: 1D and 2D, a FEM reference, TLS and MLS totals, CPDI2 corners, the ULFEM solver,
+# a distributed run's manifest and pieces.
 if [ -x build/mpm ]; then
   n=0
   seed() {
@@ -65,6 +66,22 @@ if [ -x build/mpm ]; then
   seed examples/plate_mms_2d.toml --set time.end=1e-4 --set grid.cells=2
   seed examples/plate_mms_2d.toml --set time.end=1e-4 --set grid.cells=2 \
     --set method.basis=cpdi2
+  # A distributed run's manifest and pieces (the pieces' payloads after a 'P', which sends them to
+  # the piece decoder), when Open MPI is there.
+  out="$work/run_mpi"
+  if command -v mpirun >/dev/null &&
+    OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun -n 2 --oversubscribe \
+      build/mpm run examples/plate_mms_2d.toml -q --out "$out" --set output.checkpoint_every=1 \
+      --set output.vtk=false --set time.end=1e-4 --set grid.cells=2 --set method.basis=cpdi2 \
+      >/dev/null 2>&1; then
+    tail -c +29 "$out/checkpoint.bin" >"$work/checkpoints/seed_manifest"
+    for piece in "$out"/checkpoint_s*_p*.bin; do
+      { printf P; tail -c +29 "$piece"; } >"$work/checkpoints/seed_$(basename "$piece" .bin)"
+    done
+  else
+    echo "fuzz: no distributed checkpoint seed (mpirun missing or the run failed)" >&2
+  fi
+  rm -rf "$out"
 fi
 
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1

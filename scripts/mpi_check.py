@@ -19,8 +19,11 @@ checks:
 The runs of each process count are made in one start of mpm (`mpm run --batch`, one mpirun),
 the repeats in another; the restart and failure checks start mpm for each run.
 Each frame of a distributed run is a .pvtu over one VTU piece per process, whose particles are
-those of the CSV frame. A run on 2 processes shortened and restarted from its checkpoint on 2 processes ends in the same
-bytes as the whole run, and restarted on 4 or 1 in the same answers to 1e-12.
+those of the CSV frame. A run on 2 processes shortened and restarted from its checkpoint on 2
+processes ends in the same bytes as the whole run, and restarted on 4 or 1 in the same answers to
+1e-12; one on 4 restarted on 4 in the same bytes, on 3 to 1e-12. Each distributed checkpoint is a
+manifest and one piece per process of its step; a damaged or missing piece stops the restart on
+every process with one message naming it.
 Then a failing distributed run (a body thrown out of the grid) must end every process with one
 message naming the rank and the particles, the documented exit code (4), and no hang; and a
 feature that does not distribute must be refused before the first step (exit code 2).
@@ -540,44 +543,130 @@ RESTARTS = [
 ]
 
 
+PIECE = re.compile(r"^checkpoint_s(\d+)_p(\d{4,})\.bin$")
+
+
+def check_pieces_of_checkpoint(what, d, n, failures):
+    # A distributed checkpoint: checkpoint.bin (the manifest) and one piece per process, all of
+    # one step (the earlier checkpoints' pieces removed); none after a run on one process.
+    found = [PIECE.match(f) for f in os.listdir(d)]
+    found = sorted((int(m.group(1)), int(m.group(2))) for m in found if m)
+    steps = {s for s, _ in found}
+    expect = [] if n == 1 else [(max(steps) if steps else -1, r) for r in range(n)]
+    if not os.path.exists(os.path.join(d, "checkpoint.bin")) or found != expect:
+        failures.append(f"{what}: checkpoint pieces {found}, expected one per process of "
+                        f"{n} and of one step")
+
+
+def restart_cmd(n, mpm, d, t_end, sets=()):
+    cmd = [mpm, "run", "--restart", os.path.join(d, "checkpoint.bin"), "--set",
+           f"time.end={t_end}", "--quiet"]
+    for x in sets:
+        cmd += ["--set", x]
+    return cmd if n == 1 else ["mpirun", "-n", str(n), "--oversubscribe"] + cmd
+
+
 def check_restart(mpm, tmp, failures, label, config, sets, t_short, t_end):
-    # A run on 2 processes with checkpoints, against one shortened to t_short and restarted to
-    # t_end on 2 processes (the same bytes), on 4 and on 1 (1e-12).
+    # Runs on 2 and 4 processes with checkpoints, against ones shortened to t_short and
+    # restarted to t_end: on as many processes (the same bytes), and from 2 on 4 and 1, from 4
+    # on 3 (1e-12; each process reads the pieces its slab overlaps).
     key = "".join(c if c.isalnum() else "_" for c in label)
-    whole = os.path.join(tmp, f"restart_{key}_whole")
-    r = run(mpm_cmd(mpm, 2, config, sets + [f"time.end={t_end}"], whole))
-    short = os.path.join(tmp, f"restart_{key}_short")
-    r2 = run(mpm_cmd(mpm, 2, config, sets + [f"time.end={t_short}"], short))
-    if r.returncode or r2.returncode:
-        failures.append(f"restart ({label}): the runs failed: {r.stderr} {r2.stderr}")
-        return
-    copies = {}
-    for n in (4, 1):
-        copies[n] = short + f"_n{n}"
-        shutil.copytree(short, copies[n])
+    whole, short = {}, {}
+    for n in (2, 4):
+        whole[n] = os.path.join(tmp, f"restart_{key}_whole{n}")
+        short[n] = os.path.join(tmp, f"restart_{key}_short{n}")
+        runs = [run(mpm_cmd(mpm, n, config, sets + [f"time.end={t_end}"], whole[n])),
+                run(mpm_cmd(mpm, n, config, sets + [f"time.end={t_short}"], short[n]))]
+        if any(r.returncode for r in runs):
+            failures.append(f"restart ({label}): the runs on {n} failed: "
+                            + " ".join(r.stderr for r in runs))
+            return
+        check_pieces_of_checkpoint(f"restart ({label}), the run on {n}", short[n], n, failures)
+    # (restarted on, the checkpoint's processes, its directory)
+    cases = []
+    for n, of in [(2, 2), (4, 2), (1, 2), (4, 4), (3, 4)]:
+        d = short[of] if n == of else short[of] + f"_n{n}"
+        if n != of:
+            shutil.copytree(short[of], d)
+        cases.append((n, of, d))
     results = []
-    for n, d in [(2, short), (4, copies[4]), (1, copies[1])]:
-        cmd = [mpm, "run", "--restart", os.path.join(d, "checkpoint.bin"), "--set",
-               f"time.end={t_end}", "--quiet"]
-        if n > 1:
-            cmd = ["mpirun", "-n", str(n), "--oversubscribe"] + cmd
-        r = run(cmd)
+    for n, of, d in cases:
+        # (Checkpoints every 10 steps here: the restarted run writes some.)
+        r = run(restart_cmd(n, mpm, d, t_end, ["output.checkpoint_every=10"]))
         if r.returncode:
-            failures.append(f"restart ({label}) on {n}: exit {r.returncode}: {r.stderr.strip()}")
+            failures.append(f"restart ({label}) on {n} from {of}: exit {r.returncode}: "
+                            f"{r.stderr.strip()}")
             continue
-        a, b = read_csv(os.path.join(whole, last_frame(whole))), read_csv(
-            os.path.join(d, last_frame(d)))
-        if n == 2:
-            same = a == b and open(os.path.join(whole, "history.csv"), "rb").read() == open(
+        # The restarted run's checkpoints replace the earlier ones, pieces and all.
+        check_pieces_of_checkpoint(f"restart ({label}) on {n} from {of}", d, n, failures)
+        w = whole[of]
+        a, b = read_csv(os.path.join(w, last_frame(w))), read_csv(os.path.join(d, last_frame(d)))
+        if n == of:
+            same = a == b and open(os.path.join(w, "history.csv"), "rb").read() == open(
                 os.path.join(d, "history.csv"), "rb").read()
             if not same:
-                failures.append(f"restart ({label}) on 2 processes from a checkpoint of 2: not "
-                                "the same bytes")
-            results.append("on 2: the same bytes")
+                failures.append(f"restart ({label}) on {n} processes from a checkpoint of {n}: "
+                                "not the same bytes")
+            results.append(f"{of} -> {n}: the same bytes")
         else:
-            w = compare_tables(f"restart ({label}) on {n}", a, b, failures)
-            results.append(f"on {n}: largest relative difference {w:.2e}")
-    print(f"restart ({label}) from a checkpoint of 2 processes: " + "; ".join(results))
+            x = compare_tables(f"restart ({label}) on {n} from {of}", a, b, failures)
+            results.append(f"{of} -> {n}: largest relative difference {x:.2e}")
+    print(f"restart ({label}): " + "; ".join(results))
+
+
+def check_damaged_pieces(mpm, tmp, failures):
+    # A checkpoint piece damaged (a flipped byte) or missing: the restart stops every process
+    # before the first step with exit code 2 and one message naming the piece, and no hang;
+    # also when only one process reads that piece.
+    d = os.path.join(tmp, "pieces")
+    r = run(mpm_cmd(mpm, 2, "examples/custom_bar.toml",
+                    ["time.end=0.004", "output.checkpoint_every=100", "output.frames=1"], d))
+    if r.returncode:
+        failures.append(f"damaged pieces: the run failed: {r.stderr}")
+        return
+    pieces = sorted(f for f in os.listdir(d) if PIECE.match(f))
+    for k, (how, n) in enumerate([("flipped", 2), ("missing", 1), ("missing", 2)]):
+        dk = f"{d}_{k}"
+        shutil.copytree(d, dk)
+        victim = os.path.join(dk, pieces[-1])
+        if how == "flipped":
+            b = bytearray(open(victim, "rb").read())
+            b[len(b) // 2] ^= 4
+            open(victim, "wb").write(bytes(b))
+        else:
+            os.remove(victim)
+        try:
+            r = run(restart_cmd(n, mpm, dk, "0.006"), timeout=60)
+        except subprocess.TimeoutExpired:
+            failures.append(f"a restart with a {how} piece on {n} hung (no end within 60 s)")
+            continue
+        lines = [l for l in r.stderr.splitlines() if "error" in l]
+        if r.returncode != 2 or len(lines) != 1 or pieces[-1] not in lines[0]:
+            failures.append(f"restart with a {how} piece on {n}: exit {r.returncode}, "
+                            f"stderr {r.stderr!r}")
+        else:
+            print(f"{how} piece, restart on {n}: {lines[0][:160]}")
+    # A CSV frame that cannot be written (a directory stands where rank 0 renames the frame's
+    # file, which every process wrote with MPI-IO): every process stops after that step with
+    # exit code 8 (output), one message naming the file, no hang, and the summary says so.
+    dk = f"{d}_csv"
+    shutil.copytree(d, dk)
+    frames = sorted(f for f in os.listdir(dk) if re.match(r"^particles_\d{5}\.csv$", f))
+    blocked = os.path.join(dk, f"particles_{len(frames):05d}.csv")
+    os.makedirs(os.path.join(blocked, "x"))
+    try:
+        r = run(restart_cmd(2, mpm, dk, "0.006", ["output.frames=2"]), timeout=60)
+    except subprocess.TimeoutExpired:
+        failures.append("a CSV frame that cannot be written on 2 processes hung")
+        return
+    msgs = [l for l in r.stderr.splitlines() if "run failed" in l]
+    status = json.load(open(os.path.join(dk, "summary.json"))) if r.returncode == 8 else {}
+    if (r.returncode != 8 or len(msgs) != 1 or blocked not in msgs[0]
+            or status.get("status") != "failed"):
+        failures.append(f"a CSV frame that cannot be written: exit {r.returncode}, "
+                        f"stderr {r.stderr!r}")
+    else:
+        print(f"CSV frame not written: exit 8, {msgs[0][:160]}")
 
 
 def check_failure(mpm, tmp, failures):
@@ -662,6 +751,7 @@ def main():
         if not a.case:
             for case in RESTARTS:
                 check_restart(os.path.abspath(a.mpm), tmp, failures, *case)
+            check_damaged_pieces(os.path.abspath(a.mpm), tmp, failures)
             check_failure(os.path.abspath(a.mpm), tmp, failures)
     for f in failures:
         print("FAILED:", f)

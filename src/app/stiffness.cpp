@@ -173,7 +173,7 @@ StiffnessReport stiffness_spectrum(const StiffnessOptions& opt) {
   rep.state = "the initial layout";
   Particles<kDim> P = pb->particles;
   if (!opt.checkpoint.empty()) {
-    const io::Checkpoint c = io::read_checkpoint(opt.checkpoint);
+    const io::Checkpoint c = io::read_whole_checkpoint(opt.checkpoint);
     const std::string what = fmt::format("checkpoint '{}'", opt.checkpoint);
     if (c.solver != "mpm" || c.dim != kDim)
       throw InputError(

@@ -1,11 +1,14 @@
 #include "core/comm.hpp"
 
+#include "core/comm_file.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -350,6 +353,85 @@ std::vector<std::vector<std::byte>> Comm::exchange(
   throw std::logic_error("Comm::exchange with peers in a build without MPI");
 #endif
   return recv;
+}
+
+#ifdef MPM_HAVE_MPI
+namespace {
+// The first MPI-IO error of a rank, as a failure naming the path (nothing when rc is success).
+void note_file_error(int rc, const char* what, const std::string& path, int rank,
+                     std::optional<Comm::Failure>& failed) {
+  if (rc == MPI_SUCCESS || failed) return;
+  char text[MPI_MAX_ERROR_STRING];
+  int len = 0;
+  MPI_Error_string(rc, text, &len);
+  failed = Comm::Failure{rank, exit_code::kOutput,
+                         fmt::format("cannot write '{}': {}: {}", path, what,
+                                     std::string(text, static_cast<std::size_t>(len)))};
+}
+static_assert(sizeof(MPI_File) == sizeof(void*));
+}  // namespace
+#endif
+
+OrderedFile::OrderedFile(const Comm& comm, std::string path) : comm_(comm), path_(std::move(path)) {
+  if (!comm_.distributed())
+    throw std::logic_error("OrderedFile: a run on one process writes its files itself");
+#ifdef MPM_HAVE_MPI
+  MPI_File fh = MPI_FILE_NULL;
+  note_file_error(MPI_File_open(MPI_COMM_WORLD, path_.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY,
+                                MPI_INFO_NULL, &fh),
+                  "MPI_File_open", path_, comm_.rank(), failed_);
+  // (Every rank learns whether all opened it before the collective calls on the file.)
+  if (comm_.any(failed_.has_value())) {
+    if (!failed_)
+      failed_ =
+          Comm::Failure{comm_.rank(), exit_code::kOutput,
+                        fmt::format("cannot write '{}': another process could not open it", path_)};
+    return;
+  }
+  std::memcpy(&file_, &fh, sizeof fh);
+  open_ = true;
+  note_file_error(MPI_File_set_size(fh, 0), "MPI_File_set_size", path_, comm_.rank(), failed_);
+#endif
+}
+
+void OrderedFile::append([[maybe_unused]] std::string_view mine) {
+  if (!open_) return;  // (on every rank alike)
+#ifdef MPM_HAVE_MPI
+  MPI_File fh;
+  std::memcpy(&fh, &file_, sizeof fh);
+  // Rank r writes after the sizes of ranks 0 .. r - 1 of this round.
+  const std::uint64_t size = failed_ ? 0 : mine.size();
+  std::uint64_t offset = 0, round = 0;
+  check_mpi(MPI_Exscan(&size, &offset, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Exscan");
+  if (comm_.rank() == 0) offset = 0;  // (MPI_Exscan leaves rank 0's undefined)
+  check_mpi(MPI_Allreduce(&size, &round, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD),
+            "MPI_Allreduce");
+  constexpr std::uint64_t kChunk = std::uint64_t{1} << 30;
+  const auto chunks = static_cast<double>((size + kChunk - 1) / kChunk);
+  const auto writes = static_cast<std::uint64_t>(comm_.max(chunks));  // (exact)
+  for (std::uint64_t k = 0; k < writes; ++k) {
+    const std::uint64_t at = k * kChunk;
+    const std::uint64_t n = at >= size ? 0 : std::min(kChunk, size - at);
+    note_file_error(MPI_File_write_at_all(fh, static_cast<MPI_Offset>(written_ + offset + at),
+                                          n > 0 ? mine.data() + at : nullptr, static_cast<int>(n),
+                                          MPI_BYTE, MPI_STATUS_IGNORE),
+                    "MPI_File_write_at_all", path_, comm_.rank(), failed_);
+  }
+  written_ += round;
+#endif
+}
+
+std::optional<Comm::Failure> OrderedFile::close() {
+#ifdef MPM_HAVE_MPI
+  if (open_) {
+    MPI_File fh;
+    std::memcpy(&fh, &file_, sizeof fh);
+    note_file_error(MPI_File_sync(fh), "MPI_File_sync", path_, comm_.rank(), failed_);
+    note_file_error(MPI_File_close(&fh), "MPI_File_close", path_, comm_.rank(), failed_);
+    open_ = false;
+  }
+#endif
+  return comm_.agree(failed_ ? &*failed_ : nullptr);
 }
 
 }  // namespace mpm

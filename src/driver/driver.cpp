@@ -3,11 +3,17 @@
 #include <fmt/ranges.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <array>
+#include <bit>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <numeric>
 #include <span>
 #include <utility>
 
+#include "core/comm_file.hpp"
 #include "io/checkpoint.hpp"
 #include "mpm/version.hpp"
 
@@ -229,30 +235,97 @@ std::vector<io::ScalarField> exact_fields(
 }
 }  // namespace
 
+// A distributed run's CSV frame, in id order, without any process holding more than its share
+// of it: the ids are taken in rounds of R x kRowsPerRound (R processes), each round's ids cut
+// into R equal ranges, one a process. In each round every process sends its particles of the
+// round to the processes of their ranges, formats the rows of its own range in id order and
+// appends them (core/comm_file.hpp: rank after rank, so the rows follow in id order). An id
+// beyond the N particles (a problem numbered otherwise) goes to the last range of the last
+// round, after every other. Collective. Each round holds about kRowsPerRound particles and their
+// text (about 0.5 kB a row in 2D) on a process, beside its own particles.
+template <int Dim>
+void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path,
+                                               const Particles<Dim>& P, double time) {
+  constexpr Index kRowsPerRound = Index{1} << 17;
+  // Written under a temporary name (rank 0's pid: io::remove_stale_temporaries removes it after
+  // a killed run), renamed by rank 0 once every process has written: a frame is whole or absent.
+  if (root_pid_ < 0) {
+    std::vector<std::byte> pid(sizeof(Index));
+    const auto p = static_cast<Index>(::getpid());
+    std::memcpy(pid.data(), &p, sizeof p);
+    comm_->broadcast(pid, 0);
+    std::memcpy(&root_pid_, pid.data(), sizeof root_pid_);
+  }
+  std::filesystem::path tmp = path;
+  tmp += fmt::format(".tmp.{}", root_pid_);
+
+  const Index total = comm_->sum(P.size());
+  const auto ranks = static_cast<Index>(comm_->size());
+  const Index per_round = kRowsPerRound * ranks;
+  const Index rounds = std::max<Index>(1, (total + per_round - 1) / per_round);
+  // This process's particles in id order (positions), walked round after round.
+  std::vector<CompactIndex> by_id(P.id.size());
+  std::iota(by_id.begin(), by_id.end(), CompactIndex{0});
+  std::sort(by_id.begin(), by_id.end(),
+            [&](CompactIndex a, CompactIndex b) { return P.id[a] < P.id[b]; });
+  std::array<std::vector<double>, 2 * Dim + Dim * Dim> values;
+  OrderedFile file(*comm_, tmp.string());
+  {
+    const Particles<Dim> none;  // the header line, rank 0's
+    const auto extra = exact_fields(exact_, none, time, values);
+    file.append(comm_->root() ? io::particles_csv(none, extra, /*header=*/true) : std::string());
+  }
+  std::size_t next = 0;
+  for (Index k = 0; k < rounds; ++k) {
+    std::vector<std::vector<std::byte>> send(static_cast<std::size_t>(ranks));
+    const Index first = k * per_round;
+    for (; next < by_id.size(); ++next) {
+      const auto i = static_cast<std::size_t>(by_id[next]);
+      const auto id = static_cast<Index>(P.id[i]);
+      if (id >= first + per_round && k + 1 < rounds) break;
+      const Index r = std::min(ranks - 1, (id - first) * ranks / per_round);
+      P.pack(i, send[static_cast<std::size_t>(r)]);
+    }
+    Particles<Dim> mine;
+    for (const auto& buf : comm_->alltoall(send)) mine.unpack_append(buf);
+    // In id order (a range of the ids, so not particles_in_id_order's 0 .. n-1).
+    Permutation perm;
+    perm.order.resize(mine.id.size());
+    std::iota(perm.order.begin(), perm.order.end(), CompactIndex{0});
+    std::sort(perm.order.begin(), perm.order.end(),
+              [&](CompactIndex a, CompactIndex b) { return mine.id[a] < mine.id[b]; });
+    mine.for_each_field([&](auto& field) { perm.apply(field); });
+    const auto extra = exact_fields(exact_, mine, time, values);
+    file.append(io::particles_csv(mine, extra, /*header=*/false));
+  }
+  if (const auto f = file.close())
+    throw RemoteRunError(f->exit_code,
+                         fmt::format("rank {} of {}: {}", f->rank, comm_->size(), f->message));
+  if (!writer_) return;
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw RunError(exit_code::kOutput, fmt::format("cannot write '{}': rename from {}: {}",
+                                                   path.string(), tmp.string(), ec.message()));
+  }
+}
+
 template <int Dim>
 void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
   if (!enabled()) return;
-  const std::string stem = fmt::format("particles_{:05d}", frames_);
+  // Numbered before anything is written: a frame whose write fails on one process keeps its
+  // number on every process (the next frame's CSV is one file that all of them open).
+  const std::string stem = fmt::format("particles_{:05d}", frames_++);
   frame_times_.push_back(sim.time);
   std::array<std::vector<double>, 2 * Dim + Dim * Dim> values;
   if (comm_) {
-    // A distributed run: the collective part first (the CSV gathers the particles at rank 0),
-    // so that a rank whose write fails below leaves no other waiting in it. Then every rank
-    // writes its VTU piece, and rank 0 the .pvtu over them and the CSV in id order.
+    // A distributed run: the CSV frame first, which is collective (its failure is agreed), so
+    // that a rank whose VTU write fails below leaves no other waiting in it. Each process
+    // writes the rows of its range of ids, in id order, into the one file (MPI-IO; no process
+    // gathers the body), then its VTU piece; rank 0 writes the .pvtu over the pieces.
     comm_->check();
-    std::optional<Particles<Dim>> ordered;
-    if (csv_) {
-      std::vector<std::byte> mine;
-      mine.reserve(static_cast<std::size_t>(sim.particles.size()) *
-                   Particles<Dim>::bytes_per_particle());
-      for (std::size_t i = 0; i < sim.particles.x.size(); ++i) sim.particles.pack(i, mine);
-      const auto all = comm_->gather(mine, 0);
-      if (writer_) {
-        Particles<Dim> gathered;
-        for (const auto& buf : all) gathered.unpack_append(buf);
-        ordered = particles_in_id_order(gathered);
-      }
-    }
+    if (csv_) write_distributed_csv(dir_ / (stem + ".csv"), sim.particles, sim.time);
     if (vtk_) {
       const auto extra = exact_fields(exact_, sim.particles, sim.time, values);
       const std::string piece = io::particles_vtu(sim.particles, sim.time, extra, vtk_binary_);
@@ -266,11 +339,6 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
         io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
       }
     }
-    if (ordered) {
-      const auto extra = exact_fields(exact_, *ordered, sim.time, values);
-      io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(*ordered, extra));
-    }
-    ++frames_;
     return;
   }
   // In id order, whatever order re-sorting (scheme/sort.hpp) left them in.
@@ -285,7 +353,6 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
     pvd_.add(sim.time, stem + ".vtu");
     io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
   }
-  ++frames_;
 }
 
 template <int Dim>
@@ -327,8 +394,35 @@ void OutputSession<Dim>::resume(const io::Checkpoint& c) {
     }
 }
 template <int Dim>
-void OutputSession<Dim>::checkpoint(const io::Checkpoint& c) {
-  if (enabled() && writer_) io::write_checkpoint(dir_ / io::kCheckpointFile, c);
+void OutputSession<Dim>::checkpoint(io::Checkpoint& c, const io::CheckpointPiece* piece) {
+  if (!enabled()) return;
+  if (comm_ && piece) {
+    // Every process writes its piece; once all are on disk (a process whose write failed stops
+    // every one at the check), rank 0 writes the manifest naming them. Until it has, the previous
+    // manifest and its pieces are the checkpoint, whole: the pieces are named by their step.
+    const std::string name = io::checkpoint_piece_name(piece->step, comm_->rank());
+    const io::Checkpoint::Piece mine = [&] {
+      const std::string bytes = io::encode_piece(*piece);
+      io::write_file_atomic(dir_ / name, bytes);
+      return io::describe_piece(name, bytes);
+    }();
+    comm_->check();
+    const std::vector<Index> all = comm_->allgather(std::span<const Index>(
+        std::array<Index, 2>{static_cast<Index>(mine.bytes), std::bit_cast<Index>(mine.hash)}));
+    if (!writer_) return;
+    c.pieces.clear();
+    for (int r = 0; r < comm_->size(); ++r)
+      c.pieces.push_back({io::checkpoint_piece_name(piece->step, r),
+                          static_cast<std::uint64_t>(all[2 * static_cast<std::size_t>(r)]),
+                          std::bit_cast<std::uint64_t>(all[2 * static_cast<std::size_t>(r) + 1])});
+  }
+  if (!writer_) return;
+  io::write_checkpoint(dir_ / io::kCheckpointFile, c);
+  // The pieces of an earlier checkpoint (also those a run on another number of processes, or a
+  // distributed run before this one-process restart, left), no longer named by the manifest.
+  std::vector<std::string> keep;
+  for (const auto& p : c.pieces) keep.push_back(p.file);
+  io::remove_checkpoint_pieces(dir_, keep);
 }
 
 // Stops before the first step when dt exceeds the limit, unless time.allow_unstable.

@@ -27,7 +27,8 @@
 
 namespace mpm::io {
 struct Checkpoint;
-}
+struct CheckpointPiece;
+}  // namespace mpm::io
 
 namespace mpm::driver {
 
@@ -100,9 +101,11 @@ struct StateView {
 };
 
 // Everything written into the output directory during a run. In a distributed run
-// (RunOptions::comm) every process takes part in each history row and frame (their sums and the
-// gathering of the particles are collective) and rank 0 writes the files: the same files as a
-// run on one process.
+// (RunOptions::comm) every process takes part in each history row, frame and checkpoint (all
+// collective): rank 0 writes the history, the summary and the series; each process writes its
+// VTU piece, its rows of the CSV frame (one file, in id order, through MPI-IO) and its
+// checkpoint piece, so that no process gathers the body. The files are those of a run on one
+// process, but for the pieces.
 template <int Dim>
 class OutputSession {
  public:
@@ -125,7 +128,9 @@ class OutputSession {
   // After resume(): history.csv holds the earlier run's rows up to the checkpoint, its own row
   // included (the restart then writes no row for the step it starts from).
   bool history_continues() const { return history_continues_; }
-  void checkpoint(const io::Checkpoint& c);
+  // Writes checkpoint.bin. A distributed run (collective): `piece` is this process's share, which
+  // it writes itself; rank 0 then writes `c` as their manifest (filling c.pieces).
+  void checkpoint(io::Checkpoint& c, const io::CheckpointPiece* piece = nullptr);
 
  private:
   std::filesystem::path dir_;
@@ -139,6 +144,11 @@ class OutputSession {
   bool mapping_errors_ = false;  // history.csv has mass_error, momentum_error
   bool history_continues_ = false;
   io::PvdSeries pvd_;
+  // A distributed run's CSV frame: every process writes rows of it into the one file, in
+  // rounds over the ids (collective; driver.cpp).
+  void write_distributed_csv(const std::filesystem::path& path, const Particles<Dim>& P,
+                             double time);
+  Index root_pid_ = -1;  // rank 0's process id (the frame's temporary name), once known
   int frames_ = 0;
   std::vector<double> frame_times_;
 };

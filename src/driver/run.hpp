@@ -26,7 +26,7 @@ struct RunOptions {
   bool overwrite = false;
   // Continue from this checkpoint (io::read_checkpoint) instead of the initial state; the
   // configuration passed to run() must be io::restart_config()'s. restart_name (the file)
-  // names it in error messages.
+  // names it in error messages; a distributed checkpoint's pieces are read next to it.
   std::shared_ptr<const io::Checkpoint> restart;
   std::string restart_name;
   // Non-zero: start from the particles in a random order drawn with this seed

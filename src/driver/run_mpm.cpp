@@ -77,48 +77,55 @@ std::shared_ptr<const TriangleMesh> numbered_along_y(const TriangleMesh& m,
 
 // Checkpoints (io/checkpoint.hpp). The state of an MPM run with its FEM reference: everything a
 // step reads that an earlier step wrote (the grid quantities and stencils are rebuilt per step).
-// A distributed run (comm, part) gathers its ranks' particles at rank 0, rank after rank, each in
-// its own order, with the cuts and each rank's count, re-sorting state and grid crossings
-// (Checkpoint::distribution): a restart on as many processes continues bit for bit.
+// A distributed run (comm, part) puts each process's particles, in its order, with their cells
+// and carried basis state into that process's piece; the checkpoint itself (the manifest) holds
+// the cuts, each rank's count, re-sorting state and grid crossings (Checkpoint::distribution) and
+// the particles per cell layer: a restart on as many processes continues bit for bit, on another
+// number it cuts the slabs from those counts and reads only the pieces its slab overlaps.
 template <int Dim>
-io::Checkpoint capture(Stepper<Dim>& stepper, std::string_view mapping,
-                       const std::optional<Ulfem1D>& reference, const OutputSession<Dim>& out,
-                       const std::string& config, const Comm* comm,
-                       const SlabPartition<Dim>& part) {
+struct Captured {
+  io::Checkpoint manifest;
+  std::optional<io::CheckpointPiece> piece;  // a distributed run: this process's
+};
+
+template <int Dim>
+Captured<Dim> capture(Stepper<Dim>& stepper, std::string_view mapping,
+                      const std::optional<Ulfem1D>& reference, const OutputSession<Dim>& out,
+                      const std::string& config, const Comm* comm, const SlabPartition<Dim>& part) {
   const RunState<Dim>& sim = stepper.state();
-  io::Checkpoint c;
+  Captured<Dim> cap;
+  io::Checkpoint& c = cap.manifest;
   c.config = config;
   c.solver = "mpm";
   c.dim = Dim;
   c.step = sim.step;
   c.time = sim.time;
   c.diag = sim.diag;
-  std::vector<double> carried;  // a distributed run: the basis's per-particle state, gathered
-  int width = 0;                // doubles of it per particle
   if (comm) {
     comm->check();
-    stepper.export_carried();
     const auto& P = sim.particles;
     const std::array<Index, 4> mine{P.size(), sim.sorting.reference, sim.sorting.sorts,
                                     sim.diag.grid_crossings};
     const std::vector<Index> info = comm->allgather(std::span<const Index>(mine));
-    std::vector<std::byte> bytes;
-    for (std::size_t i = 0; i < P.x.size(); ++i) pack_particle(sim, i, bytes);
-    const auto all = comm->gather(bytes, 0);
-    width = sim.carried_width;
-    stepper.resize_particle_caches();  // the basis takes its carried state back
-    if (!comm->root()) return c;       // rank 0 writes
-    Particles<Dim> gathered;
-    std::vector<CompactIndex> cells;
-    for (const auto& buf : all) unpack_particles<Dim>(buf, gathered, cells, carried, width);
-    c.cells.assign(cells.begin(), cells.end());
-    c.particles = io::pack_particles(gathered);
+    const std::vector<double> per_layer =
+        SlabPartition<Dim>::layer_counts(sim.grid, P, *comm, /*replicated=*/false);
+    io::CheckpointPiece& piece = cap.piece.emplace();
+    piece.step = sim.step;
+    piece.rank = comm->rank();
+    piece.ranks = comm->size();
+    piece.particles = io::pack_particles(P);
+    piece.cells.assign(sim.cell.begin(), sim.cell.end());
+    stepper.export_carried();  // the basis's per-particle state (CPDI2's corners)
+    piece.basis_state = sim.carried;
+    stepper.resize_particle_caches();  // the basis takes it back
+    c.particles.dim = Dim;
     c.distribution.push_back(comm->size());
     c.distribution.insert(c.distribution.end(), part.cuts.begin(), part.cuts.end());
     c.distribution.insert(c.distribution.end(), info.begin(), info.end());
+    c.layer_counts.assign(per_layer.begin(), per_layer.end());  // (whole numbers)
     c.diag.grid_crossings = 0;
     c.sorts = 0;
-    for (std::size_t r = 0; r < all.size(); ++r) {
+    for (std::size_t r = 0; r < static_cast<std::size_t>(comm->size()); ++r) {
       c.diag.grid_crossings += info[4 * r + 3];
       c.sorts += info[4 * r + 2];
     }
@@ -133,13 +140,14 @@ io::Checkpoint capture(Stepper<Dim>& stepper, std::string_view mapping,
   c.mapping = std::string(mapping);
   c.frames = out.frames();
   c.frame_times = out.frame_times();
-  stepper.save(c);                                    // mapping totals, basis state
-  if (width > 0) c.basis_state = std::move(carried);  // every rank's, in particle order
-  return c;
+  stepper.save(c);                  // mapping totals, basis state
+  if (comm) c.basis_state.clear();  // (in the pieces)
+  return cap;
 }
 
 // The checkpoint's distribution (Checkpoint::distribution) read back and checked: ranks, cuts
-// and per rank (count, re-sorting reference, sorts, grid crossings).
+// and per rank (count, re-sorting reference, sorts, grid crossings), with the pieces and the
+// particles per layer that the manifest of a distributed run holds.
 struct StoredDistribution {
   Index ranks = 0;
   std::vector<Index> cuts, info;
@@ -148,18 +156,25 @@ StoredDistribution stored_distribution(const io::Checkpoint& c, Index particles,
                                        const std::string& what) {
   StoredDistribution d;
   const auto& v = c.distribution;
-  if (v.empty()) return d;
-  const Index r = v[0];
+  if (v.empty() && c.pieces.empty() && c.layer_counts.empty()) return d;
+  const Index r = v.empty() ? 0 : v[0];
   bool ok = r >= 1 && r <= (1 << 24) && static_cast<Index>(v.size()) == 1 + (r + 1) + 4 * r &&
-            v[1] == 0 && v[static_cast<std::size_t>(r) + 1] == layers;
-  Index total = 0;
+            v[1] == 0 && v[static_cast<std::size_t>(r) + 1] == layers &&
+            static_cast<Index>(c.pieces.size()) == r &&
+            static_cast<Index>(c.layer_counts.size()) == layers;
+  Index total = 0, counted = 0;
   for (Index k = 0; ok && k < r; ++k) {
     const auto at = static_cast<std::size_t>(1 + (r + 1) + 4 * k);
     ok = v[static_cast<std::size_t>(k) + 2] > v[static_cast<std::size_t>(k) + 1] && v[at] >= 0 &&
          v[at + 1] >= -1 && v[at + 2] >= 0 && v[at + 3] >= 0;
     total += v[at];
   }
-  if (!ok || total != particles)
+  for (std::size_t l = 0; ok && l < c.layer_counts.size(); ++l) {
+    ok = c.layer_counts[l] >= 0 && c.layer_counts[l] <= particles;
+    counted += c.layer_counts[l];
+  }
+  // (Every particle lies in a layer: one outside the grid has stopped the run.)
+  if (!ok || total != particles || counted != particles)
     throw InputError(
         fmt::format("{} is not a state of this run: its distribution over "
                     "processes does not fit {} particles and {} cell layers",
@@ -172,32 +187,70 @@ StoredDistribution stored_distribution(const io::Checkpoint& c, Index particles,
 
 // Puts the checkpoint's state into a freshly set-up run; returns the step it is at. A
 // distributed run (comm) restarting from a checkpoint of as many processes takes its rank's
-// particles and state as they were (bit for bit); from another count (or from a run on one
-// process) it cuts the slabs anew and keeps the particles of its slab (the answers then change
-// by round-off, the order of the sums being another). `particles`: the run's particles in all.
+// piece as it was (bit for bit); from another count (or from a run on one process) it cuts the
+// slabs anew and keeps the particles of its slab, reading only the pieces that overlap it (the
+// answers then change by round-off, the order of the sums being another). A run on one process
+// reads every piece, rank after rank. `particles`: the run's particles in all. Collective in
+// nothing: an InputError met on one process is agreed by the caller. (The outputs resume after.)
 template <int Dim>
 Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::string_view mapping,
-              std::optional<Ulfem1D>& reference, OutputSession<Dim>& out, const Comm* comm,
-              SlabPartition<Dim>& part, Index particles) {
-  const io::Checkpoint& c = *opt.restart;
+              std::optional<Ulfem1D>& reference, const Comm* comm, SlabPartition<Dim>& part,
+              Index particles) {
+  const io::Checkpoint& stored = *opt.restart;
   RunState<Dim>& sim = stepper.state();
   const std::string what = fmt::format("checkpoint '{}'", opt.restart_name);
-  if (c.solver != "mpm" || c.dim != Dim || c.mapping != mapping)
+  if (stored.solver != "mpm" || stored.dim != Dim || stored.mapping != mapping)
     throw InputError(
         fmt::format("{} holds a {} run ({}D, mapping {}), not this {}D mpm run with "
                     "mapping {}",
-                    what, c.solver, c.dim, c.mapping, Dim, mapping));
+                    what, stored.solver, stored.dim, stored.mapping, Dim, mapping));
+  const Index layers = sim.grid.cells[SlabPartition<Dim>::kAxis];
+  const bool pieces = !stored.pieces.empty();
+  const StoredDistribution dist = stored_distribution(
+      stored, pieces ? particles : static_cast<Index>(stored.particles.count), layers, what);
+  // A distributed checkpoint: its manifest with the particles of the pieces this process reads.
+  io::Checkpoint joined;
+  std::vector<std::int64_t> piece_counts;  // the particles of each piece read
+  std::vector<int> piece_ranks;            // and its rank
+  const auto same_count = [&] { return comm && dist.ranks == comm->size(); };
+  if (pieces) {
+    std::vector<bool> take(static_cast<std::size_t>(dist.ranks), !comm);
+    if (same_count()) {
+      take[static_cast<std::size_t>(comm->rank())] = true;
+    } else if (comm) {
+      // The new slabs from the particles per layer (those a gathering of every piece would
+      // count); the pieces whose slabs overlap this process's.
+      part = SlabPartition<Dim>::balanced(
+          std::vector<double>(stored.layer_counts.begin(), stored.layer_counts.end()), comm->size(),
+          fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
+      const auto me = static_cast<std::size_t>(comm->rank());
+      for (std::size_t r = 0; r < take.size(); ++r)
+        take[r] = dist.cuts[r] < part.cuts[me + 1] && part.cuts[me] < dist.cuts[r + 1];
+    }
+    joined = stored;
+    piece_counts = io::join_pieces(joined, opt.restart_name, take);
+    for (std::size_t r = 0; r < take.size(); ++r)
+      if (take[r]) piece_ranks.push_back(static_cast<int>(r));
+    for (std::size_t k = 0; k < piece_ranks.size(); ++k)
+      if (piece_counts[k] != dist.info[4 * static_cast<std::size_t>(piece_ranks[k])])
+        throw InputError(fmt::format(
+            "{} is not a state of this run: the piece of process {} holds {} particles, the "
+            "manifest says {}",
+            what, piece_ranks[k], piece_counts[k],
+            dist.info[4 * static_cast<std::size_t>(piece_ranks[k])]));
+  }
+  const io::Checkpoint& c = pieces ? joined : stored;
   auto p = io::unpack_particles<Dim>(c.particles, what);
   // (Each particle's cell: OTM keeps none. A distributed run holds a part of them.)
   const std::size_t cells = comm ? static_cast<std::size_t>(p.size()) : sim.cell.size();
-  if (p.size() != particles || c.cells.size() != cells ||
-      reference.has_value() != c.fem.has_value())
+  if ((!pieces || !comm) && p.size() != particles)
+    throw InputError(fmt::format("{} does not fit the problem: {} particles ({} set up)", what,
+                                 p.size(), particles));
+  if (c.cells.size() != cells || reference.has_value() != c.fem.has_value())
     throw InputError(fmt::format(
-        "{} does not fit the problem: {} particles ({} set up){}", what, p.size(), particles,
+        "{} does not fit the problem: {} particles, {} cells{}", what, p.size(), c.cells.size(),
         reference.has_value() != c.fem.has_value() ? ", FEM reference state missing or unexpected"
                                                    : ""));
-  const StoredDistribution dist =
-      stored_distribution(c, p.size(), sim.grid.cells[SlabPartition<Dim>::kAxis], what);
   // A checkpoint's hash only proves the bytes are those written; a crafted or foreign one could
   // still hold a state no run reaches (issue 16, 9): the step and time must be those of this
   // run's time loop (t = step dt exactly, as the driver sets it), the counters non-negative and
@@ -213,6 +266,23 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
         c.cells.empty() ? 0 : *std::min_element(c.cells.begin(), c.cells.end()),
         c.cells.empty() ? 0 : *std::max_element(c.cells.begin(), c.cells.end()),
         sim.grid.num_cells()));
+  // Reading only the overlapping pieces keeps every particle once: each piece's particles lie in
+  // the slab of the process that wrote it (migrated there after every step).
+  if (pieces && comm && !same_count()) {
+    std::size_t i = 0;
+    for (std::size_t k = 0; k < piece_ranks.size(); ++k) {
+      const auto r = static_cast<std::size_t>(piece_ranks[k]);
+      for (std::int64_t j = 0; j < piece_counts[k]; ++j, ++i) {
+        const Index layer = sim.grid.last_layer(p.x[i]);
+        if (layer < dist.cuts[r] || layer >= dist.cuts[r + 1])
+          throw InputError(fmt::format(
+              "{} is not a state of this run: particle {} of the piece of process {} lies in "
+              "cell layer {} along {}, outside that process's slab [{}, {})",
+              what, p.id[i], r, layer, SlabPartition<Dim>::axis_name(), dist.cuts[r],
+              dist.cuts[r + 1]));
+      }
+    }
+  }
   // The traction lists name their particles by position in the freshly set-up order; the
   // checkpoint holds the particles in its own (re-sorted) order: follow the ids there. (A
   // distributed run's lists follow the ids after the particles are restored:
@@ -254,28 +324,22 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
   sim.diag = c.diag;
   sim.sorting.reference = c.sort_reference;
   sim.sorting.sorts = c.sorts;
-  if (comm && dist.ranks == comm->size()) {
-    // As many processes: this rank's slice, as it was.
+  if (same_count()) {
+    // As many processes: this rank's piece, as it was.
     const auto me = static_cast<std::size_t>(comm->rank());
-    std::size_t first = 0;
-    for (std::size_t r = 0; r < me; ++r) first += static_cast<std::size_t>(dist.info[4 * r]);
-    const std::size_t n = static_cast<std::size_t>(dist.info[4 * me]);
-    keep_carried([&](std::size_t i) { return i >= first && i < first + n; });
-    p.keep_with_ids(
-        [&](const Particles<Dim>&, std::size_t i) { return i >= first && i < first + n; });
+    keep_carried([](std::size_t) { return true; });
     release_the_rest(p);
-    cell = std::vector<CompactIndex>(cell.begin() + static_cast<std::ptrdiff_t>(first),
-                                     cell.begin() + static_cast<std::ptrdiff_t>(first + n));
     part.cuts = dist.cuts;
     sim.sorting.reference = dist.info[4 * me + 1];
     sim.sorting.sorts = dist.info[4 * me + 2];
     sim.diag.grid_crossings = dist.info[4 * me + 3];
   } else if (comm) {
-    // Another number of processes: new slabs; the counters go to rank 0, the re-sorting starts
-    // afresh.
-    part = SlabPartition<Dim>::balanced(
-        SlabPartition<Dim>::layer_counts(sim.grid, p, *comm, /*replicated=*/true), comm->size(),
-        fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
+    // Another number of processes: new slabs (cut above from a distributed checkpoint's counts);
+    // the counters go to rank 0, the re-sorting starts afresh.
+    if (!pieces)
+      part = SlabPartition<Dim>::balanced(
+          SlabPartition<Dim>::layer_counts(sim.grid, p, *comm, /*replicated=*/true), comm->size(),
+          fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
     const int me = comm->rank();
     std::vector<CompactIndex> kept;
     for (std::size_t i = 0; i < cell.size(); ++i)
@@ -303,7 +367,6 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
   if (reference) reference->restore(io::unpack_fem(*c.fem, what));
   stepper.load(c, what);  // mapping totals, basis state
   stepper.resize_particle_caches();
-  out.resume(c);
   return c.step;
 }
 
@@ -416,9 +479,14 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   Index migrated = 0;  // particles this rank sent to another
   Index rebalances = 0;
   double worst_imbalance = comm ? imbalance(sim, *comm) : 0.0;
-  const Index start = opt.restart ? restore<Dim>(opt, ts.dt, *stepper, mapping_name, reference, out,
-                                                 comm, part, res.particles)
-                                  : 0;
+  // (A distributed restart reads only some pieces on each process: a damaged one stops all.)
+  Index start = 0;
+  if (opt.restart)
+    agreed([&] {
+      start =
+          restore<Dim>(opt, ts.dt, *stepper, mapping_name, reference, comm, part, res.particles);
+    });
+  if (opt.restart) out.resume(*opt.restart);  // (collective)
   drive<Dim>(
       settings, opt, out, start,
       [&](Index s) {
@@ -454,8 +522,9 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         return StateView<Dim>{sim.particles, sim.time, sim.material, &sim.diag};
       },
       [&](Index) {
-        out.checkpoint(
-            capture<Dim>(*stepper, mapping_name, reference, out, config_text, comm, part));
+        Captured<Dim> cap =
+            capture<Dim>(*stepper, mapping_name, reference, out, config_text, comm, part);
+        out.checkpoint(cap.manifest, cap.piece ? &*cap.piece : nullptr);
       },
       res);
 

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <stdexcept>
 #include <type_traits>
 
 #include "core/bytes.hpp"
@@ -61,6 +62,23 @@ void unflatten(const std::vector<double>& in, std::vector<T>& out, std::size_t n
                 in.begin() + static_cast<std::ptrdiff_t>((i + 1) * k), out[i].data());
   }
 }
+
+// A writer for a framed file: room for the header first, and for `payload` bytes after it
+// (reserved up front: a piece of a few hundred MB is written without the doubling growth of a
+// string, whose peak was twice its size). framed() fills the header (magic, version, payload
+// size, payload hash) in place, without copying the payload.
+ByteWriter framing(std::size_t payload);
+std::string framed(std::string_view magic, ByteWriter& w);
+// Bytes the payload encoding of `a` takes (put() below).
+std::size_t encoded_size(const ParticleArrays& a) {
+  std::size_t n = 3 * 8 + 8 * a.id.size();
+  for (const auto& f : a.reals) n += 8 + 8 * f.size();
+  return n;
+}
+// The payload of a framed file, after its header's checks; `kind` ("checkpoint", "checkpoint
+// piece") names it in the messages.
+std::string_view unframed(std::string_view bytes, std::string_view magic, const std::string& name,
+                          std::string_view kind);
 
 }  // namespace
 
@@ -166,7 +184,14 @@ Ulfem1D::State unpack_fem(const FemArrays& a, const std::string& what) {
 }
 
 std::string encode_checkpoint(const Checkpoint& c) {
-  ByteWriter p;
+  // (The sizes of the large arrays; the rest is small.)
+  ByteWriter p = framing(encoded_size(c.particles) +
+                         8 * (c.cells.size() + c.basis_state.size() + c.frame_times.size() +
+                              c.distribution.size() + c.layer_counts.size()) +
+                         (c.fem ? encoded_size(c.fem->elements) +
+                                      8 * (c.fem->x.size() + c.fem->v.size() + c.fem->body.size())
+                                : 0) +
+                         c.config.size() + c.mapping_totals.size() + 64 * c.pieces.size() + 4096);
   p.str(c.config);
   p.str(c.solver);
   p.i64(c.dim);
@@ -197,48 +222,81 @@ std::string encode_checkpoint(const Checkpoint& c) {
   p.reals(c.frame_times);
   p.reals(c.basis_state);
   p.ints(c.distribution);
-
-  ByteWriter out;
-  out.bytes().append(kCheckpointMagic);
-  out.u32(kCheckpointVersion);
-  out.u64(p.bytes().size());
-  out.u64(fnv1a64(p.bytes()));
-  out.bytes() += p.bytes();
-  return std::move(out.bytes());
+  p.ints(c.layer_counts);
+  p.u64(c.pieces.size());
+  for (const auto& piece : c.pieces) {
+    p.str(piece.file);
+    p.u64(piece.bytes);
+    p.u64(piece.hash);
+  }
+  return framed(kCheckpointMagic, p);
 }
 
-Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
-  if (bytes.size() < kCheckpointMagic.size() && kCheckpointMagic.substr(0, bytes.size()) == bytes)
-    throw InputError(fmt::format("checkpoint '{}' is truncated: {} bytes", name, bytes.size()));
-  if (bytes.size() < kCheckpointMagic.size() ||
-      bytes.substr(0, kCheckpointMagic.size()) != kCheckpointMagic)
-    throw InputError(fmt::format("'{}' is not an mpmlab checkpoint (it does not start with \"{}\")",
-                                 name, kCheckpointMagic));
+namespace {
+
+static_assert(kCheckpointMagic.size() == 8 && kPieceMagic.size() == 8 &&
+              kCheckpointHeaderBytes == 8 + 4 + 8 + 8);
+
+ByteWriter framing(std::size_t payload) {
+  ByteWriter w;
+  w.bytes().reserve(kCheckpointHeaderBytes + payload);
+  w.bytes().resize(kCheckpointHeaderBytes);
+  return w;
+}
+
+std::string framed(std::string_view magic, ByteWriter& w) {
+  std::string& bytes = w.bytes();
+  const std::string_view payload = std::string_view(bytes).substr(kCheckpointHeaderBytes);
+  ByteWriter h;
+  h.bytes().append(magic);
+  h.u32(kCheckpointVersion);
+  h.u64(payload.size());
+  h.u64(fnv1a64(payload));
+  bytes.replace(0, kCheckpointHeaderBytes, h.bytes());
+  return std::move(bytes);
+}
+
+std::string_view unframed(std::string_view bytes, std::string_view magic, const std::string& name,
+                          std::string_view kind) {
+  if (bytes.size() < magic.size() && magic.substr(0, bytes.size()) == bytes)
+    throw InputError(fmt::format("{} '{}' is truncated: {} bytes", kind, name, bytes.size()));
+  if (bytes.size() < magic.size() || bytes.substr(0, magic.size()) != magic) {
+    // A piece given where the manifest is expected (mpm run --restart), or the other way round.
+    if (magic == kCheckpointMagic && bytes.substr(0, kPieceMagic.size()) == kPieceMagic)
+      throw InputError(
+          fmt::format("'{}' is one process's piece of a distributed checkpoint; restart from the "
+                      "{} next to it",
+                      name, kCheckpointFile));
+    throw InputError(
+        fmt::format("'{}' is not an mpmlab {} (it does not start with \"{}\")", name, kind, magic));
+  }
   if (bytes.size() < kCheckpointHeaderBytes)
-    throw InputError(fmt::format("checkpoint '{}' is truncated: {} bytes, the header alone is {}",
+    throw InputError(fmt::format("{} '{}' is truncated: {} bytes, the header alone is {}", kind,
                                  name, bytes.size(), kCheckpointHeaderBytes));
-  ByteReader h(
-      bytes.substr(kCheckpointMagic.size(), kCheckpointHeaderBytes - kCheckpointMagic.size()),
-      name);
+  ByteReader h(bytes.substr(magic.size(), kCheckpointHeaderBytes - magic.size()), name);
   const std::uint32_t version = h.u32();
   const std::uint64_t size = h.u64();
   const std::uint64_t hash = h.u64();
   if (version != kCheckpointVersion)
-    throw InputError(
-        fmt::format("checkpoint '{}' has format version {}; this mpm reads version {} only", name,
-                    version, kCheckpointVersion));
+    throw InputError(fmt::format("{} '{}' has format version {}; this mpm reads version {} only",
+                                 kind, name, version, kCheckpointVersion));
   const std::string_view payload = bytes.substr(kCheckpointHeaderBytes);
   if (payload.size() != size)
     throw InputError(fmt::format(
-        "checkpoint '{}' is {}: the header announces {} payload bytes, the file holds {}", name,
+        "{} '{}' is {}: the header announces {} payload bytes, the file holds {}", kind, name,
         payload.size() < size ? "truncated" : "longer than written", size, payload.size()));
   const std::uint64_t actual = fnv1a64(payload);
   if (actual != hash)
     throw InputError(fmt::format(
-        "checkpoint '{}' is corrupted: the payload checksum is {:016x}, the header says {:016x}",
+        "{} '{}' is corrupted: the payload checksum is {:016x}, the header says {:016x}", kind,
         name, actual, hash));
+  return payload;
+}
 
-  ByteReader r(payload, name);
+}  // namespace
+
+Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
+  ByteReader r(unframed(bytes, kCheckpointMagic, name, "checkpoint"), name);
   Checkpoint c;
   c.config = r.str();
   c.solver = r.str();
@@ -271,22 +329,132 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
   c.frame_times = r.reals();
   c.basis_state = r.reals();
   c.distribution = r.ints();
+  c.layer_counts = r.ints();
+  // (No reserve: the count is read from the file; each entry's bytes must follow.)
+  for (std::uint64_t k = 0, n = r.u64(); k < n; ++k) {
+    Checkpoint::Piece piece;
+    piece.file = r.str();
+    piece.bytes = r.u64();
+    piece.hash = r.u64();
+    c.pieces.push_back(std::move(piece));
+  }
   if (!r.done())
     throw InputError(fmt::format("checkpoint '{}': unexpected bytes after the payload", name));
   return c;
+}
+
+std::string encode_piece(const CheckpointPiece& piece) {
+  ByteWriter p = framing(3 * 8 + encoded_size(piece.particles) +
+                         8 * (2 + piece.cells.size() + piece.basis_state.size()));
+  p.i64(piece.step);
+  p.i64(piece.rank);
+  p.i64(piece.ranks);
+  put(p, piece.particles);
+  p.ints(piece.cells);
+  p.reals(piece.basis_state);
+  return framed(kPieceMagic, p);
+}
+
+CheckpointPiece decode_piece(std::string_view bytes, const std::string& name) {
+  ByteReader r(unframed(bytes, kPieceMagic, name, "checkpoint piece"), name);
+  CheckpointPiece piece;
+  piece.step = r.i64();
+  piece.rank = r.i64();
+  piece.ranks = r.i64();
+  piece.particles = get_particles(r);
+  piece.cells = r.ints();
+  piece.basis_state = r.reals();
+  if (!r.done())
+    throw InputError(
+        fmt::format("checkpoint piece '{}': unexpected bytes after the payload", name));
+  return piece;
+}
+
+Checkpoint::Piece describe_piece(const std::string& file, std::string_view bytes) {
+  if (bytes.size() < kCheckpointHeaderBytes)
+    throw std::logic_error("describe_piece: not an encoded piece");
+  ByteReader h(bytes.substr(kCheckpointHeaderBytes - 8, 8), file);
+  return {file, bytes.size(), h.u64()};
 }
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c) {
   write_file_atomic(path, encode_checkpoint(c));
 }
 
-Checkpoint read_checkpoint(const std::filesystem::path& path) {
+namespace {
+
+std::string read_bytes(const std::filesystem::path& path, std::string_view kind) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("cannot open checkpoint '{}'", path.string()));
+  if (!in) throw InputError(fmt::format("cannot open {} '{}'", kind, path.string()));
   std::ostringstream ss;
   ss << in.rdbuf();
-  if (in.bad()) throw InputError(fmt::format("cannot read checkpoint '{}'", path.string()));
-  return decode_checkpoint(ss.str(), path.string());
+  if (in.bad()) throw InputError(fmt::format("cannot read {} '{}'", kind, path.string()));
+  return std::move(ss).str();
+}
+
+template <class T>
+void append(std::vector<T>& to, const std::vector<T>& from) {
+  to.insert(to.end(), from.begin(), from.end());
+}
+
+}  // namespace
+
+Checkpoint read_checkpoint(const std::filesystem::path& path) {
+  return decode_checkpoint(read_bytes(path, "checkpoint"), path.string());
+}
+
+std::vector<std::int64_t> join_pieces(Checkpoint& c, const std::filesystem::path& manifest,
+                                      const std::vector<bool>& take) {
+  const std::string what = fmt::format("checkpoint '{}'", manifest.string());
+  const auto ranks = static_cast<std::int64_t>(c.pieces.size());
+  if (take.size() != c.pieces.size())
+    throw std::logic_error("join_pieces: one choice per piece expected");
+  std::vector<std::int64_t> counts;
+  for (std::int64_t r = 0; r < ranks; ++r) {
+    if (!take[static_cast<std::size_t>(r)]) continue;
+    const Checkpoint::Piece& ref = c.pieces[static_cast<std::size_t>(r)];
+    // Only the name this run gives the piece (no other path is opened).
+    if (ref.file != checkpoint_piece_name(c.step, static_cast<int>(r)))
+      throw InputError(fmt::format("{} names piece {} '{}'; a checkpoint at step {} names it '{}'",
+                                   what, r, ref.file, c.step,
+                                   checkpoint_piece_name(c.step, static_cast<int>(r))));
+    const std::filesystem::path file = manifest.parent_path() / ref.file;
+    const std::string bytes = read_bytes(file, "checkpoint piece");
+    CheckpointPiece piece = decode_piece(bytes, file.string());  // its header and checksum
+    const Checkpoint::Piece found = describe_piece(ref.file, bytes);
+    if (found.bytes != ref.bytes || found.hash != ref.hash)
+      throw InputError(fmt::format(
+          "checkpoint piece '{}' is not the one {} was written with: {} bytes with payload hash "
+          "{:016x}, the manifest says {} bytes, {:016x} (a piece of another checkpoint, or "
+          "damaged)",
+          file.string(), what, found.bytes, found.hash, ref.bytes, ref.hash));
+    if (piece.step != c.step || piece.rank != r || piece.ranks != ranks ||
+        piece.particles.dim != c.dim)
+      throw InputError(fmt::format(
+          "checkpoint piece '{}' holds step {} of process {} of {} in {}D; {} expects step {} of "
+          "process {} of {} in {}D",
+          file.string(), piece.step, piece.rank, piece.ranks, piece.particles.dim, what, c.step, r,
+          ranks, c.dim));
+    counts.push_back(piece.particles.count);
+    // The first piece taken becomes the particles; later ones are appended field by field.
+    if (c.particles.count == 0 && c.particles.id.empty()) {
+      c.particles = std::move(piece.particles);
+    } else {
+      for (std::size_t f = 0; f < c.particles.reals.size(); ++f)
+        append(c.particles.reals[f], piece.particles.reals[f]);
+      append(c.particles.id, piece.particles.id);
+      c.particles.count += piece.particles.count;
+    }
+    append(c.cells, piece.cells);
+    append(c.basis_state, piece.basis_state);
+  }
+  return counts;
+}
+
+Checkpoint read_whole_checkpoint(const std::filesystem::path& path) {
+  Checkpoint c = read_checkpoint(path);
+  if (!c.pieces.empty()) join_pieces(c, path, std::vector<bool>(c.pieces.size(), true));
+  return c;
 }
 
 namespace {

@@ -1,6 +1,11 @@
 #pragma once
-// Checkpoints: the complete state of a run in one binary file (output.checkpoint_every), from
-// which `mpm run --restart FILE` continues bit for bit (README "Checkpoints").
+// Checkpoints: the complete state of a run (output.checkpoint_every), from which
+// `mpm run --restart FILE` continues bit for bit (README "Checkpoints"). A run on one process
+// writes one file, checkpoint.bin. A distributed run (issue 21) writes one piece per process
+// (checkpoint_s<step>_p<rank>.bin: that process's particles, written by it) and, once every piece
+// is on disk, checkpoint.bin as their manifest (the run's state without particles, and each
+// piece's size and hash), so that no process gathers the body and a restart reads only the
+// pieces it needs.
 //
 // File layout (all integers little-endian, reals IEEE-754 binary64 little-endian):
 //   offset  0  8 bytes  magic "MPMLABCK"
@@ -26,10 +31,17 @@
 //   i64 frames written, f64[] frame times,
 //   f64[] basis state (version 2: the tracked corners of CPDI2, 2^Dim x Dim values per particle;
 //     empty for the other bases),
-//   i64[] distribution (version 5; empty for a run on one process): a run on R processes
-//     stores the particles and cells of rank 0, then rank 1, ..., each in its own order, and
-//     here R, the R + 1 slab cuts, then per rank its particle count, re-sorting reference span,
-//     sorts and grid crossings (4 R values; the diagnostics above hold the total crossings).
+//   i64[] distribution (version 5; empty for a run on one process): R processes, the R + 1 slab
+//     cuts, then per rank its particle count, re-sorting reference span, sorts and grid
+//     crossings (4 R values; the diagnostics above hold the total crossings and sorts),
+//   version 6: i64[] layer counts (a distributed run: the particles in each cell layer along
+//     the slabs' axis, over all processes; empty for one process), u64 pieces, then per piece
+//     (rank 0, 1, ...): str file name, u64 file size, u64 payload hash (its header's).
+// A distributed run's manifest holds no particles, cells or basis state (counts 0): its pieces
+// do. A piece has the same header with the magic "MPMLABCP" and the payload
+//   i64 step, i64 rank, i64 ranks, particles (as above), i64[] cells, f64[] basis state
+//   (CPDI2's corners, 2^Dim x Dim values per particle, else empty),
+// the particles in that process's order.
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -47,8 +59,10 @@ namespace mpm::io {
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
 // Version 4 (2026-11-27): the displacement and density are derived (Particles::displacement,
 // density), no longer stored; a version-3 file is refused by its version. Version 5
-// (2026-11-27): the distribution of a run on several processes.
-inline constexpr std::uint32_t kCheckpointVersion = 5;
+// (2026-11-27): the distribution of a run on several processes. Version 6 (2026-12-01): a
+// distributed run writes pieces and a manifest instead of gathering its particles at rank 0.
+inline constexpr std::uint32_t kCheckpointVersion = 6;
+inline constexpr std::string_view kPieceMagic = "MPMLABCP";
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 
@@ -104,7 +118,37 @@ struct Checkpoint {
   std::vector<double> basis_state;  // state a basis carries between steps (CPDI2 corners)
   // A run on several processes (the layout above); empty for one process.
   std::vector<std::int64_t> distribution;
+  std::vector<std::int64_t> layer_counts;  // a distributed run: particles per cell layer
+  // A distributed run's pieces, rank after rank (their particles are not in `particles`).
+  struct Piece {
+    std::string file;         // its name, in the manifest's directory
+    std::uint64_t bytes = 0;  // the file's size
+    std::uint64_t hash = 0;   // the FNV-1a hash of its payload (its header's)
+  };
+  std::vector<Piece> pieces;
 };
+
+// One process's share of a distributed checkpoint: its particles in its order, each one's cell
+// at the last basis evaluation and the basis's carried state (basis_state, as Checkpoint's).
+struct CheckpointPiece {
+  std::int64_t step = 0, rank = 0, ranks = 0;
+  ParticleArrays particles;
+  std::vector<std::int64_t> cells;
+  std::vector<double> basis_state;
+};
+std::string encode_piece(const CheckpointPiece& p);
+// InputError naming `name` when the bytes are not a piece, truncated or corrupted.
+CheckpointPiece decode_piece(std::string_view bytes, const std::string& name);
+// The manifest's entry for a piece's encoded bytes: its size and payload hash.
+Checkpoint::Piece describe_piece(const std::string& file, std::string_view bytes);
+
+// A distributed checkpoint (c.pieces not empty; `manifest` its file): the pieces `take` chooses
+// (by rank) read from the manifest's directory, each checked against the manifest (name, size,
+// hash) and the manifest's step and process count, and appended in rank order to c.particles,
+// c.cells and c.basis_state: all of them give the state a run on one process would have stored.
+// Returns each chosen piece's particle count (in rank order). InputError naming the piece.
+std::vector<std::int64_t> join_pieces(Checkpoint& c, const std::filesystem::path& manifest,
+                                      const std::vector<bool>& take);
 
 std::string encode_checkpoint(const Checkpoint& c);
 // `name` (the file name) is used in error messages. Throws InputError when the bytes are not a
@@ -113,8 +157,11 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name);
 
 // write_file_atomic(path, encode_checkpoint(c)).
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c);
-// Reads and decodes; InputError naming the file when it cannot be read or decoded.
+// Reads and decodes; InputError naming the file when it cannot be read or decoded. A distributed
+// checkpoint is read as its manifest (no particles): join_pieces adds them.
 Checkpoint read_checkpoint(const std::filesystem::path& path);
+// read_checkpoint with every piece joined: the whole state, for a reader on one process.
+Checkpoint read_whole_checkpoint(const std::filesystem::path& path);
 
 // The configuration of a restarted run. The checkpoint's stored configuration is parsed (source
 // "<name> (stored configuration)"); `given` (CONFIG of `mpm run CONFIG --restart FILE`, --set

@@ -355,10 +355,42 @@ std::vector<std::string> run_files(const std::filesystem::path& dir) {
                      (name.size() == 20 && name.ends_with(".pvtu")) ||
                      (name.size() >= 25 && name.substr(15, 2) == "_p" && name.ends_with(".vtu") &&
                       digits(17, name.size() - 21)));
-    if (kFixed.contains(name) || frame) names.push_back(name);
+    if (kFixed.contains(name) || frame || is_checkpoint_piece_name(name)) names.push_back(name);
   }
   std::sort(names.begin(), names.end());
   return names;
+}
+
+std::string checkpoint_piece_name(std::int64_t step, int rank) {
+  return fmt::format("checkpoint_s{}_p{:04d}.bin", step, rank);
+}
+
+bool is_checkpoint_piece_name(std::string_view name) {
+  // checkpoint_s<digits>_p<4 or more digits>.bin
+  constexpr std::string_view kStart = "checkpoint_s", kEnd = ".bin";
+  if (!name.starts_with(kStart) || !name.ends_with(kEnd)) return false;
+  const std::string_view mid =
+      name.substr(kStart.size(), name.size() - kStart.size() - kEnd.size());
+  const auto p = mid.find("_p");
+  const auto digits = [](std::string_view d) {
+    return !d.empty() && d.find_first_not_of("0123456789") == std::string_view::npos;
+  };
+  return p != std::string_view::npos && digits(mid.substr(0, p)) && mid.size() - p - 2 >= 4 &&
+         digits(mid.substr(p + 2));
+}
+
+int remove_checkpoint_pieces(const std::filesystem::path& dir,
+                             const std::vector<std::string>& keep) {
+  int removed = 0;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (!is_checkpoint_piece_name(name) || std::find(keep.begin(), keep.end(), name) != keep.end())
+      continue;
+    std::error_code rm;
+    if (std::filesystem::remove(entry.path(), rm)) ++removed;
+  }
+  return removed;
 }
 
 // ---- write_file_atomic ---------------------------------------------------------------------
@@ -425,7 +457,8 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 // ---- particles -----------------------------------------------------------------------------
 
 template <int Dim>
-std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField>& extra) {
+std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField>& extra,
+                          bool header_line) {
   static_assert(Dim >= 1 && Dim <= 3);
   check_particles(p);
   const auto n = static_cast<std::size_t>(p.size());
@@ -443,15 +476,17 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
   check_fields(extra, n, std::set<std::string>(header.begin(), header.end()), "particle");
 
   Buffer b;
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    if (i > 0) put(b, ",");
-    put(b, header[i]);
+  if (header_line) {
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (i > 0) put(b, ",");
+      put(b, header[i]);
+    }
+    for (const auto& f : extra) {
+      put(b, ",");
+      put(b, csv_field(f.name));
+    }
+    put(b, "\n");
   }
-  for (const auto& f : extra) {
-    put(b, ",");
-    put(b, csv_field(f.name));
-  }
-  put(b, "\n");
 
   for (std::size_t i = 0; i < n; ++i) {
     put_int(b, particle_id(p, i));
@@ -714,10 +749,11 @@ std::string triangle_mesh_vtu(const TriangleMesh& m, const std::vector<ScalarFie
   return fmt::to_string(b);
 }
 
-#define MPM_IO_INSTANTIATE(D)                                                                  \
-  template std::string particles_csv<D>(const Particles<D>&, const std::vector<ScalarField>&); \
-  template std::string particles_vtu<D>(const Particles<D>&, double,                           \
-                                        const std::vector<ScalarField>&, bool);                \
+#define MPM_IO_INSTANTIATE(D)                                                                 \
+  template std::string particles_csv<D>(const Particles<D>&, const std::vector<ScalarField>&, \
+                                        bool);                                                \
+  template std::string particles_vtu<D>(const Particles<D>&, double,                          \
+                                        const std::vector<ScalarField>&, bool);               \
   template std::string grid_vtu<D>(const Grid<D>&, const std::vector<ScalarField>&, bool);
 MPM_IO_INSTANTIATE(1)
 MPM_IO_INSTANTIATE(2)

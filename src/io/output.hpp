@@ -7,6 +7,7 @@
 // Formats: VTK XML file formats, "VTK File Formats" (VTK User's Guide, Kitware), section
 // "XML File Formats"; cell type ids from vtkCellType.h.
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -50,8 +51,19 @@ class DirectoryLock {
 };
 
 // The files of a run in dir (config.toml, summary.json, history.csv, checkpoint.bin, grid.vtu,
-// particles.pvd, particles_NNNNN.csv/.vtu), sorted; other files are not a run's.
+// particles.pvd, particles_NNNNN.csv/.vtu, a distributed run's pieces of frames and
+// checkpoints), sorted; other files are not a run's.
 std::vector<std::string> run_files(const std::filesystem::path& dir);
+
+// A distributed checkpoint's piece of `rank` at `step` (io/checkpoint.hpp):
+// "checkpoint_s<step>_p<rank, 4 digits or more>.bin", and whether a name is one.
+std::string checkpoint_piece_name(std::int64_t step, int rank);
+bool is_checkpoint_piece_name(std::string_view name);
+// Removes the checkpoint pieces in dir that `keep` does not name (those of an earlier
+// checkpoint, once the manifest naming the new ones is written); returns how many. Errors are
+// ignored: a piece left over takes room but no run reads it.
+int remove_checkpoint_pieces(const std::filesystem::path& dir,
+                             const std::vector<std::string>& keep);
 
 // A file written as a run goes (history.csv): open() replaces it with `content` atomically, then
 // every append() is one write(2) at its end, so the text appended so far survives a killed
@@ -88,8 +100,10 @@ struct ScalarField {
 // stress_11..stress_DD (row-major), then each extra field. id is the particle's stable id
 // (Particles::id); rows are in the order of p (the run writes its particles in id order).
 // Numbers are printed with 17 significant digits, so they parse back to the same double.
+// header = false: the rows alone (a distributed frame's part after the first process's).
 template <int Dim>
-std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField>& extra = {});
+std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField>& extra = {},
+                          bool header = true);
 
 // VTK XML UnstructuredGrid (.vtu; ASCII, or with binary = true the arrays as raw little-endian
 // bytes in an <AppendedData> block, VTK format 1.0 with UInt64 headers, which ParaView and

@@ -19,6 +19,7 @@
 #include "core/bytes.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
+#include "io/output.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {
@@ -276,6 +277,132 @@ TEST(Checkpoint, HeaderLayoutAndRoundTrip) {
   EXPECT_EQ(io::fnv1a64(""), 0xcbf29ce484222325ull);
   EXPECT_EQ(io::fnv1a64("a"), 0xaf63dc4c8601ec8cull);
   EXPECT_EQ(io::fnv1a64("foobar"), 0x85944171f73967e8ull);
+}
+
+// A distributed run's checkpoint (io/checkpoint.hpp): a manifest and one piece per process,
+// made here by hand from a one-process checkpoint of the bar (20 cells of 12 particles, in id
+// order from left to right) cut into three slabs of cell layers [0, 7), [7, 12), [12, 20), as
+// three processes would have written it. Joined, the pieces are the whole state; a restart on
+// one process from them continues as from the single file, bit for bit; a damaged, foreign or
+// misnamed piece is refused, naming it.
+TEST(Checkpoint, ADistributedCheckpointsPiecesJoinIntoTheWholeState) {
+  TempDir dir("pieces"), split("pieces_split");
+  const auto file = short_checkpoint(dir.path());
+  const io::Checkpoint whole = io::read_checkpoint(file);
+  ASSERT_EQ(whole.particles.count, 240);
+  ASSERT_EQ(whole.cells.size(), 240u);
+  const std::vector<std::int64_t> cuts{0, 7, 12, 20};
+  io::Checkpoint manifest = whole;
+  manifest.particles = io::ParticleArrays{};
+  manifest.particles.dim = 1;
+  manifest.cells.clear();
+  manifest.distribution = {3, 0, 7, 12, 20};
+  manifest.layer_counts.assign(20, 12);
+  std::vector<std::string> bytes(3);
+  for (int r = 0; r < 3; ++r) {
+    const auto first = static_cast<std::size_t>(12 * cuts[static_cast<std::size_t>(r)]);
+    const auto end = static_cast<std::size_t>(12 * cuts[static_cast<std::size_t>(r) + 1]);
+    io::CheckpointPiece piece;
+    piece.step = whole.step;
+    piece.rank = r;
+    piece.ranks = 3;
+    piece.particles.dim = 1;
+    piece.particles.count = static_cast<std::int64_t>(end - first);
+    for (std::size_t f = 0; f < whole.particles.reals.size(); ++f) {
+      const auto& all = whole.particles.reals[f];
+      const std::size_t k = all.size() / 240;  // values per particle
+      piece.particles.reals[f].assign(all.begin() + static_cast<std::ptrdiff_t>(k * first),
+                                      all.begin() + static_cast<std::ptrdiff_t>(k * end));
+    }
+    piece.particles.id.assign(whole.particles.id.begin() + static_cast<std::ptrdiff_t>(first),
+                              whole.particles.id.begin() + static_cast<std::ptrdiff_t>(end));
+    piece.cells.assign(whole.cells.begin() + static_cast<std::ptrdiff_t>(first),
+                       whole.cells.begin() + static_cast<std::ptrdiff_t>(end));
+    const std::string name = io::checkpoint_piece_name(whole.step, r);
+    bytes[static_cast<std::size_t>(r)] = io::encode_piece(piece);
+    spit(split.path() / name, bytes[static_cast<std::size_t>(r)]);
+    manifest.pieces.push_back(io::describe_piece(name, bytes[static_cast<std::size_t>(r)]));
+    // count, re-sorting reference, sorts, grid crossings (all of them on rank 0)
+    manifest.distribution.insert(manifest.distribution.end(),
+                                 {piece.particles.count, -1, r == 0 ? whole.sorts : 0,
+                                  r == 0 ? whole.diag.grid_crossings : 0});
+  }
+  const fs::path mfile = split.path() / io::kCheckpointFile;
+  io::write_checkpoint(mfile, manifest);
+  // The manifest reads back as written, without particles; joined, the pieces are the state.
+  const io::Checkpoint m = io::read_checkpoint(mfile);
+  EXPECT_EQ(io::encode_checkpoint(m), io::encode_checkpoint(manifest));
+  EXPECT_EQ(m.particles.count, 0);
+  ASSERT_EQ(m.pieces.size(), 3u);
+  EXPECT_EQ(m.pieces[1].file, "checkpoint_s10_p0001.bin");
+  EXPECT_EQ(m.pieces[1].bytes, bytes[1].size());
+  const io::Checkpoint joined = io::read_whole_checkpoint(mfile);
+  expect_same(joined.particles, whole.particles, "joined pieces");
+  EXPECT_TRUE(same_bytes(joined.cells, whole.cells));
+  // Only the pieces chosen: the middle one.
+  io::Checkpoint middle = m;
+  EXPECT_EQ(io::join_pieces(middle, mfile, {false, true, false}), (std::vector<std::int64_t>{60}));
+  EXPECT_EQ(middle.particles.count, 60);
+  EXPECT_EQ(middle.particles.id.front(), 84);
+
+  // A restart on one process from the manifest and from the single file: the same end state.
+  TempDir a("pieces_a"), b("pieces_b");
+  const auto restart = [&](const fs::path& from, const fs::path& out) {
+    auto ck = std::make_shared<const io::Checkpoint>(io::read_checkpoint(from));
+    const Config cfg = io::restart_config(*ck, from.string(), nullptr, {"time.end=1.5e-6"});
+    const RunResult r = run_in(cfg, out, ck, from.string());
+    EXPECT_EQ(r.exit_code, 0) << r.failure;
+    return io::read_checkpoint(out / io::kCheckpointFile);
+  };
+  expect_same_state(restart(mfile, a.path()), restart(file, b.path()));
+
+  // Refused, naming the piece: a flipped byte, a piece of another step (its hash differs from
+  // the manifest's), one missing, and a manifest naming another path.
+  const auto join_error = [&](const io::Checkpoint& c) {
+    try {
+      io::Checkpoint copy = c;
+      io::join_pieces(copy, mfile, std::vector<bool>(copy.pieces.size(), true));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const fs::path piece1 = split.path() / m.pieces[1].file;
+  std::string flipped = bytes[1];
+  flipped[flipped.size() / 2] = static_cast<char>(flipped[flipped.size() / 2] ^ 8);
+  spit(piece1, flipped);
+  std::string msg = join_error(m);
+  EXPECT_NE(msg.find(piece1.string() + "' is corrupted"), std::string::npos) << msg;
+  io::CheckpointPiece other = io::decode_piece(bytes[1], "piece 1");
+  other.step = 5;
+  spit(piece1, io::encode_piece(other));
+  msg = join_error(m);
+  EXPECT_NE(msg.find("is not the one"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(piece1.string()), std::string::npos) << msg;
+  fs::remove(piece1);
+  msg = join_error(m);
+  EXPECT_NE(msg.find("cannot open checkpoint piece '" + piece1.string()), std::string::npos) << msg;
+  spit(piece1, bytes[1]);
+  EXPECT_EQ(join_error(m), "");
+  io::Checkpoint elsewhere = m;
+  elsewhere.pieces[2].file = "../checkpoint_s10_p0002.bin";
+  msg = join_error(elsewhere);
+  EXPECT_NE(msg.find("names piece 2 '../checkpoint_s10_p0002.bin'"), std::string::npos) << msg;
+  // A piece where the manifest is expected (mpm run --restart PIECE).
+  msg = read_error(piece1);
+  EXPECT_NE(msg.find("is one process's piece of a distributed checkpoint; restart from the "
+                     "checkpoint.bin next to it"),
+            std::string::npos)
+      << msg;
+  // The restarted run into the pieces' directory removes them when it writes its own
+  // checkpoint (a single file: one process).
+  {
+    auto ck = std::make_shared<const io::Checkpoint>(m);
+    const Config cfg = io::restart_config(*ck, mfile.string(), nullptr, {"time.end=1.5e-6"});
+    EXPECT_EQ(run_in(cfg, split.path(), ck, mfile.string()).exit_code, 0);
+    EXPECT_FALSE(fs::exists(piece1));
+    EXPECT_TRUE(io::read_checkpoint(mfile).pieces.empty());
+  }
 }
 
 TEST(Checkpoint, CorruptionTruncationAndOtherVersionsAreRefused) {

@@ -600,11 +600,26 @@ TEST_F(AtomicWrite, DirectoryLockIsExclusiveAndNamesTheHolder) {
   EXPECT_TRUE(run_files(dir_).empty());
   for (const char* name :
        {"config.toml", "particles_00012.vtu", "particles_00012.csv", "particles_0001.csv",
-        "particles_00012.txt", "summary.json.tmp.5", "notes.txt", "checkpoint.bin"})
+        "particles_00012.txt", "summary.json.tmp.5", "notes.txt", "checkpoint.bin",
+        "checkpoint_s120_p0003.bin", "checkpoint_s120_p03.bin", "checkpoint_sx_p0001.bin",
+        "checkpoint_s7_p12345.bin"})
     std::ofstream(dir_ / name) << "x";
   EXPECT_EQ(run_files(dir_),
-            (std::vector<std::string>{"checkpoint.bin", "config.toml", "particles_00012.csv",
-                                      "particles_00012.vtu"}));
+            (std::vector<std::string>{"checkpoint.bin", "checkpoint_s120_p0003.bin",
+                                      "checkpoint_s7_p12345.bin", "config.toml",
+                                      "particles_00012.csv", "particles_00012.vtu"}));
+  // A distributed checkpoint's pieces (io/checkpoint.hpp): the name of each, and the removal of
+  // those a new manifest does not name (nothing else in the directory).
+  EXPECT_EQ(checkpoint_piece_name(120, 3), "checkpoint_s120_p0003.bin");
+  EXPECT_EQ(checkpoint_piece_name(0, 12345), "checkpoint_s0_p12345.bin");
+  for (const char* name : {"checkpoint_s_p0001.bin", "checkpoint_s1_p001.bin",
+                           "checkpoint_s1_p0001.bin.tmp.5", "checkpoint_s1-p0001.bin"})
+    EXPECT_FALSE(is_checkpoint_piece_name(name)) << name;
+  EXPECT_EQ(remove_checkpoint_pieces(dir_, {"checkpoint_s7_p12345.bin"}), 1);
+  EXPECT_EQ(run_files(dir_),
+            (std::vector<std::string>{"checkpoint.bin", "checkpoint_s7_p12345.bin", "config.toml",
+                                      "particles_00012.csv", "particles_00012.vtu"}));
+  EXPECT_TRUE(fs::exists(dir_ / "checkpoint_s120_p03.bin"));  // not a piece's name
 }
 
 TEST_F(AtomicWrite, CreatesFileWithExactContent) {
