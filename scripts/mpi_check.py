@@ -24,8 +24,9 @@ processes ends in the same bytes as the whole run, and restarted on 4 or 1 in th
 1e-12; one on 4 restarted on 4 in the same bytes, on 3 to 1e-12. Each distributed checkpoint is a
 manifest and one piece per process of its step; a damaged or missing piece stops the restart on
 every process with one message naming it.
-Then a failing distributed run (a body thrown out of the grid) must end every process with one
-message naming the rank and the particles, the documented exit code (4), and no hang; and a
+Then a failing distributed run (a body thrown out of the grid; a NaN that one process meets) must
+end every process with one message naming the rank and the particles, the documented exit code
+(4; 3), and no hang; so must an output that cannot be written (8); and a
 feature that does not distribute must be refused before the first step (exit code 2).
 
   python3 scripts/mpi_check.py --mpm build/mpm [--ranks 1,2,4] [--quick]
@@ -67,6 +68,22 @@ CASES = [
     ("1d_ugimp_usavg", "examples/vibrating_bar_crossing.toml",
      ["grid.cells=60", "time.end=2e-3", "method.basis=ugimp", "method.scheme=usavg",
       "output.frames=1"], "any"),
+    # The widest stencils: quintic B-splines reach three cells either side, so on 4 processes
+    # of 4 cell layers each (the vortex) a DOF is shared by three processes; the other 1D bases.
+    ("1d_bspline5_musl", "examples/vibrating_bar_crossing.toml",
+     ["grid.cells=60", "time.end=2e-3", "method.basis=bspline", "method.degree=5",
+      "output.frames=1"], "any"),
+    ("1d_cpdi_usl", "examples/vibrating_bar_crossing.toml",
+     ["grid.cells=60", "time.end=2e-3", "method.basis=cpdi", "method.scheme=usl",
+      "output.frames=1"], "any"),
+    ("1d_maxent_musl", "examples/vibrating_bar_crossing.toml",
+     ["grid.cells=60", "time.end=2e-3", "method.basis=maxent", "output.frames=1"], "any"),
+    ("2d_vortex_bspline5_usl", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.end=0.1", "time.dt=1e-3", "method.basis=bspline", "method.degree=5",
+      "method.scheme=usl", "output.frames=1"], "both"),
+    ("2d_vortex_ugimp_musl", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.end=0.2", "time.dt=2e-3", "method.basis=ugimp",
+      "output.frames=1"], "both"),
     ("2d_vortex_bspline2_musl", "examples/vortex_2d.toml",
      ["grid.cells=16", "time.end=0.3", "time.dt=2e-3", "output.frames=2"], "both"),
     ("2d_vortex_linear_usf", "examples/vortex_2d.toml",
@@ -704,6 +721,23 @@ def check_failure(mpm, tmp, failures):
         failures.append(f"bad input on one process: exit {r.returncode}, stderr {r.stderr!r}")
     else:
         print(f"bad input on one process: {lines[0][:160]}")
+    # A NaN that only one process meets (a body force that is not a number in the bar's right
+    # end after 1 ms, rank 1's slab): every process stops after that step with exit code 3, one
+    # message naming the rank, the step and the particles (those of the run on one process).
+    d = os.path.join(tmp, "nan")
+    try:
+        r = run(mpm_cmd(mpm, 2, "examples/custom_bar.toml",
+                        ["loading.body_force=x > 0.9 && t > 0.001 ? 0/0 : 0", "time.end=0.003",
+                         "output.frames=1"], d), timeout=60)
+    except subprocess.TimeoutExpired:
+        failures.append("a NaN on one process hung (no end within 60 s)")
+        return
+    msgs = [l for l in r.stderr.splitlines() if "run failed" in l]
+    if (r.returncode != 3 or len(msgs) != 1 or "rank 1 of 2" not in msgs[0]
+            or "step 101" not in msgs[0] or "particle 64 " not in msgs[0]):
+        failures.append(f"a NaN on one process: exit {r.returncode}, stderr {r.stderr!r}")
+    else:
+        print(f"NaN on one process: exit 3, {msgs[0][:160]}")
     # Another command than `mpm run` under mpirun: refused, once.
     r = run(["mpirun", "-n", "2", "--oversubscribe", mpm, "bench", "--dim", "1", "--steps", "1"])
     lines = [l for l in r.stderr.splitlines() if "error" in l]

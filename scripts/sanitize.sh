@@ -23,11 +23,12 @@
 # the tests run; either failing fails the script, and the fuzzers' log is printed at the end.
 # Their own tree (build-fuzz/, -O2 -g) took about 170 s of CPU beside this build in CI.
 #
-# Built with MPI (issue 21): after the tests, three short distributed runs under mpirun (MPI_SMOKE
+# Built with MPI (issue 21): after the tests, four short distributed runs under mpirun (MPI_SMOKE
 # below) put the distributed code under the sanitizers: the halo sums, the particle migration,
 # the reductions over the processes (3 processes: the fold of the processes beyond a power of
-# two), TLS's ghost particles with the adjoint strain rate's sums sent back to their owners, and
-# TLS on triangles. Their answers are checked against one process by the Release
+# two), the CSV frames written with MPI-IO, the checkpoint's pieces and a restart from them on
+# another number of processes, TLS's ghost particles with the adjoint strain rate's sums sent
+# back to their owners, and TLS on triangles. Their answers are checked against one process by the Release
 # suite (scripts/mpi_check.py), not here; here any sanitizer report or a non-zero exit fails.
 # Open MPI keeps allocations it never frees; they are suppressed by library
 # (scripts/lsan_suppressions.txt), which needs the slow unwinder for these runs (the fast one stops
@@ -251,14 +252,17 @@ if [ "$test_status" -eq 0 ]; then
   vortex=(examples/vortex_2d.toml -q --set grid.cells=16 --set time.dt=2e-3 --set output.frames=1)
   smoke_t0=$SECONDS
   env "${mpi_env[@]}" mpirun -n 3 build-asan/mpm run "${vortex[@]}" --set time.end=0.1 \
-    --out "$smoke/b2" || test_status=$?
+    --set output.checkpoint_every=25 --out "$smoke/b2" || test_status=$?
+  # Its checkpoint's pieces read by 2 processes (each reads those its slab overlaps).
+  env "${mpi_env[@]}" mpirun -n 2 build-asan/mpm run --restart "$smoke/b2/checkpoint.bin" -q \
+    --set time.end=0.104 || test_status=$?
   env "${mpi_env[@]}" mpirun -n 2 build-asan/mpm run "${vortex[@]}" --set time.end=0.04 \
     --set method.mapping=tls --set method.tls_completion=neighbour --set method.scheme=usl \
     --set method.tls_strain_rate=adjoint --out "$smoke/tls" || test_status=$?
   env "${mpi_env[@]}" mpirun -n 2 build-asan/mpm run examples/plate_tls_triangles_2d.toml -q \
     --set grid.cells=8 --set time.end=5e-4 --set output.frames=1 --out "$smoke/tri" ||
     test_status=$?
-  echo "== MPI under the sanitizers (3, 2 and 2 processes): status $test_status, $((SECONDS - smoke_t0)) s"
+  echo "== MPI under the sanitizers (3, 2, 2 and 2 processes): status $test_status, $((SECONDS - smoke_t0)) s"
   rm -rf "$smoke"
 fi
 if [ "$fuzz" = ON ]; then

@@ -359,17 +359,26 @@ namespace {
 // (issue 16, 10: std::bad_alloc was an "internal error" naming nothing). The particles are
 // checked as they are seeded (seed_counts).
 template <int Dim>
-void check_grid_memory(const Config& cfg, const Grid<Dim>& g) {
+void check_grid_memory(const Config& cfg, const Grid<Dim>& g, const SeedScope& scope) {
   double nodes = 1.0;
   for (int d = 0; d < Dim; ++d) nodes *= static_cast<double>(g.cells[d]) + 1.0;
-  // The windowed arrays over every DOF (one process) and the fixed bits.
-  const double bytes = nodes * static_cast<double>(GridState<Dim>::bytes_per_dof() + 1);
+  // The grid arrays over the DOFs, on one process; a distributed run's processes on this
+  // machine hold windows over about their share of them (GridState's window, a slab's DOFs and
+  // two layers of vertices either side: left out), and each the velocity-condition bits whole.
+  const double bytes =
+      nodes * (static_cast<double>(GridState<Dim>::bytes_per_dof()) * scope.machine_share +
+               static_cast<double>(scope.machine_processes));
   const double memory = physical_memory();
+  const bool distributed = scope.machine_share < 1.0 || scope.machine_processes > 1;
   if (memory > 0.0 && bytes > memory)
     throw InputError(fmt::format(
-        "{}: grid.cells = {} gives {:.4g} grid nodes, whose state alone needs about {:.3g} GB; "
-        "this machine has {:.3g} GB of memory: use fewer cells",
-        cfg.where("grid.cells"), cfg.get_int("grid.cells"), nodes, bytes / 1e9, memory / 1e9));
+        "{}: grid.cells = {} gives {:.4g} grid nodes, whose state alone needs about {:.3g} GB{}; "
+        "this machine has {:.3g} GB of memory: use fewer cells{}",
+        cfg.where("grid.cells"), cfg.get_int("grid.cells"), nodes, bytes / 1e9,
+        distributed ? fmt::format(" for the {} process(es) of the run on this machine",
+                                  scope.machine_processes)
+                    : "",
+        memory / 1e9, distributed ? " or more machines" : ""));
 }
 
 AnyProblem make_any_problem(const Config& cfg, const SeedScope& scope) {
@@ -432,7 +441,7 @@ AnyProblem make_problem(const Config& cfg, const SeedScope& scope) {
         "custom problem; benchmark = \"{}\"{} has none",
         cfg.where(key), key, cfg.get_string("benchmark"), meshed ? "" : " without grid.mesh"));
   }
-  std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid); }, pb);
+  std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid, scope); }, pb);
   return pb;
 }
 

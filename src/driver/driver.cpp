@@ -236,13 +236,15 @@ std::vector<io::ScalarField> exact_fields(
 }  // namespace
 
 // A distributed run's CSV frame, in id order, without any process holding more than its share
-// of it: the ids are taken in rounds of R x kRowsPerRound (R processes), each round's ids cut
-// into R equal ranges, one a process. In each round every process sends its particles of the
-// round to the processes of their ranges, formats the rows of its own range in id order and
-// appends them (core/comm_file.hpp: rank after rank, so the rows follow in id order). An id
-// beyond the N particles (a problem numbered otherwise) goes to the last range of the last
-// round, after every other. Collective. Each round holds about kRowsPerRound particles and their
-// text (about 0.5 kB a row in 2D) on a process, beside its own particles.
+// of it: the ids are taken in rounds, each round's ids [first, end) cut into R equal ranges (R
+// processes), one a process. In each round every process sends its particles of the round to
+// the processes of their ranges, formats the rows of its own range in id order and appends them
+// (core/comm_file.hpp: rank after rank, so the rows follow in id order). A round ends before the
+// id where some process would send more than kRowsPerRound particles, and after at most
+// R kRowsPerRound ids: no process sends, or formats, more than kRowsPerRound rows a round
+// (about 0.3 kB a particle sent and 0.5 kB a row of text in 2D), beside its own particles;
+// particles in slabs, whose ids follow the slabs, take about N / kRowsPerRound rounds, mixed
+// ones down to N / (R kRowsPerRound). Collective.
 template <int Dim>
 void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path,
                                                const Particles<Dim>& P, double time) {
@@ -259,15 +261,13 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
   std::filesystem::path tmp = path;
   tmp += fmt::format(".tmp.{}", root_pid_);
 
-  const Index total = comm_->sum(P.size());
   const auto ranks = static_cast<Index>(comm_->size());
-  const Index per_round = kRowsPerRound * ranks;
-  const Index rounds = std::max<Index>(1, (total + per_round - 1) / per_round);
   // This process's particles in id order (positions), walked round after round.
   std::vector<CompactIndex> by_id(P.id.size());
   std::iota(by_id.begin(), by_id.end(), CompactIndex{0});
   std::sort(by_id.begin(), by_id.end(),
             [&](CompactIndex a, CompactIndex b) { return P.id[a] < P.id[b]; });
+  const auto id_at = [&](std::size_t k) { return static_cast<Index>(P.id[by_id[k]]); };
   std::array<std::vector<double>, 2 * Dim + Dim * Dim> values;
   OrderedFile file(*comm_, tmp.string());
   {
@@ -275,28 +275,37 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
     const auto extra = exact_fields(exact_, none, time, values);
     file.append(comm_->root() ? io::particles_csv(none, extra, /*header=*/true) : std::string());
   }
+  // (Ids are below 2^31: exact as doubles, the reductions' type.)
+  constexpr double kNone = 1e300;
+  const auto n = by_id.size();
   std::size_t next = 0;
-  for (Index k = 0; k < rounds; ++k) {
+  while (true) {
+    // The round starts at the lowest id not yet written (none left: done).
+    const double lowest = comm_->min(next < n ? static_cast<double>(id_at(next)) : kNone);
+    if (lowest >= kNone) break;
+    const auto first = static_cast<Index>(lowest);
+    // The round's end: the first id a process cannot take any more, or R kRowsPerRound ids on.
+    const auto k = next + static_cast<std::size_t>(kRowsPerRound);
+    const double mine = k < n ? static_cast<double>(id_at(k)) : kNone;
+    const Index end = std::min(static_cast<Index>(std::min(comm_->min(mine), 1e18)),
+                               first + ranks * kRowsPerRound);
     std::vector<std::vector<std::byte>> send(static_cast<std::size_t>(ranks));
-    const Index first = k * per_round;
-    for (; next < by_id.size(); ++next) {
-      const auto i = static_cast<std::size_t>(by_id[next]);
-      const auto id = static_cast<Index>(P.id[i]);
-      if (id >= first + per_round && k + 1 < rounds) break;
-      const Index r = std::min(ranks - 1, (id - first) * ranks / per_round);
-      P.pack(i, send[static_cast<std::size_t>(r)]);
+    for (; next < n && id_at(next) < end; ++next) {
+      const Index r = (id_at(next) - first) * ranks / (end - first);
+      P.pack(by_id[next], send[static_cast<std::size_t>(r)]);
     }
-    Particles<Dim> mine;
-    for (const auto& buf : comm_->alltoall(send)) mine.unpack_append(buf);
+    Particles<Dim> mine_rows;
+    for (const auto& buf : comm_->alltoall(send)) mine_rows.unpack_append(buf);
+    send.clear();
     // In id order (a range of the ids, so not particles_in_id_order's 0 .. n-1).
     Permutation perm;
-    perm.order.resize(mine.id.size());
+    perm.order.resize(mine_rows.id.size());
     std::iota(perm.order.begin(), perm.order.end(), CompactIndex{0});
     std::sort(perm.order.begin(), perm.order.end(),
-              [&](CompactIndex a, CompactIndex b) { return mine.id[a] < mine.id[b]; });
-    mine.for_each_field([&](auto& field) { perm.apply(field); });
-    const auto extra = exact_fields(exact_, mine, time, values);
-    file.append(io::particles_csv(mine, extra, /*header=*/false));
+              [&](CompactIndex a, CompactIndex b) { return mine_rows.id[a] < mine_rows.id[b]; });
+    mine_rows.for_each_field([&](auto& field) { perm.apply(field); });
+    const auto extra = exact_fields(exact_, mine_rows, time, values);
+    file.append(io::particles_csv(mine_rows, extra, /*header=*/false));
   }
   if (const auto f = file.close())
     throw RemoteRunError(f->exit_code,
@@ -394,25 +403,22 @@ void OutputSession<Dim>::resume(const io::Checkpoint& c) {
     }
 }
 template <int Dim>
-void OutputSession<Dim>::checkpoint(io::Checkpoint& c, const io::CheckpointPiece* piece) {
+void OutputSession<Dim>::checkpoint(io::Checkpoint& c, const std::string* piece) {
   if (!enabled()) return;
   if (comm_ && piece) {
     // Every process writes its piece; once all are on disk (a process whose write failed stops
     // every one at the check), rank 0 writes the manifest naming them. Until it has, the previous
     // manifest and its pieces are the checkpoint, whole: the pieces are named by their step.
-    const std::string name = io::checkpoint_piece_name(piece->step, comm_->rank());
-    const io::Checkpoint::Piece mine = [&] {
-      const std::string bytes = io::encode_piece(*piece);
-      io::write_file_atomic(dir_ / name, bytes);
-      return io::describe_piece(name, bytes);
-    }();
+    const std::string name = io::checkpoint_piece_name(c.step, comm_->rank());
+    io::write_file_atomic(dir_ / name, *piece);
+    const io::Checkpoint::Piece mine = io::describe_piece(name, *piece);
     comm_->check();
     const std::vector<Index> all = comm_->allgather(std::span<const Index>(
         std::array<Index, 2>{static_cast<Index>(mine.bytes), std::bit_cast<Index>(mine.hash)}));
     if (!writer_) return;
     c.pieces.clear();
     for (int r = 0; r < comm_->size(); ++r)
-      c.pieces.push_back({io::checkpoint_piece_name(piece->step, r),
+      c.pieces.push_back({io::checkpoint_piece_name(c.step, r),
                           static_cast<std::uint64_t>(all[2 * static_cast<std::size_t>(r)]),
                           std::bit_cast<std::uint64_t>(all[2 * static_cast<std::size_t>(r) + 1])});
   }

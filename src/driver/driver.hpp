@@ -27,7 +27,6 @@
 
 namespace mpm::io {
 struct Checkpoint;
-struct CheckpointPiece;
 }  // namespace mpm::io
 
 namespace mpm::driver {
@@ -128,9 +127,10 @@ class OutputSession {
   // After resume(): history.csv holds the earlier run's rows up to the checkpoint, its own row
   // included (the restart then writes no row for the step it starts from).
   bool history_continues() const { return history_continues_; }
-  // Writes checkpoint.bin. A distributed run (collective): `piece` is this process's share, which
-  // it writes itself; rank 0 then writes `c` as their manifest (filling c.pieces).
-  void checkpoint(io::Checkpoint& c, const io::CheckpointPiece* piece = nullptr);
+  // Writes checkpoint.bin. A distributed run (collective): `piece` is this process's share
+  // (io::encode_piece), which it writes itself; rank 0 then writes `c` as their manifest
+  // (filling c.pieces).
+  void checkpoint(io::Checkpoint& c, const std::string* piece = nullptr);
 
  private:
   std::filesystem::path dir_;

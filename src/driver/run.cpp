@@ -97,10 +97,12 @@ AnyProblem make_distributed_problem(const Config& cfg, const Comm& comm, Index& 
   SeedScope counting;
   counting.layer_counts = &per_layer;
   counting.machine_share = static_cast<double>(comm.local_size()) / comm.size();
+  counting.machine_processes = comm.local_size();
   const AnyProblem counted = make_problem(cfg, counting);
   seeded = counting.seeded;
   SeedScope scope;
   scope.machine_share = counting.machine_share;
+  scope.machine_processes = counting.machine_processes;
   std::visit(
       [&](const auto& pb) {
         constexpr int Dim = std::decay_t<decltype(pb)>::kDim;

@@ -85,7 +85,7 @@ std::shared_ptr<const TriangleMesh> numbered_along_y(const TriangleMesh& m,
 template <int Dim>
 struct Captured {
   io::Checkpoint manifest;
-  std::optional<io::CheckpointPiece> piece;  // a distributed run: this process's
+  std::optional<std::string> piece;  // a distributed run: this process's, encoded
 };
 
 template <int Dim>
@@ -109,14 +109,9 @@ Captured<Dim> capture(Stepper<Dim>& stepper, std::string_view mapping,
     const std::vector<Index> info = comm->allgather(std::span<const Index>(mine));
     const std::vector<double> per_layer =
         SlabPartition<Dim>::layer_counts(sim.grid, P, *comm, /*replicated=*/false);
-    io::CheckpointPiece& piece = cap.piece.emplace();
-    piece.step = sim.step;
-    piece.rank = comm->rank();
-    piece.ranks = comm->size();
-    piece.particles = io::pack_particles(P);
-    piece.cells.assign(sim.cell.begin(), sim.cell.end());
     stepper.export_carried();  // the basis's per-particle state (CPDI2's corners)
-    piece.basis_state = sim.carried;
+    cap.piece =
+        io::encode_piece<Dim>(sim.step, comm->rank(), comm->size(), P, sim.cell, sim.carried);
     stepper.resize_particle_caches();  // the basis takes it back
     c.particles.dim = Dim;
     c.distribution.push_back(comm->size());

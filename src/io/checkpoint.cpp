@@ -355,6 +355,54 @@ std::string encode_piece(const CheckpointPiece& piece) {
   return framed(kPieceMagic, p);
 }
 
+namespace {
+// put(w, pack_particles(p)) without the copy.
+template <int Dim>
+void put_particles(ByteWriter& w, const Particles<Dim>& p) {
+  w.i64(Dim);
+  w.i64(p.size());
+  p.for_each_named_field([&](const char*, const auto& field) {
+    using T = typename std::decay_t<decltype(field)>::value_type;
+    if constexpr (std::is_same_v<T, double>) {
+      w.reals(field);
+    } else if constexpr (!std::is_same_v<T, CompactIndex>) {
+      constexpr auto k = static_cast<std::size_t>(T::SizeAtCompileTime);
+      w.u64(field.size() * k);
+      for (const auto& e : field)
+        for (std::size_t j = 0; j < k; ++j) w.f64(e.data()[j]);
+    }
+  });
+  w.u64(p.id.size());
+  for (const auto id : p.id) w.i64(static_cast<std::int64_t>(id));
+}
+}  // namespace
+
+template <int Dim>
+std::string encode_piece(std::int64_t step, std::int64_t rank, std::int64_t ranks,
+                         const Particles<Dim>& particles, std::span<const CompactIndex> cells,
+                         const std::vector<double>& basis_state) {
+  const auto n = static_cast<std::size_t>(particles.size());
+  // (Per particle: the real fields, the id and the cell; the counts.)
+  ByteWriter p =
+      framing(8 * (5 + particle_field_names().size() + 2) +
+              n * (Particles<Dim>::bytes_per_particle() + 2 * 8) + 8 * basis_state.size());
+  p.i64(step);
+  p.i64(rank);
+  p.i64(ranks);
+  put_particles(p, particles);
+  p.u64(cells.size());
+  for (const auto c : cells) p.i64(static_cast<std::int64_t>(c));
+  p.reals(basis_state);
+  return framed(kPieceMagic, p);
+}
+
+template std::string encode_piece<1>(std::int64_t, std::int64_t, std::int64_t, const Particles<1>&,
+                                     std::span<const CompactIndex>, const std::vector<double>&);
+template std::string encode_piece<2>(std::int64_t, std::int64_t, std::int64_t, const Particles<2>&,
+                                     std::span<const CompactIndex>, const std::vector<double>&);
+template std::string encode_piece<3>(std::int64_t, std::int64_t, std::int64_t, const Particles<3>&,
+                                     std::span<const CompactIndex>, const std::vector<double>&);
+
 CheckpointPiece decode_piece(std::string_view bytes, const std::string& name) {
   ByteReader r(unframed(bytes, kPieceMagic, name, "checkpoint piece"), name);
   CheckpointPiece piece;

@@ -45,6 +45,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -137,6 +138,12 @@ struct CheckpointPiece {
   std::vector<double> basis_state;
 };
 std::string encode_piece(const CheckpointPiece& p);
+// The same bytes straight from a process's particles, their cells and the basis's carried state
+// (no flattened copy of the particles: a distributed run writes its piece with this).
+template <int Dim>
+std::string encode_piece(std::int64_t step, std::int64_t rank, std::int64_t ranks,
+                         const Particles<Dim>& particles, std::span<const CompactIndex> cells,
+                         const std::vector<double>& basis_state);
 // InputError naming `name` when the bytes are not a piece, truncated or corrupted.
 CheckpointPiece decode_piece(std::string_view bytes, const std::string& name);
 // The manifest's entry for a piece's encoded bytes: its size and payload hash.

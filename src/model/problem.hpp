@@ -96,6 +96,9 @@ struct SeedScope {
   // processes here / processes in all for a distributed run): the memory checks of the seeders
   // compare that share of the body's state with the machine's memory.
   double machine_share = 1.0;
+  // The processes on this machine (1 on one process): each holds the grid's per-DOF velocity
+  // conditions whole, beside its window of the grid arrays (the grid memory check).
+  int machine_processes = 1;
   // The particles `keep` accepts, when known (the counting pass's): the seeders reserve room for
   // them and an eighth more (Particles::keep_room) before the first, so no array grows.
   Index expected = 0;
@@ -118,23 +121,22 @@ class SeedSink {
     if (scope.layer_counts)
       scope.layer_counts->assign(static_cast<std::size_t>(g->cells[Dim - 1]), 0.0);
   }
-  // `total` points to come: room for them when every one is kept (one process).
+  // `total` points to come: room for every one when all are kept (one process), for the
+  // scope's expected share and an eighth more when it keeps some (a distributed run), for none
+  // in a counting pass.
   void reserve(Index total) {
-    if (!scope_.keep && !scope_.layer_counts) particles_.reserve(total);
-    if (scope_.keep && scope_.expected > 0) particles_.reserve(scope_.expected * 9 / 8);
+    if (!scope_.layer_counts) particles_.reserve(scope_.keep ? scope_.expected * 9 / 8 : total);
   }
   void add(const Vec<Dim>& x, double volume) {
     const auto id = static_cast<CompactIndex>(next_++);
-    if (!scope_.layer_counts && !scope_.keep) {
-      particles_.append(x, volume, rho0_ * volume, id);
-      return;
+    if (scope_.layer_counts || scope_.keep) {
+      const Index layer = grid_->last_layer(x);
+      if (scope_.layer_counts) {
+        if (layer >= 0) (*scope_.layer_counts)[static_cast<std::size_t>(layer)] += 1.0;
+        return;
+      }
+      if (!scope_.keep(layer)) return;
     }
-    const Index layer = grid_->last_layer(x);
-    if (scope_.layer_counts) {
-      if (layer >= 0) (*scope_.layer_counts)[static_cast<std::size_t>(layer)] += 1.0;
-      return;
-    }
-    if (scope_.keep && !scope_.keep(layer)) return;
     particles_.append(x, volume, rho0_ * volume, id);
   }
   // The particles kept; a process of a distributed run with room for an eighth more

@@ -7,13 +7,19 @@
 // naming their particles by id.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "benchmarks/benchmarks.hpp"
+#include "grid/grid_state.hpp"
 #include "model/problem.hpp"
 #include "scheme/distribution.hpp"
 #include "setup/config.hpp"
@@ -126,6 +132,38 @@ TEST(SeedScope, EveryProcessSetsUpExactlyItsSlabOfTheWholeProblem2D) {
 TEST(SeedScope, EveryProcessSetsUpExactlyItsSlabOfTheWholeProblem3D) {
   check_config("cube_mms_3d.toml", {"grid.cells=4"}, 3);
   check_config("custom_3d.toml", {}, 3);
+}
+
+// The grid memory check (benchmarks/problem.cpp) of a distributed run counts this machine's
+// processes' windows of the grid arrays (their share of them) and each process's whole
+// velocity-condition bits: a grid whose arrays need about four times this machine's memory is
+// refused on one process and for 1024 processes all on this machine, and accepted for a process
+// of 1024 spread over as many machines. (The body is a speck, so the particles are few.)
+TEST(SeedScope, TheGridMemoryCheckCountsThisMachinesShareOfTheGrid) {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) GTEST_SKIP() << "this machine's memory is not known";
+  const double memory = static_cast<double>(pages) * static_cast<double>(page);
+  const double per_node = static_cast<double>(GridState<2>::bytes_per_dof() + 1);
+  const auto cells = static_cast<Index>(std::sqrt(4.0 * memory / per_node));
+  const Config cfg = Config::load(std::string(MPM_SOURCE_DIR) + "/examples/custom_plate_2d.toml",
+                                  {fmt::format("grid.cells={}", cells), "body.max=[1e-7, 1e-7]"});
+  const auto refused = [&](const SeedScope& scope) {
+    try {
+      (void)make_problem(cfg, scope);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(refused({}).find("GB of memory: use fewer cells"), std::string::npos);
+  SeedScope spread;
+  spread.machine_share = 1.0 / 1024;
+  EXPECT_EQ(refused(spread), "");
+  SeedScope here;
+  here.machine_processes = 1024;
+  const std::string msg = refused(here);
+  EXPECT_NE(msg.find("for the 1024 process(es) of the run on this machine"), std::string::npos)
+      << msg;
 }
 
 }  // namespace

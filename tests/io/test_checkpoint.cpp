@@ -320,6 +320,11 @@ TEST(Checkpoint, ADistributedCheckpointsPiecesJoinIntoTheWholeState) {
                        whole.cells.begin() + static_cast<std::ptrdiff_t>(end));
     const std::string name = io::checkpoint_piece_name(whole.step, r);
     bytes[static_cast<std::size_t>(r)] = io::encode_piece(piece);
+    // What a process writes from its particles: the same bytes.
+    const std::vector<CompactIndex> cells(piece.cells.begin(), piece.cells.end());
+    EXPECT_EQ(io::encode_piece<1>(whole.step, r, 3, io::unpack_particles<1>(piece.particles, "p"),
+                                  cells, {}),
+              bytes[static_cast<std::size_t>(r)]);
     spit(split.path() / name, bytes[static_cast<std::size_t>(r)]);
     manifest.pieces.push_back(io::describe_piece(name, bytes[static_cast<std::size_t>(r)]));
     // count, re-sorting reference, sorts, grid crossings (all of them on rank 0)
