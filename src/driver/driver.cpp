@@ -262,11 +262,17 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
   tmp += fmt::format(".tmp.{}", root_pid_);
 
   const auto ranks = static_cast<Index>(comm_->size());
-  // This process's particles in id order (positions), walked round after round.
-  std::vector<CompactIndex> by_id(P.id.size());
-  std::iota(by_id.begin(), by_id.end(), CompactIndex{0});
-  std::sort(by_id.begin(), by_id.end(),
-            [&](CompactIndex a, CompactIndex b) { return P.id[a] < P.id[b]; });
+  // The positions of a set of particles in id order (any ids: not particles_in_id_order's
+  // 0 .. n-1).
+  const auto id_order = [](const Particles<Dim>& Q) {
+    std::vector<CompactIndex> order(Q.id.size());
+    std::iota(order.begin(), order.end(), CompactIndex{0});
+    std::sort(order.begin(), order.end(),
+              [&](CompactIndex a, CompactIndex b) { return Q.id[a] < Q.id[b]; });
+    return order;
+  };
+  // This process's particles in id order, walked round after round.
+  const std::vector<CompactIndex> by_id = id_order(P);
   const auto id_at = [&](std::size_t k) { return static_cast<Index>(P.id[by_id[k]]); };
   std::array<std::vector<double>, 2 * Dim + Dim * Dim> values;
   OrderedFile file(*comm_, tmp.string());
@@ -297,12 +303,8 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
     Particles<Dim> mine_rows;
     for (const auto& buf : comm_->alltoall(send)) mine_rows.unpack_append(buf);
     send.clear();
-    // In id order (a range of the ids, so not particles_in_id_order's 0 .. n-1).
     Permutation perm;
-    perm.order.resize(mine_rows.id.size());
-    std::iota(perm.order.begin(), perm.order.end(), CompactIndex{0});
-    std::sort(perm.order.begin(), perm.order.end(),
-              [&](CompactIndex a, CompactIndex b) { return mine_rows.id[a] < mine_rows.id[b]; });
+    perm.order = id_order(mine_rows);
     mine_rows.for_each_field([&](auto& field) { perm.apply(field); });
     const auto extra = exact_fields(exact_, mine_rows, time, values);
     file.append(io::particles_csv(mine_rows, extra, /*header=*/false));
