@@ -2671,7 +2671,8 @@ amplitude, and the difference was not traced.
 Published (001 Figs. 2-4): MPM does not converge, BSMPM is far more accurate but stalls on fine
 grids, BSMPM+MLS keeps converging. Reproduced: P1 MPM does not converge (its errors grow with
 refinement and exceed the amplitude); BSMPM is far more accurate on 16 and 32 cells and
-converges slowly. Not reproduced: BSMPM breaks down on 64 cells, and BSMPM+MLS breaks down on
+converges slowly. Not reproduced: BSMPM breaks down on 64 cells (the exact solution is
+unstable at this amplitude: subsection "The exact solution at A = 0.1 m is unstable"), and BSMPM+MLS breaks down on
 every grid instead of converging. The same code converges at the expected orders at
 small amplitude (above), so the body force, the rollers and the mappings are right where the
 deformation is small.
@@ -2705,13 +2706,87 @@ specified, is not stable at A = 0.1 m on these grids in our implementation; 001 
 mass errors, and its figures may rest on details the paper does not give (its own reading of
 eq. 16, a wider particle seeding, or a smaller effective amplitude).
 
-Open: the BSMPM breakdown on 64 cells. In a rerun of the study (2026-11-29, the same step and
+#### The exact solution at A = 0.1 m is unstable
+
+The BSMPM breakdown on 64 cells was open. In a rerun of the study (2026-11-29, the same step and
 message as above) the kinetic energy of B2 direct at quarter periods (where the exact one is
 zero; next section), divided by the exact largest, grows steadily from 4.4e-3 to 7.8e-2 up to
 t = 0.075 s, jumps to 0.96 by t = 0.085 s and reaches 3.8-16 until the stop, whose message names
-two particles at x_1 = 1.00002 and 1.00045 m, past the roller at x_1 = 1 m: a sudden event at
-the boundary, unlike the steady growth of TLS on every grid (next section); its cause is not
-traced. Why TLS stops: the next section.
+two particles at x_1 = 1.00002 and 1.00045 m, past the roller at x_1 = 1 m. The particles'
+F_12, zero in the exact solution, has an RMS of 0.033 at t = 0.075 s and 0.14 at t = 0.08 s, and
+largest values of 2.2 at t = 0.08 s and 9.5 at the stop: a shear the manufactured solution does
+not have appears within a period. With dt halved (5e-6 s) the same run stops later, at
+t = 0.1939 s.
+
+A second implementation without particles shows that this is the manufactured solution's own
+instability, not the method's. `scripts/plate_fem_check.py` (numpy; a total-Lagrangian FEM of
+the same problem: bilinear quadrilaterals on the reference square, 2 x 2 Gauss points, row-sum
+lumped mass, central differences, the rollers, the body force from central differences of the
+exact P in X, which `--check` compares with 001 eq. 42 to 1e-10) does two things.
+
+**The linearised problem about the exact solution** (`--floquet`): rho0 w_tt = Div(dP/dF(F(X, t))
+[Grad w]), F the exact deformation gradient, discretised as above, from a random start,
+renormalised every period (0.02 s). After the first periods the norm grows each period by the
+modulus of the largest Floquet multiplier of the discretised problem. Geometric mean of the
+factor over the last half of the periods (10-14 periods; 5 at 64 elements, whose mean over
+periods 6-10 is the 59.5 given):
+
+| A [m] | 8 elements | 16 elements | 32 elements | 64 elements |
+|---|---|---|---|---|
+| 0 (linear elasticity: the check) | 1.026 | 1.012 | | |
+| 0.05 (issue 22's amplitude) | | 1.005 | 1.001 | |
+| 0.07 | | 1.003 | | |
+| 0.08 | | 1.004 | 1.004 | |
+| 0.09 | | 3.62 | 5.79 | |
+| 0.1 (001's) | 3.28 | 16.3 | 42.1 | 59.5 |
+
+With dt halved the factors of the 16-element run are the same to four digits (16.267 in the
+sixth period with both steps): they are the problem's, not the time integration's. Up to
+A = 0.08 m perturbations do not grow (the factors scatter by a few per cent about 1, as at
+A = 0); from A = 0.09 m they do, and at 001's A = 0.1 m by a factor that rises under refinement,
+by less at each halving (3.28, 16.3, 42.1, 59.5). The dispersion of the base state is extreme
+there: F_xx spans 0.37-1.63 and J 0.137-2.65 over each period, and the largest acoustic stiffness
+(mu + (mu + lambda (1 - ln J)) |F^-T n|^2) rises from 1.35e7 Pa at rest to 1.58e8 Pa at the
+largest compression. Which resonance makes the modes grow (the growth looks parametric: a
+time-periodic, everywhere elliptic operator) is not analysed here.
+
+**The nonlinear FEM from the exact initial state**: the kinetic energy at the quarter periods
+divided by the exact largest, as for the material point runs in the next section (A = 0.1 m,
+dt = 1e-5 s, T = 0.2 s):
+
+| elements | t = 0.005 s | t = 0.045 s | t = 0.085 s | t = 0.105 s | t = 0.125 s | t = 0.145 s | t = 0.165 s | result |
+|---|---|---|---|---|---|---|---|---|
+| 16 | 1.51e-04 | 8.23e-04 | 1.84e-03 | 2.47e-03 | 2.51e-03 | 2.83e-03 | 6.28e-02 | reaches T; 1.12 at t = 0.195 s, largest abs(F_12) 1.0 |
+| 32 | 9.34e-06 | 1.92e-05 | 4.75e-05 | 7.61e-05 | 2.63e-02 | 7.88e-01 (t = 0.145) | | stops at t = 0.14542 s (J <= 0), largest abs(F_12) 2.5 |
+| 64 | 5.81e-07 | 8.11e-07 | 1.96e-06 | 3.69e-04 | 3.32e-01 | | | stops at t = 0.12516 s (J <= 0), largest abs(F_12) 2.4 |
+| 32, A = 0.05 m | 1.45e-06 | 2.74e-06 | 8.15e-07 | 4.76e-07 | 7.32e-07 | 2.42e-06 | 2.24e-06 | reaches T; 1.40e-06 at t = 0.195 s, u RMS error 3.0e-05 m, largest abs(F_12) 1.8e-04 |
+
+The FEM converges at second order while it tracks the solution (error energy 1.5e-4, 9.3e-6,
+5.8e-7 at the first quarter period: 16x per halving) and then, on every mesh, departs from it within two or three
+periods by shear, as the material point runs do, and the finer the mesh the earlier: on 32 and
+64 elements it stops at t = 0.145 and 0.125 s (BSMPM on 64 cells: 0.148 s). At A = 0.05 m the
+same FEM on 32 elements runs to T = 0.2 s with an error energy that stays at 0.4-2.8e-6 (the
+last row). A random initial velocity
+of 1e-8 m/s (`--perturb 1e-8`) moves the stop on 32 elements only from 0.14542 to 0.14409 s: what
+seeds the growing modes in the unperturbed runs (the discretisation's own error or round-off) is
+not determined here.
+
+So **001's convergence set-up at A = 0.1 m and T = 0.2 s (ten periods) does not verify a method**:
+its exact solution is unstable, perturbations growing 16-60 times a period on the grids of the
+study, so an accurate discretisation departs from it within a few periods whatever its order,
+and refinement, which lowers the seed, raises the growth. This is why BSMPM breaks down on 64
+cells (the FEM breaks down on 32 and 64 elements at about the same time), and it bounds the
+target of issue 22 at A = 0.1: a method that keeps converging there to T would have to be
+dissipative enough to damp modes that grow 16-60x a period, which is not accuracy. Why MPM with
+the direct mapping survives on 16 and 32 cells where the FEM on 32 elements does not, with a
+larger error from the start (its error energy at the first quarter period is 4.4e-3 on 64 cells,
+the FEM's 5.8e-7), is not shown here. At A = 0.05 m, the
+amplitude of issue 22's target (T = 0.02 s), the exact solution is stable. `plate_mms_2d` warns
+(printed at the start and kept in `summary.json`'s `warnings`) when `mms.amplitude` exceeds
+0.08 `plate.length`, the largest amplitude found stable (for nu = 0.3; other Poisson ratios are
+not measured), and runs.
+
+Why TLS stops: the next section.
 """
 
 
@@ -4577,7 +4652,10 @@ grow. The same signature (growth under load at a rate independent of the time st
 B2-TLS with consistent mass shows on the column (section "PS-MPM with partially filled
 elements"), where the growing mode oscillates. A run that grows this way cannot be refused from its input (its
 particles, grid and settings are those of the small-amplitude plate, which converges); it
-stops at the first non-finite stress with the step and the particles named.
+stops at the first non-finite stress with the step and the particles named. On top of this
+growth of TLS's own, the exact solution at this amplitude is unstable (the subsection
+before): no accurate method stays close to it for these ten periods; what TLS can change is
+its own early growth, which the direct mapping on the same grid does not have.
 """
 
 

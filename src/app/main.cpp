@@ -93,7 +93,11 @@ int cmd_run(const std::string& config, const std::vector<std::string>& sets, std
         std::cout << fmt::format("  {:<34} {:.6e}\n", name, value.get<double>());
         any = true;
       }
-    if (!any) std::cout << "  errors: none (this benchmark has no exact or reference solution)\n";
+    // A run that stopped before time.end has no final errors (summary.json: null).
+    if (!any && r.exit_code != 0)
+      std::cout << "  errors: none (the run did not reach time.end)\n";
+    else if (!any)
+      std::cout << "  errors: none (this benchmark has no exact or reference solution)\n";
     std::cout << fmt::format("  conservation: mass {:.3e}, momentum {:.3e}; grid crossings {}\n",
                              r.diag.max_rel_mass_error, r.diag.max_rel_momentum_error,
                              r.diag.grid_crossings);

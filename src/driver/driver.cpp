@@ -458,6 +458,7 @@ nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& set
     j["failure"] = res.failure;
   }
   j["benchmark"] = res.benchmark;
+  if (!res.warnings.empty()) j["warnings"] = res.warnings;
   j["dim"] = res.dim;
   j["method"] = std::move(method);
   j["material"] = {{"model", std::string(material_name(material))},

@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <iostream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +38,7 @@ RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::stri
   Ulfem1D fem(pb, elements);
   RunResult res;
   res.benchmark = pb.benchmark;
+  res.warnings = pb.warnings;
   res.dim = 1;
   res.cells = elements;
   res.h = (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements);
@@ -154,6 +156,13 @@ RunResult run(const Config& cfg, const RunOptions& opt) {
       std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);
   if (!distributed)
     particles = std::visit([](const auto& pb) { return pb.particles.size(); }, problem);
+  // Before the first step, so that a long run shows them at once (opt.quiet on all but rank 0).
+  if (!opt.quiet)
+    std::visit(
+        [](const auto& pb) {
+          for (const std::string& w : pb.warnings) std::cerr << "mpm: warning: " << w << "\n";
+        },
+        problem);
   // A distributed run shares the cores of a machine among its processes there, and each holds
   // about its share of the particles.
   const int ranks = opt.comm ? opt.comm->size() : 1;

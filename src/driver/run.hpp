@@ -91,7 +91,8 @@ struct RunResult {
   double sort_seconds = 0.0;  // their wall time, part of ns_per_particle_step [s]
   ErrorNorms errors;
   Diagnostics diag;
-  nlohmann::ordered_json summary;  // what summary.json holds
+  nlohmann::ordered_json summary;     // what summary.json holds
+  std::vector<std::string> warnings;  // the problem's (Problem::warnings)
 };
 
 // Runs `cfg`; input errors throw InputError before the first step, numerical failures are

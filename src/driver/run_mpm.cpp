@@ -466,6 +466,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   OutputSession<Dim>& out = *out_session;
   RunResult res;
   res.benchmark = pb.benchmark;
+  res.warnings = pb.warnings;
   res.dim = Dim;
   res.cells = sim.grid.num_cells();
   res.h = sim.grid.h.maxCoeff();

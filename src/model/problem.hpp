@@ -73,6 +73,9 @@ struct Problem {
   // No exact solution: compare with an updated-Lagrangian FEM reference computed alongside
   // (reference.dofs nodes, D 5.4.1).
   bool fem_reference = false;  // empty when the benchmark has no exact solution
+  // What the set-up found questionable but not wrong (an input that makes the problem itself
+  // unstable, ...): printed when the run starts and kept in summary.json's "warnings".
+  std::vector<std::string> warnings;
 };
 
 using AnyProblem = std::variant<Problem<1>, Problem<2>, Problem<3>>;

@@ -1,14 +1,18 @@
 // The 2D axis-aligned vibration (001 eq. 38-42, D 3.4.1) checked against its definition by
 // central finite differences: v = du/dt, F = I + Grad u, the stress is the library's plane-strain
 // neo-Hookean law at that F, and the body force is the residual u_tt - Div P / rho0.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "../support/mms.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "material/materials.hpp"
+#include "model/problem.hpp"
+#include "setup/config.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {
@@ -97,6 +101,30 @@ TEST(PlateMms2DExact, NormalComponentVanishesOnEverySide) {
       EXPECT_NEAR(ex(Vec<2>(s, 1.0), t).u[1], 0.0, 1e-15);
       EXPECT_GT(std::abs(ex(Vec<2>(0.0, s), t).u[1]), 1e-3);
     }
+}
+
+TEST(PlateMms2D, WarnsAboveTheAmplitudeWhereItsExactSolutionIsUnstable) {
+  // docs/verification.md, "The exact solution at A = 0.1 m is unstable": perturbations of the
+  // exact solution grow above 0.08 L (scripts/plate_fem_check.py --floquet). The run is not
+  // refused (001's set-up is worth reproducing) but says so, naming the key and its line.
+  auto warnings = [](double A, double L) {
+    const std::string toml = fmt::format(
+        "benchmark = \"plate_mms_2d\"\n[grid]\ncells = 4\n[plate]\nlength = {}\n"
+        "[mms]\namplitude = {}\n[time]\ndt = 1e-5\nend = 1e-4\n[material]\nmodel = "
+        "\"neo_hookean\"\n"
+        "density = 1000.0\n"
+        "youngs_modulus = 1e7\n",
+        L, A);
+    return std::get<Problem<2>>(make_problem(Config::parse(toml, "plate.toml"))).warnings;
+  };
+  EXPECT_TRUE(warnings(0.05, 1.0).empty());
+  EXPECT_TRUE(warnings(0.08, 1.0).empty());
+  EXPECT_TRUE(warnings(0.1, 2.0).empty());  // the bound is relative to the plate's length
+  const auto w = warnings(0.1, 1.0);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("plate.toml:7"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("mms.amplitude = 0.1 m"), std::string::npos) << w[0];
+  EXPECT_EQ(warnings(-0.1, 1.0).size(), 1u);
 }
 
 }  // namespace
