@@ -118,47 +118,61 @@ def q1(xi, eta):
     return N, dxi, deta
 
 
-def run(n, A, T, dt, perturb, seed=1, report=True):
-    h = 1.0 / n
-    nn = n + 1
-    xs = np.linspace(0, 1, nn)
-    NX, NY = np.meshgrid(xs, xs, indexing="ij")
-    NX, NY = NX.ravel(), NY.ravel()  # node (i, j) -> i * nn + j
-    ii, jj = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    ii, jj = ii.ravel(), jj.ravel()
-    conn = np.stack([ii * nn + jj, (ii + 1) * nn + jj, (ii + 1) * nn + jj + 1, ii * nn + jj + 1], 1)
-    ne = conn.shape[0]
-    # Internal force: 2 x 2 Gauss.
-    g2, w2 = gauss(2)
-    dN = []  # (G, 4, 2) dN_a/dX_b
-    wg = []
-    for a, wa in zip(g2, w2):
-        for b, wb in zip(g2, w2):
-            _, dxi, deta = q1(a, b)
-            dN.append(np.stack([dxi * 2 / h, deta * 2 / h], 1))
-            wg.append(wa * wb * h * h / 4)
-    dN = np.array(dN)
-    wg = np.array(wg)
-    # Body force: 3 x 3 Gauss, fixed reference points.
-    g3, w3 = gauss(3)
-    N3, w3g, XG, YG = [], [], [], []
-    x0 = NX[conn[:, 0]]
-    y0 = NY[conn[:, 0]]
-    for a, wa in zip(g3, w3):
-        for b, wb in zip(g3, w3):
-            N, _, _ = q1(a, b)
-            N3.append(N)
-            w3g.append(wa * wb * h * h / 4)
-            XG.append(x0 + (a + 1) * h / 2)
-            YG.append(y0 + (b + 1) * h / 2)
-    N3 = np.array(N3)  # (G3, 4)
-    w3g = np.array(w3g)
-    XG = np.array(XG).T  # (E, G3)
-    YG = np.array(YG).T
-    mass = np.bincount(conn.ravel(), np.full(4 * ne, RHO0 * h * h / 4), minlength=nn * nn)
-    fix_x = (NX < 1e-12) | (NX > 1 - 1e-12)
-    fix_y = (NY < 1e-12) | (NY > 1 - 1e-12)
-    flat = conn.ravel()
+class Mesh:
+    """n x n Q1 elements on the unit square: nodes (i, j) -> i (n + 1) + j, the row-sum lumped
+    mass, the roller flags, and Gauss rules (quadrature)."""
+
+    def __init__(self, n):
+        self.h = h = 1.0 / n
+        self.nn = nn = n + 1
+        xs = np.linspace(0, 1, nn)
+        NX, NY = np.meshgrid(xs, xs, indexing="ij")
+        self.NX, self.NY = NX.ravel(), NY.ravel()
+        ii, jj = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+        ii, jj = ii.ravel(), jj.ravel()
+        self.conn = np.stack([ii * nn + jj, (ii + 1) * nn + jj, (ii + 1) * nn + jj + 1,
+                              ii * nn + jj + 1], 1)
+        self.flat = self.conn.ravel()
+        ne = self.conn.shape[0]
+        self.mass = np.bincount(self.flat, np.full(4 * ne, RHO0 * h * h / 4), minlength=nn * nn)
+        self.fix_x = (self.NX < 1e-12) | (self.NX > 1 - 1e-12)
+        self.fix_y = (self.NY < 1e-12) | (self.NY > 1 - 1e-12)
+
+    def quadrature(self, m):
+        """m x m Gauss points of every element: N (G, 4), dN/dX (G, 4, 2), weights (G,), and
+        their reference positions X, Y (E, G)."""
+        h = self.h
+        g, w = gauss(m)
+        x0, y0 = self.NX[self.conn[:, 0]], self.NY[self.conn[:, 0]]
+        N, dN, wg, XG, YG = [], [], [], [], []
+        for a, wa in zip(g, w):
+            for b, wb in zip(g, w):
+                Na, dxi, deta = q1(a, b)
+                N.append(Na)
+                dN.append(np.stack([dxi * 2 / h, deta * 2 / h], 1))
+                wg.append(wa * wb * h * h / 4)
+                XG.append(x0 + (a + 1) * h / 2)
+                YG.append(y0 + (b + 1) * h / 2)
+        return np.array(N), np.array(dN), np.array(wg), np.array(XG).T, np.array(YG).T
+
+    def accelerations(self, fe):
+        """Element forces (E, 4, 2) summed into the nodes, divided by the lumped mass, the
+        normal components zeroed on the rollers."""
+        nodes = self.nn * self.nn
+        f = np.stack([np.bincount(self.flat, fe[..., d].ravel(), minlength=nodes)
+                      for d in range(2)], 1)
+        a = f / self.mass[:, None]
+        a[self.fix_x, 0] = 0
+        a[self.fix_y, 1] = 0
+        return a
+
+
+def run(n, A, T, dt, perturb, seed=1):
+    mesh = Mesh(n)
+    NX, NY, conn, mass = mesh.NX, mesh.NY, mesh.conn, mesh.mass
+    fix_x, fix_y, nn = mesh.fix_x, mesh.fix_y, mesh.nn
+    _, dN, wg, _, _ = mesh.quadrature(2)  # internal force
+    N3, _, w3g, XG, YG = mesh.quadrature(3)  # body force, at fixed reference points
 
     def accel(u, t):
         ue = u[conn]  # (E, 4, 2)
@@ -169,11 +183,7 @@ def run(n, A, T, dt, perturb, seed=1, report=True):
         fe = -np.einsum("egdb,gab,g->ead", P, dN, wg)
         b = body_force(XG, YG, t, A)  # (E, G3, 2)
         fe += RHO0 * np.einsum("egd,ga,g->ead", b, N3, w3g)
-        f = np.stack([np.bincount(flat, fe[..., d].ravel(), minlength=nn * nn) for d in range(2)], 1)
-        a = f / mass[:, None]
-        a[fix_x, 0] = 0
-        a[fix_y, 1] = 0
-        return a, F
+        return mesh.accelerations(fe), F
 
     u = np.zeros((nn * nn, 2))
     v = np.stack(exact_v(NX, NY, 0.0, A), 1)
@@ -230,42 +240,14 @@ def floquet(n, A, periods, dt, seed=2):
     equation rho0 w'' = Div(dP/dF(F_exact(X, t)) [Grad w]) (no body force: it does not depend on
     w), rollers, from a random start, renormalised every period. After the first periods the
     norm grows by the largest Floquet multiplier's modulus per period; returns those factors."""
-    h = 1.0 / n
-    nn = n + 1
-    xs = np.linspace(0, 1, nn)
-    NX, NY = np.meshgrid(xs, xs, indexing="ij")
-    NX, NY = NX.ravel(), NY.ravel()
-    ii, jj = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    ii, jj = ii.ravel(), jj.ravel()
-    conn = np.stack([ii * nn + jj, (ii + 1) * nn + jj, (ii + 1) * nn + jj + 1, ii * nn + jj + 1], 1)
-    ne = conn.shape[0]
-    g2, w2 = gauss(2)
-    dN, wg, XG, YG = [], [], [], []
-    x0 = NX[conn[:, 0]]
-    y0 = NY[conn[:, 0]]
-    for a, wa in zip(g2, w2):
-        for b, wb in zip(g2, w2):
-            _, dxi, deta = q1(a, b)
-            dN.append(np.stack([dxi * 2 / h, deta * 2 / h], 1))
-            wg.append(wa * wb * h * h / 4)
-            XG.append(x0 + (a + 1) * h / 2)
-            YG.append(y0 + (b + 1) * h / 2)
-    dN, wg = np.array(dN), np.array(wg)
-    XG, YG = np.array(XG).T, np.array(YG).T  # (E, G)
-    mass = np.bincount(conn.ravel(), np.full(4 * ne, RHO0 * h * h / 4), minlength=nn * nn)
-    fix_x = (NX < 1e-12) | (NX > 1 - 1e-12)
-    fix_y = (NY < 1e-12) | (NY > 1 - 1e-12)
-    flat = conn.ravel()
+    mesh = Mesh(n)
+    fix_x, fix_y, mass, conn, nn = mesh.fix_x, mesh.fix_y, mesh.mass, mesh.conn, mesh.nn
+    _, dN, wg, XG, YG = mesh.quadrature(2)
 
     def accel(w, t):
         dF = np.einsum("ead,gab->egdb", w[conn], dN)
         dP = dpiola(exact_F(XG, YG, t, A), dF)
-        fe = -np.einsum("egdb,gab,g->ead", dP, dN, wg)
-        f = np.stack([np.bincount(flat, fe[..., d].ravel(), minlength=nn * nn) for d in range(2)], 1)
-        a = f / mass[:, None]
-        a[fix_x, 0] = 0
-        a[fix_y, 1] = 0
-        return a
+        return mesh.accelerations(-np.einsum("egdb,gab,g->ead", dP, dN, wg))
 
     rng = np.random.default_rng(seed)
     w = np.zeros((nn * nn, 2))
