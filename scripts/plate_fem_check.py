@@ -26,7 +26,7 @@ at the first non-finite value, the RMS displacement error at the nodes and the l
 
 Usage:
     python3 scripts/plate_fem_check.py --cells 16 32 64 [--amplitude 0.1] [--end 0.2]
-        [--dt 1e-5] [--perturb 1e-6] [--check]
+        [--dt 1e-5] [--perturb 1e-6] [--poisson 0.3] [--check] [--floquet PERIODS]
 """
 
 import argparse
@@ -288,15 +288,19 @@ def main():
     ap.add_argument("--dt", type=float, default=1e-5)
     ap.add_argument("--perturb", type=float, default=0.0,
                     help="standard deviation of a random initial velocity added [m/s]")
+    ap.add_argument("--poisson", type=float, default=NU, help="Poisson's ratio (default 0.3)")
     ap.add_argument("--check", action="store_true",
                     help="compare the finite-difference body force with 001 eq. 42 (pi^2)")
     ap.add_argument("--floquet", type=int, default=0, metavar="PERIODS",
                     help="instead of the runs: growth per period of the linearised equation "
                     "about the exact solution, over this many periods")
     args = ap.parse_args()
+    global LAM, MU
+    LAM = E * args.poisson / ((1 + args.poisson) * (1 - 2 * args.poisson))
+    MU = E / (2 * (1 + args.poisson))
     if args.floquet:
-        print(f"A = {args.amplitude} m, dt = {args.dt} s: growth of the linearised problem's "
-              "norm per period")
+        print(f"A = {args.amplitude} m, nu = {args.poisson}, dt = {args.dt} s: growth of the "
+              "linearised problem's norm per period")
         for n in args.cells:
             f = floquet(n, args.amplitude, args.floquet, args.dt)
             tail = f[len(f) // 2:]

@@ -105,26 +105,38 @@ TEST(PlateMms2DExact, NormalComponentVanishesOnEverySide) {
 
 TEST(PlateMms2D, WarnsAboveTheAmplitudeWhereItsExactSolutionIsUnstable) {
   // docs/verification.md, "The exact solution at A = 0.1 m is unstable": perturbations of the
-  // exact solution grow above 0.08 L (scripts/plate_fem_check.py --floquet). The run is not
-  // refused (001's set-up is worth reproducing) but says so, naming the key and its line.
-  auto warnings = [](double A, double L) {
+  // exact solution grow above an amplitude that falls as Poisson's ratio rises (0.08 L at
+  // nu = 0.3; scripts/plate_fem_check.py --floquet). The run is not refused (001's set-up is
+  // worth reproducing) but says so, naming the key and its line.
+  auto warnings = [](double A, double L, double nu) {
     const std::string toml = fmt::format(
         "benchmark = \"plate_mms_2d\"\n[grid]\ncells = 4\n[plate]\nlength = {}\n"
-        "[mms]\namplitude = {}\n[time]\ndt = 1e-5\nend = 1e-4\n[material]\nmodel = "
-        "\"neo_hookean\"\n"
-        "density = 1000.0\n"
-        "youngs_modulus = 1e7\n",
-        L, A);
+        "[mms]\namplitude = {}\n[time]\ndt = 1e-5\nend = 1e-4\n[material]\n"
+        "model = \"neo_hookean\"\ndensity = 1000.0\nyoungs_modulus = 1e7\npoisson_ratio = {}\n",
+        L, A, nu);
     return std::get<Problem<2>>(make_problem(Config::parse(toml, "plate.toml"))).warnings;
   };
-  EXPECT_TRUE(warnings(0.05, 1.0).empty());
-  EXPECT_TRUE(warnings(0.08, 1.0).empty());
-  EXPECT_TRUE(warnings(0.1, 2.0).empty());  // the bound is relative to the plate's length
-  const auto w = warnings(0.1, 1.0);
+  EXPECT_TRUE(warnings(0.05, 1.0, 0.3).empty());
+  EXPECT_TRUE(warnings(0.08, 1.0, 0.3).empty());
+  EXPECT_TRUE(warnings(0.1, 2.0, 0.3).empty());  // the bound is relative to the plate's length
+  const auto w = warnings(0.1, 1.0, 0.3);
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("plate.toml:7"), std::string::npos) << w[0];
-  EXPECT_NE(w[0].find("mms.amplitude = 0.1 m"), std::string::npos) << w[0];
-  EXPECT_EQ(warnings(-0.1, 1.0).size(), 1u);
+  EXPECT_NE(w[0].find("mms.amplitude = 0.1 m is above 0.08 plate.length"), std::string::npos)
+      << w[0];
+  EXPECT_EQ(w[0].find("not measured"), std::string::npos) << w[0];
+  EXPECT_EQ(warnings(-0.1, 1.0, 0.3).size(), 1u);
+  // By Poisson's ratio: 0.1 L is stable at nu = 0.1, 0.06 L is not at nu = 0.4; a ratio between
+  // two measured ones takes the bound of the larger, one above them all says so.
+  EXPECT_TRUE(warnings(0.1, 1.0, 0.1).empty());
+  EXPECT_EQ(warnings(0.06, 1.0, 0.4).size(), 1u);
+  const auto between = warnings(0.085, 1.0, 0.25);
+  ASSERT_EQ(between.size(), 1u);
+  EXPECT_NE(between[0].find("above 0.08 plate.length"), std::string::npos) << between[0];
+  EXPECT_NE(between[0].find("0.25 was not measured"), std::string::npos) << between[0];
+  const auto above = warnings(0.04, 1.0, 0.49);
+  ASSERT_EQ(above.size(), 1u);
+  EXPECT_NE(above[0].find("above the largest ratio measured"), std::string::npos) << above[0];
 }
 
 }  // namespace
