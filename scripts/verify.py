@@ -2744,7 +2744,7 @@ With dt halved the factors of the 16-element run are the same to four digits (16
 sixth period with both steps): they are the problem's, not the time integration's. Up to
 A = 0.08 m perturbations do not grow (the factors scatter by a few per cent about 1, as at
 A = 0); from A = 0.09 m they do, and at 001's A = 0.1 m by a factor that rises under refinement,
-by less at each halving (3.28, 16.3, 42.1, 59.5). The dispersion of the base state is extreme
+by less at each halving (3.28, 16.3, 42.1, 59.5). The base state's deformation is extreme
 there: F_xx spans 0.37-1.63 and J 0.137-2.65 over each period, and the largest acoustic stiffness
 (mu + (mu + lambda (1 - ln J)) |F^-T n|^2) rises from 1.35e7 Pa at rest to 1.58e8 Pa at the
 largest compression. Which resonance makes the modes grow (the growth looks parametric: a
@@ -2774,7 +2774,7 @@ not determined here.
 So **001's convergence set-up at A = 0.1 m and T = 0.2 s (ten periods) does not verify a method**:
 its exact solution is unstable, perturbations growing 16-60 times a period on the grids of the
 study, so an accurate discretisation departs from it within a few periods whatever its order,
-and refinement, which lowers the seed, raises the growth. This is why BSMPM breaks down on 64
+and refinement, which lowers the error it starts from, raises the growth. This is why BSMPM breaks down on 64
 cells (the FEM breaks down on 32 and 64 elements at about the same time), and it bounds the
 target of issue 22 at A = 0.1: a method that keeps converging there to T would have to be
 dissipative enough to damp modes that grow 16-60x a period, which is not accuracy. Why MPM with
