@@ -103,18 +103,24 @@ TEST(PlateMms2DExact, NormalComponentVanishesOnEverySide) {
     }
 }
 
+// The plate's problem on 4 x 4 cells (E = 1e7 Pa, rho0 = 1000 kg/m^3: c = 100 m/s, one period of
+// the exact solution 2 L / c = 0.02 s at L = 1 m).
+Problem<2> small_plate(double A, double L, double nu, double end, std::string extra = "") {
+  const std::string toml = fmt::format(
+      "benchmark = \"plate_mms_2d\"\n[grid]\ncells = 4\n[plate]\nlength = {}\n"
+      "[mms]\namplitude = {}\n{}[time]\ndt = 1e-5\nend = {}\n[material]\n"
+      "model = \"neo_hookean\"\ndensity = 1000.0\nyoungs_modulus = 1e7\npoisson_ratio = {}\n",
+      L, A, extra, end, nu);
+  return std::get<Problem<2>>(make_problem(Config::parse(toml, "plate.toml")));
+}
+
 TEST(PlateMms2D, WarnsAboveTheAmplitudeWhereItsExactSolutionIsUnstable) {
   // docs/verification.md, "The exact solution at A = 0.1 m is unstable": perturbations of the
   // exact solution grow above an amplitude that falls as Poisson's ratio rises (0.08 L at
-  // nu = 0.3; scripts/plate_fem_check.py --floquet). The run is not refused (001's set-up is
-  // worth reproducing) but says so, naming the key and its line.
+  // nu = 0.3; scripts/plate_fem_check.py --floquet). Within one period the run says so, naming
+  // the key and its line (the next test: longer runs are refused).
   auto warnings = [](double A, double L, double nu) {
-    const std::string toml = fmt::format(
-        "benchmark = \"plate_mms_2d\"\n[grid]\ncells = 4\n[plate]\nlength = {}\n"
-        "[mms]\namplitude = {}\n[time]\ndt = 1e-5\nend = 1e-4\n[material]\n"
-        "model = \"neo_hookean\"\ndensity = 1000.0\nyoungs_modulus = 1e7\npoisson_ratio = {}\n",
-        L, A, nu);
-    return std::get<Problem<2>>(make_problem(Config::parse(toml, "plate.toml"))).warnings;
+    return small_plate(A, L, nu, 1e-4).warnings;
   };
   EXPECT_TRUE(warnings(0.05, 1.0, 0.3).empty());
   EXPECT_TRUE(warnings(0.08, 1.0, 0.3).empty());
@@ -137,6 +143,31 @@ TEST(PlateMms2D, WarnsAboveTheAmplitudeWhereItsExactSolutionIsUnstable) {
   const auto above = warnings(0.04, 1.0, 0.49);
   ASSERT_EQ(above.size(), 1u);
   EXPECT_NE(above[0].find("above the largest ratio measured"), std::string::npos) << above[0];
+}
+
+TEST(PlateMms2D, RefusesMoreThanAPeriodAboveTheStableAmplitudeUnlessAllowed) {
+  // Over more than one period the perturbations compound (16-60x a period at A = 0.1 L): 001's
+  // set-up (A = 0.1 m, T = 0.2 s, ten periods) is refused up front with the reason, the lines
+  // of both keys and the ways out; mms.allow_unstable runs it with the warning.
+  try {
+    (void)small_plate(0.1, 1.0, 0.3, 0.2);
+    ADD_FAILURE() << "001's set-up was not refused";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("plate.toml:7"), std::string::npos) << m;   // mms.amplitude
+    EXPECT_NE(m.find("plate.toml:10"), std::string::npos) << m;  // time.end
+    EXPECT_NE(m.find("time.end = 0.2 s spans 10 of its periods"), std::string::npos) << m;
+    EXPECT_NE(m.find("mms.amplitude <= 0.08 m, or time.end <= 0.02 s"), std::string::npos) << m;
+    EXPECT_NE(m.find("mms.allow_unstable = true"), std::string::npos) << m;
+  }
+  EXPECT_THROW((void)small_plate(-0.1, 1.0, 0.3, 0.021), InputError);
+  // One period exactly, a stable amplitude, a longer plate (period 0.04 s, bound 0.16 m) and
+  // the opt-in all run; the opt-in still warns.
+  EXPECT_EQ(small_plate(0.1, 1.0, 0.3, 0.02).warnings.size(), 1u);
+  EXPECT_TRUE(small_plate(0.05, 1.0, 0.3, 0.2).warnings.empty());
+  EXPECT_TRUE(small_plate(0.1, 2.0, 0.3, 0.2).warnings.empty());
+  EXPECT_THROW((void)small_plate(0.2, 2.0, 0.3, 0.041), InputError);
+  EXPECT_EQ(small_plate(0.1, 1.0, 0.3, 0.2, "allow_unstable = true\n").warnings.size(), 1u);
 }
 
 }  // namespace
