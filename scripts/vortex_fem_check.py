@@ -74,6 +74,10 @@ import time
 
 import numpy as np
 
+# The Q1 shape functions of the plate's FEM (the same element; this directory is on sys.path
+# when the script runs).
+from plate_fem_check import q1  # noqa: E402
+
 RHO0 = 1000.0
 E = 1000.0
 NU = 0.3
@@ -206,16 +210,6 @@ def closed_form_b(X, Y, t, A):
 
 
 # ----------------------------------------------------------------------------- mesh
-
-def q1(xi, eta):
-    """Q1 shape functions and reference derivatives, nodes (-1,-1),(1,-1),(1,1),(-1,1)."""
-    sx = np.array([-1, 1, 1, -1.0])
-    sy = np.array([-1, -1, 1, 1.0])
-    N = 0.25 * (1 + sx * xi) * (1 + sy * eta)
-    dxi = 0.25 * sx * (1 + sy * eta)
-    deta = 0.25 * sy * (1 + sx * xi)
-    return N, dxi, deta
-
 
 class Quadrature:
     """Points (xi_g, eta_g) with weights in every element: N (G, 4), dN/dX (E, G, 4, 2),
