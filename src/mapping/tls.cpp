@@ -16,6 +16,10 @@ namespace mpm {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// The shifted Cholesky tests condition() spends on one element before it computes the
+// eigenvalues: each halves the logarithmic width of a bracket, so 16 settle every element whose
+// condition number is not within a few per cent of the limit.
+constexpr int kConditionTests = 16;
 // Two positions closer than this (in units of the element half-width) are one point: they add
 // no new direction to D.
 constexpr double kCoincident = 1e-10;
@@ -100,32 +104,6 @@ void spd_inverse(const In& A, int first, int n, Out& inv) {
       n, [&]<int N>(std::integral_constant<int, N>) { spd_inverse_n<N>(A, first, inv); });
 }
 
-// ||M^4||_F for the symmetric n x n block M of A at rows and columns first..first + n - 1 (infinite
-// or NaN when an entry is not finite). With B = M^2, symmetric, ||M^4||_F^2 = sum_ij (B^2)_ij^2
-// and (B^2)_ij = B_i . B_j (rows), so each square needs only its upper triangle: 2 n^2 (n + 1) / 2
-// multiplications instead of two full products of run-time size (Eigen's dynamic blocks were 9 %
-// of a P1-TLS step at A = 0.1, BENCHMARKS.md).
-template <class M>
-double frobenius_fourth_power(const M& A, int first, int n) {
-  constexpr int K = M::RowsAtCompileTime;
-  std::array<double, K * K> b{};  // B = M^2, row-major, both triangles
-  for (int i = 0; i < n; ++i)
-    for (int j = i; j < n; ++j) {
-      double v = 0.0;
-      for (int k = 0; k < n; ++k) v += A(first + i, first + k) * A(first + k, first + j);
-      b[static_cast<std::size_t>(i * K + j)] = b[static_cast<std::size_t>(j * K + i)] = v;
-    }
-  double sum = 0.0;
-  for (int i = 0; i < n; ++i)
-    for (int j = i; j < n; ++j) {
-      double v = 0.0;
-      for (int k = 0; k < n; ++k)
-        v += b[static_cast<std::size_t>(i * K + k)] * b[static_cast<std::size_t>(j * K + k)];
-      sum += (i == j ? 1.0 : 2.0) * v * v;
-    }
-  return std::sqrt(sum);
-}
-
 // ||M||_F of the n x n block at first..first + n - 1.
 template <class M>
 double frobenius(const M& A, int first, int n) {
@@ -144,6 +122,35 @@ double norm_inf(const M& A, int first, int n) {
     m = std::max(m, r);
   }
   return m;
+}
+
+// Whether sign (M - sigma I) is positive definite, for the symmetric n x n block M of A at rows
+// and columns first..first + n - 1: an LDL^T factorisation without square roots that stops at
+// the first pivot that is not positive (or not finite). About n^3 / 3 multiplications, against
+// about 6,600 instructions for Eigen's eigenvalues of a 6 x 6 block.
+template <class M>
+bool shifted_positive_definite(const M& A, int first, int n, double sigma, double sign) {
+  constexpr int K = M::RowsAtCompileTime;
+  std::array<double, K * K> l{};  // L (unit lower triangular, row-major) times D, column by column
+  std::array<double, K> d_inv{};
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < j; ++i) {
+      // w_ji = (L D)_ji = a_ji - sum_k w_jk w_ik / d_k; l holds w.
+      double v = sign * A(first + j, first + i);
+      for (int k = 0; k < i; ++k)
+        v -= l[static_cast<std::size_t>(j * K + k)] * l[static_cast<std::size_t>(i * K + k)] *
+             d_inv[static_cast<std::size_t>(k)];
+      l[static_cast<std::size_t>(j * K + i)] = v;
+    }
+    double d = sign * (A(first + j, first + j) - sigma);
+    for (int k = 0; k < j; ++k) {
+      const double w = l[static_cast<std::size_t>(j * K + k)];
+      d -= w * w * d_inv[static_cast<std::size_t>(k)];
+    }
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+    d_inv[static_cast<std::size_t>(j)] = 1.0 / d;
+  }
+  return true;
 }
 
 template <int K>
@@ -483,31 +490,55 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
       }
       return bound;
     }
-    // A lower bound that already exceeds the limit fails the test without the eigenvalues (in
-    // deformed layouts most eigenvalue solves were of elements far above the limit: Eigen's
-    // solver took a third of a TLS step at A = 0.1 on the plate). For symmetric positive definite
-    // M with eigenvalues mu_i, sum mu_i^8 = ||M^4||_F^2, so lambda_max(M) >= (||M^4||_F^2 /
-    // n)^(1/8) and cond(S) = lambda_max(S) lambda_max(S^{-1}) >= (||S^4||_F ||S^{-4}||_F)^(1/4) /
-    // n^(1/4). Only where rounding cannot reach the limit (the margin, as above; a failed or
-    // non-finite inverse goes to the eigenvalues). The value returned then is this bound, not
-    // cond(S): the elements it rejects are reported only through their completion (fitted elements
-    // report the condition of the system they keep; `none` recomputes it for its message).
+    // A pivot of the Cholesky factorisation that is not positive (the inverse then has entries
+    // that are not finite) proves cond(S) above any limit the bounds serve: in floating point the
+    // factorisation of a symmetric positive definite matrix runs to completion when n^2 (n + 1)
+    // u cond(S) < 1 roughly (Demmel; Higham, Accuracy and Stability of Numerical Algorithms, 2nd
+    // ed., Thm. 10.7 with van der Sluis's bound for the diagonal scaling), i.e. for cond(S) below
+    // 8e12 when n <= 10, far above the ceiling 1e10. Elements with fewer distinct points than
+    // terms are of this kind; the eigenvalues would say the same (infinite or above 1e12).
+    if (!std::isfinite(bound) && settings_.max_condition <= 1e10) return kInf;
+    // Otherwise bracket the two factors of cond(S) = lambda_max(S) lambda_max(S^{-1}) and narrow
+    // the brackets until they settle the test (in deformed layouts about half the elements reached
+    // the eigenvalues here, each an Eigen solve of about 6,600 instructions, BENCHMARKS.md). For
+    // symmetric positive definite M with eigenvalues mu_i, max_i M_ii <= lambda_max(M),
+    // ||M||_F / sqrt(n) <= lambda_max(M) <= min(||M||_F, ||M||_inf). A shifted Cholesky test
+    // narrows a bracket at its geometric mean: sigma I - S positive definite <=> lambda_max(S) <
+    // sigma, and S - I / sigma positive definite <=> lambda_max(S^{-1}) < sigma. Only where
+    // rounding cannot reach the limit (the test's backward error is about n eps ||S||, i.e. n eps
+    // cond(S) relative to lambda_min: far inside the margin below the ceiling 1e10; a failed or
+    // non-finite inverse goes to the eigenvalues). Both decisions are those of the eigenvalues
+    // outside the margin; the value returned is the bracket's end that decided (a lower bound
+    // when rejected: the elements rejected here are reported only through their completion, and
+    // `none` recomputes the condition for its message). The inverse is not handed on where the
+    // brackets accept (factorise forms its own, as after the eigenvalues), so the fits are those
+    // of the eigenvalue test, bit for bit.
     if (settings_.max_condition <= 1e10) {
-      // First the same bound with the squares, sum mu_i^2 = ||M||_F^2, which needs no product:
-      // cond(S) >= ||S||_F ||S^{-1}||_F / n. It rejects the elements far above the limit (most
-      // of those at large deformation) before the fourth powers.
-      const double lower2 = frobenius(S, first, n) * frobenius(inv, 0, n) / n;
-      if (std::isfinite(lower2) && lower2 * (1.0 - 1e-4) > settings_.max_condition) return lower2;
-      const double f = std::sqrt(
-          std::sqrt(frobenius_fourth_power(S, first, n) * frobenius_fourth_power(inv, 0, n)));
-      const double lower = f / std::sqrt(std::sqrt(static_cast<double>(n)));
-      if (std::isfinite(lower) && lower * (1.0 - 1e-4) > settings_.max_condition) return lower;
-      // The same sums bound cond(S) from above too, lambda_max(M) <= ||M^4||_F^(1/4), more
-      // tightly than the infinity norms (by at most n^(1/4) against n): an element between the
-      // two bounds of the infinity norms is often settled here without the eigenvalues. The
-      // inverse is not handed on (factorise forms its own, as after the eigenvalues), so the fits
-      // are those of the eigenvalue test, bit for bit; the value returned is this bound.
-      if (std::isfinite(f) && f <= 1e10 && f * (1.0 + 1e-4) <= settings_.max_condition) return f;
+      double lo_s = 0.0, lo_i = 0.0;
+      for (int i = 0; i < n; ++i) {
+        lo_s = std::max(lo_s, S(first + i, first + i));
+        lo_i = std::max(lo_i, inv(i, i));
+      }
+      const double root_n = std::sqrt(static_cast<double>(n));
+      const double f_s = frobenius(S, first, n), f_i = frobenius(inv, 0, n);
+      lo_s = std::max(lo_s, f_s / root_n);
+      lo_i = std::max(lo_i, f_i / root_n);
+      double hi_s = std::min(f_s, norm_inf(S, first, n)), hi_i = std::min(f_i, norm_inf(inv, 0, n));
+      if (std::isfinite(hi_s) && std::isfinite(hi_i) && lo_s > 0.0 && lo_i > 0.0) {
+        for (int test = 0;; ++test) {
+          const double lower = lo_s * lo_i, upper = hi_s * hi_i;
+          if (lower * (1.0 - 1e-4) > settings_.max_condition) return lower;
+          if (upper <= 1e10 && upper * (1.0 + 1e-4) <= settings_.max_condition) return upper;
+          if (test == kConditionTests) break;
+          if (hi_s * lo_i >= hi_i * lo_s) {  // the wider bracket (hi / lo) first
+            const double sigma = std::sqrt(lo_s * hi_s);
+            (shifted_positive_definite(S, first, n, sigma, -1.0) ? hi_s : lo_s) = sigma;
+          } else {
+            const double sigma = std::sqrt(lo_i * hi_i);
+            (shifted_positive_definite(S, first, n, 1.0 / sigma, 1.0) ? hi_i : lo_i) = sigma;
+          }
+        }
+      }
     }
   }
   return condition_number(S, first, t);
@@ -518,8 +549,15 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
 template <int Dim>
 bool BasicTlsReconstruction<Dim>::well_posed(const Matrix& D, int distinct, int t, double& cond,
                                              Matrix* s_inv, bool* has_s_inv) const {
+  // Too few distinct points fail whatever the condition number; the value is then not used
+  // (a failed element's condition is recomputed where it is reported, system_pass).
+  if (distinct < t - (settings_.conservative_only ? 1 : 0)) {
+    cond = kInf;
+    if (has_s_inv != nullptr) *has_s_inv = false;
+    return false;
+  }
   cond = condition(D, t, s_inv, has_s_inv);
-  return distinct >= t - (settings_.conservative_only ? 1 : 0) && cond <= settings_.max_condition;
+  return cond <= settings_.max_condition;
 }
 
 // D 5.2.3: virtual points on each face whose neighbour fits all n_b terms from its own points,

@@ -117,11 +117,11 @@ struct TlsSettings {
   // Every element's condition number from the eigenvalues of D (TlsElementInfo::condition,
   // TlsReport::max_condition). false: an element whose bound ||D||_inf ||D^{-1}||_inf (on the
   // orthonormal basis, at least cond_2) already meets max_condition keeps the bound, which saves
-  // the 6 x 6 eigensolve that was a quarter of a 2D TLS step; otherwise lower and upper bounds
-  // from the Frobenius norms of D, D^{-1} and their fourth powers settle most of the rest
-  // (condition()). The decisions are the same (a bound is only used where it proves cond <=
-  // max_condition or cond > max_condition), the numbers reported are then bounds. The 2D MPM
-  // runs use false (method_settings.cpp).
+  // the 6 x 6 eigensolve that was a quarter of a 2D TLS step; otherwise a failed Cholesky pivot
+  // rejects, and brackets of lambda_max(D) and lambda_max(D^{-1}), narrowed by shifted Cholesky
+  // tests, settle nearly all of the rest (condition()). The decisions are the same (a bound is
+  // only used where it proves cond <= max_condition or cond > max_condition), the numbers
+  // reported are then bounds. The 2D MPM runs use false (method_settings.cpp).
   bool exact_condition = true;
   // The particles' velocity gradients for the stress update as the adjoint of the force
   // (issue 22 item 3; docs/verification.md, "A TLS whose strain rate is the adjoint of its

@@ -68,11 +68,12 @@ TEST(TlsRobust, CrowdedPointsReduceUnderTheLimit) {
   EXPECT_EQ(loose.set_points(unit_cells(1, 1), std::span<const Vec<2>>(x)).full, 1);
 }
 
-// The bounds that spare the eigenvalues (TlsSettings::exact_condition = false: an upper bound
-// accepts, a lower bound from ||S^4||_F ||S^-4||_F rejects) decide every element as the
-// eigenvalues do: random layouts of 1-14 points per element, uniform, squeezed towards a line
-// or a corner (the deformed layouts where most fits fail the limit), limits 3, 10 and 100, with
-// `reduce` (terms kept) and `none` (failures, and the first failure's condition, exact).
+// The bounds that spare the eigenvalues (TlsSettings::exact_condition = false: the infinity norms
+// accept, brackets of lambda_max(S) and lambda_max(S^-1) narrowed by shifted Cholesky tests
+// accept or reject) decide every element as the eigenvalues do: random layouts of 1-14 points
+// per element, uniform, squeezed towards a line or a corner (the deformed layouts where most fits
+// fail the limit), limits 3, 10, 100 and 1e4, with `reduce` (terms kept) and `none` (failures,
+// and the first failure's condition, exact).
 TEST(TlsRobust, ConditionBoundsDecideAsTheEigenvaluesDo) {
   const int n = 12;
   std::mt19937 rng(7);
@@ -92,7 +93,7 @@ TEST(TlsRobust, ConditionBoundsDecideAsTheEigenvaluesDo) {
     }
   }
   int reduced = 0;
-  for (const double limit : {3.0, 10.0, 100.0}) {
+  for (const double limit : {3.0, 10.0, 100.0, 1e4}) {
     for (const TlsCompletion completion : {TlsCompletion::Reduce, TlsCompletion::None}) {
       TlsSettings s;
       s.completion = completion;
