@@ -506,8 +506,8 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
     // narrows a bracket at its geometric mean: sigma I - S positive definite <=> lambda_max(S) <
     // sigma, and S - I / sigma positive definite <=> lambda_max(S^{-1}) < sigma. Only where
     // rounding cannot reach the limit (the test's backward error is about n eps ||S||, i.e. n eps
-    // cond(S) relative to lambda_min: far inside the margin below the ceiling 1e10; a failed or
-    // non-finite inverse goes to the eigenvalues). Both decisions are those of the eigenvalues
+    // cond(S) relative to lambda_min: far inside the margin below the ceiling 1e10; 16 tests that
+    // do not settle it go to the eigenvalues). Both decisions are those of the eigenvalues
     // outside the margin; the value returned is the bracket's end that decided (a lower bound
     // when rejected: the elements rejected here are reported only through their completion, and
     // `none` recomputes the condition for its message). The inverse is not handed on where the
