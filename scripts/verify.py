@@ -5326,23 +5326,22 @@ def sec_item3_why(R, ctx):
         return beats and lo is not None and lo >= 1.0
 
     bases = (("P1", "linear"), ("B2", "bspline2"))
+    def stress_row(m, ppc, w):
+        return (f"| {m} | {ppc} | " + " | ".join(cell(w, c) for c in ITEM3_CELLS) + " | "
+                + ", ".join(o(order(w, a, b)) or "-" for a, b in zip(ITEM3_CELLS, ITEM3_CELLS[1:]))
+                + " |")
+
     tls_rows, ratio_rows, met = [], [], {9: [], 16: []}
     for key, ppc in (("tls9", 9), ("tls16", 16)):
         for _, d in bases:
             ref, v = s(key, f"{d}/direct"), s(key, f"{d}/tls")
-            for m, w in ((f"{d}/direct", ref), (f"{d}/tls", v)):
-                tls_rows.append(f"| {m} | {ppc} | " + " | ".join(cell(w, c) for c in ITEM3_CELLS)
-                                + " | " + ", ".join(o(order(w, a, b)) or "-" for a, b in
-                                                    zip(ITEM3_CELLS, ITEM3_CELLS[1:])) + " |")
+            tls_rows += [stress_row(f"{d}/direct", ppc, ref), stress_row(f"{d}/tls", ppc, v)]
             ratio_rows.append(f"| {d}/tls | {ppc} | " + " | ".join(
                 f"{ref[c] / v[c]:.2f}" if ref.get(c) and v.get(c) else "-" for c in ITEM3_CELLS)
                 + " |")
             if beats_and_keeps(ref, v):
                 met[ppc].append(f"{d}/tls")
-    for _, d in bases:
-        v = s("tls25", f"{d}/tls")
-        tls_rows.append(f"| {d}/tls | 25 | - | - | " + " | ".join(cell(v, c) for c in fine)
-                        + f" | -, -, {o(order(v, *fine)) or '-'} |")
+    tls_rows += [stress_row(f"{d}/tls", 25, s("tls25", f"{d}/tls")) for _, d in bases]
     dt_rows = []
     for _, d in bases:
         v9, v2 = s("tls9", f"{d}/tls"), s("dt2", f"{d}/tls")

@@ -479,7 +479,7 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
     // cond_2(S) <= ||S||_inf ||S^{-1}||_inf (||A||_2 <= ||A||_inf for symmetric A): when this
     // bound already meets the limit, the eigenvalues are not needed. Its rounding error is about
     // n cond eps relative, hence the margin and the ceiling (a failed or non-finite inverse fails
-    // the test and goes to the eigenvalues).
+    // the test; it is rejected below).
     Matrix inv;
     spd_inverse(S, first, n, inv);
     const double bound = norm_inf(S, first, n) * norm_inf(inv, 0, n);
@@ -490,6 +490,8 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
       }
       return bound;
     }
+    // Above the ceiling rounding could reach the limit: only the eigenvalues decide there.
+    if (settings_.max_condition > 1e10) return condition_number(S, first, t);
     // A pivot of the Cholesky factorisation that is not positive (the inverse then has entries
     // that are not finite) proves cond(S) above any limit the bounds serve: in floating point the
     // factorisation of a symmetric positive definite matrix runs to completion when n^2 (n + 1)
@@ -497,7 +499,7 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
     // ed., Thm. 10.7 with van der Sluis's bound for the diagonal scaling), i.e. for cond(S) below
     // 8e12 when n <= 10, far above the ceiling 1e10. Elements with fewer distinct points than
     // terms are of this kind; the eigenvalues would say the same (infinite or above 1e12).
-    if (!std::isfinite(bound) && settings_.max_condition <= 1e10) return kInf;
+    if (!std::isfinite(bound)) return kInf;
     // Otherwise bracket the two factors of cond(S) = lambda_max(S) lambda_max(S^{-1}) and narrow
     // the brackets until they settle the test (in deformed layouts about half the elements reached
     // the eigenvalues here, each an Eigen solve of about 6,600 instructions, BENCHMARKS.md). For
@@ -512,32 +514,29 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
     // when rejected: the elements rejected here are reported only through their completion, and
     // `none` recomputes the condition for its message). The inverse is not handed on where the
     // brackets accept (factorise forms its own, as after the eigenvalues), so the fits are those
-    // of the eigenvalue test, bit for bit.
-    if (settings_.max_condition <= 1e10) {
-      double lo_s = 0.0, lo_i = 0.0;
-      for (int i = 0; i < n; ++i) {
-        lo_s = std::max(lo_s, S(first + i, first + i));
-        lo_i = std::max(lo_i, inv(i, i));
-      }
-      const double root_n = std::sqrt(static_cast<double>(n));
-      const double f_s = frobenius(S, first, n), f_i = frobenius(inv, 0, n);
-      lo_s = std::max(lo_s, f_s / root_n);
-      lo_i = std::max(lo_i, f_i / root_n);
-      double hi_s = std::min(f_s, norm_inf(S, first, n)), hi_i = std::min(f_i, norm_inf(inv, 0, n));
-      if (std::isfinite(hi_s) && std::isfinite(hi_i) && lo_s > 0.0 && lo_i > 0.0) {
-        for (int test = 0;; ++test) {
-          const double lower = lo_s * lo_i, upper = hi_s * hi_i;
-          if (lower * (1.0 - 1e-4) > settings_.max_condition) return lower;
-          if (upper <= 1e10 && upper * (1.0 + 1e-4) <= settings_.max_condition) return upper;
-          if (test == kConditionTests) break;
-          if (hi_s * lo_i >= hi_i * lo_s) {  // the wider bracket (hi / lo) first
-            const double sigma = std::sqrt(lo_s * hi_s);
-            (shifted_positive_definite(S, first, n, sigma, -1.0) ? hi_s : lo_s) = sigma;
-          } else {
-            const double sigma = std::sqrt(lo_i * hi_i);
-            (shifted_positive_definite(S, first, n, 1.0 / sigma, 1.0) ? hi_i : lo_i) = sigma;
-          }
-        }
+    // of the eigenvalue test, bit for bit. With a finite bound S is numerically positive
+    // definite, so both brackets are finite and positive.
+    double lo_s = 0.0, lo_i = 0.0;
+    for (int i = 0; i < n; ++i) {
+      lo_s = std::max(lo_s, S(first + i, first + i));
+      lo_i = std::max(lo_i, inv(i, i));
+    }
+    const double root_n = std::sqrt(static_cast<double>(n));
+    const double f_s = frobenius(S, first, n), f_i = frobenius(inv, 0, n);
+    lo_s = std::max(lo_s, f_s / root_n);
+    lo_i = std::max(lo_i, f_i / root_n);
+    double hi_s = std::min(f_s, norm_inf(S, first, n)), hi_i = std::min(f_i, norm_inf(inv, 0, n));
+    for (int test = 0;; ++test) {
+      const double lower = lo_s * lo_i, upper = hi_s * hi_i;
+      if (lower * (1.0 - 1e-4) > settings_.max_condition) return lower;
+      if (upper <= 1e10 && upper * (1.0 + 1e-4) <= settings_.max_condition) return upper;
+      if (test == kConditionTests) break;
+      if (hi_s * lo_i >= hi_i * lo_s) {  // the wider bracket (hi / lo) first
+        const double sigma = std::sqrt(lo_s * hi_s);
+        (shifted_positive_definite(S, first, n, sigma, -1.0) ? hi_s : lo_s) = sigma;
+      } else {
+        const double sigma = std::sqrt(lo_i * hi_i);
+        (shifted_positive_definite(S, first, n, 1.0 / sigma, 1.0) ? hi_i : lo_i) = sigma;
       }
     }
   }
