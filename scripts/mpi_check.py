@@ -37,9 +37,11 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 
 TOL = 1e-12
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -760,6 +762,95 @@ def check_failure(mpm, tmp, failures):
             print(f"refused: {lines[0][:160]}")
 
 
+def limited(rank_limits, mpm, args):
+    # mpirun -n 2 with a file-size limit (ulimit -f, in the shell's blocks) on the ranks named.
+    script = "".join(f'if [ "$OMPI_COMM_WORLD_RANK" = {r} ]; then ulimit -f {n}; fi; '
+                     for r, n in rank_limits.items())
+    return ["mpirun", "-n", "2", "--oversubscribe", "sh", "-c", script + 'exec "$0" "$@"', mpm,
+            "run"] + args
+
+
+def check_write_failures(mpm, tmp, failures):
+    # A write that fails on one process only (a file-size limit that only it hits) must end every
+    # process with exit code 8 and one message, never leave the others waiting in a collective
+    # call (the timeout), and a frame written through MPI-IO must never be kept short.
+    for label, limits, sets, names in [
+            ("rank 0's history.csv", {0: 40},
+             ["output.history_every=1", "output.vtk=false", "output.csv=false"], "history.csv"),
+            ("rank 1's VTU piece", {1: 4}, ["output.csv=false"], "_p0001.vtu"),
+            ("the CSV frame through MPI-IO", {0: 200, 1: 200},
+             ["output.vtk=false", "output.history_every=1000", "grid.cells=64"],
+             "particles_00000.csv")]:
+        d = os.path.join(tmp, "limit_" + label.split()[1].replace("'", ""))
+        config = ("examples/plate_mms_2d.toml" if "CSV" in label else "examples/custom_bar.toml")
+        args = [config, "--quiet", "--out", d]
+        for x in sets + ["time.end=0.002"]:
+            args += ["--set", x]
+        try:
+            # (Open MPI's shared-memory transport and PMIx's shared-memory store size their
+            # segments with ftruncate, which the limit refuses: TCP on the loopback and PMIx's
+            # hash store instead.)
+            r = run(limited(limits, mpm, args), timeout=90,
+                    env={"OMPI_MCA_btl": "self,tcp", "PMIX_MCA_gds": "hash"})
+        except subprocess.TimeoutExpired:
+            failures.append(f"a write failing on {label} hung (no end within 90 s)")
+            continue
+        msgs = [l for l in r.stderr.splitlines() if l.startswith("mpm:")]
+        if r.returncode != 8 or len(msgs) != 1 or names not in msgs[0]:
+            failures.append(f"write failing on {label}: exit {r.returncode}, stderr {r.stderr!r}")
+            continue
+        s = json.load(open(os.path.join(d, "summary.json")))
+        if s["status"] != "failed" or s["exit_code"] != 8:
+            failures.append(f"write failing on {label}: summary {s['status']}, {s.get('exit_code')}")
+        if "CSV" in label:
+            short = [f for f in os.listdir(d) if f.startswith("particles_") and f.endswith(".csv")]
+            if short:
+                failures.append(f"write failing on {label}: frames kept under their names: {short}")
+        print(f"write failing on {label}: exit 8, {msgs[0][:160]}")
+
+
+def check_signals(mpm, tmp, failures):
+    # A signal to rank 1 alone is recorded as the signal it was, on every process; SIGUSR1 to
+    # mpirun (which forwards it; SIGINT and SIGTERM it answers by ending the job itself, with
+    # its own exit code 1) ends every process after the same step with exit code 7.
+    e = dict(os.environ)
+    e.update(MPIRUN_ENV)
+    for label, name, to_rank in [("SIGUSR1 to mpirun", "SIGUSR1", None),
+                                 ("SIGHUP to rank 1", "SIGHUP", 1)]:
+        d = os.path.join(tmp, name)
+        os.makedirs(d)
+        # (Each process writes its pid, so that one of them can be sent the signal.)
+        script = f'echo $$ > {d}/pid_$OMPI_COMM_WORLD_RANK; exec "$0" "$@"'
+        out = os.path.join(d, "o")
+        p = subprocess.Popen(["mpirun", "-n", "2", "--oversubscribe", "sh", "-c", script, mpm,
+                              "run", "examples/custom_bar.toml", "--quiet", "--out", out,
+                              "--set", "time.end=20", "--set", "output.frames=1"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=e,
+                             cwd=ROOT)
+        try:
+            pid_file = os.path.join(d, "pid_1")
+            for _ in range(300):  # (the run under way: its first history rows written)
+                if os.path.exists(os.path.join(out, "history.csv")) and os.path.exists(pid_file):
+                    break
+                time.sleep(0.1)
+            time.sleep(0.5)
+            if to_rank is None:
+                p.send_signal(getattr(signal, name))
+            else:
+                os.kill(int(open(pid_file).read()), getattr(signal, name))
+            _, err = p.communicate(timeout=60)
+            s = json.load(open(os.path.join(out, "summary.json")))
+            if p.returncode != 7 or s["status"] != "interrupted" or name not in s["failure"]:
+                failures.append(f"{label}: exit {p.returncode}, summary {s.get('failure')!r}, "
+                                f"stderr {err!r}")
+            else:
+                print(f"{label}: exit 7, {s['failure']}")
+        except (subprocess.TimeoutExpired, OSError, ValueError) as ex:
+            p.kill()
+            p.communicate()
+            failures.append(f"{label}: {type(ex).__name__}: {ex}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--mpm", required=True)
@@ -787,6 +878,8 @@ def main():
                 check_restart(os.path.abspath(a.mpm), tmp, failures, *case)
             check_damaged_pieces(os.path.abspath(a.mpm), tmp, failures)
             check_failure(os.path.abspath(a.mpm), tmp, failures)
+            check_write_failures(os.path.abspath(a.mpm), tmp, failures)
+            check_signals(os.path.abspath(a.mpm), tmp, failures)
     for f in failures:
         print("FAILED:", f)
     print("distributed runs: " + ("FAILED" if failures else "all equal to the one-process runs"))

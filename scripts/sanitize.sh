@@ -98,6 +98,11 @@ SLOW+='|BasesInTheStep\.BsmpmCutsTheColumnCompactionStressError|Ulfem\.LargeDefo
 SLOW+='|ReconstructionMpm\.(TlsImprovesMpmOnTheColumn|ReconstructionsReduceTheLargeDeformationError'
 SLOW+='|EveryBasisSchemeAndMassWithTlsAndCubicSpline)'
 SLOW+='|VerifyQuick\.'  # refinement studies through build/mpm (scripts/verify.py --quick)
+# Every example three times over (a run, its config.toml, its checkpoint), and VTK's reading of
+# eight runs' files: the writers and the restart run under the sanitizers in Checkpoint.* and
+# the Output* tests.
+SLOW+='|HostileInput\.EveryExampleRerunsFromItsConfigAndRestartsFromItsCheckpoint|Vtk\.'
+
 # Thread-count comparisons whose code paths the kept ones cover (MLS 1D/2D linear, IMLS 1D,
 # TLS, the other re-sorting cases): 30-40 s each under the sanitizers.
 SLOW+='|MappingParallel\.(Mls2DQuadraticBSpline|Imls2DQuadraticBSpline|Imls2D)SameForOneAndTwoThreads'

@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -237,6 +238,10 @@ int run_main(int argc, char** argv);
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A file-size limit (ulimit -f) would kill the process at the write that crosses it, with no
+  // message and no summary; ignored, that write fails with EFBIG and the run stops as on a full
+  // disk (exit code 8, a failed summary if it still fits).
+  std::signal(SIGXFSZ, SIG_IGN);
   prefer_passive_waiting(argv);
   // Under mpirun every process runs this program: MPI starts here (core/comm.hpp), errors that
   // every process meets alike are printed once (by rank 0), and one process's internal error
@@ -278,6 +283,16 @@ int cmd_batch(const std::string& file, bool quiet, bool overwrite, int threads) 
   std::size_t failed = 0;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const mpm::BatchRun& r = runs[k];
+    // A signal that came after the last run's time loop (its summary, the next set-up) ends the
+    // batch here, before another run starts (every process alike).
+    int sig = mpm::interrupt_signal();
+    if (comm.distributed()) sig = static_cast<int>(comm.max(static_cast<double>(sig)));
+    if (sig != 0) {
+      if (comm.root())
+        std::cout << fmt::format("mpm: batch interrupted by {}; runs {} to {} not made\n",
+                                 mpm::signal_name(sig), k + 1, runs.size());
+      return mpm::exit_code::kInterrupted;
+    }
     int rc = 0;
     try {
       rc = cmd_run(r.config, r.sets, r.out, quiet, "", overwrite, threads);

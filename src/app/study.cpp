@@ -60,6 +60,10 @@ StudyOptions parse_refine(const std::string& text) {
     const auto item =
         rest.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     if (item.empty()) throw InputError(fmt::format("--refine '{}' has an empty value", text));
+    // Each value is one run into one directory: a value twice would be two runs into one.
+    if (std::find(o.values.begin(), o.values.end(), item) != o.values.end())
+      throw InputError(
+          fmt::format("--refine '{}' gives the value {} twice; give each once", text, item));
     o.values.push_back(item);
     if (comma == std::string::npos) break;
     pos = comma + 1;
@@ -182,7 +186,20 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
                          .string());
     }
   }
-  if (!opt.out_dir.empty()) std::filesystem::create_directories(opt.out_dir);
+  if (!opt.out_dir.empty()) {
+    std::filesystem::create_directories(opt.out_dir);
+    // --overwrite: the earlier study's table goes before the first run, so that a study that
+    // stops (a refused run, an interrupt) never leaves an old study.csv beside new runs.
+    if (opt.overwrite)
+      for (const char* name : {"study.csv", "study.txt"}) {
+        std::error_code ec;
+        std::filesystem::remove(std::filesystem::path(opt.out_dir) / name, ec);
+        if (ec)
+          throw InputError(fmt::format("--overwrite: cannot remove '{}': {}",
+                                       (std::filesystem::path(opt.out_dir) / name).string(),
+                                       ec.message()));
+      }
+  }
 
   res.runs.resize(configs.size());
   std::vector<std::string> input_errors(configs.size());

@@ -130,6 +130,11 @@ struct Vortex2DExact {
 // 1D problem from the configuration alone: grid and body extents, initial velocity and stress
 // as expressions of x, body force as an expression of x and t, fixed or free ends, tractions on
 // the body ends (traction.left/right, expressions of t), an exact solution by expressions.
+// The keys that only the custom problem reads (boundary.*, traction.* but the traction bar's
+// traction.amplitude, pressure.*, body.*, initial.*, loading.*, exact.*): another benchmark
+// refuses them when they are not at their default (make_problem), rather than ignore them.
+bool read_by_custom_alone(std::string_view key);
+
 Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope = {});
 
 // The same in 2D (grid.dimension = 2): a box body in a box grid, vector keys as arrays

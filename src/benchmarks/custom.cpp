@@ -5,6 +5,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -101,6 +102,39 @@ constexpr const char* kComponents[] = {"", "x", "x, y", "x, y, z"};
 constexpr const char* kStressComponents[] = {"", "xx", "xx, yy, xy", "xx, yy, zz, yz, xz, xy"};
 constexpr std::size_t kStressCount[] = {0, 1, 3, 6};
 
+// A load of the keys `keys` (a traction and/or a pressure, functions of t) that is a finite
+// number at every time: refused at set-up when it is not at t = 0 (InputError naming the keys,
+// e.g. "1/0" or "1e308*1e308"), and stopping the run (RunError, exit_code::kNonFinite, naming
+// them) at the first step where it is not.
+template <class Load>
+auto finite_load(const Config& cfg, const std::string& key, const std::string& pkey, Load load) {
+  const auto finite = [](const auto& v) {
+    if constexpr (std::is_arithmetic_v<std::decay_t<decltype(v)>>)
+      return std::isfinite(v);
+    else
+      return v.allFinite();
+  };
+  // The keys that give the load (a traction at its default "0" gives none of it).
+  const bool traction = !cfg.at_default(key) || pkey.empty();
+  const std::string where = traction ? cfg.where(key) : cfg.where(pkey);
+  const std::string keys = pkey.empty() ? fmt::format("'{}'", key)
+                           : traction   ? fmt::format("'{}' and '{}'", key, pkey)
+                                        : fmt::format("'{}'", pkey);
+  if (!finite(load(0.0)))
+    throw InputError(
+        fmt::format("{}: the load of key {} is not a finite number at t = 0 (it "
+                    "divides by zero or overflows)",
+                    where, keys));
+  return [load, finite, where, keys](double t) {
+    const auto v = load(t);
+    if (!finite(v))
+      throw RunError(exit_code::kNonFinite,
+                     fmt::format("{}: the load of key {} is not a finite number at t = {:.9g} s",
+                                 where, keys, t));
+    return v;
+  };
+}
+
 // Dirichlet conditions of the grid sides (boundary.*) and tractions on the body faces
 // (traction.*), in Dim directions.
 template <int Dim>
@@ -147,11 +181,13 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
       // tau = -p n (a dead load, like the traction).
       const double sign = side == 0 ? -1.0 : 1.0;
       pb.tractions.push_back(body_face_traction<Dim>(
-          pb.grid, b0, b1, per_cell, d, side == 0 ? -1 : +1, [tau, p, d, sign](double t) {
-            Vec<Dim> v = vector_from<Dim>(tau, 0.0, 0.0, 0.0, t);
-            v[d] -= sign * p(0.0, 0.0, 0.0, t);
-            return v;
-          }));
+          pb.grid, b0, b1, per_cell, d, side == 0 ? -1 : +1,
+          finite_load(cfg, key, p.text() == "0" ? std::string() : pkey,
+                      [tau, p, d, sign](double t) {
+                        Vec<Dim> v = vector_from<Dim>(tau, 0.0, 0.0, 0.0, t);
+                        v[d] -= sign * p(0.0, 0.0, 0.0, t);
+                        return v;
+                      })));
     }
 }
 
@@ -335,7 +371,17 @@ void named_loads(Problem<2>& pb, const Config& cfg, const SeedScope& scope) {
                     cfg.where("pressure.loaded"), p.text()));
   const TriangleMesh& mesh = *pb.mesh;
   const auto cells_at = cells_at_vertices(mesh);
-  for (const auto& name : names) check_boundary_name(mesh, cfg, name, "boundary.loaded");
+  for (const auto& name : names) {
+    check_boundary_name(mesh, cfg, name, "boundary.loaded");
+    // A load acts on the body's surface: a line through the mesh's inside has no outward normal
+    // (a pressure there would push on both sides at once, through the particles of one).
+    if (!mesh.boundary(name).outer)
+      throw InputError(fmt::format(
+          "{}: boundary.loaded: boundary \"{}\" of {} runs through the mesh's inside (an edge "
+          "shared by two triangles), where a load has no outward normal; load boundaries on the "
+          "mesh's outer boundary",
+          cfg.where("boundary.loaded"), name, mesh.source()));
+  }
   // The body's particles (id, reference position) in each triangle next to a loaded edge, from
   // the seeding itself: a process of a distributed run stores only its slab's particles, and
   // every process needs these (each loaded point names its particle by id).
@@ -355,13 +401,15 @@ void named_loads(Problem<2>& pb, const Config& cfg, const SeedScope& scope) {
                           ++id;
                         });
   Traction<2> tr;
-  tr.value = [tau](double t) { return vector_from<2>(tau, 0.0, 0.0, 0.0, t); };
-  if (pressure) tr.pressure = [p](double t) { return p(0.0, 0.0, 0.0, t); };
+  tr.value = finite_load(cfg, "traction.loaded", "",
+                         [tau](double t) { return vector_from<2>(tau, 0.0, 0.0, 0.0, t); });
+  if (pressure)
+    tr.pressure =
+        finite_load(cfg, "pressure.loaded", "", [p](double t) { return p(0.0, 0.0, 0.0, t); });
   for (const auto& name : names) {
     for (const auto& e : mesh.boundary(name).edges) {
       const Vec<2> a = mesh.vertex(e[0]), b = mesh.vertex(e[1]);
       const auto [cell, n] = edge_cell_and_normal(mesh, cells_at, e);
-      if (cell < 0) continue;  // (TriangleMesh checks that boundary edges are mesh edges)
       const auto& own = in_cell[static_cast<std::size_t>(cell)];
       if (own.empty())
         throw InputError(fmt::format(
@@ -451,6 +499,16 @@ void refuse_keys_of_more_dimensions(const Config& cfg, int dim) {
   }
 }
 
+// An extent [lo, hi] whose size is a finite number (1e308 - (-1e308) overflows to infinity, and
+// the cell size with it); InputError naming the key otherwise.
+void check_extent(const Config& cfg, double lo, double hi, std::string_view what, char axis) {
+  if (std::isfinite(hi - lo)) return;
+  throw InputError(fmt::format(
+      "{}: {}.max - {}.min = {} - ({}) in {} is not a finite number of metres (it overflows); "
+      "give the {} in units that keep its size below about 1e300",
+      cfg.where(fmt::format("{}.max", what)), what, what, hi, lo, axis, what));
+}
+
 // The grid [g0, g1] and the body [b0, b1] of a 2D or 3D custom problem: non-empty, the body
 // inside the grid; InputError naming the key and the direction otherwise.
 template <int Dim>
@@ -461,6 +519,8 @@ void check_boxes(const Config& cfg, const Vec<Dim>& g0, const Vec<Dim>& g1, cons
     if (!(g1[d] > g0[d]))
       throw InputError(fmt::format("{}: grid.max = {} must exceed grid.min = {} in {}",
                                    cfg.where("grid.max"), g1[d], g0[d], axis));
+    check_extent(cfg, g0[d], g1[d], "grid", axis);
+    check_extent(cfg, b0[d], b1[d], "body", axis);
     if (!(b1[d] > b0[d]))
       throw InputError(fmt::format("{}: body.max = {} must exceed body.min = {} in {}",
                                    cfg.where("body.max"), b1[d], b0[d], axis));
@@ -473,6 +533,14 @@ void check_boxes(const Config& cfg, const Vec<Dim>& g0, const Vec<Dim>& g1, cons
 
 }  // namespace
 
+bool read_by_custom_alone(std::string_view key) {
+  if (key == "traction.amplitude") return false;  // (the traction bar's)
+  for (std::string_view section :
+       {"boundary.", "traction.", "pressure.", "body.", "initial.", "loading.", "exact."})
+    if (key.starts_with(section)) return true;
+  return false;
+}
+
 Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "custom";
@@ -484,6 +552,8 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
   if (!(b1 > b0))
     throw InputError(
         fmt::format("{}: body.max = {} must exceed body.min = {}", cfg.where("body.max"), b1, b0));
+  check_extent(cfg, g0, g1, "grid", 'x');
+  check_extent(cfg, b0, b1, "body", 'x');
   if (b0 < g0 || b1 > g1)
     throw InputError(
         fmt::format("{}: the body [{}, {}] must lie inside the grid [{}, {}] (grid.min, grid.max)",
@@ -551,10 +621,11 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   pb.benchmark = "custom";
   refuse_keys_of_more_dimensions(cfg, 2);
   // With a mesh file the grid is its bounding box unless given (and then checked against it),
-  // and the body the grid unless given.
+  // and the body the grid unless given. (A key at its default, one value, as a stored
+  // config.toml writes every key, is not given.)
   pb.mesh = mesh_from_config(cfg);
   auto given_or = [&](const char* key, const Vec<2>& fallback) {
-    return pb.mesh && !cfg.is_set(key) ? fallback : per_direction<2>(cfg, key);
+    return pb.mesh && cfg.at_default(key) ? fallback : per_direction<2>(cfg, key);
   };
   const Vec<2> g0 = given_or("grid.min", pb.mesh ? pb.mesh->lower() : Vec<2>::Zero());
   const Vec<2> g1 = given_or("grid.max", pb.mesh ? pb.mesh->upper() : Vec<2>::Zero());

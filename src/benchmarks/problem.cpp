@@ -238,18 +238,14 @@ std::shared_ptr<const TriangleMesh> mesh_from_config(const Config& cfg) {
         "\"powell_sabin\"; method.basis = \"{}\" lives on the grid's cells (leave grid.mesh "
         "out)",
         cfg.where("grid.mesh"), file, basis));
-  if (cfg.is_set("method.triangles"))
+  if (!cfg.at_default("method.triangles"))
     throw InputError(fmt::format(
         "{}: method.triangles splits the grid's cells into triangles; with grid.mesh = \"{}\" "
         "the triangles come from the file (leave method.triangles out)",
         cfg.where("method.triangles"), file));
-  // Relative to the configuration file; from the working directory when the configuration
-  // is not a file (a checkpoint's stored configuration, a text parsed in a test).
-  std::filesystem::path path(file);
+  const std::filesystem::path path = cfg.file_path("grid.mesh");
   std::error_code ec;
   const bool from_file = std::filesystem::is_regular_file(cfg.source(), ec);
-  if (path.is_relative() && from_file)
-    path = std::filesystem::path(cfg.source()).parent_path() / path;
   try {
     return std::make_shared<const TriangleMesh>(with_box_sides(read_gmsh_mesh(path.string())));
   } catch (const InputError& e) {
@@ -383,6 +379,14 @@ void check_grid_memory(const Config& cfg, const Grid<Dim>& g, const SeedScope& s
 
 AnyProblem make_any_problem(const Config& cfg, const SeedScope& scope) {
   const std::string name = cfg.get_string("benchmark");
+  // A key that this benchmark would ignore is refused, not dropped in silence.
+  if (name != "custom")
+    for (const KeySpec& spec : schema())
+      if (read_by_custom_alone(spec.name) && !cfg.at_default(spec.name))
+        throw InputError(fmt::format(
+            "{}: key '{}' is read by benchmark = \"custom\" only; \"{}\" sets its own body, "
+            "conditions, loads and exact solution (leave the key out)",
+            cfg.where(spec.name), spec.name, name));
   if (name != "custom" && cfg.get_int("grid.dimension") != 1)
     throw InputError(
         fmt::format("{}: grid.dimension applies to benchmark = \"custom\" only; "

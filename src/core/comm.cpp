@@ -372,25 +372,26 @@ static_assert(sizeof(MPI_File) == sizeof(void*));
 }  // namespace
 #endif
 
-OrderedFile::OrderedFile(const Comm& comm, std::string path) : comm_(comm), path_(std::move(path)) {
+OrderedFile::OrderedFile(const Comm& comm, std::string path, std::string shown)
+    : comm_(comm), path_(std::move(path)), shown_(shown.empty() ? path_ : std::move(shown)) {
   if (!comm_.distributed())
     throw std::logic_error("OrderedFile: a run on one process writes its files itself");
 #ifdef MPM_HAVE_MPI
   MPI_File fh = MPI_FILE_NULL;
   note_file_error(MPI_File_open(MPI_COMM_WORLD, path_.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY,
                                 MPI_INFO_NULL, &fh),
-                  "MPI_File_open", path_, comm_.rank(), failed_);
+                  "MPI_File_open", shown_, comm_.rank(), failed_);
   // (Every rank learns whether all opened it before the collective calls on the file.)
   if (comm_.any(failed_.has_value())) {
     if (!failed_)
-      failed_ =
-          Comm::Failure{comm_.rank(), exit_code::kOutput,
-                        fmt::format("cannot write '{}': another process could not open it", path_)};
+      failed_ = Comm::Failure{
+          comm_.rank(), exit_code::kOutput,
+          fmt::format("cannot write '{}': another process could not open it", shown_)};
     return;
   }
   std::memcpy(&file_, &fh, sizeof fh);
   open_ = true;
-  note_file_error(MPI_File_set_size(fh, 0), "MPI_File_set_size", path_, comm_.rank(), failed_);
+  note_file_error(MPI_File_set_size(fh, 0), "MPI_File_set_size", shown_, comm_.rank(), failed_);
 #endif
 }
 
@@ -412,10 +413,21 @@ void OrderedFile::append([[maybe_unused]] std::string_view mine) {
   for (std::uint64_t k = 0; k < writes; ++k) {
     const std::uint64_t at = k * kChunk;
     const std::uint64_t n = at >= size ? 0 : std::min(kChunk, size - at);
-    note_file_error(MPI_File_write_at_all(fh, static_cast<MPI_Offset>(written_ + offset + at),
-                                          n > 0 ? mine.data() + at : nullptr, static_cast<int>(n),
-                                          MPI_BYTE, MPI_STATUS_IGNORE),
-                    "MPI_File_write_at_all", path_, comm_.rank(), failed_);
+    MPI_Status status;
+    const int rc = MPI_File_write_at_all(fh, static_cast<MPI_Offset>(written_ + offset + at),
+                                         n > 0 ? mine.data() + at : nullptr, static_cast<int>(n),
+                                         MPI_BYTE, &status);
+    note_file_error(rc, "MPI_File_write_at_all", shown_, comm_.rank(), failed_);
+    // A short write (a full disk, a file-size limit) is no error to MPI-IO: its count says so.
+    int count = 0;
+    if (rc == MPI_SUCCESS && !failed_ &&
+        (MPI_Get_count(&status, MPI_BYTE, &count) != MPI_SUCCESS ||
+         static_cast<std::uint64_t>(count) != n))
+      failed_ = Comm::Failure{
+          comm_.rank(), exit_code::kOutput,
+          fmt::format("cannot write '{}': MPI_File_write_at_all wrote {} of {} bytes at offset {} "
+                      "(a full disk or a file-size limit)",
+                      shown_, count, n, written_ + offset + at)};
   }
   written_ += round;
 #endif
@@ -426,8 +438,8 @@ std::optional<Comm::Failure> OrderedFile::close() {
   if (open_) {
     MPI_File fh;
     std::memcpy(&fh, &file_, sizeof fh);
-    note_file_error(MPI_File_sync(fh), "MPI_File_sync", path_, comm_.rank(), failed_);
-    note_file_error(MPI_File_close(&fh), "MPI_File_close", path_, comm_.rank(), failed_);
+    note_file_error(MPI_File_sync(fh), "MPI_File_sync", shown_, comm_.rank(), failed_);
+    note_file_error(MPI_File_close(&fh), "MPI_File_close", shown_, comm_.rank(), failed_);
     open_ = false;
   }
 #endif

@@ -25,7 +25,9 @@ class OrderedFile {
   // Creates or truncates the file at `path`. (A failed open on some ranks is agreed at once;
   // those ranks then write nothing, the others leave the file open: a handle lost by a failing
   // run, rather than a collective close that waits for ranks that have none.)
-  OrderedFile(const Comm& comm, std::string path);
+  // `shown` names the file in messages (the name it will have: it may be written under a
+  // temporary one); empty: path.
+  OrderedFile(const Comm& comm, std::string path, std::string shown = {});
   OrderedFile(const OrderedFile&) = delete;
   OrderedFile& operator=(const OrderedFile&) = delete;
   // Not closed (an exception between the rounds): the handle is left open, for the same reason.
@@ -41,7 +43,7 @@ class OrderedFile {
 
  private:
   const Comm& comm_;
-  std::string path_;
+  std::string path_, shown_;
   void* file_ = nullptr;  // the MPI_File (an opaque pointer in Open MPI and MPICH)
   bool open_ = false;
   std::uint64_t written_ = 0;  // bytes of all ranks so far

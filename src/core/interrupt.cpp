@@ -25,7 +25,10 @@ void install_interrupt_handlers() {
   sa.sa_handler = on_interrupt;
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESTART;  // writes in progress go on instead of failing with EINTR
-  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+  // SIGUSR1 and SIGUSR2 too: Open MPI's mpirun forwards them to every process (it answers
+  // SIGINT and SIGTERM by ending the job itself, with its own exit code 1), and batch systems
+  // send them ahead of a time limit (Slurm's --signal).
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGUSR1, SIGUSR2}) sigaction(sig, &sa, nullptr);
 }
 
 int interrupt_signal() {
@@ -40,6 +43,10 @@ const char* signal_name(int sig) {
       return "SIGTERM";
     case SIGHUP:
       return "SIGHUP";
+    case SIGUSR1:
+      return "SIGUSR1";
+    case SIGUSR2:
+      return "SIGUSR2";
     default:
       return "a signal";
   }

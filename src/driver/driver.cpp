@@ -161,6 +161,26 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
 }
 
 template <int Dim>
+template <class Write>
+void OutputSession<Dim>::agreed(Write&& write) const {
+  if (!comm_) {
+    write();
+    return;
+  }
+  std::optional<Comm::Failure> mine;
+  try {
+    write();
+  } catch (const RemoteRunError&) {
+    throw std::logic_error("OutputSession::agreed: a collective call inside a one-process write");
+  } catch (const RunError& e) {
+    mine = Comm::Failure{comm_->rank(), e.exit_code(), e.what()};
+  }
+  if (const auto f = comm_->agree(mine ? &*mine : nullptr))
+    throw RemoteRunError(f->exit_code,
+                         fmt::format("rank {} of {}: {}", f->rank, comm_->size(), f->message));
+}
+
+template <int Dim>
 void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
   if (!enabled()) return;
   const auto& P = sim.particles;
@@ -186,7 +206,6 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
     strain = v[1];
     mass = v[2];
     for (int d = 0; d < Dim; ++d) mom[d] = v[3 + static_cast<std::size_t>(d)];
-    if (!writer_) return;
   }
   std::string row = fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", sim.time, kin, strain,
                                 kin + strain, mass);
@@ -198,8 +217,12 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
   row += "\n";
   // Appended as the run goes (io::AppendFile): constant memory, and a killed run keeps every row
   // written so far. A fresh run starts the file with the header at its first row.
-  if (!history_.is_open()) history_.open(dir_ / "history.csv", history_header_);
-  history_.append(row);
+  agreed([&] {
+    if (!writer_) return;
+    if (!history_.is_open()) history_.open(dir_ / "history.csv", history_header_);
+    history_.append(row, fmt::format("row {} (t = {:.6g} s)", history_rows_ + 1, sim.time));
+    ++history_rows_;
+  });
 }
 
 namespace {
@@ -232,6 +255,41 @@ std::vector<io::ScalarField> exact_fields(
   }
   for (int f = 0; f < kFields; ++f) extra.push_back({names[f], &values[f]});
   return extra;
+}
+
+// A frame's VTU: the exact displacement and velocity (the first 2 Dim of exact_fields' columns)
+// as vectors u_exact and v_exact like u and v, so that an error is one calculator line; the
+// exact stress per component; in 2D the stress normal to the plane of the (plane-strain) law in
+// the stress tensor's zz component.
+template <int Dim>
+std::string frame_vtu(const Particles<Dim>& P, double time,
+                      const std::vector<io::ScalarField>& extra,
+                      const std::array<std::vector<double>, 2 * Dim + Dim * Dim>& values,
+                      const Material& material, bool binary) {
+  const std::size_t n = P.x.size();
+  std::vector<io::ScalarField> scalars;
+  std::array<std::vector<Vec<Dim>>, 2> uv;
+  std::vector<io::VectorField<Dim>> vectors;
+  if (!extra.empty()) {
+    for (int k = 0; k < 2; ++k) {
+      uv[k].resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        for (int d = 0; d < Dim; ++d)
+          uv[k][i][d] = values[static_cast<std::size_t>(k * Dim + d)][i];
+    }
+    vectors = {{"u_exact", &uv[0]}, {"v_exact", &uv[1]}};
+    scalars.assign(extra.begin() + 2 * Dim, extra.end());
+  }
+  std::vector<double> zz;
+  if constexpr (Dim == 2) {
+    zz.resize(n);
+    std::visit(
+        [&](const auto& law) {
+          for (std::size_t i = 0; i < n; ++i) zz[i] = law.out_of_plane_stress(P.stress[i], P.F[i]);
+        },
+        material);
+  }
+  return io::particles_vtu(P, time, scalars, binary, vectors, Dim == 2 ? &zz : nullptr);
 }
 }  // namespace
 
@@ -275,7 +333,7 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
   const std::vector<CompactIndex> by_id = id_order(P);
   const auto id_at = [&](std::size_t k) { return static_cast<Index>(P.id[by_id[k]]); };
   std::array<std::vector<double>, 2 * Dim + Dim * Dim> values;
-  OrderedFile file(*comm_, tmp.string());
+  OrderedFile file(*comm_, tmp.string(), path.string());
   {
     const Particles<Dim> none;  // the header line, rank 0's
     const auto extra = exact_fields(exact_, none, time, values);
@@ -309,17 +367,36 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
     const auto extra = exact_fields(exact_, mine_rows, time, values);
     file.append(io::particles_csv(mine_rows, extra, /*header=*/false));
   }
-  if (const auto f = file.close())
+  if (const auto f = file.close()) {
+    // The frame is absent, never partial (the earlier frames stay).
+    std::error_code ec;
+    if (writer_) std::filesystem::remove(tmp, ec);
     throw RemoteRunError(f->exit_code,
                          fmt::format("rank {} of {}: {}", f->rank, comm_->size(), f->message));
-  if (!writer_) return;
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw RunError(exit_code::kOutput, fmt::format("cannot write '{}': rename from {}: {}",
-                                                   path.string(), tmp.string(), ec.message()));
   }
+  agreed([&] {
+    if (!writer_) return;
+    std::error_code ec;
+    // Never renamed over what is not a regular file (a link: over its target).
+    io::OutputTarget target;
+    try {
+      target = io::output_target(path);
+      if (target.write_through)
+        throw RunError(exit_code::kOutput,
+                       fmt::format("cannot write '{}': it is a device; a distributed run writes "
+                                   "its CSV frames into regular files only",
+                                   path.string()));
+    } catch (const RunError&) {
+      std::filesystem::remove(tmp, ec);
+      throw;
+    }
+    std::filesystem::rename(tmp, target.path, ec);
+    if (ec) {
+      std::filesystem::remove(tmp, ec);
+      throw RunError(exit_code::kOutput, fmt::format("cannot write '{}': rename from {}: {}",
+                                                     path.string(), tmp.string(), ec.message()));
+    }
+  });
 }
 
 template <int Dim>
@@ -339,16 +416,21 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
     if (csv_) write_distributed_csv(dir_ / (stem + ".csv"), sim.particles, sim.time);
     if (vtk_) {
       const auto extra = exact_fields(exact_, sim.particles, sim.time, values);
-      const std::string piece = io::particles_vtu(sim.particles, sim.time, extra, vtk_binary_);
-      io::write_file_atomic(dir_ / fmt::format("{}_p{:04d}.vtu", stem, comm_->rank()), piece);
-      if (writer_) {
+      const std::string piece =
+          frame_vtu(sim.particles, sim.time, extra, values, sim.material, vtk_binary_);
+      // Every piece on disk (agreed) before rank 0 writes the .pvtu that names them all.
+      agreed([&] {
+        io::write_file_atomic(dir_ / fmt::format("{}_p{:04d}.vtu", stem, comm_->rank()), piece);
+      });
+      agreed([&] {
+        if (!writer_) return;
         std::vector<std::string> sources;
         for (int r = 0; r < comm_->size(); ++r)
           sources.push_back(fmt::format("{}_p{:04d}.vtu", stem, r));
         io::write_file_atomic(dir_ / (stem + ".pvtu"), io::particles_pvtu(piece, sources));
         pvd_.add(sim.time, stem + ".pvtu");
         io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
-      }
+      });
     }
     return;
   }
@@ -360,7 +442,7 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
   if (csv_) io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(P, extra));
   if (vtk_) {
     io::write_file_atomic(dir_ / (stem + ".vtu"),
-                          io::particles_vtu(P, sim.time, extra, vtk_binary_));
+                          frame_vtu(P, sim.time, extra, values, sim.material, vtk_binary_));
     pvd_.add(sim.time, stem + ".vtu");
     io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
   }
@@ -368,7 +450,20 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
 
 template <int Dim>
 void OutputSession<Dim>::summary(const nlohmann::ordered_json& j) {
-  if (enabled() && writer_) io::write_file_atomic(dir_ / "summary.json", j.dump(2) + "\n");
+  if (!enabled()) return;
+  agreed([&] {
+    if (!writer_) return;
+    try {
+      io::write_file_atomic(dir_ / "summary.json", j.dump(2) + "\n");
+    } catch (const RunError& e) {
+      // The failure that stopped the run (often the first write a full disk refused) comes
+      // first; the summary that could not record it second.
+      if (!j.contains("failure")) throw;
+      throw RunError(j.value("exit_code", e.exit_code()),
+                     fmt::format("{}; and its failed summary could not be written either: {}",
+                                 j["failure"].get<std::string>(), e.what()));
+    }
+  });
 }
 
 template <int Dim>
@@ -377,21 +472,24 @@ void OutputSession<Dim>::resume(const io::Checkpoint& c) {
   // run killed after its last checkpoint may have written later ones), and the restarted run
   // appends the steps after it, so the file is that of an uninterrupted run. A file with another
   // header (another run, another version) or none is started anew, from the checkpoint's row.
-  if (enabled() && writer_) {
-    std::string kept = history_header_;
-    std::ifstream in(dir_ / "history.csv");
-    std::string line;
-    if (in && std::getline(in, line) && line + "\n" == history_header_) {
-      while (std::getline(in, line)) {
-        if (in.eof()) break;  // a last line without its newline: cut off by a kill
-        const double t = std::strtod(line.c_str(), nullptr);
-        if (!(t <= c.time)) break;
-        kept += line + "\n";
-        history_continues_ = true;
+  if (enabled())
+    agreed([&] {
+      if (!writer_) return;
+      std::string kept = history_header_;
+      std::ifstream in(dir_ / "history.csv");
+      std::string line;
+      if (in && std::getline(in, line) && line + "\n" == history_header_) {
+        while (std::getline(in, line)) {
+          if (in.eof()) break;  // a last line without its newline: cut off by a kill
+          const double t = std::strtod(line.c_str(), nullptr);
+          if (!(t <= c.time)) break;
+          kept += line + "\n";
+          ++history_rows_;
+          history_continues_ = true;
+        }
       }
-    }
-    history_.open(dir_ / "history.csv", kept);
-  }
+      history_.open(dir_ / "history.csv", kept);
+    });
   // Whether the next row is written is decided by every rank alike (history_row is collective).
   if (comm_ && enabled()) history_continues_ = comm_->any(history_continues_);
   frames_ = static_cast<int>(c.frames);
@@ -409,28 +507,28 @@ void OutputSession<Dim>::checkpoint(io::Checkpoint& c, const std::string* piece)
   if (!enabled()) return;
   if (comm_ && piece) {
     // Every process writes its piece; once all are on disk (a process whose write failed stops
-    // every one at the check), rank 0 writes the manifest naming them. Until it has, the previous
+    // every one, agreed), rank 0 writes the manifest naming them. Until it has, the previous
     // manifest and its pieces are the checkpoint, whole: the pieces are named by their step.
     const std::string name = io::checkpoint_piece_name(c.step, comm_->rank());
-    io::write_file_atomic(dir_ / name, *piece);
+    agreed([&] { io::write_file_atomic(dir_ / name, *piece); });
     const io::Checkpoint::Piece mine = io::describe_piece(name, *piece);
-    comm_->check();
     const std::vector<Index> all = comm_->allgather(std::span<const Index>(
         std::array<Index, 2>{static_cast<Index>(mine.bytes), std::bit_cast<Index>(mine.hash)}));
-    if (!writer_) return;
     c.pieces.clear();
-    for (int r = 0; r < comm_->size(); ++r)
+    for (int r = 0; r < comm_->size() && writer_; ++r)
       c.pieces.push_back({io::checkpoint_piece_name(c.step, r),
                           static_cast<std::uint64_t>(all[2 * static_cast<std::size_t>(r)]),
                           std::bit_cast<std::uint64_t>(all[2 * static_cast<std::size_t>(r) + 1])});
   }
-  if (!writer_) return;
-  io::write_checkpoint(dir_ / io::kCheckpointFile, c);
-  // The pieces of an earlier checkpoint (also those a run on another number of processes, or a
-  // distributed run before this one-process restart, left), no longer named by the manifest.
-  std::vector<std::string> keep;
-  for (const auto& p : c.pieces) keep.push_back(p.file);
-  io::remove_checkpoint_pieces(dir_, keep);
+  agreed([&] {
+    if (!writer_) return;
+    io::write_checkpoint(dir_ / io::kCheckpointFile, c);
+    // The pieces of an earlier checkpoint (also those a run on another number of processes, or
+    // a distributed run before this one-process restart, left), no longer named by the manifest.
+    std::vector<std::string> keep;
+    for (const auto& p : c.pieces) keep.push_back(p.file);
+    io::remove_checkpoint_pieces(dir_, keep);
+  });
 }
 
 // Stops before the first step when dt exceeds the limit, unless time.allow_unstable.

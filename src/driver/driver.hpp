@@ -148,7 +148,15 @@ class OutputSession {
   // rounds over the ids (collective; driver.cpp).
   void write_distributed_csv(const std::filesystem::path& path, const Particles<Dim>& P,
                              double time);
-  Index root_pid_ = -1;  // rank 0's process id (the frame's temporary name), once known
+  Index root_pid_ = -1;     // rank 0's process id (the frame's temporary name), once known
+  Index history_rows_ = 0;  // rows of history.csv below its header
+  // Runs a write that some processes make and others do not (rank 0's history row, series,
+  // summary and manifest; each process's own piece) and agrees its failure at once: every
+  // process then throws the same RemoteRunError (the lowest failing rank's exit code and
+  // message), so that none goes on to a collective call the failed one never makes. One
+  // process: the write alone.
+  template <class Write>
+  void agreed(Write&& write) const;
   int frames_ = 0;
   std::vector<double> frame_times_;
 };
@@ -207,9 +215,10 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
       progress.update(step, view().time);
       int sig = interrupt_signal();
       if (const Comm* comm = out.comm()) {
-        // Every rank ends after the same step: a signal that reached any of them ends them all.
+        // Every rank ends after the same step: a signal that reached any of them ends them all,
+        // each recording the signal it was (the highest number if several came).
         comm->check();
-        if (comm->any(sig != 0) && sig == 0) sig = SIGINT;
+        sig = static_cast<int>(comm->max(static_cast<double>(sig)));
       }
       if (sig != 0 && !last) {
         // A signal (core/interrupt.hpp): the state after this step, complete, ends the run: its

@@ -4,12 +4,14 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "benchmarks/benchmarks.hpp"
+#include "core/input_file.hpp"
 #include "core/memory.hpp"
 #include "core/parallel.hpp"
 #include "driver/driver.hpp"
@@ -23,6 +25,20 @@ namespace mpm {
 namespace {
 
 using namespace driver;
+
+// A TOML basic string holding `s`: quotes, backslashes and control characters escaped.
+std::string toml_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\')
+      out += std::string("\\") + c;
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      out += fmt::format("\\u{:04x}", static_cast<unsigned>(static_cast<unsigned char>(c)));
+    else
+      out += c;
+  }
+  return out + "\"";
+}
 
 // method.solver = "ulfem": the updated-Lagrangian FEM on the problem's body, one linear element
 // per grid cell covered by the body; outputs and errors at the element midpoints.
@@ -144,7 +160,37 @@ int run_threads(int requested, Index particles, int dim, int available) {
   return static_cast<int>(std::clamp<Index>(particles / per, 1, std::max(1, available)));
 }
 
-RunResult run(const Config& cfg, const RunOptions& opt) {
+RunResult run(const Config& given, const RunOptions& given_options) {
+  RunOptions opt = given_options;
+  // The stored configuration (config.toml, checkpoints) names the mesh file by its absolute
+  // path, so that `mpm run DIR/config.toml` and a restart from the checkpoint alone read the
+  // same file wherever they are started; the checkpoints hold its hash, so that a restart
+  // refuses a file that changed since.
+  Config cfg = given;
+  if (!cfg.get_string("grid.mesh").empty()) {
+    std::error_code ec;
+    const std::filesystem::path file = cfg.file_path("grid.mesh");
+    const std::filesystem::path absolute = std::filesystem::absolute(file, ec).lexically_normal();
+    try {
+      opt.mesh_hash = io::fnv1a64(read_input_file(file, "mesh file"));
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: grid.mesh: {}", cfg.where("grid.mesh"), e.what()));
+    }
+    if (!ec) {
+      try {
+        cfg.set("grid.mesh", toml_string(absolute.string()), cfg.where("grid.mesh"));
+      } catch (const InputError&) {
+        // (A path TOML cannot hold, e.g. not UTF-8: stored as given.)
+      }
+    }
+    if (opt.restart && opt.restart->mesh_hash != opt.mesh_hash)
+      throw InputError(fmt::format(
+          "{}: grid.mesh: the mesh file '{}' is not the one checkpoint '{}' was written with (its "
+          "bytes hash to {:016x}, the checkpoint's mesh to {:016x}); restore that file, or start "
+          "a new run",
+          cfg.where("grid.mesh"), file.string(), opt.restart_name, opt.mesh_hash,
+          opt.restart->mesh_hash));
+  }
   // summary.json's peak_memory_bytes: this run's, the problem's set-up included (a batch runs
   // several in one process).
   reset_peak_memory();

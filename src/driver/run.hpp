@@ -41,6 +41,9 @@ struct RunOptions {
   // The processes of a distributed run (mpirun; core/comm.hpp), or null: one process. Every
   // process calls run() with the same configuration and options.
   const Comm* comm = nullptr;
+  // The FNV-1a hash of the mesh file's bytes (grid.mesh; 0 without one), which checkpoints
+  // store; run() sets it.
+  std::uint64_t mesh_hash = 0;
 };
 
 // Below this many particles per thread a second thread costs more than it saves: measured with

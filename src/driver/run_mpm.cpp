@@ -435,7 +435,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         throw std::logic_error("run_mpm: a process set up a particle of another's slab");
   }
   // An input error that only some processes meet (the stepper's checks of their own particles,
-  // rank 0's output directory) stops every process with the message of the lowest.
+  // rank 0's output directory), or a write that fails on one (config.toml, grid.vtu), stops
+  // every process with the message and exit code of the lowest.
   const auto agreed = [&](auto&& build) {
     std::optional<Comm::Failure> failed;
     try {
@@ -443,9 +444,18 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
     } catch (const InputError& e) {
       if (!comm) throw;
       failed = Comm::Failure{comm->rank(), exit_code::kInput, e.what()};
+    } catch (const RemoteRunError&) {
+      throw;  // (agreed already: every process has it)
+    } catch (const RunError& e) {
+      if (!comm) throw;
+      failed = Comm::Failure{comm->rank(), e.exit_code(), e.what()};
     }
     if (comm)
-      if (const auto f = comm->agree(failed ? &*failed : nullptr)) throw InputError(f->message);
+      if (const auto f = comm->agree(failed ? &*failed : nullptr)) {
+        if (f->exit_code == exit_code::kInput) throw InputError(f->message);
+        throw RemoteRunError(f->exit_code,
+                             fmt::format("rank {} of {}: {}", f->rank, comm->size(), f->message));
+      }
   };
   // OTM and the unified solver are one- and two-dimensional (run_settings refuses them in 3D).
   std::unique_ptr<Stepper<Dim>> stepper;
@@ -470,6 +480,18 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   res.dim = Dim;
   res.cells = sim.grid.num_cells();
   res.h = sim.grid.h.maxCoeff();
+  if constexpr (Dim == 2)
+    if (pb.mesh) {
+      // A mesh from a file: its own size, not its bounding box's cells (which only sort the
+      // particles and draw the outputs), so that a study over meshes gets its orders.
+      res.cells = pb.mesh->num_cells();
+      res.h = 0.0;
+      for (Index c = 0; c < pb.mesh->num_cells(); ++c) {
+        const auto& t = pb.mesh->cell_vertices(c);
+        for (std::size_t i = 0; i < 3; ++i)
+          res.h = std::max(res.h, (pb.mesh->vertex(t[(i + 1) % 3]) - pb.mesh->vertex(t[i])).norm());
+      }
+    }
   res.cell_size.assign(sim.grid.h.data(), sim.grid.h.data() + Dim);
   res.particles = comm ? comm->sum(sim.particles.size()) : sim.particles.size();
   Index migrated = 0;  // particles this rank sent to another
@@ -520,6 +542,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
       [&](Index) {
         Captured<Dim> cap =
             capture<Dim>(*stepper, mapping_name, reference, out, config_text, comm, part);
+        cap.manifest.mesh_hash = opt.mesh_hash;
         out.checkpoint(cap.manifest, cap.piece ? &*cap.piece : nullptr);
       },
       res);

@@ -32,6 +32,13 @@ TriangleMesh::TriangleMesh(std::vector<Vec<2>> vertices, std::vector<Triangle> t
     hi_ = hi_.cwiseMax(v);
   }
   const Index nv = num_vertices();
+  // Areas, normals and the bucket grid are products of coordinate differences: a mesh whose
+  // extent squared overflows has no area to speak of (refused, rather than called degenerate).
+  if (!std::isfinite((hi_ - lo_).squaredNorm()) || !std::isfinite((hi_ - lo_).prod()))
+    throw InputError(fmt::format(
+        "{}: its coordinates span [{:.6g}, {:.6g}] x [{:.6g}, {:.6g}], too large for areas in "
+        "double precision; give the mesh in units that keep coordinates below about 1e150",
+        source_, lo_[0], hi_[0], lo_[1], hi_[1]));
   // A triangle counts as degenerate below this area: 1e-12 of the bounding box's.
   const double min_area = 1e-12 * (hi_ - lo_).prod();
   area_.resize(triangles_.size());
@@ -65,6 +72,8 @@ TriangleMesh::TriangleMesh(std::vector<Vec<2>> vertices, std::vector<Triangle> t
   // edge traverse it in opposite directions. The same directed edge twice means two triangles
   // on the same side of it: the mesh folds over itself (an inverted element), which the
   // orientation fix would otherwise hide.
+  // Triangles per undirected edge: 1 on the mesh's outer boundary, 2 inside.
+  std::map<std::pair<Index, Index>, int> edge_triangles;
   {
     std::map<std::pair<Index, Index>, std::size_t> directed;
     for (std::size_t c = 0; c < triangles_.size(); ++c)
@@ -76,6 +85,7 @@ TriangleMesh::TriangleMesh(std::vector<Vec<2>> vertices, std::vector<Triangle> t
               "{}: triangles {} and {} lie on the same side of their common edge ({}, {}): the "
               "mesh folds over itself (an inverted triangle) or holds a triangle twice",
               source_, it->second, c, key.first, key.second));
+        ++edge_triangles[std::minmax(key.first, key.second)];
       }
   }
   for (auto& [name, edges] : boundaries) {
@@ -87,6 +97,15 @@ TriangleMesh::TriangleMesh(std::vector<Vec<2>> vertices, std::vector<Triangle> t
               fmt::format("{}: an edge of boundary \"{}\" refers to vertex {}, "
                           "outside 0..{}",
                           source_, name, v, nv - 1));
+      // A named line that is no edge of the mesh would carry its conditions and loads nowhere.
+      const auto found = edge_triangles.find(std::minmax(e[0], e[1]));
+      if (found == edge_triangles.end())
+        throw InputError(fmt::format(
+            "{}: boundary \"{}\" has the edge ({}, {}) from ({:.6g}, {:.6g}) to ({:.6g}, {:.6g}), "
+            "which is no edge of a triangle: a named boundary must follow the mesh's edges",
+            source_, name, e[0], e[1], vertex(e[0])[0], vertex(e[0])[1], vertex(e[1])[0],
+            vertex(e[1])[1]));
+      if (found->second != 1) b.outer = false;
       b.vertices.push_back(e[0]);
       b.vertices.push_back(e[1]);
     }
@@ -258,11 +277,20 @@ TriangleMesh with_box_sides(const TriangleMesh& m) {
   }
   std::map<std::string, std::vector<TriangleMesh::Edge>> boundaries;
   for (const auto& name : m.boundary_names()) boundaries[name] = m.boundary(name).edges;
+  // The sides' names belong to the sides: a group of the file named so would silently take the
+  // place of its side in boundary.left, ... and grid-side conditions.
+  for (int d = 0; d < 2; ++d)
+    for (int side = 0; side < 2; ++side)
+      if (boundaries.contains(side_name(d, side)))
+        throw InputError(fmt::format(
+            "{}: its physical group \"{}\" has the name mpm gives the side {} = {:.9g} of the "
+            "mesh's bounding box (boundary.{}); rename the group",
+            m.source(), side_name(d, side), "xy"[d], side == 0 ? m.lower()[d] : m.upper()[d],
+            d == 0 ? (side == 0 ? "left" : "right") : (side == 0 ? "bottom" : "top")));
   const double tol = 1e-10 * (m.upper() - m.lower()).norm();
   for (int d = 0; d < 2; ++d)
     for (int side = 0; side < 2; ++side) {
       const std::string name = side_name(d, side);
-      if (boundaries.contains(name)) continue;
       const double line = side == 0 ? m.lower()[d] : m.upper()[d];
       std::vector<TriangleMesh::Edge> edges;
       for (const auto& [e, n] : count)

@@ -21,16 +21,19 @@ class TriangleMesh {
   static constexpr int kDim = 2;
   using Triangle = std::array<Index, 3>;
   using Edge = std::array<Index, 2>;
-  // A named boundary: its edges (vertex pairs) and their vertices (sorted, unique).
+  // A named boundary: its edges (vertex pairs, each an edge of a triangle) and their vertices
+  // (sorted, unique); outer: every edge lies on the mesh's outer boundary (one triangle), so it
+  // has an outward normal (a line through the mesh's inside has none).
   struct Boundary {
     std::vector<Edge> edges;
     std::vector<Index> vertices;
+    bool outer = true;
   };
 
   // Validates and prepares: vertex indices in range, no triangle of zero area (relative to the
-  // mesh's extent), clockwise triangles turned counter-clockwise (two vertices swapped), the
-  // boundaries' edges made of mesh vertices. `source` names the mesh in messages (a file, or
-  // "the generated mesh"). InputError otherwise.
+  // mesh's extent), coordinates whose areas do not overflow, clockwise triangles turned
+  // counter-clockwise (two vertices swapped), the boundaries' edges edges of its triangles.
+  // `source` names the mesh in messages (a file, or "the generated mesh"). InputError otherwise.
   TriangleMesh(std::vector<Vec<2>> vertices, std::vector<Triangle> triangles,
                std::map<std::string, std::vector<Edge>> boundaries,
                std::string source = "the mesh");
@@ -105,8 +108,8 @@ TriangleMesh structured_triangles(const Vec<2>& lo, const Vec<2>& hi, const IVec
 // The mesh with the boundary edges (those of one triangle) that lie on the sides of its bounding
 // box named as the grid's sides, "x-", "x+", "y-", "y+" (within 1e-10 of the box's diagonal),
 // so that conditions on the sides of a rectangle (FixedSide, boundary.left = "fixed", ...)
-// apply to a mesh read from a file. A side that the file already names, or that holds no
-// boundary edge, is not added.
+// apply to a mesh read from a file. A side that holds no boundary edge is not added; a boundary
+// of m named like a side is refused (InputError naming it).
 TriangleMesh with_box_sides(const TriangleMesh& m);
 
 // A named boundary that lies on one straight line (every vertex within 1e-10 of the mesh's box

@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "core/bytes.hpp"
+#include "core/input_file.hpp"
 #include "io/output.hpp"
 
 namespace mpm::io {
@@ -229,6 +230,7 @@ std::string encode_checkpoint(const Checkpoint& c) {
     p.u64(piece.bytes);
     p.u64(piece.hash);
   }
+  p.u64(c.mesh_hash);
   return framed(kCheckpointMagic, p);
 }
 
@@ -338,6 +340,7 @@ Checkpoint decode_checkpoint(std::string_view bytes, const std::string& name) {
     piece.hash = r.u64();
     c.pieces.push_back(std::move(piece));
   }
+  c.mesh_hash = r.u64();
   if (!r.done())
     throw InputError(fmt::format("checkpoint '{}': unexpected bytes after the payload", name));
   return c;
@@ -432,12 +435,7 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c) {
 namespace {
 
 std::string read_bytes(const std::filesystem::path& path, std::string_view kind) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("cannot open {} '{}'", kind, path.string()));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw InputError(fmt::format("cannot read {} '{}'", kind, path.string()));
-  return std::move(ss).str();
+  return read_input_file(path, kind);
 }
 
 template <class T>
@@ -548,6 +546,14 @@ Config restart_config(const Checkpoint& c, const std::string& name, const Config
   std::vector<std::string> diff;
   for (const KeySpec& k : schema()) {
     if (k.name.starts_with("output.") || k.name == "time.end") continue;
+    if (k.name == "grid.mesh") {
+      // The same file, named from another directory (the stored configuration holds its
+      // absolute path, a configuration file one relative to itself), is the same mesh.
+      std::error_code ea, eb;
+      const auto fa = std::filesystem::absolute(stored.file_path(k.name), ea).lexically_normal();
+      const auto fb = std::filesystem::absolute(run.file_path(k.name), eb).lexically_normal();
+      if (!ea && !eb && fa == fb) continue;
+    }
     const auto a = value_text(stored, k), b = value_text(run, k);
     if (a != b)
       diff.push_back(fmt::format("  {}: checkpoint {}, now {} ({})", k.name, a.value_or("missing"),

@@ -36,7 +36,9 @@
 //     crossings (4 R values; the diagnostics above hold the total crossings and sorts),
 //   version 6: i64[] layer counts (a distributed run: the particles in each cell layer along
 //     the slabs' axis, over all processes; empty for one process), u64 pieces, then per piece
-//     (rank 0, 1, ...): str file name, u64 file size, u64 payload hash (its header's).
+//     (rank 0, 1, ...): str file name, u64 file size, u64 payload hash (its header's),
+//   version 7: u64 the FNV-1a hash of the bytes of the mesh file (grid.mesh; 0 without one),
+//     so that a restart refuses a mesh file that changed.
 // A distributed run's manifest holds no particles, cells or basis state (counts 0): its pieces
 // do. A piece has the same header with the magic "MPMLABCP" and the payload
 //   i64 step, i64 rank, i64 ranks, particles (as above), i64[] cells, f64[] basis state
@@ -62,7 +64,8 @@ inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
 // density), no longer stored; a version-3 file is refused by its version. Version 5
 // (2026-11-27): the distribution of a run on several processes. Version 6 (2026-12-01): a
 // distributed run writes pieces and a manifest instead of gathering its particles at rank 0.
-inline constexpr std::uint32_t kCheckpointVersion = 6;
+// Version 7: the mesh file's hash.
+inline constexpr std::uint32_t kCheckpointVersion = 7;
 inline constexpr std::string_view kPieceMagic = "MPMLABCP";
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
@@ -127,6 +130,7 @@ struct Checkpoint {
     std::uint64_t hash = 0;   // the FNV-1a hash of its payload (its header's)
   };
   std::vector<Piece> pieces;
+  std::uint64_t mesh_hash = 0;  // fnv1a64 of the grid.mesh file's bytes; 0: no mesh
 };
 
 // One process's share of a distributed checkpoint: its particles in its order, each one's cell

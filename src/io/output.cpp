@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <signal.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -14,10 +15,13 @@
 #include <cstring>
 #include <iterator>
 #include <set>
+#include <span>
 #include <stdexcept>
 #include <system_error>
 #include <type_traits>
 #include <utility>
+
+#include "core/input_file.hpp"
 
 namespace mpm::io {
 
@@ -169,14 +173,19 @@ constexpr std::string_view vtk_type() {
 }
 
 // values: `components` per tuple, tuples one after the other.
+// component_names: one per component (VTK's ComponentName0, ...: ParaView shows "stress_XY"
+// instead of "stress_1"), or empty.
 template <class T>
 void data_array(Buffer& b, VtuData& d, std::string_view name, int components,
-                const std::vector<T>& values) {
+                const std::vector<T>& values,
+                std::span<const std::string_view> component_names = {}) {
   static_assert(std::endian::native == std::endian::little, "VTK raw data: little endian");
   fmt::format_to(std::back_inserter(b), "        <DataArray type=\"{}\" Name=\"{}\"", vtk_type<T>(),
                  xml_escape(name));
   if (components != 1)
     fmt::format_to(std::back_inserter(b), " NumberOfComponents=\"{}\"", components);
+  for (std::size_t k = 0; k < component_names.size(); ++k)
+    fmt::format_to(std::back_inserter(b), " ComponentName{}=\"{}\"", k, component_names[k]);
   if (d.binary) {
     fmt::format_to(std::back_inserter(b), " format=\"appended\" offset=\"{}\"/>\n",
                    d.appended.size());
@@ -200,6 +209,10 @@ void scalar_array(Buffer& b, VtuData& d, std::string_view name, const std::vecto
   data_array(b, d, name, 1, values);
 }
 
+constexpr std::array<std::string_view, 3> kVectorComponents = {"X", "Y", "Z"};
+constexpr std::array<std::string_view, 9> kTensorComponents = {"XX", "XY", "XZ", "YX", "YY",
+                                                               "YZ", "ZX", "ZY", "ZZ"};
+
 // A vector field padded with zeros to 3 components (VTK vectors are always 3D).
 template <int Dim>
 void vector_array(Buffer& b, VtuData& d, std::string_view name,
@@ -208,21 +221,24 @@ void vector_array(Buffer& b, VtuData& d, std::string_view name,
   flat.reserve(3 * values.size());
   for (const auto& v : values)
     for (int k = 0; k < 3; ++k) flat.push_back(k < Dim ? v[k] : 0.0);
-  data_array(b, d, name, 3, flat);
+  data_array(b, d, name, 3, flat, kVectorComponents);
 }
 
 // A Dim x Dim tensor embedded in 3x3 (row-major, 9 components); pad is the value on the
-// padded diagonal (1 for F: no deformation out of plane; 0 for stress).
+// padded diagonal (1 for F: no deformation out of plane; 0 for stress), zz (2D, when given) the
+// value at (2, 2) per tensor instead (the plane-strain stress sigma_zz).
 template <int Dim>
 void tensor_array(Buffer& b, VtuData& d, std::string_view name, const std::vector<Mat<Dim>>& values,
-                  double pad) {
+                  double pad, const std::vector<double>* zz = nullptr) {
   std::vector<double> flat;
   flat.reserve(9 * values.size());
-  for (const auto& m : values)
+  for (std::size_t i = 0; i < values.size(); ++i)
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        flat.push_back(r < Dim && c < Dim ? m(r, c) : (r == c ? pad : 0.0));
-  data_array(b, d, name, 9, flat);
+      for (int c = 0; c < 3; ++c) {
+        const double padded = (zz != nullptr && r == 2 && c == 2) ? (*zz)[i] : pad;
+        flat.push_back(r < Dim && c < Dim ? values[i](r, c) : (r == c ? padded : 0.0));
+      }
+  data_array(b, d, name, 9, flat, kTensorComponents);
 }
 
 void vtu_header(Buffer& b, const VtuData& d) {
@@ -250,7 +266,9 @@ void vtu_footer(Buffer& b, const VtuData& d) {
 void cells_block(Buffer& b, VtuData& d, const std::vector<Index>& connectivity, Index num_cells,
                  int nodes_per_cell, int cell_type) {
   put(b, "      <Cells>\n");
-  data_array(b, d, "connectivity", nodes_per_cell,
+  // One component: VTK's reader refuses a connectivity array of several ("could not be created
+  // with one component") and reads no points at all. (ASCII: one id per line.)
+  data_array(b, d, "connectivity", 1,
              std::vector<std::int64_t>(connectivity.begin(), connectivity.end()));
   std::vector<std::int64_t> offsets(static_cast<std::size_t>(num_cells));
   for (Index c = 0; c < num_cells; ++c)
@@ -288,9 +306,14 @@ void AppendFile::open(const std::filesystem::path& path, std::string_view conten
   if (fd_ < 0) throw_write_error(path, "open for appending", errno);
 }
 
-void AppendFile::append(std::string_view text) {
+void AppendFile::append(std::string_view text, std::string_view what) {
   if (fd_ < 0) throw std::logic_error("AppendFile::append before open");
-  if (const int err = write_all(fd_, text)) throw_write_error(path_, "write", err);
+  const off_t before = ::lseek(fd_, 0, SEEK_END);
+  if (const int err = write_all(fd_, text)) {
+    // (Best effort: a character device has no end to cut back to.)
+    if (before >= 0) (void)::ftruncate(fd_, before);
+    throw_write_error(path_, fmt::format("write of {}", what), err);
+  }
 }
 
 // ---- the output directory ------------------------------------------------------------------
@@ -413,7 +436,46 @@ int remove_stale_temporaries(const std::filesystem::path& dir) {
   return removed;
 }
 
-void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+OutputTarget output_target(const std::filesystem::path& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) return {path, false};  // (a new file)
+  if (S_ISREG(st.st_mode)) return {path, false};
+  if (S_ISLNK(st.st_mode)) {
+    // The link stays and its target is written: the target itself must be replaceable.
+    std::error_code ec;
+    const std::filesystem::path target = std::filesystem::canonical(path, ec);
+    if (ec)
+      throw RunError(exit_code::kOutput,
+                     fmt::format("cannot write '{}': it is a symbolic link to nothing ({})",
+                                 path.string(), ec.message()));
+    struct stat t {};
+    if (::stat(target.c_str(), &t) == 0 && !S_ISREG(t.st_mode) && !S_ISCHR(t.st_mode))
+      throw RunError(exit_code::kOutput,
+                     fmt::format("cannot write '{}': it links to '{}', which is {}, not a regular "
+                                 "file; mpm replaces only regular files",
+                                 path.string(), target.string(), file_type_name(t.st_mode)));
+    return {target, S_ISCHR(t.st_mode)};
+  }
+  if (S_ISCHR(st.st_mode)) return {path, true};
+  throw RunError(exit_code::kOutput,
+                 fmt::format("cannot write '{}': it is {}, not a regular file; mpm replaces only "
+                             "regular files (choose another path, or remove it)",
+                             path.string(), file_type_name(st.st_mode)));
+}
+
+void write_file_atomic(const std::filesystem::path& requested, std::string_view content) {
+  const OutputTarget target = output_target(requested);
+  const std::filesystem::path& path = target.path;
+  if (target.write_through) {
+    // A character device (/dev/null, a terminal): written into, never replaced.
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) throw_write_error(requested, "open", errno);
+    const int err = write_all(fd, content);
+    const int closed = ::close(fd) != 0 ? errno : 0;
+    if (err != 0) throw_write_error(requested, "write", err);
+    if (closed != 0) throw_write_error(requested, "close", closed);
+    return;
+  }
   std::filesystem::path tmp = path;
   tmp += ".tmp." + std::to_string(static_cast<long long>(::getpid()));
 
@@ -525,12 +587,29 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
 
 template <int Dim>
 std::string particles_vtu(const Particles<Dim>& p, double time,
-                          const std::vector<ScalarField>& extra, bool binary) {
+                          const std::vector<ScalarField>& extra, bool binary,
+                          const std::vector<VectorField<Dim>>& vectors,
+                          const std::vector<double>* stress_zz) {
   static_assert(Dim >= 1 && Dim <= 3);
   check_particles(p);
   const auto n = static_cast<std::size_t>(p.size());
   check_fields(extra, n, {"id", "x0", "u", "v", "mass", "volume", "density", "F", "stress"},
                "particle");
+  {
+    std::set<std::string> used = {"id", "x0", "u", "v", "mass", "volume", "density", "F", "stress"};
+    for (const auto& f : extra) used.insert(f.name);
+    for (const auto& v : vectors) {
+      if (v.values == nullptr || v.values->size() != n || v.name.empty() ||
+          !used.insert(v.name).second)
+        throw std::invalid_argument(fmt::format(
+            "particle vector field '{}': no name, no values, not one per particle, or a name "
+            "already used",
+            v.name));
+    }
+    if (stress_zz != nullptr && (Dim != 2 || stress_zz->size() != n))
+      throw std::invalid_argument(
+          "particles_vtu: stress_zz needs a 2D frame and a value per particle");
+  }
 
   Buffer b;
   VtuData d;
@@ -564,7 +643,8 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
   scalar_array(b, d, "volume", p.volume);
   scalar_array(b, d, "density", rho);
   tensor_array<Dim>(b, d, "F", p.F, 1.0);
-  tensor_array<Dim>(b, d, "stress", p.stress, 0.0);
+  tensor_array<Dim>(b, d, "stress", p.stress, 0.0, stress_zz);
+  for (const auto& f : vectors) vector_array<Dim>(b, d, f.name, *f.values);
   for (const auto& f : extra) scalar_array(b, d, f.name, *f.values);
   put(b, "      </PointData>\n");
 
@@ -659,7 +739,10 @@ std::string particles_pvtu(std::string_view piece, const std::vector<std::string
          at = section.find("<DataArray", at + 1)) {
       const auto tag = section.substr(at, section.find('>', at) - at);
       std::string attrs;
-      for (const char* key : {"type", "Name", "NumberOfComponents"}) {
+      for (const char* key :
+           {"type", "Name", "NumberOfComponents", "ComponentName0", "ComponentName1",
+            "ComponentName2", "ComponentName3", "ComponentName4", "ComponentName5",
+            "ComponentName6", "ComponentName7", "ComponentName8"}) {
         const std::string k = std::string(" ") + key + "=\"";
         const auto v = tag.find(k);
         if (v == std::string_view::npos) continue;
@@ -752,8 +835,9 @@ std::string triangle_mesh_vtu(const TriangleMesh& m, const std::vector<ScalarFie
 #define MPM_IO_INSTANTIATE(D)                                                                 \
   template std::string particles_csv<D>(const Particles<D>&, const std::vector<ScalarField>&, \
                                         bool);                                                \
-  template std::string particles_vtu<D>(const Particles<D>&, double,                          \
-                                        const std::vector<ScalarField>&, bool);               \
+  template std::string particles_vtu<D>(                                                      \
+      const Particles<D>&, double, const std::vector<ScalarField>&, bool,                     \
+      const std::vector<VectorField<D>>&, const std::vector<double>*);                        \
   template std::string grid_vtu<D>(const Grid<D>&, const std::vector<ScalarField>&, bool);
 MPM_IO_INSTANTIATE(1)
 MPM_IO_INSTANTIATE(2)

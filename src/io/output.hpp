@@ -25,7 +25,21 @@ namespace mpm::io {
 // see either the old file or the complete new one. Creates no directories. Throws
 // RunError (exit_code::kOutput) naming the path and the system error (strerror) on failure; the
 // temporary file is removed in that case.
+// A path that exists and is not a regular file is never replaced: a symbolic link keeps its
+// place and its target is written (as below); a character device (/dev/null, a terminal) is
+// written through; anything else (a directory, a FIFO, a socket, a block device, a link to
+// nothing or to such a thing) is refused with RunError (exit_code::kOutput) naming it.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+
+// Where an output at `path` goes: `path` itself when it does not exist or is a regular file
+// (replaced by a rename), a symbolic link's target (the link kept), or a character device
+// (write_through: written into, never renamed over). RunError (exit_code::kOutput) naming the
+// path for anything else.
+struct OutputTarget {
+  std::filesystem::path path;
+  bool write_through = false;
+};
+OutputTarget output_target(const std::filesystem::path& path);
 
 // Removes the temporaries "<name>.tmp.<pid>" in dir (not its subdirectories) that a process no
 // longer running left behind (killed while writing); those of running processes stay. Returns
@@ -79,7 +93,9 @@ class AppendFile {
   ~AppendFile();
 
   void open(const std::filesystem::path& path, std::string_view content);
-  void append(std::string_view text);
+  // `what` names the text in the error ("row 12"). A write that fails part-way is cut off again
+  // (the file keeps whole appends only, e.g. no partial history row on a full disk).
+  void append(std::string_view text, std::string_view what = "append");
   bool is_open() const { return fd_ >= 0; }
 
  private:
@@ -93,6 +109,14 @@ class AppendFile {
 struct ScalarField {
   std::string name;
   const std::vector<double>* values = nullptr;
+};
+
+// An extra per-particle vector field (e.g. the exact displacement), written to a VTU as a
+// 3-component array like u and v (zero padded), so that an error field is one calculator line.
+template <int Dim>
+struct VectorField {
+  std::string name;
+  const std::vector<Vec<Dim>>* values = nullptr;
 };
 
 // CSV of the particle state: a header line, then one row per particle. Columns:
@@ -110,11 +134,15 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
 // meshio read) with one VTK_VERTEX cell per particle at its current
 // position (padded to 3 components). PointData: id (Int64, Particles::id), x0, u, v (3 components,
 // zero padded), mass, volume, density, F and stress (9 components, row-major: the Dim x Dim tensor
-// embedded in 3x3 with identity padding for F and zero padding for stress), then the extra
-// scalars. The time [s] is stored in FieldData as "TimeValue", which ParaView reads.
+// embedded in 3x3 with identity padding for F and zero padding for stress; in 2D stress_zz, when
+// given, is the stress normal to the plane, sigma_zz, of each particle), then the extra vectors
+// and scalars. Vectors and tensors name their components (ComponentName0 ...: X, Y, Z; XX, XY,
+// ..., ZZ). The time [s] is stored in FieldData as "TimeValue", which ParaView reads.
 template <int Dim>
 std::string particles_vtu(const Particles<Dim>& p, double time,
-                          const std::vector<ScalarField>& extra = {}, bool binary = false);
+                          const std::vector<ScalarField>& extra = {}, bool binary = false,
+                          const std::vector<VectorField<Dim>>& vectors = {},
+                          const std::vector<double>* stress_zz = nullptr);
 
 // A .pvtu (VTK's parallel unstructured grid) over the pieces `sources` (file names relative to
 // it) of one frame of a distributed run, one piece per process: its PPointData and PPoints are

@@ -39,6 +39,11 @@ struct Elastic1DSmall {
     return 0.5 * sigma(0, 0) * sigma(0, 0) / p.youngs_modulus * V;
   }
   double wave_speed() const { return std::sqrt(p.youngs_modulus / p.density); }
+  // A uniaxial-stress law (1D only): no stress across the bar.
+  template <int Dim>
+  double out_of_plane_stress(const Mat<Dim>& /*sigma*/, const Mat<Dim>& /*F*/) const {
+    return 0.0;
+  }
 };
 
 // 1D large deformation, incremental: sigma^{s+1} = sigma^s + (E - sigma^s) d_eps (004 eq. 4.16),
@@ -58,6 +63,10 @@ struct Elastic1DLarge {
     return p.youngs_modulus * (f - 1.0 - std::log(f)) * V0;
   }
   double wave_speed() const { return std::sqrt(p.youngs_modulus / p.density); }
+  template <int Dim>
+  double out_of_plane_stress(const Mat<Dim>& /*sigma*/, const Mat<Dim>& /*F*/) const {
+    return 0.0;
+  }
 };
 
 // Linear elastic in F (D eq. 2.13): sigma = lambda tr(eps) I + 2 mu eps, eps = sym(F) - I.
@@ -80,6 +89,11 @@ struct LinearElastic {
     return (0.5 * lambda_ * tr * tr + mu_ * eps.squaredNorm()) * V0;
   }
   double wave_speed() const { return std::sqrt((lambda_ + 2.0 * mu_) / p.density); }
+  // Plane strain in 2D (eps_zz = 0): sigma_zz = lambda tr(eps).
+  template <int Dim>
+  double out_of_plane_stress(const Mat<Dim>& /*sigma*/, const Mat<Dim>& F) const {
+    return lambda_ * (F.trace() - Dim);
+  }
 
  private:
   // The Lame constants of p, computed once: update() runs per particle per step, and the
@@ -109,6 +123,12 @@ struct NeoHookean {
            V0;
   }
   double wave_speed() const { return std::sqrt((lambda_ + 2.0 * mu_) / p.density); }
+  // Plane strain in 2D (F_zz = 1, so b_zz = 1): sigma_zz = lambda ln(J) / J.
+  template <int Dim>
+  double out_of_plane_stress(const Mat<Dim>& /*sigma*/, const Mat<Dim>& F) const {
+    const double J = F.determinant();
+    return lambda_ * std::log(J) / J;
+  }
 
  private:
   double lambda_, mu_;  // of p, computed once (see LinearElastic)
@@ -117,7 +137,8 @@ struct NeoHookean {
 // The constitutive-law concept: the per-particle stress update over a step (dtL = dt L, the
 // velocity gradient times the increment; F already updated), the strain energy of a particle
 // (history.csv), the wave speed of the stability limit, and the dimensions it exists in
-// (make_material refuses the others; the stages compile no update for them).
+// (make_material refuses the others; the stages compile no update for them), and the stress
+// normal to the plane of a 2D run, which the 2D state omits (plane strain: outputs).
 template <class Law, int Dim>
 concept ConstitutiveLaw = requires(const Law& law, Mat<Dim>& sigma, const Mat<Dim>& F,
                                    const Mat<Dim>& dtL, double V, double V0, int dim) {
@@ -126,6 +147,7 @@ concept ConstitutiveLaw = requires(const Law& law, Mat<Dim>& sigma, const Mat<Di
   law.update(sigma, F, dtL);
   { law.energy(sigma, F, V, V0) } -> std::convertible_to<double>;
   { law.wave_speed() } -> std::convertible_to<double>;
+  { law.out_of_plane_stress(sigma, F) } -> std::convertible_to<double>;
 };
 static_assert(ConstitutiveLaw<Elastic1DSmall, 1> && ConstitutiveLaw<Elastic1DLarge, 1>);
 static_assert(ConstitutiveLaw<LinearElastic, 1> && ConstitutiveLaw<LinearElastic, 2>);

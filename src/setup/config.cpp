@@ -14,6 +14,7 @@
 #include <tuple>
 #include <utility>
 
+#include "core/input_file.hpp"
 #include "core/types.hpp"
 
 namespace mpm {
@@ -99,8 +100,15 @@ std::string_view trim(std::string_view s) {
 // What a TOML node holds, for "got ..." in type errors.
 std::string describe(const toml::node& node) {
   switch (node.type()) {
-    case toml::node_type::string:
-      return "a string (" + quote(node.as_string()->get()) + ")";
+    case toml::node_type::string: {
+      // (A long one by its start: a message is read, not scrolled.)
+      const std::string& text = node.as_string()->get();
+      if (text.size() <= 160) return "a string (" + quote(text) + ")";
+      std::size_t cut = 120;
+      while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
+      return fmt::format("a string of {} characters ({}...)", text.size(),
+                         quote(text.substr(0, cut)));
+    }
     case toml::node_type::integer:
       return "an integer (" + std::to_string(node.as_integer()->get()) + ")";
     case toml::node_type::floating_point:
@@ -572,7 +580,14 @@ class ConfigBuilder {
   }
 
   void override_arg(const std::string& arg) {
-    const std::string origin = "--set " + arg;
+    // The argument names itself in messages (and in where()); a long one only by its start.
+    std::string shown = arg;
+    if (arg.size() > 160) {
+      std::size_t cut = 120;
+      while (cut > 0 && (static_cast<unsigned char>(arg[cut]) & 0xC0) == 0x80) --cut;  // UTF-8
+      shown = fmt::format("{}... ({} characters)", arg.substr(0, cut), arg.size());
+    }
+    const std::string origin = "--set " + shown;
     const auto eq = arg.find('=');
     if (eq == std::string::npos) {
       error_at(origin, kOverride, "expected KEY=VALUE (e.g. --set grid.cells=40), got no '='");
@@ -837,17 +852,11 @@ class ConfigBuilder {
 };
 
 namespace {
-// The bytes of a file the user named; `what` ("config", "batch") names it in the messages.
+// The bytes of a file the user named; `what` ("config", "batch") names it in the messages. A
+// configuration or batch file of more than 64 MiB is no such file (a mistaken argument).
+constexpr std::uint64_t kMaxInputBytes = std::uint64_t{64} << 20;
 std::string read_input_file(const std::string& path, std::string_view what) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(fmt::format("cannot open {} file '{}': it is a directory", what, path));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("cannot open {} file '{}'", what, path));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(fmt::format("cannot read {} file '{}'", what, path));
-  return text.str();
+  return mpm::read_input_file(path, fmt::format("{} file", what), kMaxInputBytes);
 }
 }  // namespace
 
@@ -994,6 +1003,20 @@ bool Config::is_set(std::string_view key) const {
   return stored(key) != nullptr;
 }
 
+std::filesystem::path Config::file_path(std::string_view key) const {
+  std::filesystem::path path(get_string(key));
+  std::error_code ec;
+  if (!path.empty() && path.is_relative() && std::filesystem::is_regular_file(source_, ec))
+    path = std::filesystem::path(source_).parent_path() / path;
+  return path;
+}
+
+bool Config::at_default(std::string_view key) const {
+  const KeySpec& spec = spec_or_throw(key);
+  const Stored* s = stored(key);
+  return s == nullptr || (spec.default_value && s->value == *spec.default_value);
+}
+
 std::string Config::where(std::string_view key) const {
   if (key.starts_with(kConstants + ".")) {
     const auto it = constant_origins_.find(key.substr(kConstants.size() + 1));
@@ -1109,9 +1132,15 @@ std::vector<BatchRun> read_batch(const std::string& path) {
     if (r.config.empty() || r.out.empty())
       throw InputError(fmt::format("{}: this [[run]] has no {}; {}", r.where,
                                    r.config.empty() ? "config" : "out", kForm));
-    // "runs/a", "runs/a/" and "./runs/a" are one directory.
+    // "runs/a", "runs/a/", "./runs/a" and "link/a" with link a symbolic link to runs are one
+    // directory: the part of the path that exists is resolved (links followed), the rest
+    // normalised.
     auto key = std::filesystem::absolute(r.out, ec).lexically_normal();
     if (!key.has_filename()) key = key.parent_path();
+    if (auto resolved = std::filesystem::weakly_canonical(key, ec); !ec) {
+      key = resolved.lexically_normal();
+      if (!key.has_filename()) key = key.parent_path();
+    }
     if (const auto [it, fresh] = outs.emplace(key, runs.size()); !fresh)
       throw InputError(
           fmt::format("{}: run {} writes to '{}', as run {} does ({}); give each run its own out",

@@ -3,6 +3,7 @@
 // (src/setup/keys.cpp). Every user mistake is reported as an InputError that names the file, line
 // and column (or the --set argument) and says what would have been valid.
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <ostream>
@@ -77,6 +78,12 @@ class Config {
 
   // Given in the file or by --set / set(). Also accepts "constants.NAME".
   bool is_set(std::string_view key) const;
+  // Not given, or given with its default value (a stored config.toml gives every key).
+  bool at_default(std::string_view key) const;
+  // A String key that names a file (grid.mesh): a relative path is taken from the directory of
+  // the configuration file, or from the working directory when the configuration is not a file
+  // (a checkpoint's stored configuration, a text parsed in a test).
+  std::filesystem::path file_path(std::string_view key) const;
   // "file.toml:12:7", "--set grid.cells=10", or "default"; for later validation messages
   // (e.g. "file.toml:4:9: grid.max must be above grid.min"). Also accepts "constants.NAME".
   std::string where(std::string_view key) const;

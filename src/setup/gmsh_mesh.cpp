@@ -1,16 +1,27 @@
 #include "setup/gmsh_mesh.hpp"
 
 #include <dlfcn.h>
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <gmshc.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
+#include <sstream>
 #include <unordered_map>
 #include <vector>
+
+#include "core/input_file.hpp"
 
 namespace mpm {
 
@@ -157,18 +168,221 @@ class GmshSession {
   const GmshLibrary& lib_;
 };
 
+// The version line of a Gmsh mesh file: the first line that is not blank must be $MeshFormat,
+// the next "2.2 T 8" or "4.1 T 8" (T: 0 ASCII, 1 binary). Gmsh reads a file without this header
+// as a .geo script, whose commands (SystemCall, Shell, ...) it would run: a mesh is data, so
+// nothing else reaches Gmsh. InputError naming the file and what its start holds.
+struct MshFormat {
+  bool v41 = false;  // else 2.2
+  bool binary = false;
+};
+MshFormat check_msh_header(const std::string& bytes, const std::string& where) {
+  std::size_t at = 0;
+  const auto line = [&]() {
+    const std::size_t end = bytes.find('\n', at);
+    std::string l = bytes.substr(at, end == std::string::npos ? std::string::npos : end - at);
+    at = end == std::string::npos ? bytes.size() : end + 1;
+    while (!l.empty() && (l.back() == '\r' || l.back() == ' ' || l.back() == '\t')) l.pop_back();
+    return l;
+  };
+  const auto shown = [](const std::string& l) {
+    std::string out;
+    for (char c : l.substr(0, 40)) out += (c >= 32 && c < 127) ? c : '?';
+    return l.size() > 40 ? out + "..." : out;
+  };
+  std::string first;
+  while (at < bytes.size() && first.find_first_not_of(" \t") == std::string::npos) first = line();
+  if (first.find_first_not_of(" \t") != std::string::npos)
+    first = first.substr(first.find_first_not_of(" \t"));
+  if (first != "$MeshFormat")
+    throw InputError(fmt::format(
+        "{}: not a Gmsh mesh file: it must start with the line $MeshFormat (MSH 2.2 or 4.1, "
+        "ASCII or binary), and starts with \"{}\"; mpm reads meshes, never scripts (.geo): "
+        "mesh it with gmsh -2 -format msh41 first",
+        where, bytes.empty() ? std::string() : shown(first)));
+  const std::string version = line();
+  std::istringstream in(version);
+  std::string number;
+  int file_type = -1, data_size = -1;
+  in >> number >> file_type >> data_size;
+  if (!in || (number != "2.2" && number != "4.1") || (file_type != 0 && file_type != 1) ||
+      data_size != 8)
+    throw InputError(fmt::format(
+        "{}: the format line after $MeshFormat is \"{}\"; mpm reads MSH 2.2 and 4.1, ASCII or "
+        "binary (\"4.1 0 8\", \"4.1 1 8\", \"2.2 0 8\" or \"2.2 1 8\")",
+        where, shown(version)));
+  return {number == "4.1", file_type == 1};
+}
+
+// The node ids of the file's $Nodes section in file order, read from the bytes (Gmsh keeps one
+// of two definitions of an id without a word): MSH 2.2 "count" then "id x y z" per node (binary:
+// int id, 3 doubles); MSH 4.1 "numEntityBlocks numNodes minTag maxTag", then per block
+// "entityDim entityTag parametric numNodesInBlock", its tags, then its coordinates (binary: the
+// same as 8-byte size_t and 4-byte int fields). Nothing when the section is not found or not read
+// (Gmsh's own reader then says what is wrong).
+std::optional<std::vector<std::uint64_t>> node_ids(const std::string& bytes, MshFormat f) {
+  const std::size_t at = bytes.find("$Nodes");
+  if (at == std::string::npos) return std::nullopt;
+  std::size_t pos = bytes.find('\n', at);
+  if (pos == std::string::npos) return std::nullopt;
+  ++pos;
+  std::vector<std::uint64_t> ids;
+  const auto raw = [&](auto& v) {  // a little-endian binary field (as the header checked)
+    if (pos + sizeof v > bytes.size()) return false;
+    std::memcpy(&v, bytes.data() + pos, sizeof v);
+    pos += sizeof v;
+    return true;
+  };
+  if (!f.binary || !f.v41) {
+    // The count (2.2) or the section's header line (4.1 ASCII) is text.
+    std::istringstream in(bytes.substr(pos, bytes.find("$EndNodes", pos) - pos));
+    if (!f.v41) {
+      std::uint64_t n = 0;
+      if (!(in >> n)) return std::nullopt;
+      if (f.binary) {
+        const std::size_t eol = bytes.find('\n', pos);
+        if (eol == std::string::npos) return std::nullopt;
+        pos = eol + 1;
+        for (std::uint64_t k = 0; k < n; ++k) {
+          std::int32_t id = 0;
+          double xyz[3];
+          if (!raw(id) || !raw(xyz)) return std::nullopt;
+          ids.push_back(static_cast<std::uint64_t>(id));
+        }
+        return ids;
+      }
+      for (std::uint64_t k = 0; k < n; ++k) {
+        std::uint64_t id = 0;
+        double x = 0, y = 0, z = 0;
+        if (!(in >> id >> x >> y >> z)) return std::nullopt;
+        ids.push_back(id);
+      }
+      return ids;
+    }
+    std::uint64_t blocks = 0, n = 0, lo = 0, hi = 0;
+    if (!(in >> blocks >> n >> lo >> hi)) return std::nullopt;
+    for (std::uint64_t b = 0; b < blocks; ++b) {
+      int dim = 0, tag = 0, parametric = 0;
+      std::uint64_t count = 0;
+      if (!(in >> dim >> tag >> parametric >> count)) return std::nullopt;
+      for (std::uint64_t k = 0; k < count; ++k) {
+        std::uint64_t id = 0;
+        if (!(in >> id)) return std::nullopt;
+        ids.push_back(id);
+      }
+      const std::uint64_t values = count * (3 + (parametric != 0 ? static_cast<unsigned>(dim) : 0));
+      for (std::uint64_t k = 0; k < values; ++k) {
+        double v = 0;
+        if (!(in >> v)) return std::nullopt;
+      }
+    }
+    return ids;
+  }
+  std::uint64_t blocks = 0, n = 0, lo = 0, hi = 0;
+  if (!raw(blocks) || !raw(n) || !raw(lo) || !raw(hi)) return std::nullopt;
+  for (std::uint64_t b = 0; b < blocks; ++b) {
+    std::int32_t dim = 0, tag = 0, parametric = 0;
+    std::uint64_t count = 0;
+    if (!raw(dim) || !raw(tag) || !raw(parametric) || !raw(count)) return std::nullopt;
+    if (count > bytes.size()) return std::nullopt;
+    for (std::uint64_t k = 0; k < count; ++k) {
+      std::uint64_t id = 0;
+      if (!raw(id)) return std::nullopt;
+      ids.push_back(id);
+    }
+    const std::uint64_t skip =
+        count * 8 * (3 + (parametric != 0 ? static_cast<std::uint64_t>(dim) : 0));
+    if (pos + skip > bytes.size()) return std::nullopt;
+    pos += skip;
+  }
+  return ids;
+}
+
+// A private directory holding a copy of the mesh for Gmsh to open, removed with it: Gmsh also
+// merges a file "NAME.opt" next to the file it opens, whose options and commands it would run,
+// and the copy has no such neighbour. Reading the copy also means Gmsh parses the very bytes
+// whose header was checked.
+class PrivateCopy {
+ public:
+  PrivateCopy(const std::string& bytes, const std::string& where) {
+    std::error_code ec;
+    std::filesystem::path base = std::filesystem::temp_directory_path(ec);
+    if (ec) base = "/tmp";
+    std::string tmpl = (base / "mpm-mesh-XXXXXX").string();
+    if (::mkdtemp(tmpl.data()) == nullptr)
+      throw InputError(fmt::format("{}: cannot make a private directory under {} for Gmsh: {}",
+                                   where, base.string(), std::strerror(errno)));
+    dir_ = tmpl;
+    file_ = dir_ / "mesh.msh";
+    const int fd = ::open(file_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    bool ok = fd >= 0;
+    int err = errno;
+    for (std::size_t done = 0; ok && done < bytes.size();) {
+      const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        ok = false;
+        err = errno;
+        break;
+      }
+      done += static_cast<std::size_t>(n);
+    }
+    if (fd >= 0 && ::close(fd) != 0 && ok) {
+      ok = false;
+      err = errno;
+    }
+    if (!ok) {
+      std::filesystem::remove_all(dir_, ec);
+      throw InputError(fmt::format("{}: cannot copy it into {} for Gmsh: {}", where, dir_.string(),
+                                   std::strerror(err)));
+    }
+  }
+  ~PrivateCopy() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
+  }
+  PrivateCopy(const PrivateCopy&) = delete;
+  PrivateCopy& operator=(const PrivateCopy&) = delete;
+  const std::filesystem::path& file() const { return file_; }
+
+ private:
+  std::filesystem::path dir_, file_;
+};
+
 }  // namespace
 
 TriangleMesh read_gmsh_mesh(const std::string& path) {
   const std::string where = fmt::format("mesh file \"{}\"", path);
-  if (!std::ifstream(path).good())
-    throw InputError(fmt::format("{}: cannot be opened for reading", where));
+  // Refuses FIFOs and devices (which would block or never end) before anything else.
+  const std::string bytes = read_input_file(path, "mesh file");
+  const MshFormat format = check_msh_header(bytes, where);
   const GmshLibrary& lib = GmshLibrary::get();
   std::lock_guard<std::mutex> lock(gmsh_mutex);
+  const PrivateCopy copy(bytes, where);
   const GmshSession g(lib);
   int ierr = 0;
-  lib.open(path.c_str(), &ierr);
+  lib.open(copy.file().c_str(), &ierr);
   g.check(ierr, where + ": Gmsh could not read it");
+  // Only linear triangles: a mesh that mixes them with quadrilaterals (or other surface
+  // elements) is refused whole, never read in part.
+  {
+    int* types = nullptr;
+    std::size_t nt = 0;
+    lib.element_types(&types, &nt, 2, -1, &ierr);
+    const auto surface_types = g.take(types, nt);
+    g.check(ierr, where);
+    std::string others;
+    for (int t : surface_types)
+      if (t != 2) others += (others.empty() ? "" : ", ") + g.element_name(t);
+    const bool has_triangles =
+        std::find(surface_types.begin(), surface_types.end(), 2) != surface_types.end();
+    if (has_triangles && !others.empty())
+      throw InputError(fmt::format(
+          "{}: it mixes 3-node triangles with other surface elements ({}); mpm reads meshes of "
+          "linear triangles only: mesh with Mesh.ElementOrder = 1 and without recombination "
+          "into quadrilaterals",
+          where, others));
+  }
   auto [tri_tags, tri_nodes] = g.elements(2, -1, where);
   if (tri_tags.empty()) {
     int* types = nullptr;
@@ -190,11 +404,28 @@ TriangleMesh read_gmsh_mesh(const std::string& path) {
   for (std::size_t k = 0; k < used.size(); ++k) index.emplace(used[k], static_cast<Index>(k));
   std::size_t *tags_p = nullptr, ntags = 0, ncoord = 0, nparam = 0;
   double *coord_p = nullptr, *param_p = nullptr;
-  lib.nodes(&tags_p, &ntags, &coord_p, &ncoord, &param_p, &nparam, -1, -1, 1, 0, &ierr);
+  // (Every node once: each is classified on one entity, and boundaries are not included.)
+  lib.nodes(&tags_p, &ntags, &coord_p, &ncoord, &param_p, &nparam, -1, -1, 0, 0, &ierr);
   const auto node_tags = g.take(tags_p, ntags);
   const auto coord = g.take(coord_p, ncoord);
   g.take(param_p, nparam);
   g.check(ierr, where);
+  {
+    // A node defined twice (two coordinates for one id) leaves it open which one a triangle
+    // means: refused, not resolved by whichever Gmsh keeps.
+    std::vector<std::size_t> sorted(node_tags);
+    std::sort(sorted.begin(), sorted.end());
+    const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+    if (twice != sorted.end())
+      throw InputError(fmt::format("{}: node {} is defined twice", where, *twice));
+    // Gmsh keeps one of two definitions of an id in silence: the file's own ids say.
+    if (auto ids = node_ids(bytes, format)) {
+      std::sort(ids->begin(), ids->end());
+      const auto again = std::adjacent_find(ids->begin(), ids->end());
+      if (again != ids->end())
+        throw InputError(fmt::format("{}: node {} is defined twice in $Nodes", where, *again));
+    }
+  }
   std::vector<Vec<2>> vertices(used.size(), Vec<2>::Zero());
   std::vector<char> seen(used.size(), 0);
   double extent = 0.0;

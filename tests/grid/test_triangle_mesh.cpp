@@ -158,14 +158,18 @@ TEST(TriangleMesh, BoxSidesAreTheBoundaryEdgesOnTheBoundingBox) {
   // The unit square as four triangles around its centre, with one named side.
   const std::vector<Vec<2>> v{{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5}};
   const std::vector<TriangleMesh::Triangle> t{{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
-  const TriangleMesh square(v, t, {{"x+", {{1, 2}}}, {"inlet", {{3, 0}}}}, "square");
+  const TriangleMesh square(v, t, {{"inlet", {{3, 0}}}}, "square");
   const TriangleMesh s = with_box_sides(square);
   EXPECT_EQ(s.boundary_names(), (std::vector<std::string>{"inlet", "x+", "x-", "y+", "y-"}));
+  EXPECT_EQ(s.boundary_vertices("x+"), (std::vector<Index>{1, 2}));
   EXPECT_EQ(s.boundary_vertices("x-"), (std::vector<Index>{0, 3}));
   EXPECT_EQ(s.boundary_vertices("y-"), (std::vector<Index>{0, 1}));
   EXPECT_EQ(s.boundary_vertices("y+"), (std::vector<Index>{2, 3}));
   EXPECT_EQ(s.boundary("x-").edges.size(), 1u);
   EXPECT_EQ(s.source(), "square");
+  // A boundary named like a side would take its place in the conditions on sides: refused.
+  const TriangleMesh named(v, t, {{"x+", {{1, 2}}}}, "square");
+  EXPECT_THROW(with_box_sides(named), InputError);
   // The diamond touches each side of its box at one vertex only.
   const std::vector<Vec<2>> d{{0.5, 0}, {1, 0.5}, {0.5, 1}, {0, 0.5}, {0.5, 0.5}};
   const TriangleMesh diamond = with_box_sides(TriangleMesh(d, t, {}, "diamond"));

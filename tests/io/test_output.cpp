@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -423,6 +424,48 @@ for stem in ("p", "g"):
   fs::remove_all(dir);
 }
 
+// VTK's XML reader refuses a connectivity array of several components and then reads no points
+// (what ParaView showed for every grid.vtu): one component, whatever the cell. Vectors and
+// tensors name their components, which ParaView shows ("stress_XY").
+TEST(OutputVtu, OneComponentConnectivityAndNamedComponents) {
+  const auto p = make_particles_2d();
+  const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{2, 2});
+  for (const bool binary : {false, true}) {
+    const auto grid = parse_xml(grid_vtu(g, {}, binary));
+    EXPECT_EQ(find_array(grid, "connectivity")->attrs.count("NumberOfComponents"), 0u);
+    const auto xml = parse_xml(particles_vtu(p, 0.0, {}, binary));
+    EXPECT_EQ(find_array(xml, "connectivity")->attrs.count("NumberOfComponents"), 0u);
+    const auto& s = find_array(xml, "stress")->attrs;
+    const char* tensor[] = {"XX", "XY", "XZ", "YX", "YY", "YZ", "ZX", "ZY", "ZZ"};
+    for (int k = 0; k < 9; ++k) EXPECT_EQ(s.at("ComponentName" + std::to_string(k)), tensor[k]);
+    const auto& v = find_array(xml, "v")->attrs;
+    EXPECT_EQ(v.at("ComponentName0"), "X");
+    EXPECT_EQ(v.at("ComponentName2"), "Z");
+  }
+}
+
+// 2D: the stress normal to the plane (plane strain) in the tensor's zz place, and extra vector
+// fields (the exact displacement) as 3-component arrays like u.
+TEST(OutputVtu, PlaneStrainZzAndExtraVectors) {
+  const auto p = make_particles_2d();
+  const std::vector<double> zz{1.5, -2.5, 3.5, 4.5};
+  std::vector<Vec<2>> u_exact(4);
+  for (std::size_t k = 0; k < 4; ++k) u_exact[k] = Vec<2>(0.25 * k, -1.0 * k);
+  const auto xml = parse_xml(particles_vtu(p, 0.0, {}, false, {{"u_exact", &u_exact}}, &zz));
+  const auto S = numbers(find_array(xml, "stress")->text);
+  const auto U = numbers(find_array(xml, "u_exact")->text);
+  EXPECT_EQ(find_array(xml, "u_exact")->attrs.at("NumberOfComponents"), "3");
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(S[9 * k + 8], zz[k]);
+    EXPECT_EQ(S[9 * k + 0], p.stress[k](0, 0));
+    EXPECT_EQ(S[9 * k + 2], 0.0);
+    EXPECT_EQ(U[3 * k], u_exact[k][0]);
+    EXPECT_EQ(U[3 * k + 1], u_exact[k][1]);
+    EXPECT_EQ(U[3 * k + 2], 0.0);
+  }
+  EXPECT_THROW(particles_vtu(p, 0.0, {}, false, {{"u", &u_exact}}), std::invalid_argument);
+}
+
 TEST(OutputVtu, FieldNamesAreXmlEscaped) {
   const auto p = make_particles_1d();
   const std::vector<double> e{1, 2, 3};
@@ -656,6 +699,39 @@ TEST_F(AtomicWrite, MissingDirectoryThrowsWithPath) {
     EXPECT_NE(msg.find("No such file or directory"), std::string::npos) << msg;
   }
   EXPECT_FALSE(fs::exists(dir_ / "no_such_dir"));  // creates no directories
+}
+
+// An output never replaces what is not a regular file: a device is written through (as root
+// the rename turned /dev/null into a regular file), a FIFO refused at once (not waited on), a
+// symbolic link kept with its target written.
+TEST_F(AtomicWrite, WhatIsNotARegularFileIsNeverReplaced) {
+  write_file_atomic("/dev/null", "discarded");
+  struct stat st {};
+  ASSERT_EQ(::stat("/dev/null", &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode));
+  const fs::path fifo = dir_ / "frame.vtu";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    write_file_atomic(fifo, "data");
+    ADD_FAILURE() << "a FIFO was written";
+  } catch (const RunError& e) {
+    EXPECT_EQ(e.exit_code(), exit_code::kOutput);
+    EXPECT_NE(std::string(e.what()).find("it is a FIFO (named pipe), not a regular file"),
+              std::string::npos)
+        << e.what();
+  }
+  ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  // A link to a regular file: the link stays, the target gets the content.
+  std::ofstream(dir_ / "target.txt") << "old";
+  fs::create_symlink("target.txt", dir_ / "link.txt");
+  write_file_atomic(dir_ / "link.txt", "new");
+  EXPECT_TRUE(fs::is_symlink(dir_ / "link.txt"));
+  EXPECT_EQ(read(dir_ / "target.txt"), "new");
+  // A link to nothing is refused.
+  fs::create_symlink("nowhere.txt", dir_ / "dangling.txt");
+  EXPECT_THROW(write_file_atomic(dir_ / "dangling.txt", "x"), RunError);
+  EXPECT_TRUE(fs::is_symlink(dir_ / "dangling.txt"));
 }
 
 TEST_F(AtomicWrite, RenameOntoDirectoryThrowsAndCleansUp) {

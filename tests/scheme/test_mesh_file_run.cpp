@@ -179,10 +179,10 @@ TEST(MeshFileRun, InputThatDoesNotFitIsRefusedWithTheKey) {
   const std::string tri = "method.basis=p1_triangles";
   EXPECT_NE(refusal({"grid.mesh=" + mesh}).find("grid.mesh = \"" + mesh + "\" holds triangles"),
             std::string::npos);
-  EXPECT_NE(refusal({tri, "grid.mesh=" + mesh, "method.triangles=right"})
+  EXPECT_NE(refusal({tri, "grid.mesh=" + mesh, "method.triangles=criss_cross"})
                 .find("leave method.triangles out"),
             std::string::npos);
-  EXPECT_NE(refusal({tri, "grid.mesh=no/such/file.msh"}).find("cannot be opened for reading"),
+  EXPECT_NE(refusal({tri, "grid.mesh=no/such/file.msh"}).find("No such file or directory"),
             std::string::npos);
   EXPECT_NE(refusal({tri, "grid.mesh=" + mesh, "plate.length=2"}).find("is not the grid's"),
             std::string::npos);
@@ -306,7 +306,7 @@ TEST(MeshFileRun, NamedBoundariesThatDoNotFitAreRefused) {
       refusal([&] {
         (void)make_problem(Config::load(std::string(MPM_SOURCE_DIR) + "/examples/plate_mms_2d.toml",
                                         {"boundary.roller=x-"}));
-      }).find("sets its own conditions"),
+      }).find("key 'boundary.roller' is read by benchmark = \"custom\" only"),
       std::string::npos);
 }
 

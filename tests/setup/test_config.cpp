@@ -368,7 +368,8 @@ TEST(ConfigErrors, MissingFile) {
     Config::load("/nonexistent/dir/run.toml");
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "cannot open config file '/nonexistent/dir/run.toml'");
+    EXPECT_STREQ(e.what(),
+                 "cannot open config file '/nonexistent/dir/run.toml': No such file or directory");
   }
 }
 
