@@ -224,7 +224,7 @@ int cmd_bench(const mpm::BenchOptions& opt) {
 
 // OpenMP's default wait policy lets idle threads spin: on a busy or shared machine a run with
 // nproc threads then waits for spinning threads that have no core (a 50x slowdown measured on 2
-// cores with one busy, issue 23). libgomp reads OMP_WAIT_POLICY when it is loaded, before main,
+// cores with one busy). libgomp reads OMP_WAIT_POLICY when it is loaded, before main,
 // so when the user has not set it the program sets "passive" and executes itself again, once
 // (the variable is set the second time). If that fails it goes on with the default.
 void prefer_passive_waiting(char** argv) {

@@ -7,10 +7,11 @@
 #include <Eigen/SparseCholesky>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <ostream>
+#include <sstream>
 
+#include "io/output.hpp"
 #include "solver/ldlt_pivots.hpp"
 #include "solver/spline_matrices.hpp"
 
@@ -235,8 +236,8 @@ void print_massmatrix(std::ostream& os, const MassMatrixOptions& opt,
 }
 
 void write_massmatrix_csv(const std::string& path, const std::vector<MassMatrixRow>& rows) {
-  std::ofstream f(path);
-  if (!f) throw InputError(fmt::format("--csv {}: cannot be written", path));
+  // Written whole and checked (io::write_file_atomic: never a half file, never over a device).
+  std::ostringstream f;
   f << "degree,cells,unknowns,kappa,kappa_published,cg_iterations,cg_converged,cg_published,"
        "cg_bound,cg_error,pmg_cycles,pmg_converged,pmg_published,pmg_error,singular,"
        "direct_seconds,cg_seconds,pmg_seconds,cg_free_iterations,cg_free_seconds,"
@@ -249,7 +250,7 @@ void write_massmatrix_csv(const std::string& path, const std::vector<MassMatrixR
                      r.pmg_cycles, r.pmg_converged ? 1 : 0, v(r.pmg_published), v(r.pmg_error),
                      r.singular ? 1 : 0, v(r.direct_seconds), v(r.cg_seconds), v(r.pmg_seconds),
                      r.cg_free_iterations, v(r.cg_free_seconds), v(r.cg_free_difference));
-  if (!f) throw RunError(exit_code::kOutput, fmt::format("{}: write failed", path));
+  io::write_file_atomic(path, f.str());
 }
 
 }  // namespace mpm

@@ -63,7 +63,7 @@ BenchResult bench_1d(const BenchOptions& opt);
 BenchResult bench_2d(const BenchOptions& opt);
 
 // 3D, about `particles` particles, per_cell per direction (default 2), the 2D plate's material,
-// lumped mass. problem "plate": the cube of cube_mms_3d (issue 20), amplitude 1e-3 m, rollers,
+// lumped mass. problem "plate": the cube of cube_mms_3d, amplitude 1e-3 m, rollers,
 // its body force every step, dt = 0.1 h / c with the P-wave speed. problem "refkernel": the 2D
 // refkernel problem in 3D (scripts/refkernel3d.cpp), the unit cube body in a grid padded by two
 // cells per side, v = (0.1 sin(2 pi x), -0.1 sin(2 pi y), 0.1 sin(2 pi z)) m/s, no body force,

@@ -1,6 +1,6 @@
 #pragma once
 // `mpm stiffness`: the linearised semi-discrete operator of a mapping on a frozen particle layout
-// (issue 22 item 3: why TLS grows at A = 0.1 while the direct mapping does not).
+// (why TLS grows at A = 0.1 while the direct mapping does not).
 //
 // With the particles held where they are, a grid velocity v gives each particle the velocity
 // gradient L_p = sum_i v_i grad phi_i(x_p)^T, its law the stress rate dsigma_p = C_p : L_p (the

@@ -82,7 +82,7 @@ struct PlateMms2DExact {
   ExactState<2> operator()(const Vec<2>& X, double t) const;
 };
 
-// 3D axis-aligned vibration of the cube [0, L]^3, manufactured solution (issue 20; 001's plate
+// 3D axis-aligned vibration of the cube [0, L]^3, manufactured solution (001's plate
 // extended to 3D), neo-Hookean:
 //   u_i = A sin(2 pi X_i/L) sin(omega t),   omega = c pi / L,   c = sqrt(E / rho0),
 // rollers on all six faces; body force b = u_tt - Div P / rho0 (scripts/cube_mms.py derives it).

@@ -352,7 +352,7 @@ Particles<2> seed_body_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo,
 
 namespace {
 // A grid whose nodal state alone would not fit in memory is refused before it is allocated
-// (issue 16, 10: std::bad_alloc was an "internal error" naming nothing). The particles are
+// (std::bad_alloc was an "internal error" naming nothing). The particles are
 // checked as they are seeded (seed_counts).
 template <int Dim>
 void check_grid_memory(const Config& cfg, const Grid<Dim>& g, const SeedScope& scope) {

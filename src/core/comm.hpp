@@ -1,5 +1,5 @@
 #pragma once
-// The processes of a distributed run (issue 21): MPI's world communicator when `mpm` was started
+// The processes of a distributed run: MPI's world communicator when `mpm` was started
 // by an MPI launcher (mpirun) and built with MPI (CMake MPM_MPI), else one process. Only
 // core/comm.cpp includes <mpi.h>; everything above sees this interface, whose operations are
 // plain copies with one process.
@@ -10,7 +10,7 @@
 // bits (MPI_Allreduce promises neither for doubles); integer sums and extrema, exact in any
 // order, use MPI_Allreduce. Both take about log2(N) message latencies and move n values per
 // round, where an all-gather moves N n values to every rank (BENCHMARKS.md, the communication
-// model of issue 21).
+// model of distributed runs).
 //
 // Failures: a rank that meets a RunError must not leave the others waiting in a collective
 // operation. Every collective operation of a time step therefore starts with agree(): each rank

@@ -1,5 +1,5 @@
 #pragma once
-// Collective file output of a distributed run (issue 21) through MPI-IO, the standard engine for
+// Collective file output of a distributed run through MPI-IO, the standard engine for
 // it: one file whose parts the processes write at once, each at its offset, so that no process
 // gathers what the others write (a CSV frame of the whole body: driver/driver.cpp). Declared
 // apart from core/comm.hpp (which the whole tree includes); implemented in core/comm.cpp, the

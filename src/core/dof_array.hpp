@@ -1,5 +1,5 @@
 #pragma once
-// A grid array over a window of the DOFs (issue 21): indexed by the global DOF number, it holds
+// A grid array over a window of the DOFs: indexed by the global DOF number, it holds
 // the DOFs [first(), stop()) only. On one process the window is every DOF of the basis; a
 // distributed run keeps the DOFs its slab's particles touch (RunState::fit_dof_window), so that a
 // process's grid memory grows with its slab, not with the whole grid. Iteration (begin, end,

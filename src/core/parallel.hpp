@@ -61,7 +61,7 @@ void parallel_for(Index n, F&& f) {
 // independent (a thread goes on to its share of the second loop when done with its share of the
 // first, with no barrier between). A region's fork and join cost 15-130 us on a 2-core virtual
 // machine with sleeping threads (OMP_WAIT_POLICY=passive: the longer the threads slept since the
-// last region, the more), 2-14 us with spinning ones (BENCHMARKS.md, issue 22 item 5: a TLS step
+// last region, the more), 2-14 us with spinning ones (BENCHMARKS.md, a TLS step
 // had 36 regions).
 template <class F, class G>
 void parallel_for_both(Index n, F&& f, Index m, G&& g) {
@@ -114,7 +114,7 @@ struct ChunkDofRanges {
   Index particles = -1;  // the particle count they were recorded for; -1: none yet
   std::array<Index, ParticleChunks::kMax> lo{}, hi{};
   // The scatters write only the DOFs between the lowest and highest of the ranges; the others
-  // keep what they held. Set by a distributed run (issue 21), whose grid stages read only the
+  // keep what they held. Set by a distributed run, whose grid stages read only the
   // DOFs its particles touch (RunState::dof_window): the grid work of a process then scales
   // with its slab, not with the whole grid. Otherwise every DOF outside the ranges is set to zero.
   bool bounded = false;

@@ -11,7 +11,7 @@ namespace mpm {
 
 using Index = std::int64_t;
 // Per-particle indices stored for every particle (its stable id, its cell) are 32-bit: 8 bytes
-// per particle less in a state of about 300 (issue 8's memory target). A run is therefore
+// per particle less in a state of about 300 (the memory target). A run is therefore
 // limited to 2^31 - 1 particles and cells; Simulation checks both.
 using CompactIndex = std::int32_t;
 

@@ -262,7 +262,7 @@ void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim
 
 // A run whose error norms against the exact solution are not finite (the exact solution is
 // not finite at some particle, e.g. exact.displacement = "0/0") has no result to report: its
-// status becomes failed with exit_code::kNonFinite, naming the norms (issue 16, 9).
+// status becomes failed with exit_code::kNonFinite, naming the norms.
 void check_error_norms(RunResult& res);
 
 // The fields of summary.json common to every solver; `method` describes the solver.

@@ -102,7 +102,7 @@ RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::stri
   return res;
 }
 
-// A distributed run's problem (issue 21): each process stores only the particles of its slab,
+// A distributed run's problem: each process stores only the particles of its slab,
 // so that no process holds the whole body, not even while the problem is set up. A counting pass
 // (the same on every process, storing no particle) gives the particles in each cell layer along
 // the grid's last axis; the slabs are cut from them (SlabPartition::balanced, as run_mpm cuts

@@ -247,7 +247,7 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
         reference.has_value() != c.fem.has_value() ? ", FEM reference state missing or unexpected"
                                                    : ""));
   // A checkpoint's hash only proves the bytes are those written; a crafted or foreign one could
-  // still hold a state no run reaches (issue 16, 9): the step and time must be those of this
+  // still hold a state no run reaches: the step and time must be those of this
   // run's time loop (t = step dt exactly, as the driver sets it), the counters non-negative and
   // the cells on the grid.
   if (c.step < 0 || c.time != static_cast<double>(c.step) * dt || c.sorts < 0 ||
@@ -401,7 +401,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
     check_stability(ts, pb.grid.h.minCoeff(), pb.material, stability_factor(basis), Dim,
                     fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
 
-  // A distributed run (issue 21): each process has set up only the particles of its slab
+  // A distributed run: each process has set up only the particles of its slab
   // (scheme/distribution.hpp), cut so that each holds about as many (driver/run.cpp).
   const Comm* comm = opt.comm != nullptr && opt.comm->distributed() ? opt.comm : nullptr;
   if (opt.shuffle_seed != 0 && !opt.restart) {
@@ -415,7 +415,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
     if (otm || unified)
       throw InputError(
           fmt::format("{}: method.solver = \"{}\" does not run on several "
-                      "processes yet (issue 21); {}",
+                      "processes yet; {}",
                       method.where_solver, otm ? "otm" : "unified", kHow));
     if constexpr (Dim == 2)
       if (pb.mesh) {

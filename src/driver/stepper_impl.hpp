@@ -64,7 +64,7 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
   }
 }
 
-// What a distributed run (issue 21) does not do yet, refused before the first step with the
+// What a distributed run does not do yet, refused before the first step with the
 // key to change: the exchange shares the particle-to-grid sums of every mapping (the
 // reconstructions read the other processes' particles near a process's own: ghost particles,
 // MappingFor's kGhostParticles) for every basis on the grid (DDMPM's node sums with the next
@@ -82,7 +82,7 @@ inline void check_distributed_run(const MethodSettings& method) {
     throw InputError(fmt::format(
         "{}: method.mass = \"consistent\" runs on several processes with method.mass_solver = "
         "\"cg\" or \"pmg\" (on distributed vectors); the direct solver factorises the whole "
-        "matrix on one process (issue 21); choose \"cg\" or \"pmg\", or {}",
+        "matrix on one process; choose \"cg\" or \"pmg\", or {}",
         method.where_mass, kHow));
   if (method.mass == MassType::Consistent && method.mass_solver.kind == MassSolver::Pmg &&
       method.mass_solver.pmg.smoother == Smoother::GaussSeidel)

@@ -1,7 +1,7 @@
 #pragma once
 // Per-DOF grid quantities of one time step (D Algorithm 2, steps 4-9). Sized by the basis; the
 // quantities of a step are held over a window of the DOFs (core/dof_array.hpp): every DOF on one
-// process, the DOFs of a process's slab in a distributed run (issue 21).
+// process, the DOFs of a process's slab in a distributed run.
 #include <algorithm>
 #include <array>
 #include <cstdint>

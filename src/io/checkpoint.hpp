@@ -1,7 +1,7 @@
 #pragma once
 // Checkpoints: the complete state of a run (output.checkpoint_every), from which
 // `mpm run --restart FILE` continues bit for bit (README "Checkpoints"). A run on one process
-// writes one file, checkpoint.bin. A distributed run (issue 21) writes one piece per process
+// writes one file, checkpoint.bin. A distributed run writes one piece per process
 // (checkpoint_s<step>_p<rank>.bin: that process's particles, written by it) and, once every piece
 // is on disk, checkpoint.bin as their manifest (the run's state without particles, and each
 // piece's size and hash), so that no process gathers the body and a restart reads only the
@@ -60,11 +60,9 @@
 namespace mpm::io {
 
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
-// Version 4 (2026-11-27): the displacement and density are derived (Particles::displacement,
-// density), no longer stored; a version-3 file is refused by its version. Version 5
-// (2026-11-27): the distribution of a run on several processes. Version 6 (2026-12-01): a
-// distributed run writes pieces and a manifest instead of gathering its particles at rank 0.
-// Version 7: the mesh file's hash.
+// A file of another version is refused by its version: the layout above is version 7's (the
+// displacement and density derived, not stored; a distributed run's pieces and manifest; the
+// mesh file's hash).
 inline constexpr std::uint32_t kCheckpointVersion = 7;
 inline constexpr std::string_view kPieceMagic = "MPMLABCP";
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;

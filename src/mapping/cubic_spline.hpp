@@ -193,7 +193,7 @@ class CubicSplineMapping {
     auto& q = quad_.prepare<Sim>();
     fit_mass(sim, q);
     q.evaluate(sim.basis, sim.step, sim.time);
-    sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs (issue 21)
+    sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs
     assemble_mass(sim, q, rho_g_);
   }
 

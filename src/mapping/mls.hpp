@@ -314,7 +314,7 @@ struct MlsSettings {
 //     that solve_velocity's M^-1 q returns v_i; needs lumped mass (003 eq. 32). Only DOFs with
 //     mass get a value; one with no particle within a cell (possible for B-splines, whose DOFs
 //     sit at Greville points) uses the quadratic-spline weight instead (report().widened).
-// Settings::conservative adds the conservation that 001 and 003 lack (issue 22), by the smallest
+// Settings::conservative adds the conservation that 001 and 003 lack, by the smallest
 // corrections of the reconstructed fields that make their totals the particles':
 //   rho~_g = rho^_g M / sum_g w_g rho^_g, M = sum_p m_p: the minimiser of
 //     sum_g w_g (rho~_g - rho^_g)^2 / rho^_g under sum_g w_g rho~_g = M (a Lagrange multiplier
@@ -338,7 +338,7 @@ struct MlsSettings {
 // (the nodal rows, what map_momentum assembles), not in a per-particle loop, so the choice is
 // made at run time and the steppers compile one Simulation for the two (driver/stepper_impl.hpp,
 // stepped_mapping_t): one stepper instantiation less per (dimension, basis); a 2D B2 stepper unit
-// compiled in 14.5 s against 15.5 s (two alternating pairs, 2026-11-28).
+// compiles in about 14.5 s against 15.5 s with two.
 // MovingLeastSquaresMapping<Improved> (MlsMapping, ImlsMapping) are the two named alternatives of
 // the configuration (MappingKind), each this class with its flag.
 class MlsFamilyMapping {
@@ -405,7 +405,7 @@ class MlsFamilyMapping {
     auto& q = quad_.prepare<Sim>();
     fit_mass<Dim>(sim, q);
     q.evaluate(sim.basis, sim.step, sim.time);
-    sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs (issue 21)
+    sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs
     assemble_mass(sim, q, rho_);
     if (improved_) {
       // Nodal rows (003 eq. 31) for the DOFs that carry mass.

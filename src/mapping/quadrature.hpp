@@ -27,7 +27,7 @@ GaussRule gauss_legendre(int n);  // quadrature.cpp
 // O(particles + cells) per step, no allocation after the first step. The cell of each point
 // (a division and a rounding per direction) is found in parallel; the counting and the placing
 // are serial passes over those cells, so the order is the points' order for any thread count
-// (issue 22 item 5: the serial sort was 2-3 % of a TLS step).
+// (the serial sort was 2-3 % of a TLS step).
 template <int Dim>
 struct ElementBins {
   std::vector<Index> start;  // particles of cell e: order[start[e] .. start[e + 1])

@@ -124,7 +124,7 @@ struct TlsSettings {
   // reported are then bounds. The 2D MPM runs use false (method_settings.cpp).
   bool exact_condition = true;
   // The particles' velocity gradients for the stress update as the adjoint of the force
-  // (issue 22 item 3; docs/verification.md, "A TLS whose strain rate is the adjoint of its
+  // (docs/verification.md, "A TLS whose strain rate is the adjoint of its
   // force"): the force is f_i = -sum_g w_g sigma^(x_g) grad phi_i(x_g) with sigma^(x_g) =
   // sum_p R_gp sigma_p (the stress fit, linear in the particle stresses), so the rate whose power
   // the force does is L_p = sum_g R_gp w_g L(x_g) / omega_p, L(x_g) = sum_i v_i grad phi_i(x_g)^T
@@ -671,12 +671,12 @@ class TlsMapping {
       }
       fit_mass_triangles(sim, q);
       q.evaluate(sim.basis, sim.step, sim.time);
-      sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs (issue 21)
+      sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs
       assemble_mass(sim, q, triangles_->rho);
     } else {
       fit_mass<Dim>(sim, q);
       q.evaluate(sim.basis, sim.step, sim.time);
-      sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs (issue 21)
+      sim.quadrature_dofs = q.ranges.span();  // shared with the particles' DOFs
       assemble_mass(sim, q, state<Dim>().rho);
     }
   }

@@ -108,7 +108,7 @@ void TlsMapping::apply_theta(const TlsMappingState<Dim>& st, BasicTlsCoefficient
 // the particles' bin order. The overlaps are computed in parallel over fixed chunks of the
 // binned particles (each chunk's entries in bin order), the counting sort places each chunk's
 // entries after those of the chunks before it: the same entries and order for any thread count,
-// and serial work only per element of each chunk's band (issue 22 item 5: the serial split was
+// and serial work only per element of each chunk's band (the serial split was
 // 10 % of a one-thread TLS step).
 template <int Dim>
 void TlsMapping::split_domains(const RunState<Dim>& sim, const BasicTlsReconstruction<Dim>& recon) {

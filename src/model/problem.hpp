@@ -80,7 +80,7 @@ struct Problem {
 
 using AnyProblem = std::variant<Problem<1>, Problem<2>, Problem<3>>;
 
-// Which of a problem's particles this process stores (issue 21). On one process: every particle.
+// Which of a problem's particles this process stores. On one process: every particle.
 // A process of a distributed run stores only those of its slab, so that no process holds the
 // whole body, not even while the problem is set up: every process generates every particle in
 // the one process's order and numbers them as one process does (Particles::id: the position in

@@ -28,7 +28,7 @@ struct Particles {
   std::vector<CompactIndex> id;
 
   Index size() const { return static_cast<Index>(x.size()); }
-  // Derived, not stored (issue 20's memory budget: 32 bytes per particle in 3D): the displacement
+  // Derived, not stored (the memory budget: 32 bytes per particle in 3D): the displacement
   // u_p = x_p - x_p^0 [m] and the density rho_p = m_p / V_p [kg/m^3].
   Vec<Dim> displacement(std::size_t i) const { return x[i] - x0[i]; }
   double density(std::size_t i) const { return mass[i] / volume[i]; }

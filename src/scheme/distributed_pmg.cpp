@@ -1,4 +1,4 @@
-// p-multigrid on distributed vectors (scheme/distributed_pmg.hpp; issue 21, 004 section 4.7).
+// p-multigrid on distributed vectors (scheme/distributed_pmg.hpp; 004 section 4.7).
 #include "scheme/distributed_pmg.hpp"
 
 #include <algorithm>

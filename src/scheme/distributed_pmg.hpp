@@ -1,5 +1,5 @@
 #pragma once
-// p-multigrid for consistent mass on distributed vectors (issue 21; 004 sections 4.6-4.7): the
+// p-multigrid for consistent mass on distributed vectors (004 sections 4.6-4.7): the
 // cycle of solver/iterative.hpp (pmg_cycles) on operators each process applies with the matrices
 // of its own particles, summed over the processes that share a function (scheme/dof_sharing.hpp),
 // the way the distributed CG applies the mass matrix (scheme/grid_stages.cpp).

@@ -1,5 +1,5 @@
 #pragma once
-// Distributed runs (issue 21): the grid's cells are cut into slabs of whole cell layers along
+// Distributed runs: the grid's cells are cut into slabs of whole cell layers along
 // its last axis (x in 1D, y in 2D, z in 3D), one slab per process; a process owns the particles
 // in its slab. Slabs, not a Cartesian grid of blocks or a graph partition: with the DOFs
 // numbered x fastest, a slab's particles touch one contiguous DOF range, so the DOFs two

@@ -1,5 +1,5 @@
 #pragma once
-// Grid functions shared between the processes of a distributed run (issue 21): each process
+// Grid functions shared between the processes of a distributed run: each process
 // holds the functions its particles touch, a range [lo, hi] of the grid's numbering, and adds
 // its partial particle-to-grid sums to those of the processes whose ranges overlap it. Used for
 // the grid sums (stages::detail::share_grid_sums) and for the matrix-free operators of the
@@ -77,9 +77,8 @@ void sum_over_sharing_ranks(const Comm& comm, const DofRanges& sh, std::size_t w
   if (lo > hi || peers.empty()) return;
   // Only the functions some other rank holds take the sum in rank order: the union of the
   // overlaps, as sorted disjoint intervals (with slabs, one at each end of the range). A function
-  // no other rank holds keeps its value, which is its sum (until 2026-11-29 every function of the
-  // range was packed, zeroed and added again: a copy of the whole range per exchange, and 0 + x
-  // turned a -0 into +0).
+  // no other rank holds keeps its value, which is its sum (packing, zeroing and adding the whole
+  // range would copy it per exchange, and 0 + x would turn a -0 into +0).
   std::vector<std::array<Index, 2>> both;
   for (int r : peers) both.push_back(overlap(r));
   std::sort(both.begin(), both.end());

@@ -70,7 +70,7 @@ struct RunState {
   double conservation_limit = 0.5;
   BodyForce<Dim> body_force;
   std::vector<Traction<Dim>> tractions;
-  // A distributed run (issue 21): the whole problem's tractions with each loaded point's particle
+  // A distributed run: the whole problem's tractions with each loaded point's particle
   // by id; `tractions` holds the points of this process's particles (localize_tractions, after
   // every migration). `face_forces`: the loaded points' nodal forces of this step, (DOF, force),
   // which stages::detail::share_grid_sums adds where this process's sums hold the DOF and sends
@@ -127,7 +127,7 @@ struct RunState {
   void constrain(const std::vector<Index>& dofs, const Mat<Dim>& c);
   void refresh_per_component();
 
-  // A distributed run (issue 21; core/comm.hpp): the processes, each holding the particles of
+  // A distributed run (core/comm.hpp): the processes, each holding the particles of
   // its slab of the grid (scheme/distribution.hpp) and the grid quantities of the DOFs its
   // particles touch. Null for a run on one process. After each particle-to-grid sum the ranks
   // add their partial sums on the DOFs they share (stages::detail::share_grid_sums), so every
@@ -154,7 +154,7 @@ struct RunState {
   // contribution. Nothing on one process.
   void fit_dof_window();
 
-  // Ghost particles (issue 21): a mapping that reads the particles of neighbouring cells
+  // Ghost particles: a mapping that reads the particles of neighbouring cells
   // (MappingFor's kGhostParticles: TLS) sees, during each of its particle-to-grid sums, copies of
   // the other processes' particles within a few cell layers of this process's own, appended
   // after them (stages::GhostParticles); `owned` is then this process's particle count (-1: no

@@ -1,5 +1,5 @@
 #pragma once
-// Re-sorting the particles by cell (issue 8). The parallel scatters (core/parallel.hpp) give
+// Re-sorting the particles by cell. The parallel scatters (core/parallel.hpp) give
 // each fixed chunk of consecutive particles a grid slice covering the DOF range its stencils
 // touch. Particles seeded cell by cell make those ranges narrow bands (about 1.4 grids in all at
 // 1e6 particles in 2D); particles in random order, or mixed by a long flow, make every range

@@ -171,7 +171,7 @@ std::vector<KeySpec> declare() {
            "consistent mass: the DOFs whose functions reach an element (grid cell, or triangle of "
            "a basis on triangles) whose particles fill less than this fraction of its volume get "
            "lumped rows and columns (D 7.2); 0: none"),
-      // Issue 22 item 1: B-spline TLS with consistent mass flutters under load
+      // B-spline TLS with consistent mass flutters under load
       // (docs/verification.md, "PS-MPM with partially filled elements").
       boolean("method.allow_unstable", false,
               "run B-spline TLS (degree >= 2) with consistent mass in 2D and 3D, refused otherwise "
@@ -189,7 +189,7 @@ std::vector<KeySpec> declare() {
       // Direct mappings conserve mass and momentum to round-off; the reconstructions (MLS, IMLS,
       // TLS, cubic spline) to their approximation error, which falls with h. An error of order
       // one means the grid no longer holds the particles' mass (e.g. a support smaller than the
-      // particle spacing): the run stops rather than report "ok" (issue 16, 9).
+      // particle spacing): the run stops rather than report "ok".
       real("method.conservation_limit", "", 0.5, greater_than(0),
            "a step whose relative mass or momentum error on the grid (summary.json "
            "'conservation') exceeds this stops the run (exit code 9)"),
@@ -240,7 +240,7 @@ std::vector<KeySpec> declare() {
       real("mms.amplitude", "m", 0.1, any(),
            "amplitude A of the manufactured displacement A sin(2 pi X/L) sin(c pi t/L) (mms_1d: "
            "003; plate_mms_2d: 001; cube_mms_3d)"),
-      // Issue 22: above an amplitude the plate's exact solution is itself unstable
+      // Above an amplitude the plate's exact solution is itself unstable
       // (docs/verification.md, "The exact solution at A = 0.1 m is unstable").
       boolean("mms.allow_unstable", false,
               "plate_mms_2d: run over more than one period at an amplitude where the exact "

@@ -76,7 +76,7 @@ inline constexpr Entry kBenchmarks[] = {
      "2D axis-aligned vibration of a unit square, neo-Hookean manufactured solution (001, D "
      "3.4.1)"},
     {"cube_mms_3d",
-     "3D axis-aligned vibration of a cube, neo-Hookean manufactured solution (issue 20; 001's "
+     "3D axis-aligned vibration of a cube, neo-Hookean manufactured solution (001's "
      "plate in 3D), rollers on the six faces"},
     {"vortex_2d",
      "2D generalized vortex: an annulus turned by a radius-dependent angle, neo-Hookean "

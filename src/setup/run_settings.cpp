@@ -241,7 +241,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
       }
     }
     *tls = TlsMapping(ts, dim);
-    // Issue 22 item 1: under a constant load, B-spline TLS with consistent mass grows an
+    // Under a constant load, B-spline TLS with consistent mass grows an
     // oscillation among the highest modes of the consistent matrix, at loads that fall with the
     // cell size; lumped mass, P1-TLS and the direct mapping stay neutral (docs/verification.md,
     // "PS-MPM with partially filled elements": the growing mode).

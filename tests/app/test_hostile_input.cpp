@@ -10,17 +10,20 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "../support/shell.hpp"
 #include "setup/config.hpp"
+#include "setup/gmsh_mesh.hpp"
 
 namespace MPM_UNITY_ID {
 namespace {
@@ -213,6 +216,49 @@ TEST(HostileInput, LongArgumentsAreCutAndStudyValuesTwiceRefused) {
                          " --refine grid.cells=5,5 --out " + (s.dir / "st").string());
   EXPECT_EQ(twice.code, 2) << twice.out;
   EXPECT_TRUE(contains(twice.out, "gives the value 5 twice")) << twice.out;
+}
+
+// A study over mesh files printed no orders: h was the bounding box's, the same for every mesh.
+// A mesh run reports the mesh's own size: its triangles as cells, its longest edge as h.
+TEST(HostileInput, AStudyOverMeshFilesHasTheMeshesSizesAndOrders) {
+  const Scratch s("mesh_study");
+  const std::vector<std::string> meshes = {"meshes/plate_unstructured_8.msh",
+                                           "meshes/plate_unstructured_16.msh"};
+  const auto r = mpm("study " + src("examples/plate_ps_unstructured_2d.toml") +
+                     " --refine grid.mesh=" + meshes[0] + "," + meshes[1] +
+                     " --set time.end=2e-4 --set output.frames=0 --out " + (s.dir / "st").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream csv(s.dir / "st" / "study.csv");
+  std::string line;
+  std::getline(csv, line);  // method,grid.mesh,cells,h,...
+  for (const auto& file : meshes) {
+    ASSERT_TRUE(std::getline(csv, line));
+    const auto m = mpm::read_gmsh_mesh(src("examples/" + file));
+    double longest = 0.0;
+    for (mpm::Index c = 0; c < m.num_cells(); ++c) {
+      const auto& t = m.cell_vertices(c);
+      for (std::size_t i = 0; i < 3; ++i)
+        longest = std::max(longest, (m.vertex(t[(i + 1) % 3]) - m.vertex(t[i])).norm());
+    }
+    std::vector<std::string> f;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) f.push_back(cell);
+    ASSERT_GE(f.size(), 4u) << line;
+    EXPECT_EQ(std::stoll(f[2]), m.num_cells()) << line;
+    EXPECT_EQ(std::stod(f[3]), longest) << line;
+  }
+  // The finer mesh's row of the table has its orders (a number after each error).
+  std::ifstream txt(s.dir / "st" / "study.txt");
+  std::vector<std::string> rows;
+  for (std::string l; std::getline(txt, l);) rows.push_back(l);
+  ASSERT_GE(rows.size(), 4u);
+  std::stringstream coarse(rows[2]), fine(rows[3]);
+  const auto words = [](std::stringstream& in) {
+    int n = 0;
+    for (std::string w; in >> w;) ++n;
+    return n;
+  };
+  EXPECT_GT(words(fine), words(coarse)) << rows[2] << "\n" << rows[3];
 }
 
 // A full disk in the middle of history.csv (here a file-size limit, which mpm meets as EFBIG
