@@ -313,7 +313,7 @@ struct ScatterBuffers {
   GridAccumulator<double> scalar;
   GridAccumulator<Vec<Dim>> vector;
   GridAccumulator<Vec<Dim>> vector2;  // the second vector sum of a fused scatter
-  // The particle sums of the conservation checks (stages::detail::after_mass, after_momentum),
+  // The particle sums of the conservation checks (stages::after_mass, after_momentum),
   // taken by a mapping's scatter when it reads the same particle data: sum m_p, and
   // (sum m_p v_p, sum m_p |v_p|). `has_*`: set by the scatter, cleared by the check that uses it.
   using MomentumSums = Eigen::Matrix<double, Dim + 1, 1>;

@@ -145,7 +145,7 @@ struct DirectMapping {
       Vp = P.volume[i];
     }
     if constexpr ((What & kMass) != 0) sim.scatter.particle_mass[m.chunk] += mp;
-    if constexpr ((What & kMomentum) != 0) {  // as stages::detail::after_momentum
+    if constexpr ((What & kMomentum) != 0) {  // as stages::after_momentum
       typename ScatterBuffers<Sim::kDim>::MomentumSums r;
       r.template head<Sim::kDim>() = mv;
       r[Sim::kDim] = P.mass[i] * P.v[i].norm();

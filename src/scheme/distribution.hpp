@@ -5,7 +5,7 @@
 // numbered x fastest, a slab's particles touch one contiguous DOF range, so the DOFs two
 // neighbouring processes share are one contiguous segment (the layers their stencils reach
 // across the cut), and the exchange after each particle-to-grid sum is one message per
-// neighbour (stages::detail::share_grid_sums); the cuts are chosen to give each process the same
+// neighbour (stages::share_grid_sums); the cuts are chosen to give each process the same
 // number of particles. BENCHMARKS.md ("Distributed runs") has the communication model and where
 // slabs stop scaling.
 #include <cstddef>

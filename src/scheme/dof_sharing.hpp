@@ -2,7 +2,7 @@
 // Grid functions shared between the processes of a distributed run: each process
 // holds the functions its particles touch, a range [lo, hi] of the grid's numbering, and adds
 // its partial particle-to-grid sums to those of the processes whose ranges overlap it. Used for
-// the grid sums (stages::detail::share_grid_sums) and for the matrix-free operators of the
+// the grid sums (stages::share_grid_sums) and for the matrix-free operators of the
 // distributed mass solvers (CG, p-multigrid: scheme/distributed_pmg.hpp), whose levels have
 // their own numbering and ranges.
 #include <algorithm>

@@ -19,7 +19,7 @@
 
 namespace mpm::stages {
 
-namespace detail {
+namespace {
 // Formats at most `limit` particles (indices) by stable id with their positions for failure
 // messages.
 template <int Dim>
@@ -54,6 +54,7 @@ std::string describe_box(const Grid<Dim>& g) {
     out += fmt::format("{}[{:.6g}, {:.6g}]", d ? " x " : "", g.origin[d], hi[d]);
   return out;
 }
+}  // namespace
 
 template <int Dim>
 void throw_unfit(const RunState<Dim>& sim, const std::vector<Index>& ids, std::string_view basis) {
@@ -124,6 +125,7 @@ void throw_particle_failure(const RunState<Dim>& sim) {
                              sim.step, sim.time, inverted.size(), describe_particles(P, inverted)));
 }
 
+namespace {
 // The DOF range [lo, hi] this rank's particle stencils touch: the union of the chunk ranges
 // evaluate_basis recorded and of a reconstruction mapping's quadrature points (empty, lo > hi,
 // without either).
@@ -173,6 +175,7 @@ void place_face_forces(RunState<Dim>& sim) {
       force[static_cast<std::size_t>(i)] += f;
     }
 }
+}  // namespace
 
 template <int Dim>
 void share_grid_sums(RunState<Dim>& sim, unsigned what) {
@@ -195,6 +198,7 @@ void share_grid_sums(RunState<Dim>& sim, unsigned what) {
   });
 }
 
+namespace {
 // A sum of this rank (double or an Eigen vector), summed over the ranks (rank order).
 template <class T>
 T over_ranks(const Comm* comm, T v) {
@@ -269,6 +273,7 @@ void mark_lumped_rows(RunState<Dim>& sim) {
   sim.diag.max_lumped_dofs = std::max(sim.diag.max_lumped_dofs, lumped);
   sim.consistent.set_lumped(std::move(rows));
 }
+}  // namespace
 
 // The active set and the mass conservation check, and the consistent matrix if requested,
 // from the nodal masses of the mapping.
@@ -420,7 +425,6 @@ void after_momentum(RunState<Dim>& sim) {
                       scale, sim.conservation_limit));
   }
 }
-}  // namespace detail
 
 namespace {
 // An iterative mass solve that did not reach its tolerance: the step, the component, the
@@ -601,38 +605,35 @@ void advance_grid_velocity(RunState<Dim>& sim, double dt) {
   });
 }
 
-template void detail::share_grid_sums<1>(RunState<1>&, unsigned);
-template void detail::share_grid_sums<2>(RunState<2>&, unsigned);
-template void detail::share_grid_sums<3>(RunState<3>&, unsigned);
-template void detail::after_mass<1>(RunState<1>&);
-template void detail::after_momentum<1>(RunState<1>&);
+template void share_grid_sums<1>(RunState<1>&, unsigned);
+template void share_grid_sums<2>(RunState<2>&, unsigned);
+template void share_grid_sums<3>(RunState<3>&, unsigned);
+template void after_mass<1>(RunState<1>&);
+template void after_momentum<1>(RunState<1>&);
 template void solve_acceleration<1>(RunState<1>&);
 template void solve_velocity<1>(RunState<1>&);
 template void advance_grid_velocity<1>(RunState<1>&, double);
-template void detail::after_mass<2>(RunState<2>&);
-template void detail::after_mass<3>(RunState<3>&);
-template void detail::after_momentum<2>(RunState<2>&);
-template void detail::after_momentum<3>(RunState<3>&);
+template void after_mass<2>(RunState<2>&);
+template void after_mass<3>(RunState<3>&);
+template void after_momentum<2>(RunState<2>&);
+template void after_momentum<3>(RunState<3>&);
 template void solve_acceleration<2>(RunState<2>&);
 template void solve_acceleration<3>(RunState<3>&);
 template void solve_velocity<2>(RunState<2>&);
 template void solve_velocity<3>(RunState<3>&);
 template void advance_grid_velocity<2>(RunState<2>&, double);
 template void advance_grid_velocity<3>(RunState<3>&, double);
-template void detail::throw_unfit<1>(const RunState<1>&, const std::vector<Index>&,
-                                     std::string_view);
-template void detail::throw_left_grid<1>(const RunState<1>&);
-template void detail::throw_face_left_grid<1>(const RunState<1>&, std::size_t, const Vec<1>&, bool);
-template void detail::throw_particle_failure<1>(const RunState<1>&);
-template void detail::throw_unfit<2>(const RunState<2>&, const std::vector<Index>&,
-                                     std::string_view);
-template void detail::throw_unfit<3>(const RunState<3>&, const std::vector<Index>&,
-                                     std::string_view);
-template void detail::throw_left_grid<2>(const RunState<2>&);
-template void detail::throw_left_grid<3>(const RunState<3>&);
-template void detail::throw_face_left_grid<2>(const RunState<2>&, std::size_t, const Vec<2>&, bool);
-template void detail::throw_face_left_grid<3>(const RunState<3>&, std::size_t, const Vec<3>&, bool);
-template void detail::throw_particle_failure<2>(const RunState<2>&);
-template void detail::throw_particle_failure<3>(const RunState<3>&);
+template void throw_unfit<1>(const RunState<1>&, const std::vector<Index>&, std::string_view);
+template void throw_left_grid<1>(const RunState<1>&);
+template void throw_face_left_grid<1>(const RunState<1>&, std::size_t, const Vec<1>&, bool);
+template void throw_particle_failure<1>(const RunState<1>&);
+template void throw_unfit<2>(const RunState<2>&, const std::vector<Index>&, std::string_view);
+template void throw_unfit<3>(const RunState<3>&, const std::vector<Index>&, std::string_view);
+template void throw_left_grid<2>(const RunState<2>&);
+template void throw_left_grid<3>(const RunState<3>&);
+template void throw_face_left_grid<2>(const RunState<2>&, std::size_t, const Vec<2>&, bool);
+template void throw_face_left_grid<3>(const RunState<3>&, std::size_t, const Vec<3>&, bool);
+template void throw_particle_failure<2>(const RunState<2>&);
+template void throw_particle_failure<3>(const RunState<3>&);
 
 }  // namespace mpm::stages

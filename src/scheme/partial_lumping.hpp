@@ -6,9 +6,9 @@
 // with partially filled elements", and TLS with consistent mass on the vortex). The rule here:
 // in each step the DOFs whose functions the particles cover to less than a fraction of their
 // integrals (each element's fill, its particles' volumes over its own, weighted by the
-// function's integral over it: stages::detail::mark_lumped_rows) get lumped rows and columns
-// (ConsistentMass::set_lumped, which keeps every row sum and so the conserved totals); the DOFs
-// inside the body keep their consistent rows. This header sets up the elements with the
+// function's integral over it: mark_lumped_rows in scheme/grid_stages.cpp) get lumped rows and
+// columns (ConsistentMass::set_lumped, which keeps every row sum and so the conserved totals); the
+// DOFs inside the body keep their consistent rows. This header sets up the elements with the
 // integrals of the functions over each, once per run.
 #include <algorithm>
 #include <array>

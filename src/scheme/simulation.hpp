@@ -73,7 +73,7 @@ struct RunState {
   // A distributed run: the whole problem's tractions with each loaded point's particle
   // by id; `tractions` holds the points of this process's particles (localize_tractions, after
   // every migration). `face_forces`: the loaded points' nodal forces of this step, (DOF, force),
-  // which stages::detail::share_grid_sums adds where this process's sums hold the DOF and sends
+  // which stages::share_grid_sums adds where this process's sums hold the DOF and sends
   // on to the process that holds it otherwise.
   std::vector<Traction<Dim>> all_tractions;
   std::vector<std::pair<Index, Vec<Dim>>> face_forces;
@@ -81,7 +81,7 @@ struct RunState {
   GridState<Dim> nodes;
   ConsistentMass consistent;
   // A distributed run's p-multigrid hierarchy (method.mass_solver = "pmg"), built with the
-  // consistent matrix each step (stages::detail::after_mass).
+  // consistent matrix each step (stages::after_mass).
   std::shared_ptr<DistributedPmg<Dim>> distributed_pmg;
   // Some DOF is fixed in only some components (rollers): consistent mass then factorises once
   // per velocity component. Set by Simulation::fix_side, the only place that changes
@@ -94,7 +94,7 @@ struct RunState {
   // Partial lumping of the consistent mass matrix (method.partial_lumping; D 7.2 proposes it for
   // the partially filled elements of PS-MPM): in each step the DOFs whose functions' integrals
   // the particles cover to less than `below` get lumped rows and columns
-  // (ConsistentMass::set_lumped; marked in stages::detail::after_mass). Set up once per run by
+  // (ConsistentMass::set_lumped; marked in stages::after_mass). Set up once per run by
   // setup_partial_lumping (scheme/partial_lumping.hpp).
   struct PartialLumping {
     double below = 0.0;  // 0: off
@@ -130,7 +130,7 @@ struct RunState {
   // A distributed run (core/comm.hpp): the processes, each holding the particles of
   // its slab of the grid (scheme/distribution.hpp) and the grid quantities of the DOFs its
   // particles touch. Null for a run on one process. After each particle-to-grid sum the ranks
-  // add their partial sums on the DOFs they share (stages::detail::share_grid_sums), so every
+  // add their partial sums on the DOFs they share (stages::share_grid_sums), so every
   // rank's grid holds the totals on its DOFs; `shared` holds each rank's DOF range [lo, hi] of
   // the last exchange (for the conservation totals, which count each DOF once).
   const Comm* comm = nullptr;

@@ -26,7 +26,6 @@ class TriangleMesh;  // grid/triangle_mesh.hpp
 
 namespace mpm::stages {
 
-namespace detail {
 // The failures of the stages, formatted once per dimension (scheme/grid_stages.cpp): exit code,
 // step, time and the particles (by id, with their positions; at most 8 listed) or points named.
 // ids: particle indices.
@@ -59,7 +58,6 @@ inline bool deform_particle(Particles<Dim>& P, std::size_t i, const Mat<Dim>& dt
   law.update(P.stress[i], P.F[i], dtL);
   return !(J > 0.0) || !std::isfinite(P.stress[i].sum());
 }
-}  // namespace detail
 
 // D Alg. 2 step 3: basis values and gradients at x_p^s. Stops the run (exit code 4) when a
 // particle has left the grid, and counts grid crossings.
@@ -157,14 +155,14 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
       std::vector<Index> ids;
       for (Index p = 0; p < P.size(); ++p)
         if (!basis.fits(P, p)) ids.push_back(p);
-      detail::throw_unfit(sim, ids, B::kName);
+      throw_unfit(sim, ids, B::kName);
     }
   }
   if (outside) {
     if constexpr (B::kTriangleMesh)
-      detail::throw_left_mesh(sim, basis.mesh());
+      throw_left_mesh(sim, basis.mesh());
     else
-      detail::throw_left_grid(sim);
+      throw_left_grid(sim);
   }
   if constexpr (B::kIterative) basis.throw_if_failed(sim.step, sim.time, "particles");
   if (sim.comm) sim.fit_dof_window();  // the grid arrays of this process's slab
@@ -177,7 +175,6 @@ void refresh_body_force(RunState<Dim>& sim) {
     sim.body_force.fill(sim.particles, sim.time, sim.particles.body);
 }
 
-namespace detail {
 // A distributed run (sim.comm): each rank's partial sums of What (grid_sum bits kMass, kMomentum,
 // kForces) on the DOFs its particles touched are added to those of the ranks that share them,
 // in rank order, so that every rank holds the same totals (scheme/grid_stages.cpp). Nothing on
@@ -231,8 +228,6 @@ void after_forces(BasisState<Dim, B>& sim) {
     if (!sim.tractions.empty()) sim.basis.throw_if_failed(sim.step, sim.time, "traction faces");
 }
 
-}  // namespace detail
-
 // For the sums of a mapping that reads the particles of neighbouring cells (kGhostParticles:
 // TLS's completions, free-surface test and domain integrals) in a distributed run: the other
 // processes' particles within the mapping's reach (ghost_reach, in cell layers, the largest of
@@ -271,10 +266,10 @@ void map_to_grid(Sim& sim) {
     if constexpr ((What & kForces) != 0) sim.mapping.map_forces(sim);
   }
   // The tractions first, so that a distributed run shares the whole forces.
-  if constexpr ((What & kForces) != 0) detail::after_forces(sim);
-  if (sim.comm) detail::share_grid_sums(sim, What & (kMass | kMomentum | kForces));
-  if constexpr ((What & kMass) != 0) detail::after_mass(sim);
-  if constexpr ((What & kMomentum) != 0) detail::after_momentum(sim);
+  if constexpr ((What & kForces) != 0) after_forces(sim);
+  if (sim.comm) share_grid_sums(sim, What & (kMass | kMomentum | kForces));
+  if constexpr ((What & kMass) != 0) after_mass(sim);
+  if constexpr ((What & kMomentum) != 0) after_momentum(sim);
 }
 
 // Nodal (lumped) masses, the consistent matrix if requested, the active set, and the mass
@@ -356,7 +351,7 @@ void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
             }
             if constexpr ((What & kStress) != 0) {
               if (mapped != nullptr) L = mapped[i];
-              return detail::deform_particle(P, i, Mat<Dim>(stress_dt * L), law);
+              return deform_particle(P, i, Mat<Dim>(stress_dt * L), law);
             }
             return false;
           });
@@ -367,7 +362,7 @@ void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
   if constexpr ((What & kPosition) != 0) {
     if constexpr (B::kTrackedCorners) sim.basis.advect(sim, dt);
   }
-  if (bad) detail::throw_particle_failure(sim);
+  if (bad) throw_particle_failure(sim);
 }
 
 template <unsigned What, int Dim, class B>
@@ -410,8 +405,8 @@ void update_velocity_map_momentum(Sim& sim, double dt) {
   using namespace grid_sum;
   if constexpr (Sim::MappingT::kFusedScatter) {
     sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt);
-    if (sim.comm) detail::share_grid_sums(sim, kMomentum);
-    detail::after_momentum(sim);
+    if (sim.comm) share_grid_sums(sim, kMomentum);
+    after_momentum(sim);
   } else {
     update_particle_velocity(sim, dt);
     map_momentum(sim);

@@ -336,7 +336,7 @@ void Otm<Dim>::maxent_rows() {
   for (Index p = 0; p < P.size(); ++p) {
     const auto i = static_cast<std::size_t>(p);
     const Vec<Dim> x = P.x[i];
-    if (!st_.grid.inside(x)) stages::detail::throw_left_grid(st_);
+    if (!st_.grid.inside(x)) stages::throw_left_grid(st_);
     int m = 0;
     IVec<Dim> b0;
     for (int d = 0; d < Dim; ++d) b0[d] = bin_of(x, d);
@@ -446,7 +446,7 @@ void Otm<Dim>::evaluate_basis() {
     for (Index p = 0; p < P.size(); ++p) {
       const auto i = static_cast<std::size_t>(p);
       const double x = P.x[i][0];
-      if (!(x >= x_.front() && x <= x_.back())) stages::detail::throw_left_grid(st_);
+      if (!(x >= x_.front() && x <= x_.back())) stages::throw_left_grid(st_);
       Index e = element_[i];
       while (e > 0 && x < x_[static_cast<std::size_t>(e)]) --e;
       while (e < n - 2 && x > x_[static_cast<std::size_t>(e + 1)]) ++e;
@@ -512,8 +512,8 @@ void Otm<Dim>::step(double dt) {
     }
   }
   add_tractions();
-  stages::detail::after_mass(st_);  // conservation check, active nodes, factorisation
-  stages::detail::after_momentum(st_);
+  stages::after_mass(st_);  // conservation check, active nodes, factorisation
+  stages::after_momentum(st_);
 
   // v_i = M^-1 (q + dt f) with the Dirichlet conditions, a_i = M^-1 f; x_i += dt v_i (4.31,
   // 4.84-4.86, constant dt).
@@ -549,13 +549,13 @@ void Otm<Dim>::step(double dt) {
             } else {
               P.v[i] = dx / dt;  // OTM: the momentum of the next step (4.29)
             }
-            any = stages::detail::deform_particle(P, i, Mat<Dim>(dt * L), law) || any;
+            any = stages::deform_particle(P, i, Mat<Dim>(dt * L), law) || any;
           }
           return any;
         }
       },
       st_.material);
-  if (bad) stages::detail::throw_particle_failure(st_);
+  if (bad) stages::throw_particle_failure(st_);
   for (Index i = 0; i < n; ++i)
     for (int d = 0; d < Dim; ++d)
       x_[static_cast<std::size_t>(i * Dim + d)] += dt * nd.velocity[static_cast<std::size_t>(i)][d];

@@ -16,7 +16,7 @@ bool coincide(double a, double b, double scale) {
 }
 
 // At most `limit` element ids with their current midpoints, for failure messages (the style of
-// stages::detail::describe_particles).
+// the failure messages of scheme/grid_stages.cpp).
 std::string describe_elements(const Particles<1>& E, const std::vector<Index>& ids,
                               std::size_t limit = 8) {
   std::string out;
