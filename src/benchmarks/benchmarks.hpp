@@ -201,9 +201,6 @@ void use_manufactured_solution(Problem<Dim>& pb, const Exact& ex) {
   pb.exact = ex;
 }
 
-// Material from the [material] keys for a problem in `dim` dimensions.
-Material material_from_config(const Config& cfg, int dim);
-
 // The neo-Hookean law of a manufactured-solution benchmark, whose body force is derived for that
 // law (`source` names the derivation); InputError naming material.model otherwise.
 const NeoHookean& require_neo_hookean(const Config& cfg, const Material& m,

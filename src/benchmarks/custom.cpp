@@ -13,6 +13,7 @@
 #include "grid/triangle_mesh.hpp"
 #include "setup/config.hpp"
 #include "setup/expression.hpp"
+#include "setup/material_settings.hpp"
 
 namespace mpm {
 namespace {

@@ -6,6 +6,7 @@
 
 #include "benchmarks/benchmarks.hpp"
 #include "setup/config.hpp"
+#include "setup/material_settings.hpp"
 
 namespace mpm {
 

@@ -4,6 +4,7 @@
 
 #include "benchmarks/benchmarks.hpp"
 #include "setup/config.hpp"
+#include "setup/material_settings.hpp"
 
 namespace mpm {
 

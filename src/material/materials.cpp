@@ -3,11 +3,28 @@
 #include <fmt/format.h>
 
 #include <cstddef>
+#include <string>
+#include <utility>
 #include <variant>
+#include <vector>
 
 namespace mpm {
 
 namespace {
+// The names of the laws that exist in `dim`, as "a, b or c".
+template <std::size_t... I>
+std::string laws_in(int dim, std::index_sequence<I...>) {
+  std::vector<std::string_view> names;
+  ((std::variant_alternative_t<I, Material>::supports_dimension(dim)
+        ? names.push_back(std::variant_alternative_t<I, Material>::kName)
+        : void()),
+   ...);
+  std::string out;
+  for (std::size_t k = 0; k < names.size(); ++k)
+    out += fmt::format("{}{}", k == 0 ? "" : k + 1 == names.size() ? " or " : ", ", names[k]);
+  return out;
+}
+
 // The law named `model` as the alternative I of Material or after, if it exists in `dim`.
 template <std::size_t I = 0>
 Material make_law(std::string_view model, const ElasticParameters& p, int dim) {
@@ -16,9 +33,8 @@ Material make_law(std::string_view model, const ElasticParameters& p, int dim) {
     if (model != Law::kName) return make_law<I + 1>(model, p, dim);
     if (!Law::supports_dimension(dim))
       throw InputError(fmt::format(
-          "material.model = \"{}\" is a one-dimensional law; in {}D choose linear_elastic or "
-          "neo_hookean",
-          model, dim));
+          "material.model = \"{}\" does not exist in {}D; in {}D choose {}", model, dim, dim,
+          laws_in(dim, std::make_index_sequence<std::variant_size_v<Material>>{})));
     return Law{p};
   } else {
     throw InputError(fmt::format("unknown material.model \"{}\"", model));

@@ -25,6 +25,8 @@ struct ElasticParameters {
 // (004 eq. 4.15).
 struct Elastic1DSmall {
   static constexpr std::string_view kName = "elastic_1d_small";
+  static constexpr std::string_view kDescription =
+      "1D linear elastic, small deformation: sigma += E d_eps (004 eq. 4.15)";
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
   ElasticParameters p;
   template <int Dim>
@@ -50,6 +52,8 @@ struct Elastic1DSmall {
 // whose closed form is sigma = E (1 - 1/F).
 struct Elastic1DLarge {
   static constexpr std::string_view kName = "elastic_1d_large";
+  static constexpr std::string_view kDescription =
+      "1D elastic, large deformation: sigma += (E - sigma) d_eps (004 eq. 4.16)";
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
   ElasticParameters p;
   template <int Dim>
@@ -73,6 +77,8 @@ struct Elastic1DLarge {
 // In 1D this is sigma = (lambda + 2 mu) (F - 1); with nu = 0 the modulus is E.
 struct LinearElastic {
   static constexpr std::string_view kName = "linear_elastic";
+  static constexpr std::string_view kDescription =
+      "linear elastic in F, any dimension (D eq. 2.13); 1D modulus lambda+2mu";
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   ElasticParameters p;
   explicit LinearElastic(const ElasticParameters& params = {})
@@ -104,6 +110,8 @@ struct LinearElastic {
 // Compressible neo-Hookean (D eq. 2.14): sigma = lambda ln(J)/J I + mu/J (F F^T - I).
 struct NeoHookean {
   static constexpr std::string_view kName = "neo_hookean";
+  static constexpr std::string_view kDescription =
+      "compressible neo-Hookean, any dimension (D eq. 2.14)";
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   ElasticParameters p;
   explicit NeoHookean(const ElasticParameters& params = {})
@@ -143,6 +151,7 @@ template <class Law, int Dim>
 concept ConstitutiveLaw = requires(const Law& law, Mat<Dim>& sigma, const Mat<Dim>& F,
                                    const Mat<Dim>& dtL, double V, double V0, int dim) {
   { Law::kName } -> std::convertible_to<std::string_view>;
+  { Law::kDescription } -> std::convertible_to<std::string_view>;
   { Law::supports_dimension(dim) } -> std::convertible_to<bool>;
   law.update(sigma, F, dtL);
   { law.energy(sigma, F, V, V0) } -> std::convertible_to<double>;
@@ -156,8 +165,8 @@ static_assert(ConstitutiveLaw<LinearElastic, 3> && ConstitutiveLaw<NeoHookean, 3
 
 using Material = std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean>;
 
-// Build the material named by `model` (a registry::kMaterials name). Throws InputError when the
-// law does not exist in dimension `dim`.
+// Build the material named by `model` (a law's kName; registry::kMaterials lists them). Throws
+// InputError when the law does not exist in dimension `dim`, naming those that do.
 Material make_material(std::string_view model, const ElasticParameters& p, int dim);
 
 inline double wave_speed(const Material& m) {

@@ -9,6 +9,7 @@
 #include <utility>
 #include <variant>
 
+#include "material/materials.hpp"
 #include "scheme/variants.hpp"
 
 namespace mpm::registry {
@@ -187,13 +188,8 @@ inline constexpr Entry kSortModes[] = {
     {"never", "keep the particles in their order (seeded, or as a checkpoint stored them)"},
 };
 
-inline constexpr Entry kMaterials[] = {
-    {"elastic_1d_small", "1D linear elastic, small deformation: sigma += E d_eps (004 eq. 4.15)"},
-    {"elastic_1d_large",
-     "1D elastic, large deformation: sigma += (E - sigma) d_eps (004 eq. 4.16)"},
-    {"linear_elastic", "linear elastic in F, any dimension (D eq. 2.13); 1D modulus lambda+2mu"},
-    {"neo_hookean", "compressible neo-Hookean, any dimension (D eq. 2.14)"},
-};
+// The constitutive laws, from each law's kName and kDescription (material/materials.hpp).
+inline constexpr auto kMaterials = entries_of<Material>();
 
 inline constexpr Entry kBoundaryTypes[] = {
     {"fixed", "all velocity components zero at the boundary degrees of freedom"},

@@ -1,0 +1,14 @@
+#pragma once
+// The material of a run from its [material] keys, read once here for every problem: the law
+// named by material.model (material/materials.hpp) with its parameters.
+#include "material/materials.hpp"
+#include "setup/config.hpp"
+
+namespace mpm {
+
+// The law of material.model with material.density, youngs_modulus and poisson_ratio, for a
+// problem in `dim` dimensions. InputError naming material.model when the law does not exist
+// there (the message names those that do).
+Material material_from_config(const Config& cfg, int dim);
+
+}  // namespace mpm
