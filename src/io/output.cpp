@@ -593,10 +593,12 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
   static_assert(Dim >= 1 && Dim <= 3);
   check_particles(p);
   const auto n = static_cast<std::size_t>(p.size());
-  check_fields(extra, n, {"id", "x0", "u", "v", "mass", "volume", "density", "F", "stress"},
-               "particle");
+  // The frame's own arrays, whose names no extra field may take.
+  const std::set<std::string> own = {"id",     "x0",      "u", "v",     "mass",
+                                     "volume", "density", "F", "stress"};
+  check_fields(extra, n, own, "particle");
   {
-    std::set<std::string> used = {"id", "x0", "u", "v", "mass", "volume", "density", "F", "stress"};
+    std::set<std::string> used = own;
     for (const auto& f : extra) used.insert(f.name);
     for (const auto& v : vectors) {
       if (v.values == nullptr || v.values->size() != n || v.name.empty() ||
