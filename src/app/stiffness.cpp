@@ -179,6 +179,11 @@ StiffnessReport stiffness_spectrum(const StiffnessOptions& opt) {
       throw InputError(
           fmt::format("{} holds a {} run in {}D, not a 2D mpm run", what, c.solver, c.dim));
     P = io::unpack_particles<kDim>(c.particles, what);
+    try {
+      P.state.set_names(state_names(pb->material));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(fmt::format("{}: {}", what, e.what()));
+    }
     rep.state = fmt::format("t = {:.6g} s (step {}) of {}", c.time, c.step, opt.checkpoint);
   }
   if (opt.layout_only) {

@@ -22,6 +22,21 @@ namespace {
 // x, y, then z (back: z = min, front: z = max).
 constexpr const char* kSideKeys[3][2] = {{"left", "right"}, {"bottom", "top"}, {"back", "front"}};
 
+// A non-zero initial stress with a law that is not incremental (its stress follows from F, which
+// is I at the start): InputError naming the incremental laws of the dimension, if any.
+template <int Dim>
+void refuse_initial_stress(const Config& cfg, const Material& material) {
+  if (incremental(material)) return;
+  const std::string laws = laws_in(Dim, /*incremental_only=*/true);
+  throw InputError(fmt::format(
+      "{}: an initial stress needs an incremental law{}; material.model = \"{}\" computes the "
+      "stress from F = I{}",
+      cfg.where("initial.stress"), laws.empty() ? "" : fmt::format(" ({})", laws),
+      material_name(material),
+      laws.empty() ? fmt::format(" (no {}D law is incremental: leave initial.stress at 0)", Dim)
+                   : ""));
+}
+
 // The values of a RealVector key, one per direction; InputError naming its line otherwise.
 template <int Dim>
 Vec<Dim> per_direction(const Config& cfg, const char* key) {
@@ -577,8 +592,6 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
     m(0, 0) = s0(X[0]);
     return m;
   };
-  const bool incremental_law = std::holds_alternative<Elastic1DSmall>(pb.material) ||
-                               std::holds_alternative<Elastic1DLarge>(pb.material);
   auto& P = pb.particles;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.v[i][0] = v0(P.x0[i][0]);
@@ -591,11 +604,7 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
         throw InputError(fmt::format("{}: {} = \"{}\" is not finite at x = {:.6g} (particle {})",
                                      cfg.where(key), key, cfg.get_string(key), P.x0[i][0],
                                      P.id[i]));
-    if (P.stress[i](0, 0) != 0.0 && !incremental_law)
-      throw InputError(
-          fmt::format("{}: an initial stress needs an incremental law (elastic_1d_small or "
-                      "elastic_1d_large); material.model = \"{}\" computes the stress from F = I",
-                      cfg.where("initial.stress"), material_name(pb.material)));
+    if (P.stress[i](0, 0) != 0.0) refuse_initial_stress<1>(cfg, pb.material);
   }
 
   const Expression b(cfg.get_string("loading.body_force"), constants);
@@ -648,8 +657,6 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   const auto s0 = expressions(cfg, "initial.stress", 3, kStressComponents[2]);
   pb.initial_velocity = [v0](const Vec<2>& X) { return vector_from<2>(v0, X[0], X[1], 0.0, 0.0); };
   pb.initial_stress = [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0, 0.0); };
-  const bool incremental_law = std::holds_alternative<Elastic1DSmall>(pb.material) ||
-                               std::holds_alternative<Elastic1DLarge>(pb.material);
   auto& P = pb.particles;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.v[i] = pb.initial_velocity(P.x0[i]);
@@ -660,11 +667,7 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
         throw InputError(
             fmt::format("{}: {} is not finite at (x, y) = ({:.6g}, {:.6g}) (particle {})",
                         cfg.where(key), key, P.x0[i][0], P.x0[i][1], P.id[i]));
-    if (P.stress[i] != Mat<2>::Zero() && !incremental_law)
-      throw InputError(fmt::format(
-          "{}: an initial stress needs an incremental law; material.model = \"{}\" computes "
-          "the stress from F = I (no 2D law is incremental: leave initial.stress at 0)",
-          cfg.where("initial.stress"), material_name(pb.material)));
+    if (P.stress[i] != Mat<2>::Zero()) refuse_initial_stress<2>(cfg, pb.material);
   }
 
   const auto b = expressions(cfg, "loading.body_force", 2, kComponents[2]);
@@ -743,12 +746,7 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
         throw InputError(fmt::format(
             "{}: {} is not finite at (x, y, z) = ({:.6g}, {:.6g}, {:.6g}) (particle {})",
             cfg.where(key), key, P.x0[i][0], P.x0[i][1], P.x0[i][2], P.id[i]));
-    // The 3D laws (linear_elastic, neo_hookean) compute the stress from F, which is I here.
-    if (P.stress[i] != Mat<3>::Zero())
-      throw InputError(fmt::format(
-          "{}: an initial stress needs an incremental law; material.model = \"{}\" computes "
-          "the stress from F = I (no 3D law is incremental: leave initial.stress at 0)",
-          cfg.where("initial.stress"), material_name(pb.material)));
+    if (P.stress[i] != Mat<3>::Zero()) refuse_initial_stress<3>(cfg, pb.material);
   }
 
   const auto b = expressions(cfg, "loading.body_force", 3, kComponents[3]);

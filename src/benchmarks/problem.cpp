@@ -38,7 +38,8 @@ IVec<Dim> seed_counts(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi
     per_dim[d] = std::max(1.0, std::round((hi[d] - lo[d]) / g.h[d] * per_cell));
     total *= per_dim[d];
   }
-  const double bytes = share * total * static_cast<double>(Particles<Dim>::bytes_per_particle());
+  // (The state of an elastic law: a material's internal variables come on top.)
+  const double bytes = share * total * static_cast<double>(Particles<Dim>::bytes_per_particle(0));
   const double memory = physical_memory();
   if (!(total < 1e15) || (memory > 0.0 && bytes > memory))
     throw InputError(fmt::format(
@@ -192,7 +193,8 @@ std::vector<Vec<2>> triangle_seed_reference(int per_triangle) {
 // SeedScope::machine_share) is refused before anything is allocated.
 void check_triangle_seed_memory(const TriangleMesh& mesh, Index per, double share) {
   const double total = static_cast<double>(mesh.num_cells()) * static_cast<double>(per);
-  const double bytes = share * total * static_cast<double>(Particles<2>::bytes_per_particle());
+  // (The state of an elastic law: a material's internal variables come on top.)
+  const double bytes = share * total * static_cast<double>(Particles<2>::bytes_per_particle(0));
   const double memory = physical_memory();
   if (memory > 0.0 && bytes > memory)
     throw InputError(fmt::format(

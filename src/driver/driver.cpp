@@ -190,7 +190,8 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
       [&](const auto& law) {
         for (std::size_t i = 0; i < P.x.size(); ++i) {
           kin += 0.5 * P.mass[i] * P.v[i].squaredNorm();
-          strain += law.energy(P.stress[i], P.F[i], P.volume[i], P.volume0[i]);
+          strain += law.energy(P.stress[i], state_row<std::decay_t<decltype(law)>>(P.state, i),
+                               P.F[i], P.volume[i], P.volume0[i]);
           mass += P.mass[i];
           mom += P.mass[i] * P.v[i];
         }
@@ -285,7 +286,9 @@ std::string frame_vtu(const Particles<Dim>& P, double time,
     zz.resize(n);
     std::visit(
         [&](const auto& law) {
-          for (std::size_t i = 0; i < n; ++i) zz[i] = law.out_of_plane_stress(P.stress[i], P.F[i]);
+          using Law = std::decay_t<decltype(law)>;
+          for (std::size_t i = 0; i < n; ++i)
+            zz[i] = law.out_of_plane_stress(P.stress[i], state_row<Law>(P.state, i), P.F[i]);
         },
         material);
   }
@@ -335,7 +338,7 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
   std::array<std::vector<double>, 2 * Dim + Dim * Dim> values;
   OrderedFile file(*comm_, tmp.string(), path.string());
   {
-    const Particles<Dim> none;  // the header line, rank 0's
+    const Particles<Dim> none = P.empty_like();  // the header line, rank 0's
     const auto extra = exact_fields(exact_, none, time, values);
     file.append(comm_->root() ? io::particles_csv(none, extra, /*header=*/true) : std::string());
   }
@@ -358,7 +361,7 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
       const Index r = (id_at(next) - first) * ranks / (end - first);
       P.pack(by_id[next], send[static_cast<std::size_t>(r)]);
     }
-    Particles<Dim> mine_rows;
+    Particles<Dim> mine_rows = P.empty_like();
     for (const auto& buf : comm_->alltoall(send)) mine_rows.unpack_append(buf);
     send.clear();
     Permutation perm;

@@ -236,6 +236,12 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
   }
   const io::Checkpoint& c = pieces ? joined : stored;
   auto p = io::unpack_particles<Dim>(c.particles, what);
+  try {
+    p.state.set_names(state_names(sim.material));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{} does not fit the problem: {} (material.model = \"{}\")", what,
+                                 e.what(), material_name(sim.material)));
+  }
   // (Each particle's cell: OTM keeps none. A distributed run holds a part of them.)
   const std::size_t cells = comm ? static_cast<std::size_t>(p.size()) : sim.cell.size();
   if ((!pieces || !comm) && p.size() != particles)

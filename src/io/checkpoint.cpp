@@ -43,6 +43,11 @@ void flatten(const std::vector<T>& in, std::vector<double>& out) {
   }
 }
 
+// A material's internal variables: their values, row after row (width values per particle).
+void flatten(const MaterialState& in, std::vector<double>& out) {
+  out = in.values();
+}
+
 template <class T>
 void unflatten(const std::vector<double>& in, std::vector<T>& out, std::size_t n,
                const std::string& what, const std::string& field) {
@@ -97,8 +102,10 @@ const std::vector<std::string>& particle_field_names() {
     std::vector<std::string> n;
     const Particles<1> p;
     p.for_each_named_field([&](const char* name, const auto& field) {
-      if constexpr (!std::is_same_v<typename std::decay_t<decltype(field)>::value_type,
-                                    CompactIndex>)
+      if constexpr (kIsMaterialState<decltype(field)>)
+        n.emplace_back(name);
+      else if constexpr (!std::is_same_v<typename std::decay_t<decltype(field)>::value_type,
+                                         CompactIndex>)
         n.emplace_back(name);
     });
     return n;
@@ -113,11 +120,15 @@ ParticleArrays pack_particles(const Particles<Dim>& p) {
   a.count = p.size();
   std::size_t k = 0;
   p.for_each_named_field([&](const char*, const auto& field) {
-    using T = typename std::decay_t<decltype(field)>::value_type;
-    if constexpr (std::is_same_v<T, CompactIndex>)
-      a.id.assign(field.begin(), field.end());
-    else
+    if constexpr (kIsMaterialState<decltype(field)>) {
       flatten(field, a.reals[k++]);
+    } else {
+      using T = typename std::decay_t<decltype(field)>::value_type;
+      if constexpr (std::is_same_v<T, CompactIndex>)
+        a.id.assign(field.begin(), field.end());
+      else
+        flatten(field, a.reals[k++]);
+    }
   });
   return a;
 }
@@ -134,8 +145,18 @@ Particles<Dim> unpack_particles(const ParticleArrays& a, const std::string& what
   Particles<Dim> p;
   std::size_t k = 0;
   p.for_each_named_field([&](const char* name, auto& field) {
-    using T = typename std::decay_t<decltype(field)>::value_type;
-    if constexpr (std::is_same_v<T, CompactIndex>) {
+    if constexpr (kIsMaterialState<decltype(field)>) {
+      // Rows of the material's internal variables, named by the run's material when it
+      // continues (MaterialState::set_names checks their width).
+      auto& values = a.reals[k++];
+      if (n == 0 ? !values.empty() : values.size() % n != 0)
+        throw InputError(
+            fmt::format("{}: particle field {} holds {} values, not a whole number "
+                        "per particle for {} particles",
+                        what, name, values.size(), n));
+      field.set_raw(n, values);
+    } else if constexpr (std::is_same_v<typename std::decay_t<decltype(field)>::value_type,
+                                        CompactIndex>) {
       // The ids in the stored order: a run re-sorted before the checkpoint continues in that
       // order.
       if (a.id.size() != n)
@@ -365,14 +386,19 @@ void put_particles(ByteWriter& w, const Particles<Dim>& p) {
   w.i64(Dim);
   w.i64(p.size());
   p.for_each_named_field([&](const char*, const auto& field) {
-    using T = typename std::decay_t<decltype(field)>::value_type;
-    if constexpr (std::is_same_v<T, double>) {
-      w.reals(field);
-    } else if constexpr (!std::is_same_v<T, CompactIndex>) {
-      constexpr auto k = static_cast<std::size_t>(T::SizeAtCompileTime);
-      w.u64(field.size() * k);
-      for (const auto& e : field)
-        for (std::size_t j = 0; j < k; ++j) w.f64(e.data()[j]);
+    if constexpr (kIsMaterialState<decltype(field)>) {
+      w.reals(field.values());
+      return;
+    } else {
+      using T = typename std::decay_t<decltype(field)>::value_type;
+      if constexpr (std::is_same_v<T, double>) {
+        w.reals(field);
+      } else if constexpr (!std::is_same_v<T, CompactIndex>) {
+        constexpr auto k = static_cast<std::size_t>(T::SizeAtCompileTime);
+        w.u64(field.size() * k);
+        for (const auto& e : field)
+          for (std::size_t j = 0; j < k; ++j) w.f64(e.data()[j]);
+      }
     }
   });
   w.u64(p.id.size());
@@ -386,9 +412,8 @@ std::string encode_piece(std::int64_t step, std::int64_t rank, std::int64_t rank
                          const std::vector<double>& basis_state) {
   const auto n = static_cast<std::size_t>(particles.size());
   // (Per particle: the real fields, the id and the cell; the counts.)
-  ByteWriter p =
-      framing(8 * (5 + particle_field_names().size() + 2) +
-              n * (Particles<Dim>::bytes_per_particle() + 2 * 8) + 8 * basis_state.size());
+  ByteWriter p = framing(8 * (5 + particle_field_names().size() + 2) +
+                         n * (particles.record_bytes() + 2 * 8) + 8 * basis_state.size());
   p.i64(step);
   p.i64(rank);
   p.i64(ranks);

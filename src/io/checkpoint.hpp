@@ -17,9 +17,10 @@
 //   str config (Config::to_toml() of the run), str solver ("mpm" or "ulfem"), i64 dim,
 //   i64 step, f64 time,
 //   particles: i64 dim, i64 count, then one f64[] per real field of Particles::for_each_field
-//     (x, x0, v, mass, volume, volume0, F, stress, body; vectors Dim values per
-//     particle, tensors Dim x Dim column-major), i64[] id (version 3: the stable ids in the
-//     stored order, which re-sorting may have changed),
+//     (x, x0, v, mass, volume, volume0, F, stress, body, state; vectors Dim values per
+//     particle, tensors Dim x Dim column-major, state the material's internal variables, its
+//     kStateNames.size() values per particle, version 8), i64[] id (version 3: the stable ids in
+//     the stored order, which re-sorting may have changed),
 //   i64[] cell of each particle at the last basis evaluation,
 //   version 3: i64 re-sorting reference span (-1: none), i64 sorts so far (scheme/sort.hpp),
 //   diagnostics: f64 max_rel_mass_error, f64 max_rel_momentum_error, i64 grid_crossings,
@@ -60,10 +61,10 @@
 namespace mpm::io {
 
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
-// A file of another version is refused by its version: the layout above is version 7's (the
+// A file of another version is refused by its version: the layout above is version 8's (the
 // displacement and density derived, not stored; a distributed run's pieces and manifest; the
-// mesh file's hash).
-inline constexpr std::uint32_t kCheckpointVersion = 7;
+// mesh file's hash; the material's internal variables).
+inline constexpr std::uint32_t kCheckpointVersion = 8;
 inline constexpr std::string_view kPieceMagic = "MPMLABCP";
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
@@ -72,7 +73,7 @@ inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 std::uint64_t fnv1a64(std::string_view bytes);
 
 // The names of the real particle fields, in the order of Particles::for_each_named_field ("x",
-// "x0", ..., "body").
+// "x0", ..., "body", "state").
 const std::vector<std::string>& particle_field_names();
 
 // Particle arrays of any dimension, flattened (Dim or Dim^2 doubles per particle): one array per
@@ -88,7 +89,9 @@ struct ParticleArrays {
 
 template <int Dim>
 ParticleArrays pack_particles(const Particles<Dim>& p);
-// Throws InputError (naming `what`) when the dimension or a size does not match.
+// Throws InputError (naming `what`) when the dimension or a size does not match. The material
+// state's rows come unnamed (MaterialState::set_raw): the run's material names them and checks
+// their width (MaterialState::set_names).
 template <int Dim>
 Particles<Dim> unpack_particles(const ParticleArrays& a, const std::string& what);
 

@@ -135,7 +135,7 @@ template <int Dim>
 void check_particles(const Particles<Dim>& p) {
   const auto n = static_cast<std::size_t>(p.size());
   if (p.x0.size() != n || p.v.size() != n || p.mass.size() != n || p.volume.size() != n ||
-      p.F.size() != n || p.stress.size() != n) {
+      p.F.size() != n || p.stress.size() != n || p.state.size() != n) {
     throw std::invalid_argument("particle arrays have inconsistent sizes");
   }
 }
@@ -535,6 +535,7 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
       for (int c = 1; c <= Dim; ++c) header.push_back(fmt::format("{}_{}{}", t, r, c));
     }
   }
+  for (const auto name : p.state.names()) header.emplace_back(name);
   check_fields(extra, n, std::set<std::string>(header.begin(), header.end()), "particle");
 
   Buffer b;
@@ -576,6 +577,10 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
     }
     mat(p.F[i]);
     mat(p.stress[i]);
+    for (const double s : p.state[i]) {
+      put(b, ",");
+      put_num(b, s);
+    }
     for (const auto& f : extra) {
       put(b, ",");
       put_num(b, (*f.values)[i]);
@@ -594,8 +599,8 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
   check_particles(p);
   const auto n = static_cast<std::size_t>(p.size());
   // The frame's own arrays, whose names no extra field may take.
-  const std::set<std::string> own = {"id",     "x0",      "u", "v",     "mass",
-                                     "volume", "density", "F", "stress"};
+  std::set<std::string> own = {"id", "x0", "u", "v", "mass", "volume", "density", "F", "stress"};
+  for (const auto name : p.state.names()) own.emplace(name);
   check_fields(extra, n, own, "particle");
   {
     std::set<std::string> used = own;
@@ -646,6 +651,14 @@ std::string particles_vtu(const Particles<Dim>& p, double time,
   scalar_array(b, d, "density", rho);
   tensor_array<Dim>(b, d, "F", p.F, 1.0);
   tensor_array<Dim>(b, d, "stress", p.stress, 0.0, stress_zz);
+  // The material's internal variables, one scalar array each.
+  {
+    std::vector<double> column(n);
+    for (std::size_t k = 0; k < p.state.width(); ++k) {
+      for (std::size_t i = 0; i < n; ++i) column[i] = p.state[i][k];
+      scalar_array(b, d, p.state.names()[k], column);
+    }
+  }
   for (const auto& f : vectors) vector_array<Dim>(b, d, f.name, *f.values);
   for (const auto& f : extra) scalar_array(b, d, f.name, *f.values);
   put(b, "      </PointData>\n");

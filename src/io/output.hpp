@@ -121,7 +121,8 @@ struct VectorField {
 
 // CSV of the particle state: a header line, then one row per particle. Columns:
 // id, x0_1..x0_D, x_1..x_D, u_1..u_D, v_1..v_D, mass, volume, density, F_11..F_DD (row-major),
-// stress_11..stress_DD (row-major), then each extra field. id is the particle's stable id
+// stress_11..stress_DD (row-major), the material's internal variables (Particles::state, by
+// their names; none for an elastic law), then each extra field. id is the particle's stable id
 // (Particles::id); rows are in the order of p (the run writes its particles in id order).
 // Numbers are printed with 17 significant digits, so they parse back to the same double.
 // header = false: the rows alone (a distributed frame's part after the first process's).
@@ -135,8 +136,9 @@ std::string particles_csv(const Particles<Dim>& p, const std::vector<ScalarField
 // position (padded to 3 components). PointData: id (Int64, Particles::id), x0, u, v (3 components,
 // zero padded), mass, volume, density, F and stress (9 components, row-major: the Dim x Dim tensor
 // embedded in 3x3 with identity padding for F and zero padding for stress; in 2D stress_zz, when
-// given, is the stress normal to the plane, sigma_zz, of each particle), then the extra vectors
-// and scalars. Vectors and tensors name their components (ComponentName0 ...: X, Y, Z; XX, XY,
+// given, is the stress normal to the plane, sigma_zz, of each particle), the material's internal
+// variables (one scalar each, by name), then the extra vectors and scalars. Vectors and tensors
+// name their components (ComponentName0 ...: X, Y, Z; XX, XY,
 // ..., ZZ). The time [s] is stored in FieldData as "TimeValue", which ParaView reads.
 template <int Dim>
 std::string particles_vtu(const Particles<Dim>& p, double time,

@@ -11,11 +11,11 @@
 namespace mpm {
 
 namespace {
-// The names of the laws that exist in `dim`, as "a, b or c".
 template <std::size_t... I>
-std::string laws_in(int dim, std::index_sequence<I...>) {
+std::string names_of_laws(int dim, bool incremental_only, std::index_sequence<I...>) {
   std::vector<std::string_view> names;
-  ((std::variant_alternative_t<I, Material>::supports_dimension(dim)
+  ((std::variant_alternative_t<I, Material>::supports_dimension(dim) &&
+            (!incremental_only || std::variant_alternative_t<I, Material>::kIncremental)
         ? names.push_back(std::variant_alternative_t<I, Material>::kName)
         : void()),
    ...);
@@ -32,9 +32,9 @@ Material make_law(std::string_view model, const ElasticParameters& p, int dim) {
     using Law = std::variant_alternative_t<I, Material>;
     if (model != Law::kName) return make_law<I + 1>(model, p, dim);
     if (!Law::supports_dimension(dim))
-      throw InputError(fmt::format(
-          "material.model = \"{}\" does not exist in {}D; in {}D choose {}", model, dim, dim,
-          laws_in(dim, std::make_index_sequence<std::variant_size_v<Material>>{})));
+      throw InputError(
+          fmt::format("material.model = \"{}\" does not exist in {}D; in {}D choose {}", model, dim,
+                      dim, laws_in(dim)));
     return Law{p};
   } else {
     throw InputError(fmt::format("unknown material.model \"{}\"", model));
@@ -44,6 +44,11 @@ Material make_law(std::string_view model, const ElasticParameters& p, int dim) {
 
 Material make_material(std::string_view model, const ElasticParameters& p, int dim) {
   return make_law(model, p, dim);
+}
+
+std::string laws_in(int dim, bool incremental_only) {
+  return names_of_laws(dim, incremental_only,
+                       std::make_index_sequence<std::variant_size_v<Material>>{});
 }
 
 }  // namespace mpm

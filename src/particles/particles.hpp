@@ -9,8 +9,12 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "particles/material_state.hpp"
 
 namespace mpm {
+
+template <class Field>
+inline constexpr bool kIsMaterialState = std::is_same_v<std::remove_cvref_t<Field>, MaterialState>;
 
 template <int Dim>
 struct Particles {
@@ -23,6 +27,9 @@ struct Particles {
   std::vector<Mat<Dim>> F;       // deformation gradient F_p
   std::vector<Mat<Dim>> stress;  // Cauchy stress sigma_p [Pa]
   std::vector<Vec<Dim>> body;    // body force per unit mass b_p [m/s^2], refreshed every step
+  // The material's internal variables, a row per particle (none for an elastic law; named by
+  // the law's kStateNames: set_names when the run starts).
+  MaterialState state;
   // Stable id: the particle's index when it was created. Re-sorting (scheme/sort.hpp) moves the
   // particles in memory; outputs list them in id order and error messages name the id.
   std::vector<CompactIndex> id;
@@ -44,6 +51,7 @@ struct Particles {
     F.resize(s, Mat<Dim>::Identity());
     stress.resize(s, Mat<Dim>::Zero());
     body.resize(s, Vec<Dim>::Zero());
+    state.resize(s);
     // New particles get the next ids: the creation order (existing ones keep theirs).
     const std::size_t old = id.size();
     id.resize(s);
@@ -77,10 +85,14 @@ struct Particles {
     const std::size_t want = x.size() + static_cast<std::size_t>(headroom);
     for_each_field([&](auto& field) {
       if (field.capacity() == want) return;
-      std::remove_reference_t<decltype(field)> fresh;
-      fresh.reserve(want);
-      fresh.assign(field.begin(), field.end());
-      field.swap(fresh);
+      if constexpr (kIsMaterialState<decltype(field)>) {
+        field.shrink_capacity_to(want);
+      } else {
+        std::remove_reference_t<decltype(field)> fresh;
+        fresh.reserve(want);
+        fresh.assign(field.begin(), field.end());
+        field.swap(fresh);
+      }
     });
   }
 
@@ -93,7 +105,12 @@ struct Particles {
     for (std::size_t i = 0; i < x.size(); ++i)
       if (keep(std::as_const(*this), i)) kept.push_back(i);
     for_each_field([&](auto& field) {
-      for (std::size_t k = 0; k < kept.size(); ++k) field[k] = field[kept[k]];
+      for (std::size_t k = 0; k < kept.size(); ++k) {
+        if constexpr (kIsMaterialState<decltype(field)>)
+          field.copy_row(k, kept[k]);
+        else
+          field[k] = field[kept[k]];
+      }
       field.resize(kept.size());
     });
   }
@@ -105,27 +122,45 @@ struct Particles {
   }
 
   // Particle i's fields appended to `out` as raw bytes, in the order of for_each_field
-  // (bytes_per_particle() of them): migration and gathering between processes of one run, whose
+  // (record_bytes() of them): migration and gathering between processes of one run, whose
   // machines share the representation.
   void pack(std::size_t i, std::vector<std::byte>& out) const {
     fields(*this, [&](const char*, const auto& field) {
       const std::size_t at = out.size();
-      out.resize(at + sizeof(field[i]));
-      std::memcpy(out.data() + at, &field[i], sizeof(field[i]));
+      if constexpr (kIsMaterialState<decltype(field)>) {
+        out.resize(at + field.row_bytes());
+        if (field.width() > 0) std::memcpy(out.data() + at, field.row_data(i), field.row_bytes());
+      } else {
+        out.resize(at + sizeof(field[i]));
+        std::memcpy(out.data() + at, &field[i], sizeof(field[i]));
+      }
     });
   }
-  // Appends the particles of a buffer written by pack(); returns the bytes read.
+  // Appends the particles of a buffer written by pack() (by particles of the same material
+  // state); returns the bytes read.
   std::size_t unpack_append(std::span<const std::byte> in) {
-    const std::size_t n = in.size() / bytes_per_particle();
+    const std::size_t n = in.size() / record_bytes();
     std::size_t at = 0;
     for (std::size_t k = 0; k < n; ++k)
       fields(*this, [&](const char*, auto& field) {
-        field.emplace_back();
-        // (Eigen's fixed-size vectors and matrices are plain arrays of doubles.)
-        std::memcpy(static_cast<void*>(&field.back()), in.data() + at, sizeof(field.back()));
-        at += sizeof(field.back());
+        if constexpr (kIsMaterialState<decltype(field)>) {
+          field.append_row(in.data() + at);
+          at += field.row_bytes();
+        } else {
+          field.emplace_back();
+          // (Eigen's fixed-size vectors and matrices are plain arrays of doubles.)
+          std::memcpy(static_cast<void*>(&field.back()), in.data() + at, sizeof(field.back()));
+          at += sizeof(field.back());
+        }
       });
     return at;
+  }
+
+  // Empty particles with this one's material state (its names): what unpack_append fills.
+  Particles empty_like() const {
+    Particles out;
+    out.state.set_names(state.names());
+    return out;
   }
 
   // Whether the particles are in id order (never re-sorted, or sorted back).
@@ -153,11 +188,15 @@ struct Particles {
     fields(*this, [&](const char*, auto& field) { f(field); });
   }
 
-  // Bytes of particle state per particle (for the benchmark's memory figure): x, x0, v, body;
-  // mass, volume, volume0; F, stress; id.
-  static constexpr std::size_t bytes_per_particle() {
-    return 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + 2 * sizeof(Mat<Dim>) + sizeof(CompactIndex);
+  // Bytes of particle state per particle of a material with `state_width` internal variables
+  // (the memory figures and checks): x, x0, v, body; mass, volume, volume0; F, stress; the
+  // material state; id.
+  static constexpr std::size_t bytes_per_particle(std::size_t state_width) {
+    return 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + 2 * sizeof(Mat<Dim>) +
+           state_width * sizeof(double) + sizeof(CompactIndex);
   }
+  // Those of these particles (pack()'s record).
+  std::size_t record_bytes() const { return bytes_per_particle(state.width()); }
 
  private:
   template <class Self, class Fn>
@@ -171,6 +210,7 @@ struct Particles {
     f("F", p.F);
     f("stress", p.stress);
     f("body", p.body);
+    f("state", p.state);
     f("id", p.id);
   }
 };

@@ -83,7 +83,7 @@ void pack_particle(const RunState<Dim>& sim, std::size_t i, std::vector<std::byt
 template <int Dim>
 void unpack_particles(std::span<const std::byte> in, Particles<Dim>& P,
                       std::vector<CompactIndex>& cells, std::vector<double>& carried, int width) {
-  constexpr std::size_t kParticle = Particles<Dim>::bytes_per_particle();
+  const std::size_t kParticle = P.record_bytes();
   const auto w = static_cast<std::size_t>(width);
   const std::size_t record = kParticle + sizeof(CompactIndex) + w * sizeof(double);
   for (std::size_t at = 0; at + record <= in.size(); at += record) {

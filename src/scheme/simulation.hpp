@@ -59,7 +59,9 @@ struct RunState {
   static constexpr int kDim = Dim;
 
   RunState(const Grid<Dim>& g, Particles<Dim> p, Material mat)
-      : grid(g), particles(std::move(p)), material(std::move(mat)) {}
+      : grid(g), particles(std::move(p)), material(std::move(mat)) {
+    particles.state.set_names(state_names(material));
+  }
 
   Grid<Dim> grid;
   Particles<Dim> particles;

@@ -33,6 +33,7 @@
 
 #include "core/parallel.hpp"
 #include "core/types.hpp"
+#include "particles/material_state.hpp"
 
 namespace mpm {
 
@@ -77,9 +78,12 @@ class Permutation {
     const T* src = std::launder(tmp);
     parallel_for(n, [&](Index k) { v[static_cast<std::size_t>(k)] = src[k]; });
   }
+  // The rows of a material's internal variables (through a scratch array of their own).
+  void apply(MaterialState& s) { s.permute(order, state_scratch_); }
 
  private:
   std::vector<std::max_align_t> scratch_;  // n values of the largest array type
+  std::vector<double> state_scratch_;
 };
 
 // The re-sorting state of a run (Simulation::sorting).

@@ -48,14 +48,15 @@ template <int Dim>
 [[noreturn]] void throw_particle_failure(const RunState<Dim>& sim);
 
 // Particle i's F, V, rho and stress from the velocity-gradient increment dt L (D eq. 2.40-2.43):
-// F = (I + dt L) F, V = det F V0 (so rho = m / V), sigma by the law. True when the particle failed
+// F = (I + dt L) F, V = det F V0 (so rho = m / V), sigma and the law's internal variables by
+// the law. True when the particle failed
 // (det F <= 0 or a non-finite stress). Shared by the MPM stages and OTM (solver/otm.cpp).
 template <int Dim, class Law>
 inline bool deform_particle(Particles<Dim>& P, std::size_t i, const Mat<Dim>& dtL, const Law& law) {
   P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
   const double J = P.F[i].determinant();
   P.volume[i] = J * P.volume0[i];
-  law.update(P.stress[i], P.F[i], dtL);
+  law.update(P.stress[i], state_row<Law>(P.state, i), P.F[i], dtL);
   return !(J > 0.0) || !std::isfinite(P.stress[i].sum());
 }
 

@@ -292,9 +292,8 @@ std::vector<KeySpec> declare() {
                         "initial velocity, one expression of the position x, y, z per "
                         "component (custom; a single \"0\": all zero)"),
       expression_vector("initial.stress", "Pa", "0",
-                        "initial Cauchy stress as an expression of x (custom, 1D, the "
-                        "incremental laws elastic_1d_small and elastic_1d_large only: the 2D and "
-                        "3D laws compute the stress from F and refuse a non-zero one)"),
+                        "initial Cauchy stress as an expression of x (custom; incremental laws "
+                        "only: the others compute the stress from F and refuse a non-zero one)"),
       expression_vector("loading.body_force", "m/s^2", "0",
                         "body force per unit mass, one expression of the current position x, y, "
                         "z and t per component (custom)"),

@@ -1,8 +1,10 @@
 #include "solver/ulfem.hpp"
 
 #include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 namespace mpm {
@@ -66,6 +68,7 @@ Ulfem1D::Ulfem1D(const Problem<1>& pb, Index elements)
   if (fixed_hi_) v_.back() = 0.0;
 
   el_.resize(elements);
+  el_.state.set_names(state_names(material_));
   for (std::size_t e = 0; e < ne; ++e) {
     const double L0 = X_[e + 1] - X_[e];
     const double mass = rho0 * L0;
@@ -136,7 +139,8 @@ void Ulfem1D::step(double dt) {
           el_.x[e][0] = 0.5 * (x_[e] + x_[e + 1]);
           el_.v[e][0] = 0.5 * (v_[e] + v_[e + 1]);
           el_.body[e] = 0.5 * (nodes_.body[e] + nodes_.body[e + 1]);
-          law.update(el_.stress[e], el_.F[e], dtL);
+          using Law = std::decay_t<decltype(law)>;
+          law.update(el_.stress[e], state_row<Law>(el_.state, e), el_.F[e], dtL);
           bad |= !(F_new > 0.0) || !std::isfinite(el_.stress[e](0, 0));
         }
       },
@@ -196,8 +200,10 @@ double Ulfem1D::strain_energy() const {
   return std::visit(
       [&](const auto& law) {
         double w = 0.0;
+        using Law = std::decay_t<decltype(law)>;
         for (std::size_t e = 0; e < el_.F.size(); ++e)
-          w += law.energy(el_.stress[e], el_.F[e], el_.volume[e], el_.volume0[e]);
+          w += law.energy(el_.stress[e], state_row<Law>(el_.state, e), el_.F[e], el_.volume[e],
+                          el_.volume0[e]);
         return w;
       },
       material_);
@@ -225,7 +231,14 @@ void Ulfem1D::restore(const State& s) {
   x_ = s.x;
   v_ = s.v;
   nodes_.body = s.node_body;
+  const auto names = el_.state.names();
   el_ = s.elements;
+  // (Checks the stored rows' width against the law's.)
+  try {
+    el_.state.set_names(names);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("ULFEM state: {}", e.what()));
+  }
   time_ = s.time;
   time_anchor_ = s.time_anchor;
   last_dt_ = s.last_dt;

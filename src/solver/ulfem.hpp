@@ -4,8 +4,8 @@
 // large-deformation vibrating bar (D 5.4.1: "ULFEM", 120 degrees of freedom) and runs on every
 // 1D benchmark. The mesh moves with the material, so there is no grid crossing and no
 // particle-to-grid mapping: it integrates exactly the constitutive laws of the MPM stages
-// (same F update F_new = (1 + dt L) F_old, same law.update(sigma, F_new, dtL) call), which makes
-// MPM and ULFEM differ only by the spatial discretisation.
+// (same F update F_new = (1 + dt L) F_old, same law.update(sigma, state, F_new, dtL) call), which
+// makes MPM and ULFEM differ only by the spatial discretisation.
 #include <functional>
 #include <vector>
 

@@ -29,7 +29,7 @@ double law_stress(const Mms1DExact& ex, double F) {
   p.poisson_ratio = 0.3;
   const NeoHookean law{p};
   Mat<1> sigma = Mat<1>::Zero();
-  law.update<1>(sigma, Mat<1>::Constant(F), Mat<1>::Zero());
+  law.update<1>(sigma, {}, Mat<1>::Constant(F), Mat<1>::Zero());
   EXPECT_NEAR(p.lambda(), ex.lambda, 1e-9 * ex.lambda);
   return sigma(0, 0);
 }

@@ -45,7 +45,7 @@ TEST(PlateMms2DExact, VelocityDeformationAndStressFromTheDisplacement) {
       EXPECT_LT((ex.deformation_gradient(X, t) - F).norm(), 1e-7);
       const NeoHookean law{params()};
       Mat<2> sigma = Mat<2>::Zero();
-      law.update<2>(sigma, ex.deformation_gradient(X, t), Mat<2>::Zero());
+      law.update<2>(sigma, {}, ex.deformation_gradient(X, t), Mat<2>::Zero());
       EXPECT_LT((s.stress - sigma).norm(), 1e-9 * sigma.norm());
       // u_y carries sin(omega t + pi) (001 eq. 38).
       using std::numbers::pi;

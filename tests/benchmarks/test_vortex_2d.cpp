@@ -57,7 +57,7 @@ TEST(Vortex2DExact, VelocityDeformationAndStressFromTheMotion) {
       EXPECT_NEAR(F.determinant(), 1.0, 1e-13);  // the motion is isochoric
       const NeoHookean law{params()};
       Mat<2> sigma = Mat<2>::Zero();
-      law.update<2>(sigma, F, Mat<2>::Zero());
+      law.update<2>(sigma, {}, F, Mat<2>::Zero());
       EXPECT_LT((s.stress - sigma).norm(), 1e-12 * sigma.norm() + 1e-12);
       // Material points stay on their circle.
       EXPECT_NEAR((X + s.u).norm(), X.norm(), 1e-14);

@@ -438,7 +438,8 @@ double total_energy(const RunState<2>& sim) {
       [&](const auto& law) {
         for (std::size_t i = 0; i < P.x.size(); ++i)
           e += 0.5 * P.mass[i] * P.v[i].squaredNorm() +
-               law.energy(P.stress[i], P.F[i], P.volume[i], P.volume0[i]);
+               law.energy(P.stress[i], state_row<std::decay_t<decltype(law)>>(P.state, i), P.F[i],
+                          P.volume[i], P.volume0[i]);
       },
       sim.material);
   return e;

@@ -71,7 +71,7 @@ TEST(Particles, PackedParticlesRestoreEveryField) {
   std::vector<std::byte> buf;
   a.pack(2, buf);
   a.pack(0, buf);
-  EXPECT_EQ(buf.size(), 2 * Particles<3>::bytes_per_particle());
+  EXPECT_EQ(buf.size(), 2 * Particles<3>::bytes_per_particle(0));
   Particles<3> b;
   EXPECT_EQ(b.unpack_append(buf), buf.size());
   ASSERT_EQ(b.size(), 2);

@@ -36,7 +36,7 @@ template <int Dim>
 Mat<Dim> neo_hookean_piola(const ElasticParameters& p, const Mat<Dim>& F) {
   const NeoHookean law{p};
   Mat<Dim> sigma = Mat<Dim>::Zero();
-  law.update<Dim>(sigma, F, Mat<Dim>::Zero());
+  law.update<Dim>(sigma, {}, F, Mat<Dim>::Zero());
   return F.determinant() * sigma * F.inverse().transpose();
 }
 
