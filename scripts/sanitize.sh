@@ -72,8 +72,9 @@ debug_flags="-O0"
 if [ "${SANITIZE_ALL:-0}" = 1 ]; then
   units=(-UMPM_STEPPERS_1D -UMPM_STEPPERS_2D -UMPM_STEPPERS_3D)
 else
-  units=(-DMPM_STEPPERS_1D="0;6;7;10;11" -DMPM_STEPPERS_2D="0;4;6;11;12;13"
-    -DMPM_STEPPERS_3D="0;6")
+  units=(-DMPM_STEPPERS_1D="linear;bspline2;bspline3;ddmpm;maxent"
+    -DMPM_STEPPERS_2D="linear;cpdi2;bspline2;maxent;p1_triangles;powell_sabin"
+    -DMPM_STEPPERS_3D="linear;bspline2")
 fi
 # Without MPI (MPM_MPI=OFF): Open MPI's run-time keeps allocations to its exit that
 # LeakSanitizer would report, and the distributed runs are checked in the Release suite

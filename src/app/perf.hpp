@@ -42,7 +42,7 @@ struct BenchResult {
   double median_ns_after_first = 0.0;
   double median_ns_first_step = 0.0;
   double bytes_per_particle = 0.0;  // particle state + cached stencil + grid share
-  // Re-sorting (scheme/sort.hpp): sorts per run, mean wall time of one [ns per particle], and
+  // Re-sorting (state/sort.hpp): sorts per run, mean wall time of one [ns per particle], and
   // its buffers [bytes per particle] (order, inverse, scratch of the largest field, cursors per
   // cell), allocated by the first sort.
   Index sorts = 0;

@@ -1,6 +1,6 @@
 #pragma once
 // The basis concept. Every basis provides the interface below, and declares its optional
-// capabilities as constants; the stages (scheme/stages.hpp, scheme/sort.hpp) branch on those
+// capabilities as constants; the stages (scheme/stages.hpp, state/sort.hpp) branch on those
 // constants, never on whether a member happens to exist, and the concept checks that a declared
 // capability has its members. A misspelt member is then a compile error at the basis's
 // static_assert instead of a feature silently switched off.
@@ -36,7 +36,7 @@
 #include "basis/stencil.hpp"
 #include "core/types.hpp"
 #include "particles/particles.hpp"
-#include "scheme/sort.hpp"
+#include "particles/permutation.hpp"
 
 namespace mpm {
 

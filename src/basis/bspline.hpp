@@ -218,7 +218,7 @@ class BSplineBasis {
 static_assert(Basis<BSplineBasis<1, 2>, 1> && Basis<BSplineBasis<2, 3>, 2>);
 
 // fn(std::integral_constant<int, P>{}) for a B-spline degree p = 1..5 chosen at run time
-// (solver/spline_matrices.cpp, solver/otm.cpp); std::invalid_argument for another degree (the
+// (solver/spline_matrices.cpp, methods/otm.cpp); std::invalid_argument for another degree (the
 // callers validate the degree of their input first).
 template <class Fn>
 decltype(auto) with_bspline_degree(int p, Fn&& fn) {

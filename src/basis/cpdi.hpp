@@ -51,7 +51,7 @@
 // segment between the clamped corners. In 2D it is the quadrilateral of the clamped corners (the
 // exact intersection of parallelogram and grid can be a pentagon; the quadrilateral is the
 // natural CPDI2 approximation of it); fits() requires that quadrilateral to be strictly convex.
-// In 3D it is the trilinear hexahedron of the clamped corners (detail::hex_corner_weights), by
+// In 3D it is the trilinear hexahedron of the clamped corners (hex_corner_weights), by
 // the same reasoning; fits() requires its Jacobian to be positive at the corners and the Gauss
 // points.
 #include <algorithm>
@@ -65,8 +65,6 @@
 #include "basis/gimp.hpp"
 
 namespace mpm {
-
-namespace detail {
 
 // 2D cross product u x v [m^2 for lengths in m].
 inline double cross2(const Vec<2>& u, const Vec<2>& v) {
@@ -172,6 +170,8 @@ inline bool hex_corner_weights(const std::array<Vec<3>, 8>& x, std::array<double
   return true;
 }
 
+namespace detail {
+
 // The corner-sum bases (CPDI, CPDI2) on the nodal 4-per-direction window: weights and gradients
 // w_i = sum_c wc_c N_i(x_c), dw_i = sum_c N_i(x_c) gc_c, with N_i the P1 basis at the corners
 // (D eq. 2.56). The corners must lie in the grid (clamped by the caller) and span at most 2 h_d
@@ -264,8 +264,8 @@ bool corners_within_window(const Grid<Dim>& g, const std::array<Vec<Dim>, K>& x)
 }  // namespace detail
 
 template <int Dim>
-class CpdiBasis : public detail::NodalDomainBasis<Dim> {
-  using Base = detail::NodalDomainBasis<Dim>;
+class CpdiBasis : public NodalDomainBasis<Dim> {
+  using Base = NodalDomainBasis<Dim>;
   static constexpr int kCorners = ipow(2, Dim);
 
  public:
@@ -324,9 +324,9 @@ class CpdiBasis : public detail::NodalDomainBasis<Dim> {
       std::array<double, kCorners> wq;
       std::array<Vec<Dim>, kCorners> gq;
       if constexpr (Dim == 2)
-        return detail::quad_corner_weights(x, wq, gq);
+        return quad_corner_weights(x, wq, gq);
       else
-        return detail::hex_corner_weights(x, wq, gq);
+        return hex_corner_weights(x, wq, gq);
     }
   }
 
@@ -344,9 +344,9 @@ class CpdiBasis : public detail::NodalDomainBasis<Dim> {
       bool ok = false;
       if (clipped) {
         if constexpr (Dim == 2)
-          ok = detail::quad_corner_weights(x, wc, gc);
+          ok = quad_corner_weights(x, wc, gc);
         else
-          ok = detail::hex_corner_weights(x, wc, gc);
+          ok = hex_corner_weights(x, wc, gc);
       }
       if (ok) {
         detail::corner_sum_stencil<Dim, kCorners>(this->grid_, this->inv_h_, this->n_, x, wc, gc,
@@ -385,9 +385,9 @@ class CpdiBasis : public detail::NodalDomainBasis<Dim> {
 // corner is not changed). A corner outside the grid is advected with the velocity of the
 // nearest grid point. Corners on a grid side whose nodes are fixed do not move off it.
 template <int Dim>
-class Cpdi2Basis : public detail::NodalDomainBasis<Dim> {
+class Cpdi2Basis : public NodalDomainBasis<Dim> {
   static_assert(Dim == 2, "CPDI2 is implemented for quadrilateral domains (2D)");
-  using Base = detail::NodalDomainBasis<Dim>;
+  using Base = NodalDomainBasis<Dim>;
 
  public:
   static constexpr std::string_view kName = "cpdi2";
@@ -420,7 +420,7 @@ class Cpdi2Basis : public detail::NodalDomainBasis<Dim> {
   // The tracked corners (checkpoint state) and their replacement (restart).
   const std::vector<Corners>& corners() const { return corners_; }
   void set_corners(std::vector<Corners> c) { corners_ = std::move(c); }
-  // Re-sorted particles (scheme/sort.hpp): the corners move with their particles.
+  // Re-sorted particles (state/sort.hpp): the corners move with their particles.
   template <class Permutation>
   void permute(Permutation& perm) {
     if (static_cast<Index>(corners_.size()) == perm.size()) perm.apply(corners_);
@@ -443,7 +443,7 @@ class Cpdi2Basis : public detail::NodalDomainBasis<Dim> {
     if (!detail::corners_within_window(this->grid_, x)) return false;
     std::array<double, kCorners> wq;
     Corners gq;
-    return detail::quad_corner_weights(x, wq, gq);
+    return quad_corner_weights(x, wq, gq);
   }
 
   // Requires fits(P, p); the caller checks.
@@ -451,7 +451,7 @@ class Cpdi2Basis : public detail::NodalDomainBasis<Dim> {
     const Corners x = clamped_corners(p);
     std::array<double, kCorners> wq;
     Corners gq;
-    detail::quad_corner_weights(x, wq, gq);
+    quad_corner_weights(x, wq, gq);
     detail::corner_sum_stencil<Dim, kCorners>(this->grid_, this->inv_h_, this->n_, x, wq, gq, s);
   }
 
@@ -470,7 +470,7 @@ class Cpdi2Basis : public detail::NodalDomainBasis<Dim> {
         for (std::size_t d = 0; d < Dim; ++d) {
           const auto e = static_cast<int>(d);
           const double sd = (std::clamp(xc[e], g.origin[e], hi[e]) - g.origin[e]) * this->inv_h_[e];
-          first[d] = detail::clamped_cell(sd, g.cells[d]);
+          first[d] = clamped_cell(sd, g.cells[d]);
           xi[d] = std::clamp(sd - static_cast<double>(first[d]), 0.0, 1.0);
         }
         Vec<Dim> vc = Vec<Dim>::Zero();

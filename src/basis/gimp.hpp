@@ -55,8 +55,6 @@ double cpgimp_side(const Grid<Dim>& g, const Particles<Dim>& P, Index p, int d) 
   return P.F[i](d, d) * domain_initial_side(g, P.volume0[i], d);
 }
 
-namespace detail {
-
 // Nodes per direction in the GIMP and CPDI stencils.
 inline constexpr int kDomainPerDim = 4;
 
@@ -182,6 +180,8 @@ class NodalDomainBasis {
   IVec<Dim> n_{};
   Vec<Dim> inv_h_;
 };
+
+namespace detail {
 
 // 1D GIMP factors for the domain [s_lo, s_hi] in grid units (s = (x - origin)/h), already clipped
 // to [0, cells]: exact integrals of the hat functions, cell by cell (D eq. 2.61-2.62). On a cell

@@ -1,6 +1,6 @@
 #pragma once
 // The settings of the local max-ent basis (basis/maxent.hpp), apart from it so that the basis
-// kind (scheme/variants.hpp) can carry them without compiling the basis.
+// kind (methods/kinds.hpp) can carry them without compiling the basis.
 
 namespace mpm {
 

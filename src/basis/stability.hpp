@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "basis/gauss_legendre.hpp"
 #include "grid/grid.hpp"
-#include "mapping/quadrature.hpp"
 
 namespace mpm {
 

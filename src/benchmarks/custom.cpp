@@ -11,6 +11,7 @@
 
 #include "benchmarks/benchmarks.hpp"
 #include "grid/triangle_mesh.hpp"
+#include "methods/kinds.hpp"
 #include "setup/config.hpp"
 #include "setup/expression.hpp"
 #include "setup/material_settings.hpp"
@@ -324,12 +325,14 @@ void named_boundaries(Problem<2>& pb, const Config& cfg) {
     const auto line = straight_boundary(*pb.mesh, name);
     if (!line) {
       const std::string basis = cfg.get_string("method.basis");
-      if (basis != "p1_triangles")
+      const auto vertex_dofs = [](const auto& k) { return k.kVertexDofs; };
+      if (!basis_named_has(basis, vertex_dofs))
         throw InputError(fmt::format(
             "{}: boundary.roller: boundary \"{}\" of {} does not lie on one straight line, so it "
-            "has no single normal; method.basis = \"p1_triangles\" follows a bent boundary (a "
-            "normal per vertex), \"{}\" needs it split into straight physical groups (or fixed)",
-            cfg.where("boundary.roller"), name, pb.mesh->source(), basis));
+            "has no single normal; method.basis = {} follows a bent boundary (a normal per "
+            "vertex), \"{}\" needs it split into straight physical groups (or fixed)",
+            cfg.where("boundary.roller"), name, pb.mesh->source(), basis_names_where(vertex_dofs),
+            basis));
       FixedSide f{0, 0, 0u, name};
       f.vertex_normals = roller_vertex_normals(*pb.mesh, name);
       pb.fixed_sides.push_back(std::move(f));

@@ -15,6 +15,7 @@
 #include "grid/triangle_mesh.hpp"
 #include "setup/config.hpp"
 #include "setup/gmsh_mesh.hpp"
+#include "setup/registry.hpp"
 
 namespace mpm {
 
@@ -234,12 +235,12 @@ std::shared_ptr<const TriangleMesh> mesh_from_config(const Config& cfg) {
   const std::string file = cfg.get_string("grid.mesh");
   if (file.empty()) return nullptr;
   const std::string basis = cfg.get_string("method.basis");
-  if (basis != "p1_triangles" && basis != "powell_sabin")
+  const auto triangles = [](const auto& k) { return k.kOnTriangles; };
+  if (!basis_named_has(basis, triangles))
     throw InputError(fmt::format(
-        "{}: grid.mesh = \"{}\" holds triangles, which carry method.basis = \"p1_triangles\" or "
-        "\"powell_sabin\"; method.basis = \"{}\" lives on the grid's cells (leave grid.mesh "
-        "out)",
-        cfg.where("grid.mesh"), file, basis));
+        "{}: grid.mesh = \"{}\" holds triangles, which carry method.basis = {}; method.basis = "
+        "\"{}\" lives on the grid's cells (leave grid.mesh out)",
+        cfg.where("grid.mesh"), file, basis_names_where(triangles), basis));
   if (!cfg.at_default("method.triangles"))
     throw InputError(fmt::format(
         "{}: method.triangles splits the grid's cells into triangles; with grid.mesh = \"{}\" "
@@ -304,11 +305,12 @@ void for_each_body_seed_2d(const Config& cfg, const Grid<2>& g, const Vec<2>& lo
     return;
   }
   const std::string basis = cfg.get_string("method.basis");
-  if (basis != "p1_triangles" && basis != "powell_sabin")
+  const auto triangles = [](const auto& k) { return k.kOnTriangles; };
+  if (!basis_named_has(basis, triangles))
     throw InputError(fmt::format(
-        "{}: particles.per_triangle = {} seeds the triangles of method.basis = \"p1_triangles\" "
-        "or \"powell_sabin\", not of \"{}\" (use particles.per_cell, or 0 here)",
-        cfg.where("particles.per_triangle"), per_triangle, basis));
+        "{}: particles.per_triangle = {} seeds the triangles of method.basis = {}, not of \"{}\" "
+        "(use particles.per_cell, or 0 here)",
+        cfg.where("particles.per_triangle"), per_triangle, basis_names_where(triangles), basis));
   // (To round-off: the grid's upper corner is origin + cells h, which need not give back the
   // box of a mesh file bit for bit.)
   const double tol = 1e-9 * (g.upper() - g.origin).norm();
@@ -379,6 +381,57 @@ void check_grid_memory(const Config& cfg, const Grid<Dim>& g, const SeedScope& s
         memory / 1e9, distributed ? " or more machines" : ""));
 }
 
+// The constructor of each benchmark of registry::kBenchmarks (its name and description), by name.
+struct BenchmarkMaker {
+  std::string_view name;
+  AnyProblem (*make)(const Config& cfg, const SeedScope& scope);
+};
+constexpr BenchmarkMaker kBenchmarkMakers[] = {
+    {"vibrating_bar",
+     [](const Config& c, const SeedScope& s) -> AnyProblem {
+       return make_vibrating_bar(c, /*large=*/false, s);
+     }},
+    {"vibrating_bar_large",
+     [](const Config& c, const SeedScope& s) -> AnyProblem {
+       return make_vibrating_bar(c, /*large=*/true, s);
+     }},
+    {"column_compaction",
+     [](const Config& c, const SeedScope& s) -> AnyProblem {
+       return make_column_compaction(c, s);
+     }},
+    {"traction_bar",
+     [](const Config& c, const SeedScope& s) -> AnyProblem { return make_traction_bar(c, s); }},
+    {"mms_1d", [](const Config& c, const SeedScope& s) -> AnyProblem { return make_mms_1d(c, s); }},
+    {"custom",
+     [](const Config& c, const SeedScope& s) -> AnyProblem {
+       const auto dim = c.get_int("grid.dimension");
+       if (dim == 3) return make_custom_3d(c, s);
+       if (dim == 2) return make_custom_2d(c, s);
+       return make_custom_1d(c, s);
+     }},
+    {"plate_mms_2d",
+     [](const Config& c, const SeedScope& s) -> AnyProblem { return make_plate_mms_2d(c, s); }},
+    {"cube_mms_3d",
+     [](const Config& c, const SeedScope& s) -> AnyProblem { return make_cube_mms_3d(c, s); }},
+    {"vortex_2d",
+     [](const Config& c, const SeedScope& s) -> AnyProblem { return make_vortex_2d(c, s); }},
+};
+
+// Every benchmark the registry lists (the choices of `benchmark`) has its constructor here, and
+// every constructor its entry there: a benchmark added to one and not the other does not compile.
+constexpr bool makers_match_registry() {
+  bool ok = std::size(kBenchmarkMakers) == std::size(registry::kBenchmarks);
+  for (const auto& e : registry::kBenchmarks) {
+    int found = 0;
+    for (const auto& m : kBenchmarkMakers) found += m.name == e.name ? 1 : 0;
+    ok = ok && found == 1;
+  }
+  return ok;
+}
+static_assert(makers_match_registry(),
+              "benchmarks/problem.cpp: kBenchmarkMakers and registry::kBenchmarks must name the "
+              "same benchmarks");
+
 AnyProblem make_any_problem(const Config& cfg, const SeedScope& scope) {
   const std::string name = cfg.get_string("benchmark");
   // A key that this benchmark would ignore is refused, not dropped in silence.
@@ -394,20 +447,8 @@ AnyProblem make_any_problem(const Config& cfg, const SeedScope& scope) {
         fmt::format("{}: grid.dimension applies to benchmark = \"custom\" only; "
                     "\"{}\" fixes its own dimension",
                     cfg.where("grid.dimension"), name));
-  if (name == "vibrating_bar") return make_vibrating_bar(cfg, /*large=*/false, scope);
-  if (name == "vibrating_bar_large") return make_vibrating_bar(cfg, /*large=*/true, scope);
-  if (name == "column_compaction") return make_column_compaction(cfg, scope);
-  if (name == "traction_bar") return make_traction_bar(cfg, scope);
-  if (name == "mms_1d") return make_mms_1d(cfg, scope);
-  if (name == "custom") {
-    const auto dim = cfg.get_int("grid.dimension");
-    if (dim == 3) return make_custom_3d(cfg, scope);
-    if (dim == 2) return make_custom_2d(cfg, scope);
-    return make_custom_1d(cfg, scope);
-  }
-  if (name == "plate_mms_2d") return make_plate_mms_2d(cfg, scope);
-  if (name == "vortex_2d") return make_vortex_2d(cfg, scope);
-  if (name == "cube_mms_3d") return make_cube_mms_3d(cfg, scope);
+  for (const auto& m : kBenchmarkMakers)
+    if (m.name == name) return m.make(cfg, scope);
   throw InputError(
       fmt::format("{}: benchmark \"{}\" is not implemented", cfg.where("benchmark"), name));
 }

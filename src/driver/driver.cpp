@@ -139,9 +139,7 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
     // The background the basis lives on: the grid's cells, or their triangles.
     std::string grid = io::grid_vtu(pb.grid, {}, vtk_binary_);
     if constexpr (Dim == 2) {
-      std::optional<TrianglePattern> pattern;
-      if (const auto* k = std::get_if<TriangleP1Kind>(&s.method.basis)) pattern = k->pattern;
-      if (const auto* k = std::get_if<PowellSabinKind>(&s.method.basis)) pattern = k->pattern;
+      const std::optional<TrianglePattern> pattern = triangle_pattern(s.method.basis);
       if (pb.mesh)
         grid = io::triangle_mesh_vtu(*pb.mesh, {}, {}, vtk_binary_);
       else if (pattern)
@@ -437,7 +435,7 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
     }
     return;
   }
-  // In id order, whatever order re-sorting (scheme/sort.hpp) left them in.
+  // In id order, whatever order re-sorting (state/sort.hpp) left them in.
   std::optional<Particles<Dim>> ordered;
   if (!sim.particles.in_id_order()) ordered = particles_in_id_order(sim.particles);
   const Particles<Dim>& P = ordered ? *ordered : sim.particles;

@@ -20,10 +20,10 @@
 #include "core/interrupt.hpp"
 #include "driver/run.hpp"
 #include "io/output.hpp"
+#include "methods/ulfem.hpp"
 #include "model/problem.hpp"
-#include "scheme/simulation.hpp"
 #include "setup/run_settings.hpp"
-#include "solver/ulfem.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm::io {
 struct Checkpoint;

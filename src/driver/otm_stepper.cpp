@@ -1,4 +1,4 @@
-// The OTM solver (solver/otm.hpp) behind the driver's Stepper interface: the time loop, outputs,
+// The OTM solver (methods/otm.hpp) behind the driver's Stepper interface: the time loop, outputs,
 // error norms, summary and checkpoints are those of every MPM run (driver/run_mpm.cpp).
 #include <fmt/format.h>
 
@@ -8,7 +8,7 @@
 
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
-#include "solver/otm.hpp"
+#include "methods/otm.hpp"
 
 namespace mpm::driver {
 namespace {

@@ -17,7 +17,7 @@
 #include "driver/driver.hpp"
 #include "driver/run_mpm.hpp"
 #include "io/checkpoint.hpp"
-#include "scheme/distribution.hpp"
+#include "parallel/distribution.hpp"
 #include "setup/config.hpp"
 #include "setup/run_settings.hpp"
 

@@ -9,7 +9,7 @@
 
 #include "core/comm.hpp"
 #include "core/types.hpp"
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 
@@ -90,7 +90,7 @@ struct RunResult {
   // first touches the step's arrays (a TLS first step costs about five later ones, BENCHMARKS.md),
   // so `mpm bench` reports the steps after it separately.
   double first_step_seconds = 0.0;
-  Index sorts = 0;            // re-sorts by cell over the run (scheme/sort.hpp; MPM only)
+  Index sorts = 0;            // re-sorts by cell over the run (state/sort.hpp; MPM only)
   double sort_seconds = 0.0;  // their wall time, part of ns_per_particle_step [s]
   ErrorNorms errors;
   Diagnostics diag;

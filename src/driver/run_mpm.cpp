@@ -18,9 +18,9 @@
 #include "driver/stepper.hpp"
 #include "grid/triangle_mesh.hpp"
 #include "io/checkpoint.hpp"
-#include "scheme/distribution.hpp"
-#include "scheme/sort.hpp"
+#include "parallel/distribution.hpp"
 #include "setup/variant_name.hpp"
+#include "state/sort.hpp"
 
 namespace mpm::driver {
 namespace {
@@ -408,7 +408,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
                     fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
 
   // A distributed run: each process has set up only the particles of its slab
-  // (scheme/distribution.hpp), cut so that each holds about as many (driver/run.cpp).
+  // (parallel/distribution.hpp), cut so that each holds about as many (driver/run.cpp).
   const Comm* comm = opt.comm != nullptr && opt.comm->distributed() ? opt.comm : nullptr;
   if (opt.shuffle_seed != 0 && !opt.restart) {
     // (The one process's random order cannot be had from a slab's particles.)

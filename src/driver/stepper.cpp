@@ -11,26 +11,24 @@
 
 namespace mpm::driver {
 
-// The generated units (CMakeLists.txt) instantiate make_stepper_for<Dim, I> for I below this.
+// The generated units (CMakeLists.txt, MPM_BASIS_KIND_UNITS) instantiate make_stepper_for<Dim, I>
+// for the kinds by unit name; the list names every alternative of BasisKind once, in its order,
+// and gives each the dimensions of its supports_dimension.
 static_assert(std::variant_size_v<BasisKind> == MPM_BASIS_KINDS,
-              "CMakeLists.txt generates one stepper unit per BasisKind alternative: update "
-              "MPM_BASIS_KINDS there");
-
-// In 3D the units exist for the kinds that support it only (CMakeLists.txt, MPM_KINDS_3D): a kind
-// that declares 3D without its unit fails to link, and run_settings refuses the others before.
-// CMakeLists.txt generates a unit for each kind of its lists MPM_KINDS_1D/2D/3D: they must be
-// the kinds whose supports_dimension holds.
+              "CMakeLists.txt, MPM_BASIS_KIND_UNITS: one entry per BasisKind alternative");
 template <std::size_t... I>
 constexpr bool kinds_match_units(std::index_sequence<I...>) {
   return (
-      (kStepperKinds[0][I] == supports_dimension<std::variant_alternative_t<I, BasisKind>>(1) &&
+      (basis_kind_index(kStepperUnitNames[I]) == I &&
+       kStepperKinds[0][I] == supports_dimension<std::variant_alternative_t<I, BasisKind>>(1) &&
        kStepperKinds[1][I] == supports_dimension<std::variant_alternative_t<I, BasisKind>>(2) &&
        kStepperKinds[2][I] == supports_dimension<std::variant_alternative_t<I, BasisKind>>(3)) &&
       ...);
 }
 static_assert(kinds_match_units(std::make_index_sequence<std::variant_size_v<BasisKind>>{}),
-              "CMakeLists.txt: MPM_KINDS_1D/2D/3D must list the kinds whose supports_dimension "
-              "holds (scheme/variants.hpp)");
+              "CMakeLists.txt, MPM_BASIS_KIND_UNITS: the kinds by unit name in the order of "
+              "BasisKind (methods/kinds.hpp), each with the dimensions of its "
+              "supports_dimension");
 
 bool stepper_compiled(int dim, std::size_t kind) {
   return dim >= 1 && dim <= 3 && kind < std::variant_size_v<BasisKind> &&
@@ -45,11 +43,11 @@ std::unique_ptr<Stepper<Dim>> stepper_of_kind(const StepperInput<Dim>& in) {
   else if constexpr (!kStepperUnits[Dim - 1][I])
     throw InputError(fmt::format(
         "method.basis = \"{}\"{} in {}D is not compiled into this build of mpm: it was "
-        "configured with CMake option MPM_STEPPERS_{}D leaving out basis kind {} "
+        "configured with CMake option MPM_STEPPERS_{}D leaving out \"{}\" "
         "(scripts/sanitize.sh compiles only the units its tests run); build with the default "
         "options (scripts/build.sh) to run it",
         Kind::kName, Kind::kDegree > 0 ? fmt::format(" (degree {})", Kind::kDegree) : "", Dim, Dim,
-        I));
+        kStepperUnitNames[I]));
   else
     return make_stepper_for<Dim, I>(in);
 }
@@ -107,50 +105,6 @@ void report_mapping(nlohmann::ordered_json& summary, const MlsFamilyMapping& m, 
                     {"worst_x", t.worst_x}};
   if (dim >= 2) summary["mls"]["worst_y"] = t.worst_y;
   if (dim == 3) summary["mls"]["worst_z"] = t.worst_z;
-}
-
-double altitude_stability_factor(const BasisKind& basis) {
-  // PS splines are quadratic: the quadratic B-spline's factor on the triangles' length.
-  if (std::holds_alternative<PowellSabinKind>(basis)) return bspline_stability_factor(2);
-  if (std::holds_alternative<TriangleP1Kind>(basis)) return 1.0;
-  throw std::logic_error("altitude_stability_factor: not a basis on triangles");
-}
-
-double stability_factor(const BasisKind& basis) {
-  return std::visit(
-      [&basis](const auto& k) {
-        using Kind = std::decay_t<decltype(k)>;
-        // GIMP, CPDI and DDMPM use the P1 bound (their gradients are averages of P1's).
-        if constexpr (std::is_same_v<Kind, MaxEntKind>)
-          return maxent_stability_factor(k.settings);
-        else if constexpr (std::is_same_v<Kind, TriangleP1Kind> ||
-                           std::is_same_v<Kind, PowellSabinKind>)
-          return triangle_stability_factor(k.pattern) * altitude_stability_factor(basis);
-        else if constexpr (Kind::kDegree > 0)
-          return bspline_stability_factor(Kind::kDegree);
-        else
-          return 1.0;
-      },
-      basis);
-}
-
-// One cell for nodal bases, p cells for B-splines of degree p, whose asymmetric end functions
-// phi_0 .. phi_{p-1} of the open knot vector reach p cells into the domain (D Fig. 5.10).
-// Max-ent: the cells within d_max zeta of the boundary, where the functions differ from the
-// interior ones (weak Kronecker-delta property).
-int boundary_cells(const BasisKind& basis) {
-  if (const auto* m = std::get_if<MaxEntKind>(&basis))
-    return static_cast<int>(std::ceil(m->settings.dmax));
-  const int p = basis_degree(basis);
-  return p > 0 ? p : 1;
-}
-
-std::string_view basis_name(const BasisKind& basis) {
-  return std::visit([](auto k) { return decltype(k)::kName; }, basis);
-}
-
-int basis_degree(const BasisKind& basis) {
-  return std::visit([](auto k) { return decltype(k)::kDegree; }, basis);
 }
 
 }  // namespace mpm::driver

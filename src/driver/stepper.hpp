@@ -18,10 +18,10 @@
 #include <string>
 #include <variant>
 
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/simulation.hpp"
-#include "scheme/variants.hpp"
 #include "setup/run_settings.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 
@@ -38,7 +38,7 @@ class Stepper {
   // Takes the state from step s to s + 1 with the scheme (may throw RunError). The driver sets
   // the step counter and the time afterwards.
   virtual void step(double dt) = 0;
-  // Re-sorts the particles by cell if due (scheme/sort.hpp); true when it did.
+  // Re-sorts the particles by cell if due (state/sort.hpp); true when it did.
   virtual bool sort_if_due() = 0;
   // The basis- and mapping-independent state (particles, grid, time, diagnostics).
   virtual RunState<Dim>& state() = 0;
@@ -51,11 +51,11 @@ class Stepper {
   virtual void report(nlohmann::ordered_json& summary) const = 0;
   // Before particles travel between processes (a distributed run's migration or checkpoint):
   // the basis's per-particle state (CPDI2's corners) into state().carried, which moves with
-  // them (scheme/distribution.hpp). Nothing for the other bases.
+  // them (parallel/distribution.hpp). Nothing for the other bases.
   virtual void export_carried() = 0;
-  // After particles have arrived or left (a distributed run's migration, scheme/distribution.hpp):
-  // sizes the per-particle caches to the particles (the next step's evaluate_basis fills them)
-  // and gives the basis its carried state back.
+  // After particles have arrived or left (a distributed run's migration,
+  // parallel/distribution.hpp): sizes the per-particle caches to the particles (the next step's
+  // evaluate_basis fills them) and gives the basis its carried state back.
   virtual void resize_particle_caches() = 0;
 };
 
@@ -81,7 +81,7 @@ std::unique_ptr<Stepper<Dim>> make_stepper(const BasisKind& basis, const Stepper
 // (make_stepper then refuses it with an input error naming those options).
 bool stepper_compiled(int dim, std::size_t kind);
 
-// method.solver = "otm" or "unified": the stepper of solver/otm.hpp with the basis kind's
+// method.solver = "otm" or "unified": the stepper of methods/otm.hpp with the basis kind's
 // functions on the advected nodes (OTM: linear or max-ent; unified: B-splines; run_settings has
 // checked). 1D only (logic_error in 2D, which run_settings refuses).
 template <int Dim>
@@ -100,18 +100,6 @@ void report_mapping(nlohmann::ordered_json& summary, const TlsMapping& m, int di
 void report_mapping(nlohmann::ordered_json& summary, const MlsFamilyMapping& m, int dim);
 template <class Mapping>
 void report_mapping(nlohmann::ordered_json&, const Mapping&, int) {}
-
-// Per basis kind, what the driver needs without instantiating the basis:
-// the explicit stability factor (dt <= factor h / c in 1D, lumped mass; see stepper.cpp),
-double stability_factor(const BasisKind& basis);
-// the cells at each end of the body left out of the interior error norms (ErrorNorms),
-int boundary_cells(const BasisKind& basis);
-// and the name and B-spline degree (0 for the others) reported in summary.json.
-std::string_view basis_name(const BasisKind& basis);
-int basis_degree(const BasisKind& basis);
-// The stability factor of the bases on triangles (p1_triangles, powell_sabin) with h the
-// smallest altitude of the triangles (a mesh from a file: TriangleMesh::min_altitude).
-double altitude_stability_factor(const BasisKind& basis);
 
 }  // namespace driver
 }  // namespace mpm

@@ -12,11 +12,11 @@
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
 #include "mapping/mapping.hpp"
-#include "scheme/distribution.hpp"
+#include "parallel/distribution.hpp"
 #include "scheme/partial_lumping.hpp"
 #include "scheme/schemes.hpp"
-#include "scheme/sort.hpp"
 #include "setup/run_settings.hpp"
+#include "state/sort.hpp"
 
 namespace mpm::driver {
 

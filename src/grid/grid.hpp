@@ -72,7 +72,7 @@ struct Grid {
     return idx;
   }
   // x's cell layer along the last axis, -1 outside the grid: what the slabs of a distributed run
-  // cut (scheme/distribution.hpp; SeedScope, model/problem.hpp, seeds by it).
+  // cut (parallel/distribution.hpp; SeedScope, model/problem.hpp, seeds by it).
   Index last_layer(const Vec<Dim>& x) const {
     return inside(x) ? cell_of(x[Dim - 1], Dim - 1) : Index{-1};
   }

@@ -22,7 +22,7 @@
 //     kStateNames.size() values per particle, version 8), i64[] id (version 3: the stable ids in
 //     the stored order, which re-sorting may have changed),
 //   i64[] cell of each particle at the last basis evaluation,
-//   version 3: i64 re-sorting reference span (-1: none), i64 sorts so far (scheme/sort.hpp),
+//   version 3: i64 re-sorting reference span (-1: none), i64 sorts so far (state/sort.hpp),
 //   diagnostics: f64 max_rel_mass_error, f64 max_rel_momentum_error, i64 grid_crossings,
 //   u8 FEM state present; if 1: f64[] node x, f64[] node v, f64[] node body, the element
 //     particles (as above), f64 time, f64 time_anchor, f64 last_dt, i64 steps,
@@ -53,10 +53,10 @@
 #include <string_view>
 #include <vector>
 
+#include "methods/ulfem.hpp"
 #include "particles/particles.hpp"
-#include "scheme/diagnostics.hpp"
 #include "setup/config.hpp"
-#include "solver/ulfem.hpp"
+#include "state/diagnostics.hpp"
 
 namespace mpm::io {
 

@@ -18,7 +18,7 @@
 
 #include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 

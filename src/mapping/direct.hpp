@@ -4,7 +4,7 @@
 #include <string_view>
 
 #include "mapping/mapping.hpp"
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 

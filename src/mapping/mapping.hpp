@@ -16,13 +16,13 @@
 //   kStrainRates   strain_rates(sim): the mapping may define the particles' velocity
 //                  gradients for the stress update (TLS's adjoint rate), which it writes to
 //                  RunState::mapped_gradient (stages::mapped_strain_rates)
-// Mappings hold no per-particle state, so re-sorting the particles (scheme/sort.hpp) needs
+// Mappings hold no per-particle state, so re-sorting the particles (state/sort.hpp) needs
 // nothing from them.
 #include <concepts>
 #include <string>
 #include <string_view>
 
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 

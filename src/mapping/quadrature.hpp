@@ -1,5 +1,5 @@
 #pragma once
-// Gauss-Legendre rules and per-step bookkeeping shared by the reconstruction mappings
+// Per-step bookkeeping shared by the reconstruction mappings
 // (D 3.2.2: Gauss quadrature; 5.3.1: element-wise integration of the reconstructions).
 #include <Eigen/Core>
 #include <algorithm>
@@ -10,18 +10,11 @@
 #include <stdexcept>
 #include <vector>
 
+#include "basis/gauss_legendre.hpp"
 #include "core/parallel.hpp"
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
-
-// n-point Gauss-Legendre rule on [-1, 1], exact for polynomials of degree 2n - 1, from the
-// Golub-Welsch eigenvalue problem of the Jacobi matrix (nodes ascending).
-struct GaussRule {
-  std::vector<double> xi, w;
-};
-
-GaussRule gauss_legendre(int n);  // quadrature.cpp
 
 // Particles grouped by the grid cell (element, knot span) containing them: a counting sort,
 // O(particles + cells) per step, no allocation after the first step. The cell of each point

@@ -35,7 +35,7 @@
 #include "mapping/mapping.hpp"
 #include "mapping/quadrature.hpp"
 #include "mapping/tls_triangle.hpp"
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 

@@ -9,7 +9,7 @@
 #include "basis/gimp.hpp"
 #include "core/bytes.hpp"
 #include "mapping/tls.hpp"
-#include "scheme/distribution.hpp"
+#include "parallel/distribution.hpp"
 
 namespace mpm {
 

@@ -76,7 +76,7 @@ class MaterialState {
     if (width() > 0) std::memcpy(values_.data() + n_ * width(), bytes, row_bytes());
     ++n_;
   }
-  // Row k becomes the old row order[k] (sorting: scheme/sort.hpp), through `scratch`.
+  // Row k becomes the old row order[k] (sorting: state/sort.hpp), through `scratch`.
   template <class Order>
   void permute(const Order& order, std::vector<double>& scratch) {
     if (width() == 0) return;

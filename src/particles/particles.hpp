@@ -30,7 +30,7 @@ struct Particles {
   // The material's internal variables, a row per particle (none for an elastic law; named by
   // the law's kStateNames: set_names when the run starts).
   MaterialState state;
-  // Stable id: the particle's index when it was created. Re-sorting (scheme/sort.hpp) moves the
+  // Stable id: the particle's index when it was created. Re-sorting (state/sort.hpp) moves the
   // particles in memory; outputs list them in id order and error messages name the id.
   std::vector<CompactIndex> id;
 

@@ -14,7 +14,7 @@
 
 #include "core/parallel.hpp"
 #include "grid/triangle_mesh.hpp"
-#include "scheme/distributed_pmg.hpp"
+#include "parallel/distributed_pmg.hpp"
 #include "scheme/stages.hpp"
 
 namespace mpm::stages {

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "mapping/quadrature.hpp"
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "core/parallel.hpp"
-#include "scheme/distribution.hpp"
-#include "scheme/simulation.hpp"
+#include "parallel/distribution.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 class TriangleMesh;  // grid/triangle_mesh.hpp
@@ -50,7 +50,7 @@ template <int Dim>
 // Particle i's F, V, rho and stress from the velocity-gradient increment dt L (D eq. 2.40-2.43):
 // F = (I + dt L) F, V = det F V0 (so rho = m / V), sigma and the law's internal variables by
 // the law. True when the particle failed
-// (det F <= 0 or a non-finite stress). Shared by the MPM stages and OTM (solver/otm.cpp).
+// (det F <= 0 or a non-finite stress). Shared by the MPM stages and OTM (methods/otm.cpp).
 template <int Dim, class Law>
 inline bool deform_particle(Particles<Dim>& P, std::size_t i, const Mat<Dim>& dtL, const Law& law) {
   P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
@@ -232,7 +232,7 @@ void after_forces(BasisState<Dim, B>& sim) {
 // For the sums of a mapping that reads the particles of neighbouring cells (kGhostParticles:
 // TLS's completions, free-surface test and domain integrals) in a distributed run: the other
 // processes' particles within the mapping's reach (ghost_reach, in cell layers, the largest of
-// any process) are appended to this process's while the object lives (scheme/distribution.hpp).
+// any process) are appended to this process's while the object lives (parallel/distribution.hpp).
 // Fresh copies for every sum: the particles' velocities and stresses change between them.
 template <class Sim>
 class GhostParticles {

@@ -379,7 +379,7 @@ std::vector<KeySpec> declare() {
       integer("output.checkpoint_every", 0, at_least(0),
               "write the complete state to checkpoint.bin every N steps, replacing the previous "
               "one, for `mpm run --restart` (0: never)"),
-      // Distributed runs (mpirun; scheme/distribution.hpp).
+      // Distributed runs (mpirun; parallel/distribution.hpp).
       real("parallel.rebalance", "", 0.25, at_least(0),
            "a run on several processes cuts its slabs anew when the most loaded process holds "
            "this fraction more particles than the mean (0: never)"),

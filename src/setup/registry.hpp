@@ -10,7 +10,7 @@
 #include <variant>
 
 #include "material/materials.hpp"
-#include "scheme/variants.hpp"
+#include "methods/kinds.hpp"
 
 namespace mpm::registry {
 
@@ -177,7 +177,7 @@ inline constexpr Entry kVtkFormats[] = {
     {"ascii", "text, 17 significant digits (readable, about 3x larger)"},
 };
 
-// method.sort: re-sorting the particles by cell between steps (scheme/sort.hpp).
+// method.sort: re-sorting the particles by cell between steps (state/sort.hpp).
 inline constexpr Entry kTrianglePatterns[] = {
     {"right", "each cell split along its diagonal from the lower-left corner (2 triangles)"},
     {"criss_cross", "each cell split by both diagonals at a centre vertex (4 triangles)"},

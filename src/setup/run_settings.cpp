@@ -13,10 +13,6 @@
 namespace mpm {
 namespace {
 
-int basis_degree_of(const BasisKind& k) {
-  return std::visit([](const auto& kind) { return std::decay_t<decltype(kind)>::kDegree; }, k);
-}
-
 // A basis kind matches by name and, for B-splines, by degree (method.degree).
 template <std::size_t I = 0>
 BasisKind choose_basis(std::string_view name, int degree) {
@@ -104,8 +100,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
     const TrianglePattern pattern = cfg.get_string("method.triangles") == "criss_cross"
                                         ? TrianglePattern::criss_cross
                                         : TrianglePattern::right;
-    if (auto* k = std::get_if<TriangleP1Kind>(&m.basis)) k->pattern = pattern;
-    if (auto* k = std::get_if<PowellSabinKind>(&m.basis)) k->pattern = pattern;
+    set_triangle_pattern(m.basis, pattern);
     if (auto* k = std::get_if<MaxEntKind>(&m.basis)) {
       k->settings.dmax = cfg.get_real("method.maxent_dmax");
       k->settings.tolerance = cfg.get_real("method.maxent_tolerance");
@@ -133,7 +128,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
     if (!together)
       throw InputError(fmt::format(
           "{}: method.mapping = \"{}\" is not available with method.basis = \"{}\"; the {} "
-          "basis runs with the direct mapping only (scheme/variants.hpp, docs/verification.md)",
+          "basis runs with the direct mapping only (methods/kinds.hpp, docs/verification.md)",
           m.where_mapping, name_of(m.mapping), name_of(m.basis), name_of(m.basis)));
   }
   s.time = time_settings(cfg);
@@ -176,7 +171,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
           "method.mass = \"lumped\" (a diagonal: nothing to solve): set method.mass = "
           "\"consistent\" or remove method.mass_solver",
           cfg.where("method.mass_solver"), solver));
-    if (ms.kind == MassSolver::Pmg && (m.solver != Solver::Mpm || basis_degree_of(m.basis) == 0))
+    if (ms.kind == MassSolver::Pmg && (m.solver != Solver::Mpm || basis_degree(m.basis) == 0))
       throw InputError(fmt::format(
           "{}: method.mass_solver = \"pmg\" runs over the degrees of a B-spline basis on the "
           "grid: method.solver = \"mpm\" with method.basis = \"bspline\" (this run: solver "
@@ -191,8 +186,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
                            : configured_mapping<3>(m.mapping, cfg);
   if (auto* tls = std::get_if<TlsMapping>(&m.mapping); tls && m.solver == Solver::Mpm) {
     // The completions differ between the grid's rectangles and triangles (mapping/tls.hpp).
-    const bool triangles = std::holds_alternative<TriangleP1Kind>(m.basis) ||
-                           std::holds_alternative<PowellSabinKind>(m.basis);
+    const bool triangles = on_triangles(m.basis);
     TlsSettings ts = tls->settings();
     const std::string completion = cfg.get_string("method.tls_completion");
     const bool triangle_only =
@@ -245,7 +239,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
     // oscillation among the highest modes of the consistent matrix, at loads that fall with the
     // cell size; lumped mass, P1-TLS and the direct mapping stay neutral (docs/verification.md,
     // "PS-MPM with partially filled elements": the growing mode).
-    const int degree = basis_degree_of(m.basis);
+    const int degree = basis_degree(m.basis);
     if (!triangles && dim >= 2 && degree >= 2 && m.mass == MassType::Consistent &&
         !cfg.get_bool("method.allow_unstable"))
       throw InputError(fmt::format(
@@ -261,15 +255,14 @@ RunSettings run_settings(const Config& cfg, int dim) {
   if (m.solver == Solver::Otm) {
     // OTM's update x_p = sum phi_i x_i needs consistent bases (D eq. 4.14-4.16), and it
     // integrates at the material points (D Algorithm 3).
-    if (!std::holds_alternative<LinearKind>(m.basis) &&
-        !std::holds_alternative<MaxEntKind>(m.basis))
+    if (!otm_nodes(m.basis))
       throw InputError(fmt::format(
           "{}: method.solver = \"otm\" needs a basis with partition of unity and linear "
-          "completeness on its advected nodes (D eq. 4.15-4.16): method.basis = \"linear\" or "
-          "\"maxent\", not \"{}\"",
-          m.where_basis, name_of(m.basis)));
+          "completeness on its advected nodes (D eq. 4.15-4.16): method.basis = {}, not \"{}\"",
+          m.where_basis, basis_names_where([](const auto& k) { return k.kOtmNodes; }),
+          name_of(m.basis)));
   }
-  if (m.solver == Solver::Unified && basis_degree_of(m.basis) == 0)
+  if (m.solver == Solver::Unified && basis_degree(m.basis) == 0)
     throw InputError(fmt::format(
         "{}: method.solver = \"unified\" runs B-splines on advected degrees of freedom (D "
         "Algorithm 4): method.basis = \"bspline\" (method.degree 1-5), not \"{}\"",

@@ -6,8 +6,8 @@
 #include <string>
 
 #include "material/materials.hpp"
-#include "scheme/simulation.hpp"
-#include "scheme/variants.hpp"
+#include "methods/kinds.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 
@@ -50,7 +50,7 @@ struct MethodSettings {
   std::string where_solver, where_basis, where_mapping, where_tls_completion, where_mass;
 };
 
-// parallel.*: a run on several processes (RunOptions::comm; scheme/distribution.hpp).
+// parallel.*: a run on several processes (RunOptions::comm; parallel/distribution.hpp).
 struct ParallelSettings {
   // Re-cut the slabs when max particles per process / mean - 1 exceeds this (0: never).
   double rebalance = 0.25;

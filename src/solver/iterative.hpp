@@ -75,7 +75,7 @@ struct PmgSettings {
 // One level of the cycle through its operations on the level's vectors. A matrix hierarchy
 // (PMultigrid) binds them to its matrices; a distributed run to each process's part of the
 // level's matrices, summed over the processes that share a function, and to inner products over
-// the functions each process owns (scheme/distributed_pmg.hpp).
+// the functions each process owns (parallel/distributed_pmg.hpp).
 struct PmgLevelOps {
   Index size = 0;
   LinearOperator A;            // y = A x
@@ -150,7 +150,7 @@ PMultigrid spline_pmg(const Grid<Dim>& g, int p, const PointSet<Dim>& pts,
 
 // Whether function i of a tensor grid of n[d] functions per direction (x fastest) lies on one of
 // the sides (direction, side 0: lower / 1: upper): a coarse level leaves these out (spline_pmg,
-// scheme/distributed_pmg.cpp).
+// parallel/distributed_pmg.cpp).
 template <int Dim>
 bool on_spline_side(Index i, const IVec<Dim>& n, const std::vector<std::pair<int, int>>& sides) {
   for (int d = 0; d < Dim; ++d) {

@@ -7,7 +7,7 @@
 #include <type_traits>
 
 #include "basis/bspline.hpp"
-#include "mapping/quadrature.hpp"
+#include "basis/gauss_legendre.hpp"
 
 namespace mpm {
 

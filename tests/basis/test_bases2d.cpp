@@ -23,8 +23,8 @@
 #include "basis/gimp.hpp"
 #include "basis/linear.hpp"
 #include "io/checkpoint.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {
@@ -655,7 +655,7 @@ TEST(Ddmpm2D, InteriorNodeGradientsAreParticleSums) {
 // Each basis reproduces constants, so L = sum v grad phi_i = 0 while every node the body touches
 // carries mass; CPDI2's corners move with the body.
 void rigid_translation_2d(const BasisKind& basis) {
-  const std::string_view name = driver::basis_name(basis);
+  const std::string_view name = basis_name(basis);
   SCOPED_TRACE(name);
   Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.2), IVec<2>{8, 6});
   auto P = seed_particles<2>(g, Vec<2>(0.3, 0.35), Vec<2>(0.6, 0.8), 2, 1000.0);

@@ -20,8 +20,8 @@
 #include "basis/ddmpm.hpp"
 #include "basis/gimp.hpp"
 #include "basis/linear.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {
@@ -157,7 +157,7 @@ TEST(Bases3D, CpGimpAndCpdiProperties) {
 
 // CPDI domains that pass the grid's sides are clipped: their corners are clamped onto the sides
 // and the domain is the trilinear hexahedron of the clamped corners (basis/cpdi.hpp,
-// detail::hex_corner_weights, 2 x 2 x 2 Gauss, exact for its polynomials). Unclipped, that
+// hex_corner_weights, 2 x 2 x 2 Gauss, exact for its polynomials). Unclipped, that
 // construction gives the parallelepiped's closed form (wq_c = 1/8, gq_c = J^-T xi_c / 8);
 // clipped, the basis keeps partition of unity, the zero gradient sum and sum x_i grad^T = I,
 // with sum w_i x_i the clipped domain's centroid sum_c wq_c x_c.
@@ -172,7 +172,7 @@ TEST(Bases3D, CpdiClippedAtTheGridSides) {
   }
   std::array<double, 8> wq;
   std::array<Vec<3>, 8> gq;
-  ASSERT_TRUE(detail::hex_corner_weights(x, wq, gq));
+  ASSERT_TRUE(hex_corner_weights(x, wq, gq));
   const Mat<3> JinvT = J.inverse().transpose();
   for (std::size_t c = 0; c < 8; ++c) {
     const Vec<3> sc(((c >> 0) & 1) ? 1.0 : -1.0, ((c >> 1) & 1) ? 1.0 : -1.0,
@@ -201,7 +201,7 @@ TEST(Bases3D, CpdiClippedAtTheGridSides) {
     if (!was_clipped) continue;
     ASSERT_TRUE(cpdi.fits(P, 0)) << xp.transpose();
     ++clipped;
-    ASSERT_TRUE(detail::hex_corner_weights(corners, wq, gq));
+    ASSERT_TRUE(hex_corner_weights(corners, wq, gq));
     Vec<3> centroid = Vec<3>::Zero();
     for (std::size_t c = 0; c < 8; ++c) centroid += wq[c] * corners[c];
     CpdiBasis<3>::StencilT s;
@@ -296,12 +296,12 @@ TEST(Bases3D, RigidTranslationWithEveryBasis) {
   ASSERT_EQ(kinds.size(), 10u);  // linear, uGIMP, cpGIMP, CPDI, B-splines of degree 1-5, DDMPM
   for (const BasisKind& basis : kinds)
     for (const Scheme& scheme : {Scheme(Musl{}), Scheme(Usl{}), Scheme(Usf{}), Scheme(Usavg{})}) {
-      const int degree = driver::basis_degree(basis);
+      const int degree = basis_degree(basis);
       const bool every_scheme = std::holds_alternative<LinearKind>(basis) || degree == 2;
       const bool c1 = degree >= 2 || std::holds_alternative<UGimpKind>(basis) ||
                       std::holds_alternative<CpGimpKind>(basis);
       if (!every_scheme && !std::holds_alternative<Musl>(scheme)) continue;
-      SCOPED_TRACE(std::string(driver::basis_name(basis)) + " degree " + std::to_string(degree) +
+      SCOPED_TRACE(std::string(basis_name(basis)) + " degree " + std::to_string(degree) +
                    " scheme " + std::to_string(scheme.index()));
       auto P = P0;
       for (auto& v : P.v) v = vel;

@@ -15,8 +15,8 @@
 
 #include "../support/stepper.hpp"
 #include "basis/maxent.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
 #include "setup/config.hpp"
 #include "setup/run_settings.hpp"
 
@@ -324,7 +324,7 @@ TEST(MaxEnt, RigidTranslationConservesMassAndMomentum) {
   }
 }
 
-// Max-ent with a reconstruction mapping is refused naming the key (scheme/variants.hpp).
+// Max-ent with a reconstruction mapping is refused naming the key (methods/kinds.hpp).
 TEST(MaxEnt, ReconstructionMappingsAreRefused) {
   const std::string base = R"(benchmark = "mms_1d"
 [time]

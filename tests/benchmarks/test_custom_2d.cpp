@@ -19,8 +19,8 @@
 #include "benchmarks/benchmarks.hpp"
 #include "driver/run.hpp"
 #include "driver/stepper.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {

@@ -21,7 +21,7 @@
 #include "benchmarks/benchmarks.hpp"
 #include "grid/grid_state.hpp"
 #include "model/problem.hpp"
-#include "scheme/distribution.hpp"
+#include "parallel/distribution.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {

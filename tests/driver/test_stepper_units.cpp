@@ -10,6 +10,7 @@
 #include "core/types.hpp"
 #include "driver/stepper.hpp"
 #include "model/problem.hpp"
+#include "mpm/stepper_units.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {
@@ -26,8 +27,8 @@ void check_units() {
                                 : Material(NeoHookean{ElasticParameters{1000.0, 1e6, 0.3}});
   int compiled = 0, refused = 0;
   for (const BasisKind& kind : test::basis_kinds<Dim>()) {
-    SCOPED_TRACE(::testing::Message() << Dim << "D, basis kind " << kind.index() << " ("
-                                      << driver::basis_name(kind) << ")");
+    SCOPED_TRACE(::testing::Message()
+                 << Dim << "D, basis kind " << kind.index() << " (" << basis_name(kind) << ")");
     const test::StepperSpec<Dim> spec{.grid = g, .particles = P, .material = law, .basis = kind};
     if (driver::stepper_compiled(Dim, kind.index())) {
       auto stepper = test::compiled_stepper<Dim>(spec);
@@ -42,6 +43,10 @@ void check_units() {
       } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("MPM_STEPPERS_" + std::to_string(Dim) + "D"),
                   std::string::npos)
+            << e.what();
+        // The unit by its name in CMakeLists.txt's list (MPM_BASIS_KIND_UNITS), not a position.
+        const std::string unit(driver::kStepperUnitNames[kind.index()]);
+        EXPECT_NE(std::string(e.what()).find("leaving out \"" + unit + "\""), std::string::npos)
             << e.what();
       }
       ++refused;

@@ -19,8 +19,8 @@
 #include "basis/bases.hpp"
 #include "core/parallel.hpp"
 #include "mapping/mls.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {

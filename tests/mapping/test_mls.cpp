@@ -13,8 +13,8 @@
 #include "basis/linear.hpp"
 #include "mapping/mls.hpp"
 #include "material/materials.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {

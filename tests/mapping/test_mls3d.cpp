@@ -116,9 +116,8 @@ TEST(MlsMapping3d, ConservativeVariantConservesMassAndMomentum) {
   for (const BasisKind& basis : {BasisKind(LinearKind{}), BasisKind(BSplineKind<2>{})})
     for (bool improved : {false, true})
       for (bool conservative : {false, true}) {
-        SCOPED_TRACE(fmt::format("{} degree {}, {}{}", driver::basis_name(basis),
-                                 driver::basis_degree(basis), improved ? "IMLS" : "MLS",
-                                 conservative ? ", conservative" : ""));
+        SCOPED_TRACE(fmt::format("{} degree {}, {}{}", basis_name(basis), basis_degree(basis),
+                                 improved ? "IMLS" : "MLS", conservative ? ", conservative" : ""));
         MlsSettings s;
         s.conservative = conservative;
         MappingKind mapping = improved ? MappingKind(ImlsMapping(s)) : MappingKind(MlsMapping(s));

@@ -488,7 +488,7 @@ TEST(TlsMapping, RunsWithEveryBasis) {
   EXPECT_EQ(kinds.size(), 10u);
   for (const BasisKind& basis : kinds)
     for (const Scheme scheme : {Scheme(Musl{}), Scheme(Usavg{})}) {
-      SCOPED_TRACE(fmt::format("{} {}", driver::basis_name(basis), driver::basis_degree(basis)));
+      SCOPED_TRACE(fmt::format("{} {}", basis_name(basis), basis_degree(basis)));
       auto stepper = test::compiled_stepper<1>({.grid = g,
                                                 .particles = P,
                                                 .material = test_material(),

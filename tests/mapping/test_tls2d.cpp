@@ -672,7 +672,7 @@ TEST(TlsMapping2D, ConservesMassAndMomentumBSplineConsistent) {
 // A small elastic body (edges cutting cells, a swirling initial velocity) stepped 40 times with
 // MUSL: mass and momentum of the mapping conserved to round-off in every step (D Table 6.1).
 void run_musl(const BasisKind& basis, int steps, TlsCompletion mode = TlsCompletion::Virtual) {
-  SCOPED_TRACE(fmt::format("{} degree {}", driver::basis_name(basis), driver::basis_degree(basis)));
+  SCOPED_TRACE(fmt::format("{} degree {}", basis_name(basis), basis_degree(basis)));
   const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{8, 8});
   auto P = seed_particles<2>(g, Vec<2>(0.3, 0.27), Vec<2>(0.72, 0.7), 3, 1000.0);
   for (std::size_t i = 0; i < P.x.size(); ++i) {

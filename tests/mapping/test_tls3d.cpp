@@ -371,7 +371,7 @@ TEST(TlsMapping3D, MuslStepsConserveMassAndMomentum) {
                         Case{BSplineKind<2>{}, MassType::Lumped, TlsCompletion::Reduce},
                         Case{BSplineKind<2>{}, MassType::Lumped, TlsCompletion::Virtual}}) {
     SCOPED_TRACE(fmt::format(
-        "{} degree {}, {} mass, {}", driver::basis_name(c.basis), driver::basis_degree(c.basis),
+        "{} degree {}, {} mass, {}", basis_name(c.basis), basis_degree(c.basis),
         c.mass == MassType::Lumped ? "lumped" : "consistent", tls_completion_name(c.completion)));
     TlsSettings s;
     s.completion = c.completion;

@@ -18,7 +18,7 @@
 #include "io/output.hpp"
 #include "material/materials.hpp"
 #include "particles/particles.hpp"
-#include "scheme/sort.hpp"
+#include "state/sort.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {

@@ -4,8 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "../support/stepper.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {

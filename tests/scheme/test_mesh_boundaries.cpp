@@ -1,5 +1,5 @@
 // Conditions and loads on the named boundaries of a mesh file (benchmarks/custom.cpp,
-// scheme/simulation.hpp, model/loads.hpp): a roller on an inclined boundary (v . n = 0, which
+// state/simulation.hpp, model/loads.hpp): a roller on an inclined boundary (v . n = 0, which
 // couples the velocity components) gives the rotated run of the same roller parallel to an
 // axis, for lumped and consistent mass, P1 and Powell-Sabin; rollers that meet at an angle fix
 // their corner; a loaded boundary adds exactly its force to the body's momentum; a loaded point

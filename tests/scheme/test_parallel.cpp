@@ -17,8 +17,8 @@
 #include "../support/threads.hpp"
 #include "core/parallel.hpp"
 #include "driver/run.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
-#include "scheme/variants.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {

@@ -13,7 +13,7 @@
 #include "app/perf.hpp"
 #include "basis/bases.hpp"
 #include "driver/run.hpp"
-#include "scheme/variants.hpp"
+#include "methods/kinds.hpp"
 #include "setup/config.hpp"
 
 namespace mpm {

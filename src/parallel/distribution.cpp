@@ -1,4 +1,4 @@
-#include "scheme/distribution.hpp"
+#include "parallel/distribution.hpp"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-// OTM in 1D (src/solver/otm.hpp, D Algorithm 3): its first step equals that of USL-MPM with P1
+// OTM in 1D (src/methods/otm.hpp, D Algorithm 3): its first step equals that of USL-MPM with P1
 // and consistent mass under the conditions of D 4.4 (constant time step, linear completeness),
 // which also fixes the sign of the internal force (D eq. 4.30 prints +grad phi sigma); momentum
 // conserved to round-off on a free bar with P1 and max-ent; the advected nodes carry the
@@ -14,10 +14,10 @@
 #include "benchmarks/benchmarks.hpp"
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
+#include "methods/otm.hpp"
 #include "model/problem.hpp"
 #include "setup/config.hpp"
 #include "setup/run_settings.hpp"
-#include "solver/otm.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {
@@ -233,7 +233,7 @@ TEST(Unified, QuadraticConservesMomentumAndFollowsItsMap) {
   }
 }
 
-// A traction acts on the loaded end node (solver/otm.cpp): on a bar with no fixed end the total
+// A traction acts on the loaded end node (methods/otm.cpp): on a bar with no fixed end the total
 // momentum grows by dt sum_s tau(t^s) to round-off, with OTM (P1, max-ent) and the unified
 // approach. The bar is the traction bar's, in its 1.25 m grid (the nodes cover the bar only).
 TEST(Otm, TractionImpulseOnAFreeBar) {

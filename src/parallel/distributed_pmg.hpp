@@ -1,7 +1,7 @@
 #pragma once
 // p-multigrid for consistent mass on distributed vectors (004 sections 4.6-4.7): the
 // cycle of solver/iterative.hpp (pmg_cycles) on operators each process applies with the matrices
-// of its own particles, summed over the processes that share a function (scheme/dof_sharing.hpp),
+// of its own particles, summed over the processes that share a function (state/dof_sharing.hpp),
 // the way the distributed CG applies the mass matrix (scheme/grid_stages.cpp).
 //
 // The hierarchy is the one process's (spline_pmg): the fine level is the matrix the mapping
@@ -22,8 +22,8 @@
 #include <utility>
 #include <vector>
 
-#include "scheme/simulation.hpp"
 #include "solver/iterative.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 

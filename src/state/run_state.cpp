@@ -1,4 +1,4 @@
-// RunState's per-run set-up of velocity conditions (scheme/simulation.hpp), compiled once per
+// RunState's per-run set-up of velocity conditions (state/simulation.hpp), compiled once per
 // dimension here rather than in every stepper unit.
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "scheme/simulation.hpp"
+#include "state/run_state.hpp"
 
 namespace mpm {
 
@@ -62,21 +62,21 @@ void RunState<Dim>::constrain(const std::vector<Index>& dofs, const Mat<Dim>& c)
 
 template <int Dim>
 void RunState<Dim>::fit_dof_window() {
-  if (comm == nullptr) return;
-  const auto [lo, hi] = scatter.ranges.span();
+  if (this->comm == nullptr) return;
+  const auto [lo, hi] = this->scatter.ranges.span();
   if (lo > hi) {  // no particle: nothing is summed here
-    nodes.set_window(0, 0);
+    this->nodes.set_window(0, 0);
     return;
   }
-  const Index n = nodes.size();
+  const Index n = this->nodes.size();
   // The DOFs of one layer of grid vertices across the cuts (rounded up): a B-spline's DOFs per
   // layer, a triangle basis's corners and centres of a row of cells.
-  const Index cuts = grid.cells[Dim - 1] + 1;
+  const Index cuts = this->grid.cells[Dim - 1] + 1;
   const Index layer = (n + cuts - 1) / cuts;
-  const auto [first, end] = nodes.window();
+  const auto [first, end] = this->nodes.window();
   const bool covers = first <= std::max<Index>(0, lo - layer) && std::min(n, hi + 1 + layer) <= end;
   if (covers && end - first <= hi + 1 - lo + 8 * layer) return;
-  nodes.set_window(std::max<Index>(0, lo - 2 * layer), std::min(n, hi + 1 + 2 * layer));
+  this->nodes.set_window(std::max<Index>(0, lo - 2 * layer), std::min(n, hi + 1 + 2 * layer));
 }
 
 template struct RunState<1>;

@@ -3,7 +3,7 @@
 // holds the functions its particles touch, a range [lo, hi] of the grid's numbering, and adds
 // its partial particle-to-grid sums to those of the processes whose ranges overlap it. Used for
 // the grid sums (stages::share_grid_sums) and for the matrix-free operators of the
-// distributed mass solvers (CG, p-multigrid: scheme/distributed_pmg.hpp), whose levels have
+// distributed mass solvers (CG, p-multigrid: parallel/distributed_pmg.hpp), whose levels have
 // their own numbering and ranges.
 #include <algorithm>
 #include <array>

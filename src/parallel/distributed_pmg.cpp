@@ -1,5 +1,5 @@
-// p-multigrid on distributed vectors (scheme/distributed_pmg.hpp; 004 section 4.7).
-#include "scheme/distributed_pmg.hpp"
+// p-multigrid on distributed vectors (parallel/distributed_pmg.hpp; 004 section 4.7).
+#include "parallel/distributed_pmg.hpp"
 
 #include <algorithm>
 #include <cmath>

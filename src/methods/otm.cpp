@@ -1,5 +1,5 @@
-// OTM and the unified approach, 1D and 2D (solver/otm.hpp; D Algorithms 3 and 4).
-#include "solver/otm.hpp"
+// OTM and the unified approach, 1D and 2D (methods/otm.hpp; D Algorithms 3 and 4).
+#include "methods/otm.hpp"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-// The 1D updated-Lagrangian FEM reference (src/solver/ulfem.hpp) on the 1D benchmarks: the
+// The 1D updated-Lagrangian FEM reference (src/methods/ulfem.hpp) on the 1D benchmarks: the
 // small-deformation vibrating bar against its exact solution (D Table 3.1 set 2), energy
 // behaviour of Euler-Cromer (D 2.3.2), self-convergence on the large-deformation bar with the
 // 120 degrees of freedom of D 5.4.1, the traction bar against D eq. 4.93, body forces, failure
@@ -11,9 +11,9 @@
 #include <string>
 
 #include "benchmarks/benchmarks.hpp"
+#include "methods/ulfem.hpp"
 #include "model/problem.hpp"
 #include "setup/config.hpp"
-#include "solver/ulfem.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {

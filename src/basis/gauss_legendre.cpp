@@ -1,6 +1,7 @@
-#include "mapping/quadrature.hpp"
+#include "basis/gauss_legendre.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <cmath>
 
 namespace mpm {
 

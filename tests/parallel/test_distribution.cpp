@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "core/comm.hpp"
-#include "scheme/distribution.hpp"
-#include "scheme/simulation.hpp"
+#include "parallel/distribution.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {

@@ -31,7 +31,7 @@
 
 #include "basis/maxent_settings.hpp"
 #include "model/problem.hpp"
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "core/comm.hpp"
-#include "scheme/simulation.hpp"
+#include "state/simulation.hpp"
 
 namespace mpm {
 

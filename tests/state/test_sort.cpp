@@ -1,4 +1,4 @@
-// Re-sorting the particles by cell (scheme/sort.hpp): a run started from shuffled particles and
+// Re-sorting the particles by cell (state/sort.hpp): a run started from shuffled particles and
 // re-sorted gives the seeded run's results per particle id to round-off; sorting puts the
 // particles in cell order and shrinks the chunks' DOF spans; 1 and 2 threads stay bitwise
 // identical; a restart across a sort stays bitwise identical; method.sort is validated.
@@ -26,11 +26,11 @@
 #include "core/parallel.hpp"
 #include "driver/run.hpp"
 #include "io/checkpoint.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
 #include "scheme/schemes.hpp"
-#include "scheme/sort.hpp"
-#include "scheme/variants.hpp"
 #include "setup/config.hpp"
+#include "state/sort.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {

@@ -1,4 +1,4 @@
-// p-multigrid on distributed vectors (scheme/distributed_pmg.hpp, issue 21) on one process,
+// p-multigrid on distributed vectors (parallel/distributed_pmg.hpp, issue 21) on one process,
 // where its sums over the processes are plain copies: it must be the matrix hierarchy of
 // spline_pmg with Jacobi smoothing (the same kept functions, transfers, damping and cycles), so
 // that on several processes it differs from one process by round-off alone (checked under mpirun
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/comm.hpp"
-#include "scheme/distributed_pmg.hpp"
+#include "parallel/distributed_pmg.hpp"
 #include "solver/spline_matrices.hpp"
 
 namespace mpm {

@@ -1,4 +1,4 @@
-#include "solver/ulfem.hpp"
+#include "methods/ulfem.hpp"
 
 #include <fmt/format.h>
 
