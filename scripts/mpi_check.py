@@ -52,6 +52,13 @@ THROWN_BAR = ["grid.max=2.0", "grid.cells=40", "body.max=0.5", "initial.velocity
               "boundary.left=free", "loading.body_force=0", "time.end=0.02",
               "method.basis=bspline", "method.degree=2"]
 
+# A free block of the custom plate's material model tracked_elastic (two internal variables per
+# particle) thrown up through the grid, so that every particle crosses cuts.
+TRACKED_BLOCK = ["grid.max=[0.2, 2.0]", "body.max=[0.2, 0.5]", 'boundary.bottom="free"',
+                 'initial.velocity=["0", "40+5*sin(2*pi*y)"]', 'loading.body_force=["0", "0"]',
+                 'material.model="tracked_elastic"', "method.basis=bspline", "time.end=0.02",
+                 "output.frames=2"]
+
 # Cases whose processes may hold every DOF in their grid window: max-ent's 6 nodes per direction
 # with the window's margins cover the 9 DOF layers of the 8-cell plate, and the criss-cross
 # triangles number the cells' centres after the corners, so a slab's DOFs span both blocks. (A
@@ -199,6 +206,9 @@ CASES = [
      ["time.end=0.05", "method.basis=bspline", "body.max=[0.15, 1.0]",
       'traction.right=["0", "2e4*min(t/T, 1)"]', 'pressure.top="1e4*min(t/T, 1)"',
       "output.frames=1"], "none"),
+    # A material with internal variables (material/tracked_elastic.hpp): a block thrown up
+    # across the cuts, its particles' state migrating with them and written in the frames.
+    ("2d_custom_thrown_tracked_elastic", "examples/custom_plate_2d.toml", TRACKED_BLOCK, "any"),
     # The bases on the grid's triangles with the direct mapping: P1 on criss-cross triangles
     # (whose centre DOFs follow the corners'), Powell-Sabin on right triangles.
     ("2d_plate_p1_triangles_criss_cross", "examples/plate_triangles_2d.toml",
@@ -552,6 +562,8 @@ def last_frame(d):
 # and out of it, and the mapping's run totals continue. The plate with tractions: the loaded
 # points find their particles again by id on any number of processes.
 RESTARTS = [
+    ("material state", "examples/custom_plate_2d.toml",
+     TRACKED_BLOCK + ["output.checkpoint_every=20"], "0.01", "0.02"),
     ("CPDI2 with TLS", "examples/vortex_2d.toml",
      ["grid.cells=16", "time.dt=2e-3", "output.frames=2", "output.checkpoint_every=50",
       "method.basis=cpdi2", "method.mapping=tls"], "0.2", "0.26"),

@@ -13,10 +13,12 @@
 #include "material/law.hpp"
 #include "material/linear_elastic.hpp"
 #include "material/neo_hookean.hpp"
+#include "material/tracked_elastic.hpp"
 
 namespace mpm {
 
-using Material = std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean>;
+using Material =
+    std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean, TrackedElastic>;
 
 // Every law of the list satisfies the concept in each dimension it supports (a law that does
 // not declare what is asked of it does not compile).
