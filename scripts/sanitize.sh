@@ -5,10 +5,10 @@
 #
 # clang, not g++: on this 2-core machine clang at -O0 with the sanitizers compiled a stepper
 # unit in 12.6 s against 30.4 s for g++ (the same flags), the whole tree in about 7 minutes
-# against 12, and the instrumented tests ran in 235 s against about 500 s (BENCHMARKS.md, "CI").
+# against 12, and the instrumented tests ran in 235 s against about 500 s.
 # No debug information by default: line tables (-gline-tables-only) took about 14 % of this
-# build's compile time (four stepper units 38.7-40.3 s against 33.5-34.1 s without, alternating;
-# BENCHMARKS.md, "CI back under 20 minutes"), and CI must stay within its 20 minutes. UBSan's
+# build's compile time (four stepper units 38.7-40.3 s against 33.5-34.1 s without, alternating),
+# and CI must stay within its 20 minutes (BENCHMARKS.md, "Build and CI time"). UBSan's
 # reports keep file and line (its checks carry their source location); ASan's name the functions
 # of the stack. SANITIZE_LINES=1 builds with line tables for file and line in ASan's reports too
 # (full -g took 8.7 s per stepper unit against 7.7 s with line tables). -O0: the instrumented

@@ -49,7 +49,7 @@ class DofArray {
 
   // The window's values and first DOF number as two locals, for a per-particle loop that calls
   // functions the compiler cannot see into (a material law), after which it would reload both
-  // from the array: view[i] is (*this)[i] (measured: BENCHMARKS.md, "Grid arrays over a window").
+  // from the array: view[i] is (*this)[i] (measured on a grid-dominated problem).
   template <class U>
   struct View {
     U* data;

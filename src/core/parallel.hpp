@@ -61,8 +61,7 @@ void parallel_for(Index n, F&& f) {
 // independent (a thread goes on to its share of the second loop when done with its share of the
 // first, with no barrier between). A region's fork and join cost 15-130 us on a 2-core virtual
 // machine with sleeping threads (OMP_WAIT_POLICY=passive: the longer the threads slept since the
-// last region, the more), 2-14 us with spinning ones (BENCHMARKS.md, a TLS step
-// had 36 regions).
+// last region, the more), 2-14 us with spinning ones (a TLS step had 36 regions).
 template <class F, class G>
 void parallel_for_both(Index n, F&& f, Index m, G&& g) {
 #pragma omp parallel if (n + m >= kParallelMin)
@@ -212,7 +211,7 @@ class GridAccumulator {
   void reduce(DofArray<T>& out, const T& zero, const ChunkDofRanges& r, Index b, Index e) const {
     // Plain pointers into the window and the slices: the fill and the additions run as over
     // vectors (a loop through DofArray's indexing instead of the fill was measured slower on a
-    // grid-dominated problem: BENCHMARKS.md, "Grid arrays over a window").
+    // grid-dominated problem).
     std::fill(out.data() + (b - out.first()), out.data() + (e - out.first()), zero);
     const int k = ParticleChunks::count(r.particles);
     for (int c = 0; c < k; ++c) {

@@ -47,8 +47,8 @@ struct RunOptions {
 };
 
 // Below this many particles per thread a second thread costs more than it saves: measured with
-// `mpm bench --threads 1|2`, passive waiting, on 2 cores (BENCHMARKS.md, "Threads sized to the
-// problem"): 2D quadratic B-splines gain 1.2x at 8000 particles and lose at 4000; 1D P1 breaks
+// `mpm bench --threads 1|2`, passive waiting, on 2 cores (BENCHMARKS.md,
+// "Threads"): 2D quadratic B-splines gain 1.2x at 8000 particles and lose at 4000; 1D P1 breaks
 // even at 64000 and gains 1.35x at 128000.
 inline constexpr Index kMinParticlesPerThread[4] = {0, 50000, 5000, 5000};
 

@@ -7,7 +7,7 @@
 // What stays compile-time, and why: the basis and the mapping are in every per-particle loop
 // (stencil size, weights, the mapping's scatters and fits), so each (dimension, basis, mapping)
 // is its own Simulation type. The scheme is an order of stage calls made once per step: a
-// std::visit per step costs nothing measurable (BENCHMARKS.md, "Architecture step"), so it is a
+// std::visit per step costs nothing measurable (alternated runs of both dispatches), so it is a
 // run-time choice inside the stepper and adds no driver instances. The steppers of one
 // (dimension, basis kind) are instantiated in one generated translation unit
 // (driver/stepper_kind.cpp.in, CMakeLists.txt), so a 2-core build compiles them in parallel and

@@ -158,8 +158,7 @@ constexpr int kVtkHexahedron = 12;
 // Where a DataArray's values go: inline as ASCII (17 significant digits, a tuple per line), or
 // as raw little-endian bytes in the file's <AppendedData> block, each array a UInt64 byte count
 // followed by its values (VTK XML format 1.0, header_type="UInt64"), referenced by its offset.
-// A 2D frame of 1e6 particles is then 289 MB instead of 466 MB and built 4x faster
-// (BENCHMARKS.md).
+// A 2D frame of 1e6 particles is then 289 MB instead of 466 MB and built 4x faster.
 struct VtuData {
   bool binary = false;
   std::string appended;

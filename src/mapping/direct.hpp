@@ -101,7 +101,7 @@ struct DirectMapping {
   // consistent mass is rarely used: serial. Entries of weight zero are left out (as the
   // quadrature mappings do): max-ent's window holds 36 entries in 2D of which about 13 are
   // nonzero at d_max = 2, and its 36^2 triplets per particle made the assembly 8x the rest of
-  // the step (docs: BENCHMARKS.md). The matrix is the same; its stored pattern loses the
+  // the step. The matrix is the same; its stored pattern loses the
   // explicit zeros, which can change the factorisation's ordering and so the last bits.
   template <int Dim, class B>
   static void consistent_mass(BasisState<Dim, B>& sim) {

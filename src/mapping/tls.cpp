@@ -502,7 +502,7 @@ double BasicTlsReconstruction<Dim>::condition(const Matrix& D, int t, Matrix* s_
     if (!std::isfinite(bound)) return kInf;
     // Otherwise bracket the two factors of cond(S) = lambda_max(S) lambda_max(S^{-1}) and narrow
     // the brackets until they settle the test (in deformed layouts about half the elements reached
-    // the eigenvalues here, each an Eigen solve of about 6,600 instructions, BENCHMARKS.md). For
+    // the eigenvalues here, each an Eigen solve of about 6,600 instructions). For
     // symmetric positive definite M with eigenvalues mu_i, max_i M_ii <= lambda_max(M),
     // ||M||_F / sqrt(n) <= lambda_max(M) <= min(||M||_F, ||M||_inf). A shifted Cholesky test
     // narrows a bracket at its geometric mean: sigma I - S positive definite <=> lambda_max(S) <

@@ -6,7 +6,7 @@
 // neighbouring processes share are one contiguous segment (the layers their stencils reach
 // across the cut), and the exchange after each particle-to-grid sum is one message per
 // neighbour (stages::share_grid_sums); the cuts are chosen to give each process the same
-// number of particles. BENCHMARKS.md ("Distributed runs") has the communication model and where
+// number of particles. BENCHMARKS.md ("Processes") has the communication model and where
 // slabs stop scaling.
 #include <cstddef>
 #include <span>

@@ -79,7 +79,7 @@ struct Particles {
   // where the capacity differs). A process of a distributed run keeps room for particles that
   // arrive from others: growing a full array holds the old and the new one at once (the cached
   // stencils' array growing on the edge slabs of a 4-process plate: 365 MB at their peak against
-  // the others' 270, BENCHMARKS.md), while capacity beyond the particles is never written, so it
+  // the others' 270), while capacity beyond the particles is never written, so it
   // takes no resident memory. (A restart: the whole checkpoint's particles were written.)
   void keep_room(Index headroom) {
     const std::size_t want = x.size() + static_cast<std::size_t>(headroom);

@@ -108,7 +108,7 @@ class ConsistentMass {
   // The particles' contributions summed into one sparse matrix over all DOFs, once per
   // assembly: the slots (components with their own Dirichlet DOFs) and pmg's fine level start
   // from it instead of each summing the triplets again (the per-particle triplets, 27^2 per
-  // particle for quadratic B-splines in 3D, were 60 % of a consistent-mass step; BENCHMARKS.md).
+  // particle for quadratic B-splines in 3D, were 60 % of a consistent-mass step).
   const Eigen::SparseMatrix<double>& summed();
   void lump_rows();  // set_lumped's change of summed_matrix_
   Eigen::SparseMatrix<double> summed_matrix_;

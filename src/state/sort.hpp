@@ -44,14 +44,14 @@ struct SortState {
   // The first measurement of a run sorts when the chunks' ranges total more than this many
   // times their union: sorted or seeded particles measure about 1-2 (the 20 x 20-cell plate of
   // test_sort.cpp, 3600 particles in 8 chunks: 1.65 sorted, 8.0 shuffled; about 1.4 grids at 1e6
-  // particles in 2D, BENCHMARKS.md "Parallel design"), random order about the chunk count (up
+  // particles in 2D), random order about the chunk count (up
   // to 64). Below 4 chunks (2048 particles) random order is never sorted at the start: it costs
   // at most 4 slices of small grids.
   static constexpr double kFirstSortSpan = 4.0;
   // Later measurements sort when the total exceeds this factor times the reference (the first
-  // measurement after the last sort). From BENCHMARKS.md ("Particle re-sorting by cell", 2D
-  // quadratic B-spline MUSL, 1e6 particles): one sort costs about one step (140-330 ns per
-  // particle), random order (about 62 grids of extra span) about 210-420 ns per particle-step
+  // measurement after the last sort). Measured (2D
+  // quadratic B-spline MUSL, 1e6 particles, alternated): one sort costs about one step (140-330 ns
+  // per particle), random order (about 62 grids of extra span) about 210-420 ns per particle-step
   // more than sorted order. Interpolated linearly, spans at twice the sorted ones (1.4 extra
   // grids) cost about 5-10 ns per particle-step, so a sort then pays back within some 30-60
   // steps, while a smaller factor would sort more often for less.
