@@ -1,5 +1,10 @@
 #include "setup/method_settings.hpp"
 
+#include <string>
+#include <string_view>
+
+#include "methods/kinds.hpp"
+
 namespace mpm {
 
 TlsSettings tls_settings(const Config& cfg, int dim) {
@@ -48,6 +53,62 @@ CubicSplineSettings cubic_spline_settings(const Config& cfg) {
   CubicSplineSettings s;
   s.gauss_points_per_half = static_cast<int>(cfg.get_int("method.gauss_points"));
   return s;
+}
+
+namespace {
+// The bases on triangles, as "a" or "b" (messages).
+std::string triangle_bases() {
+  return basis_names_where([](const auto& k) { return k.kOnTriangles; });
+}
+}  // namespace
+
+TlsSettings tls_settings_for_basis(const Config& cfg, const TlsSettings& chosen, bool triangles,
+                                   std::string_view basis) {
+  TlsSettings ts = chosen;
+  const std::string completion = cfg.get_string("method.tls_completion");
+  const bool triangle_only =
+      ts.completion == TlsCompletion::MinimumNorm || ts.completion == TlsCompletion::Graded;
+  if (!triangles && triangle_only)
+    throw InputError(fmt::format(
+        "{}: method.tls_completion = \"{}\" works on triangles (method.basis = {}); on the "
+        "grid's cells choose one of: none, reduce, virtual, neighbour, auto",
+        cfg.where("method.tls_completion"), completion, triangle_bases()));
+  // Both limits are measured in the orthonormal Taylor basis of their element, but each was
+  // chosen for its own elements, so each is refused where it does not apply; so are the
+  // rectangles' positivity and surface stress on triangles.
+  const char* other = triangles ? "method.tls_max_condition" : "method.tls_triangle_max_condition";
+  const KeySpec* spec = find_key(other);
+  if (spec != nullptr && spec->default_value &&
+      cfg.get_real(other) != std::get<double>(*spec->default_value))
+    throw InputError(fmt::format(
+        "{}: {} applies to {}; this run's basis \"{}\" uses {}", cfg.where(other), other,
+        triangles ? "the grid's cells" : fmt::format("triangles ({})", triangle_bases()), basis,
+        triangles ? "method.tls_triangle_max_condition" : "method.tls_max_condition"));
+  if (triangles) {
+    for (const char* key :
+         {"method.tls_positivity", "method.tls_surface_stress", "method.tls_cell_integrals"})
+      if (cfg.get_string(key) != "auto")
+        throw InputError(fmt::format(
+            "{}: {} applies to the grid's cells; this run's basis \"{}\" uses triangles, "
+            "whose TLS keeps the plain stress fit, D's element integrals and no positivity "
+            "scaling (leave it \"auto\")",
+            cfg.where(key), key, basis));
+    if (ts.adjoint_strain_rate)
+      throw InputError(fmt::format(
+          "{}: method.tls_strain_rate = \"adjoint\" is defined on the grid's cells; this "
+          "run's basis \"{}\" uses triangles (choose \"gradient\")",
+          cfg.where("method.tls_strain_rate"), basis));
+    ts.positivity = false;
+    ts.surface_volume = false;
+    ts.domain_integrals = false;
+    ts.max_condition = cfg.get_real("method.tls_triangle_max_condition");
+    try {
+      (void)tls_triangle_settings(ts);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", cfg.where("method.tls_completion"), e.what()));
+    }
+  }
+  return ts;
 }
 
 }  // namespace mpm

@@ -2,6 +2,7 @@
 // The settings of the method components from the configuration (set-up layer): the numerics
 // take typed settings (TlsSettings, MlsSettings, CubicSplineSettings) and never see Config.
 #include <fmt/format.h>
+#include <string_view>
 #include <type_traits>
 
 #include "mapping/cubic_spline.hpp"
@@ -14,6 +15,12 @@ namespace mpm {
 // method.tls_terms, method.tls_completion, method.tls_max_condition, method.gauss_points,
 // validated for `dim` (InputError).
 TlsSettings tls_settings(const Config& cfg, int dim);
+// TLS's settings for the run's basis (`basis`, its name): the grid's cells and triangles
+// (`triangles`) take different completions, condition limits (method.tls_max_condition,
+// method.tls_triangle_max_condition) and robustness measures; a key that does not apply to the
+// basis is refused (InputError naming it and its line). All of TLS's keys are read here.
+TlsSettings tls_settings_for_basis(const Config& cfg, const TlsSettings& chosen, bool triangles,
+                                   std::string_view basis);
 // method.mls_degree, method.gauss_points, method.mls_dilation; IMLS (improved) also needs
 // method.mass = lumped (003 eq. 32).
 MlsSettings mls_settings(const Config& cfg, bool improved);

@@ -185,56 +185,9 @@ RunSettings run_settings(const Config& cfg, int dim) {
                 : dim == 2 ? configured_mapping<2>(m.mapping, cfg)
                            : configured_mapping<3>(m.mapping, cfg);
   if (auto* tls = std::get_if<TlsMapping>(&m.mapping); tls && m.solver == Solver::Mpm) {
-    // The completions differ between the grid's rectangles and triangles (mapping/tls.hpp).
     const bool triangles = on_triangles(m.basis);
-    TlsSettings ts = tls->settings();
-    const std::string completion = cfg.get_string("method.tls_completion");
-    const bool triangle_only =
-        ts.completion == TlsCompletion::MinimumNorm || ts.completion == TlsCompletion::Graded;
-    if (!triangles && triangle_only)
-      throw InputError(fmt::format(
-          "{}: method.tls_completion = \"{}\" works on triangles (method.basis = "
-          "\"p1_triangles\" or \"powell_sabin\"); on the grid's cells choose one of: none, "
-          "reduce, virtual, neighbour, auto",
-          m.where_tls_completion, completion));
-    // Both limits are measured in the orthonormal Taylor basis of their element, but each was
-    // chosen for its own elements, so each is refused where it does not apply; so are the
-    // rectangles' positivity and surface stress on triangles.
-    const char* other =
-        triangles ? "method.tls_max_condition" : "method.tls_triangle_max_condition";
-    const KeySpec* spec = find_key(other);
-    if (spec != nullptr && spec->default_value &&
-        cfg.get_real(other) != std::get<double>(*spec->default_value))
-      throw InputError(fmt::format(
-          "{}: {} applies to {}; this run's basis \"{}\" uses {}", cfg.where(other), other,
-          triangles ? "the grid's cells" : "triangles (p1_triangles, powell_sabin)",
-          name_of(m.basis),
-          triangles ? "method.tls_triangle_max_condition" : "method.tls_max_condition"));
-    if (triangles) {
-      for (const char* key :
-           {"method.tls_positivity", "method.tls_surface_stress", "method.tls_cell_integrals"})
-        if (cfg.get_string(key) != "auto")
-          throw InputError(fmt::format(
-              "{}: {} applies to the grid's cells; this run's basis \"{}\" uses triangles, "
-              "whose TLS keeps the plain stress fit, D's element integrals and no positivity "
-              "scaling (leave it \"auto\")",
-              cfg.where(key), key, name_of(m.basis)));
-      if (ts.adjoint_strain_rate)
-        throw InputError(fmt::format(
-            "{}: method.tls_strain_rate = \"adjoint\" is defined on the grid's cells; this "
-            "run's basis \"{}\" uses triangles (choose \"gradient\")",
-            cfg.where("method.tls_strain_rate"), name_of(m.basis)));
-      ts.positivity = false;
-      ts.surface_volume = false;
-      ts.domain_integrals = false;
-      ts.max_condition = cfg.get_real("method.tls_triangle_max_condition");
-      try {
-        (void)tls_triangle_settings(ts);
-      } catch (const InputError& e) {
-        throw InputError(fmt::format("{}: {}", m.where_tls_completion, e.what()));
-      }
-    }
-    *tls = TlsMapping(ts, dim);
+    *tls =
+        TlsMapping(tls_settings_for_basis(cfg, tls->settings(), triangles, name_of(m.basis)), dim);
     // Under a constant load, B-spline TLS with consistent mass grows an
     // oscillation among the highest modes of the consistent matrix, at loads that fall with the
     // cell size; lumped mass, P1-TLS and the direct mapping stay neutral (docs/verification.md,
