@@ -1665,7 +1665,7 @@ def sec_bar_461(R, ctx):
 
 `examples/bar_fixed_ends_otm.toml`: L = 1 m, E = 4 kPa, rho = 1 kg/m^3, v0 = 0.6 m/s, T = 1e-3 s,
 dt = 1e-5 s, 12 particles per element, USL for MPM, max-ent with d_max = 2. OTM (`method.solver
-= "otm"`, D Algorithm 3, `src/solver/otm.hpp`) advects the nodes with the material, the unified
+= "otm"`, D Algorithm 3, `src/methods/otm.hpp`) advects the nodes with the material, the unified
 approach (`method.solver = "unified"`, D Algorithm 4) the degrees of freedom of B-splines (the
 same study with `--methods bspline2/direct/consistent --set method.solver=unified`). `build/mpm study
 examples/bar_fixed_ends_otm.toml --refine grid.cells={cells} --methods "{', '.join(methods)}"`,
@@ -1687,9 +1687,9 @@ consistent mass), RMS displacement error of D eq. 4.92 (observed order):
 
 "Similar results for BSMPM and the unified approach" (D): their errors differ by at most
 {100 * same:.1f} % on these grids. The unified approach is our isoparametric reading
-of D Algorithm 4 (`src/solver/otm.hpp`): the control points of x(X) = sum B_i(X) c_i are the
+of D Algorithm 4 (`src/methods/otm.hpp`): the control points of x(X) = sum B_i(X) c_i are the
 advected degrees of freedom, so the particles keep their material coordinate; with degree 1 it
-is OTM-P1's basis, and the first step of the two coincides (`tests/solver/test_otm.cpp`).
+is OTM-P1's basis, and the first step of the two coincides (`tests/methods/test_otm.cpp`).
 
 D does not say which mass matrix its MPM runs of Fig. 4.7 use (OTM and the unified approach
 use the consistent one). The third order of BSMPM appears with consistent mass only: with lumped
@@ -1701,7 +1701,7 @@ time-integration error at dt = 1e-5 s, the "limiting value" of D's text; so the 
 OTM-maxent between one and two that D reports are not seen here, where it is at the floor from
 32 nodes on. Max-ent is not below P1 on the coarse grids here (it is from 128 nodes on, where P1
 loses its order). The first step of OTM-P1 equals that of USL-MPM-P1 with consistent mass to
-round-off, as D 4.4 derives (`tests/solver/test_otm.cpp`, which also shows that the internal
+round-off, as D 4.4 derives (`tests/methods/test_otm.cpp`, which also shows that the internal
 force of D eq. 4.30 needs the sign of eq. 2.33: with D's printed sign the two differ).
 
 Cost (D Table 4.1, normalised by MPM-P1 at the same number of nodes; ours: `mpm bench --dim 1
@@ -1922,7 +1922,7 @@ kg/m^3 (D prints "1e7 Pa" for the density, a typo), 33 nodes a side (32 cells), 
 element, T = 3.5e-3 s, dt = 1e-4 s, USL; max-ent with d_max = 3 for MPM and 2 for OTM as D
 uses (`--set` of the keys above, the method keys per row). OTM-P1 in 2D is bilinear on the
 advected quadrilaterals; OTM-maxent in 2D evaluates max-ent on the advected lattice of nodes,
-found through bins of their current positions (`src/solver/otm.cpp`); the unified approach runs
+found through bins of their current positions (`src/methods/otm.cpp`); the unified approach runs
 in 2D with tensor-product B-splines. D shows sigma_11 along x_2^0 = 0.07 m (Fig. 4.10) without
 error figures; here the errors over all particles at T, and the total variation of sigma_11
 along the row of particles nearest x_2^0 = 0.07 m (x_2^0 = {y0:.4f} m; 128 particles) divided by
