@@ -42,7 +42,8 @@ TEST(MaterialSettings, ALawOfAnotherDimensionIsRefusedWithThoseThatExist) {
     // The choices are the laws that declare 3D (laws_in), whichever they are.
     EXPECT_EQ(std::string(e.what()),
               "material.toml:8:9: material.model = \"elastic_1d_small\" does not exist in 3D; "
-              "in 3D choose " + laws_in(3));
+              "in 3D choose " +
+                  laws_in(3));
     EXPECT_EQ(laws_in(3).find("elastic_1d"), std::string::npos);
     EXPECT_NE(laws_in(3).find("linear_elastic, neo_hookean"), std::string::npos);
   }
