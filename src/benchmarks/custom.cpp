@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "benchmarks/benchmarks.hpp"
+#include "benchmarks/initial_stress.hpp"
 #include "grid/triangle_mesh.hpp"
 #include "methods/kinds.hpp"
 #include "setup/config.hpp"
@@ -22,21 +23,6 @@ namespace {
 // The sides of the grid (boundary.*) and faces of the body (traction.*, pressure.*) by direction:
 // x, y, then z (back: z = min, front: z = max).
 constexpr const char* kSideKeys[3][2] = {{"left", "right"}, {"bottom", "top"}, {"back", "front"}};
-
-// A non-zero initial stress with a law that is not incremental (its stress follows from F, which
-// is I at the start): InputError naming the incremental laws of the dimension, if any.
-template <int Dim>
-void refuse_initial_stress(const Config& cfg, const Material& material) {
-  if (incremental(material)) return;
-  const std::string laws = laws_in(Dim, /*incremental_only=*/true);
-  throw InputError(fmt::format(
-      "{}: an initial stress needs an incremental law{}; material.model = \"{}\" computes the "
-      "stress from F = I{}",
-      cfg.where("initial.stress"), laws.empty() ? "" : fmt::format(" ({})", laws),
-      material_name(material),
-      laws.empty() ? fmt::format(" (no {}D law is incremental: leave initial.stress at 0)", Dim)
-                   : ""));
-}
 
 // The values of a RealVector key, one per direction; InputError naming its line otherwise.
 template <int Dim>
@@ -607,7 +593,7 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
         throw InputError(fmt::format("{}: {} = \"{}\" is not finite at x = {:.6g} (particle {})",
                                      cfg.where(key), key, cfg.get_string(key), P.x0[i][0],
                                      P.id[i]));
-    if (P.stress[i](0, 0) != 0.0) refuse_initial_stress<1>(cfg, pb.material);
+    if (P.stress[i](0, 0) != 0.0) refuse_initial_stress(cfg, pb.material, 1);
   }
 
   const Expression b(cfg.get_string("loading.body_force"), constants);
@@ -658,22 +644,19 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
 
   const auto v0 = expressions(cfg, "initial.velocity", 2, kComponents[2]);
   const auto s0 = expressions(cfg, "initial.stress", 3, kStressComponents[2]);
+  const auto b = expressions(cfg, "loading.body_force", 2, kComponents[2]);
   pb.initial_velocity = [v0](const Vec<2>& X) { return vector_from<2>(v0, X[0], X[1], 0.0, 0.0); };
-  pb.initial_stress = [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0, 0.0); };
   auto& P = pb.particles;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.v[i] = pb.initial_velocity(P.x0[i]);
-    P.stress[i] = pb.initial_stress(P.x0[i]);
-    for (const auto& [key, finite] : {std::pair{"initial.velocity", P.v[i].allFinite()},
-                                      std::pair{"initial.stress", P.stress[i].allFinite()}})
-      if (!finite)
-        throw InputError(
-            fmt::format("{}: {} is not finite at (x, y) = ({:.6g}, {:.6g}) (particle {})",
-                        cfg.where(key), key, P.x0[i][0], P.x0[i][1], P.id[i]));
-    if (P.stress[i] != Mat<2>::Zero()) refuse_initial_stress<2>(cfg, pb.material);
+    if (!P.v[i].allFinite())
+      throw InputError(fmt::format(
+          "{}: initial.velocity is not finite at (x, y) = ({:.6g}, {:.6g}) (particle {})",
+          cfg.where("initial.velocity"), P.x0[i][0], P.x0[i][1], P.id[i]));
   }
+  set_initial_stress<2>(
+      cfg, pb, [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0, 0.0); }, b);
 
-  const auto b = expressions(cfg, "loading.body_force", 2, kComponents[2]);
   pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time();
   pb.body_force.position_dependent = b[0].uses_position() || b[1].uses_position();
   // Serial: an Expression is not thread-safe (one parser per copy); the fill is once a step.
@@ -737,22 +720,20 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
 
   const auto v0 = expressions(cfg, "initial.velocity", 3, kComponents[3]);
   const auto s0 = expressions(cfg, "initial.stress", kStressCount[3], kStressComponents[3]);
+  const auto b = expressions(cfg, "loading.body_force", 3, kComponents[3]);
   pb.initial_velocity = [v0](const Vec<3>& X) { return vector_from<3>(v0, X[0], X[1], X[2], 0.0); };
-  pb.initial_stress = [s0](const Vec<3>& X) { return stress_from<3>(s0, X[0], X[1], X[2], 0.0); };
   auto& P = pb.particles;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     P.v[i] = pb.initial_velocity(P.x0[i]);
-    P.stress[i] = pb.initial_stress(P.x0[i]);
-    for (const auto& [key, finite] : {std::pair{"initial.velocity", P.v[i].allFinite()},
-                                      std::pair{"initial.stress", P.stress[i].allFinite()}})
-      if (!finite)
-        throw InputError(fmt::format(
-            "{}: {} is not finite at (x, y, z) = ({:.6g}, {:.6g}, {:.6g}) (particle {})",
-            cfg.where(key), key, P.x0[i][0], P.x0[i][1], P.x0[i][2], P.id[i]));
-    if (P.stress[i] != Mat<3>::Zero()) refuse_initial_stress<3>(cfg, pb.material);
+    if (!P.v[i].allFinite())
+      throw InputError(
+          fmt::format("{}: initial.velocity is not finite at (x, y, z) = ({:.6g}, {:.6g}, {:.6g}) "
+                      "(particle {})",
+                      cfg.where("initial.velocity"), P.x0[i][0], P.x0[i][1], P.x0[i][2], P.id[i]));
   }
+  set_initial_stress<3>(
+      cfg, pb, [s0](const Vec<3>& X) { return stress_from<3>(s0, X[0], X[1], X[2], 0.0); }, b);
 
-  const auto b = expressions(cfg, "loading.body_force", 3, kComponents[3]);
   pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time() || b[2].uses_time();
   pb.body_force.position_dependent =
       b[0].uses_position() || b[1].uses_position() || b[2].uses_position();

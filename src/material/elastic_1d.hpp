@@ -16,6 +16,7 @@ struct Elastic1DSmall {
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
   static constexpr NoState kStateNames{};
   static constexpr bool kIncremental = true;
+  static constexpr NoParameters kParameters{};
   ElasticParameters p;
   template <int Dim>
   void update(Mat<Dim>& sigma, StateOf<Elastic1DSmall> /*state*/, const Mat<Dim>& /*F*/,
@@ -48,6 +49,7 @@ struct Elastic1DLarge {
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
   static constexpr NoState kStateNames{};
   static constexpr bool kIncremental = true;
+  static constexpr NoParameters kParameters{};
   ElasticParameters p;
   template <int Dim>
   void update(Mat<Dim>& sigma, StateOf<Elastic1DLarge> /*state*/, const Mat<Dim>& /*F*/,

@@ -16,6 +16,7 @@ struct LinearElastic {
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr NoState kStateNames{};
   static constexpr bool kIncremental = false;
+  static constexpr NoParameters kParameters{};
   ElasticParameters p;
   explicit LinearElastic(const ElasticParameters& params = {})
       : p(params), lambda_(params.lambda()), mu_(params.mu()) {}

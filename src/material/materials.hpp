@@ -4,21 +4,26 @@
 // says what it declares); the stress stage visits the material variant once and then loops over
 // particles (no virtual calls in the loop). Stress is the Cauchy stress [Pa]; F the deformation
 // gradient. A new law: its header, and its type in the list below.
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
+#include "material/drucker_prager.hpp"
 #include "material/elastic_1d.hpp"
 #include "material/law.hpp"
 #include "material/linear_elastic.hpp"
+#include "material/mohr_coulomb.hpp"
 #include "material/neo_hookean.hpp"
 #include "material/tracked_elastic.hpp"
+#include "material/von_mises.hpp"
 
 namespace mpm {
 
-using Material =
-    std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean, TrackedElastic>;
+using Material = std::variant<Elastic1DSmall, Elastic1DLarge, LinearElastic, NeoHookean,
+                              TrackedElastic, VonMises, DruckerPrager, MohrCoulomb>;
 
 // Every law of the list satisfies the concept in each dimension it supports (a law that does
 // not declare what is asked of it does not compile).
@@ -34,9 +39,21 @@ constexpr bool laws_are_complete(std::variant<Laws...>*) {
 }
 static_assert(laws_are_complete(static_cast<Material*>(nullptr)));
 
-// Build the material named by `model` (a law's kName; registry::kMaterials lists them). Throws
-// InputError when the law does not exist in dimension `dim`, naming those that do.
-Material make_material(std::string_view model, const ElasticParameters& p, int dim);
+// The value of a law's parameter (MaterialParameter; a choice as its index), from configuration.
+using ParameterSource = std::function<double(const MaterialParameter&)>;
+// Build the material named by `model` (a law's kName; registry::kMaterials lists them), its
+// parameters beyond the elastic ones from `parameters` (without a source: their defaults).
+// Throws InputError when the law does not exist in dimension `dim`, naming those that do, and
+// InvalidParameter when the law refuses its parameters.
+Material make_material(std::string_view model, const ElasticParameters& p, int dim,
+                       const ParameterSource& parameters = {});
+// The parameters of the law named `model` (empty for an unknown name).
+std::span<const MaterialParameter> parameters_of(std::string_view model);
+// Every parameter of every law, each once (laws share one declaration; a name declared twice
+// differently is a logic_error).
+std::vector<MaterialParameter> all_material_parameters();
+// The names of the laws that declare the parameter `name`, as "a and b".
+std::string laws_with_parameter(std::string_view name);
 // The names of the laws that exist in `dim` (those with kIncremental alone when
 // `incremental_only`), as "a, b or c"; empty when there is none.
 std::string laws_in(int dim, bool incremental_only = false);

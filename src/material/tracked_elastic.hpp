@@ -21,6 +21,7 @@ struct TrackedElastic {
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr std::array<std::string_view, 2> kStateNames = {"updates", "strain_path"};
   static constexpr bool kIncremental = false;
+  static constexpr NoParameters kParameters{};
   ElasticParameters p;
   explicit TrackedElastic(const ElasticParameters& params = {}) : p(params), elastic_(params) {}
   template <int Dim>

@@ -637,7 +637,7 @@ class ConfigBuilder {
     }
     if (check_required && errors_.empty()) {
       for (const KeySpec& spec : schema()) {
-        if (spec.required() && !cfg_.values_.contains(spec.name)) {
+        if (spec.required() && !spec.required_when_read && !cfg_.values_.contains(spec.name)) {
           error_at(cfg_.source_, kRequired, missing_message(spec));
         }
       }

@@ -35,6 +35,9 @@ struct KeySpec {
   bool min_exclusive = false, max_exclusive = false;
   std::vector<std::string> choices;  // String keys with a fixed set of values
   std::string description;           // one line
+  // A key without default that only some runs need (a law's parameter): reported missing when
+  // it is read, not whenever a configuration lacks it.
+  bool required_when_read = false;
 
   std::string section() const;  // "grid" for "grid.cells", "" for top-level keys
   bool required() const { return !default_value.has_value(); }

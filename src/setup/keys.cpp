@@ -1,11 +1,16 @@
 // The configuration schema: every key `mpm` understands is declared here, once. Parsing,
 // validation, `mpm keys`, the defaults and the written-back config.toml all read this table.
 // Choices for String keys come from setup/registry.hpp, so a model/scheme name exists in one place.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "material/materials.hpp"
 #include "setup/config.hpp"
 #include "setup/registry.hpp"
 
@@ -105,9 +110,44 @@ KeySpec expression_vector(std::string name, std::string unit, std::string def,
                  any(), std::move(description));
 }
 
+// A required key that only some runs read (KeySpec::required_when_read).
+KeySpec when_read(KeySpec k) {
+  k.required_when_read = true;
+  return k;
+}
+
+// The keys material.<name> of the laws' own parameters (material/law.hpp, MaterialParameter),
+// each declared once by the laws that read it.
+std::vector<KeySpec> material_parameter_keys() {
+  std::vector<KeySpec> keys;
+  for (const MaterialParameter& m : all_material_parameters()) {
+    const std::string name = fmt::format("material.{}", m.name);
+    std::string description(m.description);
+    if (!m.choices.empty()) {
+      std::optional<std::string> def;
+      if (!std::isnan(m.default_value))
+        def = std::string(m.choices[static_cast<std::size_t>(m.default_value)]);
+      KeySpec k = numeric(name, KeyType::String, "",
+                          def ? std::optional<Value>(*def) : std::nullopt, any(), description);
+      for (const auto c : m.choices) k.choices.emplace_back(c);
+      keys.push_back(std::move(k));
+    } else {
+      const Range range{m.min == -kInfinity ? std::nullopt : std::optional<double>(m.min),
+                        m.max == kInfinity ? std::nullopt : std::optional<double>(m.max),
+                        m.min_exclusive, m.max_exclusive};
+      keys.push_back(
+          real(name, std::string(m.unit),
+               std::isnan(m.default_value) ? kRequired : std::optional<double>(m.default_value),
+               range, description));
+    }
+    keys.back().required_when_read = true;  // by the laws that have it
+  }
+  return keys;
+}
+
 std::vector<KeySpec> declare() {
   using namespace registry;
-  return {
+  std::vector<KeySpec> keys = {
       choice("benchmark", kRequired, kBenchmarks, "benchmark problem to run"),
 
       integer("grid.cells", 20, at_least(1), "number of cells (knot spans) per direction"),
@@ -294,6 +334,16 @@ std::vector<KeySpec> declare() {
       expression_vector("initial.stress", "Pa", "0",
                         "initial Cauchy stress as an expression of x (custom; incremental laws "
                         "only: the others compute the stress from F and refuse a non-zero one)"),
+      expression("initial.stress_zz", "Pa", "0",
+                 "initial stress normal to the plane of a 2D (plane-strain) custom run, an "
+                 "expression of x, y (laws that carry it: von_mises, drucker_prager, "
+                 "mohr_coulomb)"),
+      choice("initial.geostatic", "none", kGeostaticModes,
+             "geostatic initial stress of the custom body"),
+      when_read(real("initial.k0", "", kRequired, at_least(0),
+                     "coefficient of earth pressure at rest K0 = sigma_h / sigma_v of "
+                     "initial.geostatic = \"k0\" (e.g. 1 - sin(phi), Jaky; nu / (1 - nu) for "
+                     "an elastic layer)")),
       expression_vector("loading.body_force", "m/s^2", "0",
                         "body force per unit mass, one expression of the current position x, y, "
                         "z and t per component (custom)"),
@@ -384,6 +434,13 @@ std::vector<KeySpec> declare() {
            "a run on several processes cuts its slabs anew when the most loaded process holds "
            "this fraction more particles than the mean (0: never)"),
   };
+  // The laws' parameters after the elastic ones.
+  const auto after = std::find_if(keys.begin(), keys.end(), [](const KeySpec& k) {
+    return k.name == "material.poisson_ratio";
+  });
+  const std::vector<KeySpec> parameters = material_parameter_keys();
+  keys.insert(after + 1, parameters.begin(), parameters.end());
+  return keys;
 }
 
 }  // namespace

@@ -183,6 +183,15 @@ inline constexpr Entry kTrianglePatterns[] = {
     {"criss_cross", "each cell split by both diagonals at a centre vertex (4 triangles)"},
 };
 
+// initial.geostatic: how a custom body's initial stress is given (benchmarks/initial_stress.hpp).
+inline constexpr Entry kGeostaticModes[] = {
+    {"none", "the initial stress is initial.stress (and initial.stress_zz in 2D)"},
+    {"k0",
+     "sigma_v = rho g (top - depth) from the weight of the box body above, sigma_h = "
+     "initial.k0 sigma_v across (out of the plane too), under a constant body force along -y "
+     "(2D) or -z (3D)"},
+};
+
 inline constexpr Entry kSortModes[] = {
     {"auto", "sort by cell when the order has degraded (chunk DOF spans twice the sorted ones)"},
     {"never", "keep the particles in their order (seeded, or as a checkpoint stored them)"},

@@ -468,7 +468,7 @@ TEST(Custom3D, InputErrorsNameTheKeyAndTheCount) {
   expect_input_error(flat, {"case.toml:16:", "body.max = 0.1 must exceed body.min = 0.2 in z"});
   // No 3D law is incremental: an initial stress is refused.
   expect_input_error(base + "[initial]\nstress = [\"0\", \"0\", \"0\", \"1e3\", \"0\", \"0\"]\n",
-                     {"case.toml:18:", "initial.stress", "no 3D law is incremental"});
+                     {"case.toml:18:", "initial.stress", "needs an incremental law (von_mises"});
   // Mesh-file keys are 2D.
   expect_input_error(base + "[boundary]\nroller = \"wall\"\n",
                      {"case.toml:18:", "boundary.roller", "2D mesh file",

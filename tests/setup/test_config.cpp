@@ -561,6 +561,11 @@ TEST(Config, ToTomlRoundTrips) {
   Config d;
   ASSERT_NO_THROW(d = Config::parse(text, "roundtrip.toml")) << text;
   for (const KeySpec& k : schema()) {
+    // A key required by what reads it (a law's parameter) and not given has no value to write.
+    if (k.required_when_read && k.required() && !c.is_set(k.name)) {
+      EXPECT_FALSE(d.is_set(k.name)) << k.name;
+      continue;
+    }
     switch (k.type) {
       case KeyType::Integer:
         EXPECT_EQ(d.get_int(k.name), c.get_int(k.name)) << k.name;
