@@ -82,6 +82,17 @@ bool parallel_any(Index n, F&& f) {
   return any;
 }
 
+// f(begin, end) over [0, n) cut into blocks of `block` consecutive indices, blocks in parallel;
+// true when any call returned true (failure flags).
+template <class F>
+bool parallel_any_block(Index n, Index block, F&& f) {
+  bool any = false;
+  const Index blocks = (n + block - 1) / block;
+#pragma omp parallel for schedule(static) reduction(|| : any) if (n >= kParallelMin)
+  for (Index k = 0; k < blocks; ++k) any = f(k * block, std::min(n, (k + 1) * block)) || any;
+  return any;
+}
+
 // f(c, begin, end) for every chunk c of ParticleChunks over n particles, chunks in parallel.
 template <class F>
 void for_each_chunk(Index n, F&& f) {

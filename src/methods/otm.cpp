@@ -524,37 +524,27 @@ void Otm<Dim>::step(double dt) {
   // x_p = sum phi_i x_i^{s+1} written as x_p + dt sum phi_i v_i (the same by linear
   // completeness, without the Newton residual of max-ent; D eq. 4.87 for the unified approach),
   // F, V, rho and the stress; the particle velocity of each algorithm.
-  const bool bad = std::visit(
-      [&](const auto& law) -> bool {
-        if constexpr (!std::decay_t<decltype(law)>::supports_dimension(Dim)) {
-          throw std::logic_error("Otm: a material law outside its dimensions");
-        } else {
-          bool any = false;
-          for (Index p = 0; p < P.size(); ++p) {
-            const auto i = static_cast<std::size_t>(p);
-            Vec<Dim> dx = Vec<Dim>::Zero();
-            Mat<Dim> L = Mat<Dim>::Zero();
-            for (Index k = row_[i]; k < row_[i + 1]; ++k) {
-              const Vec<Dim>& v = nd.velocity[node(k)];
-              dx += weight(k) * v;
-              L.noalias() += v * grad(k).transpose();
-            }
-            dx *= dt;
-            P.x[i] += dx;
-            if (s_.unified) {
-              // USL's velocity update (D eq. 4.88).
-              Vec<Dim> acc = Vec<Dim>::Zero();
-              for (Index k = row_[i]; k < row_[i + 1]; ++k) acc += weight(k) * nd.accel[node(k)];
-              P.v[i] += dt * acc;
-            } else {
-              P.v[i] = dx / dt;  // OTM: the momentum of the next step (4.29)
-            }
-            any = stages::deform_particle(P, i, Mat<Dim>(dt * L), law) || any;
-          }
-          return any;
-        }
-      },
-      st_.material);
+  std::vector<Mat<Dim>> L(static_cast<std::size_t>(P.size()), Mat<Dim>::Zero());
+  for (Index p = 0; p < P.size(); ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    Vec<Dim> dx = Vec<Dim>::Zero();
+    for (Index k = row_[i]; k < row_[i + 1]; ++k) {
+      const Vec<Dim>& v = nd.velocity[node(k)];
+      dx += weight(k) * v;
+      L[i].noalias() += v * grad(k).transpose();
+    }
+    dx *= dt;
+    P.x[i] += dx;
+    if (s_.unified) {
+      // USL's velocity update (D eq. 4.88).
+      Vec<Dim> acc = Vec<Dim>::Zero();
+      for (Index k = row_[i]; k < row_[i + 1]; ++k) acc += weight(k) * nd.accel[node(k)];
+      P.v[i] += dt * acc;
+    } else {
+      P.v[i] = dx / dt;  // OTM: the momentum of the next step (4.29)
+    }
+  }
+  const bool bad = stages::deform_particles(P, st_.material, 0, P.size(), L.data(), dt);
   if (bad) stages::throw_particle_failure(st_);
   for (Index i = 0; i < n; ++i)
     for (int d = 0; d < Dim; ++d)

@@ -47,18 +47,19 @@ template <int Dim>
 template <int Dim>
 [[noreturn]] void throw_particle_failure(const RunState<Dim>& sim);
 
-// Particle i's F, V, rho and stress from the velocity-gradient increment dt L (D eq. 2.40-2.43):
-// F = (I + dt L) F, V = det F V0 (so rho = m / V), sigma and the law's internal variables by
-// the law. True when the particle failed
-// (det F <= 0 or a non-finite stress). Shared by the MPM stages and OTM (methods/otm.cpp).
-template <int Dim, class Law>
-inline bool deform_particle(Particles<Dim>& P, std::size_t i, const Mat<Dim>& dtL, const Law& law) {
-  P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];
-  const double J = P.F[i].determinant();
-  P.volume[i] = J * P.volume0[i];
-  law.update(P.stress[i], state_row<Law>(P.state, i), P.F[i], dtL);
-  return !(J > 0.0) || !std::isfinite(P.stress[i].sum());
-}
+// F, V, rho, the stress and the law's internal variables of the particles [b, e) from their
+// velocity gradients L[0, e - b) over the increment dt (D eq. 2.40-2.43): F = (I + dt L) F,
+// V = det F V0 (so rho = m / V), sigma by the material's law. True when a particle failed
+// (det F <= 0 or a non-finite stress). Compiled once per dimension (scheme/deform.cpp): the
+// laws' return mappings are instantiated there, not once per basis in every stepper unit.
+// Shared by the MPM stages and OTM (methods/otm.cpp).
+template <int Dim>
+bool deform_particles(Particles<Dim>& P, const Material& material, Index b, Index e,
+                      const Mat<Dim>* L, double dt);
+
+// The particles per block of update_particles' stress pass: their velocity gradients (a
+// 3x3 matrix each, 9 KB in 3D) stay in the core's cache between the gather and the law.
+inline constexpr Index kDeformBlock = 128;
 
 // D Alg. 2 step 3: basis values and gradients at x_p^s. Stops the run (exit code 4) when a
 // particle has left the grid, and counts grid crossings.
@@ -326,38 +327,40 @@ void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
       mapped = sim.mapped_gradient.data();
     }
   }
-  // The variant is resolved once, outside the parallel loop; `bad`: any particle failed.
-  // Laws that do not exist in Dim (make_material refuses them) get no loop.
-  const bool bad = std::visit(
-      [&]([[maybe_unused]] const auto& law) -> bool {
-        if constexpr (!std::decay_t<decltype(law)>::supports_dimension(Dim))
-          throw std::logic_error("update_particles: a material law outside its dimensions");
-        else
-          return parallel_any(P.size(), [&](Index p) {
-            const auto i = static_cast<std::size_t>(p);
-            Vec<Dim> acc = Vec<Dim>::Zero(), dx = Vec<Dim>::Zero();
-            Mat<Dim> L = Mat<Dim>::Zero();  // L_ab = dv_a/dx_b
-            for_each_entry(sim.stencils[i], sim.dof_stride,
-                           [&](Index dof, double w, const Vec<Dim>& grad) {
-                             const auto k = static_cast<std::size_t>(dof);
-                             if constexpr ((What & kVelocity) != 0) acc += w * a[k];
-                             if constexpr ((What & kPosition) != 0) dx += w * v[k];
-                             if constexpr ((What & kStress) != 0)
-                               L.noalias() += v[k] * grad.transpose();
-                           });
-            if constexpr ((What & kVelocity) != 0) P.v[i] += dt * acc;
-            if constexpr ((What & kPosition) != 0) {
-              dx *= dt;
-              P.x[i] += dx;
-            }
-            if constexpr ((What & kStress) != 0) {
-              if (mapped != nullptr) L = mapped[i];
-              return deform_particle(P, i, Mat<Dim>(stress_dt * L), law);
-            }
-            return false;
-          });
-      },
-      sim.material);
+  // One particle's grid sums; its velocity gradient L_ab = dv_a/dx_b into *out where the stress
+  // is updated (not where the mapping gave it).
+  const auto gather = [&](std::size_t i, [[maybe_unused]] Mat<Dim>* out) {
+    Vec<Dim> acc = Vec<Dim>::Zero(), dx = Vec<Dim>::Zero();
+    Mat<Dim> L = Mat<Dim>::Zero();
+    for_each_entry(sim.stencils[i], sim.dof_stride, [&](Index dof, double w, const Vec<Dim>& grad) {
+      const auto k = static_cast<std::size_t>(dof);
+      if constexpr ((What & kVelocity) != 0) acc += w * a[k];
+      if constexpr ((What & kPosition) != 0) dx += w * v[k];
+      if constexpr ((What & kStress) != 0) L.noalias() += v[k] * grad.transpose();
+    });
+    if constexpr ((What & kVelocity) != 0) P.v[i] += dt * acc;
+    if constexpr ((What & kPosition) != 0) {
+      dx *= dt;
+      P.x[i] += dx;
+    }
+    if constexpr ((What & kStress) != 0)
+      if (out != nullptr) *out = L;
+  };
+  bool bad = false;  // any particle failed
+  if constexpr ((What & kStress) != 0) {
+    // Per block: the grid sums and velocity gradients, then the material's law over the block
+    // (deform_particles, the law resolved once per block).
+    bad = parallel_any_block(P.size(), kDeformBlock, [&](Index b, Index e) {
+      std::array<Mat<Dim>, kDeformBlock> Ls;
+      for (Index p = b; p < e; ++p)
+        gather(static_cast<std::size_t>(p),
+               mapped != nullptr ? nullptr : &Ls[static_cast<std::size_t>(p - b)]);
+      return deform_particles(P, sim.material, b, e, mapped != nullptr ? mapped + b : Ls.data(),
+                              stress_dt);
+    });
+  } else {
+    parallel_for(P.size(), [&](Index p) { gather(static_cast<std::size_t>(p), nullptr); });
+  }
   if constexpr ((What & kStress) != 0) sim.mapped_gradient.clear();
   // Bases that track particle-domain corners (CPDI2) move them with the same grid velocity.
   if constexpr ((What & kPosition) != 0) {
