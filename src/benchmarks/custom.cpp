@@ -138,6 +138,50 @@ auto finite_load(const Config& cfg, const std::string& key, const std::string& p
   };
 }
 
+// The box of prescribed velocities (prescribed.*): the MPM solver with lumped mass (a consistent
+// mass matrix couples the prescribed DOFs to the free ones, which the elimination of the
+// constrained rows with zero values leaves out).
+template <int Dim>
+void prescribed_from_config(Problem<Dim>& pb, const Config& cfg) {
+  if (cfg.get_string("prescribed.nodes") == "none") return;
+  const std::string where = cfg.where("prescribed.nodes");
+  if (cfg.get_string("method.solver") != "mpm")
+    throw InputError(fmt::format(
+        "{}: prescribed.nodes prescribes grid velocities of the MPM solver; method.solver = "
+        "\"{}\" has none (use method.solver = \"mpm\")",
+        where, cfg.get_string("method.solver")));
+  if (cfg.get_string("method.mass") != "lumped")
+    throw InputError(
+        fmt::format("{}: prescribed.nodes needs method.mass = \"lumped\" (a consistent mass matrix "
+                    "couples the prescribed velocities to the free ones), got \"{}\"",
+                    where, cfg.get_string("method.mass")));
+  const Vec<Dim> lo = per_direction<Dim>(cfg, "prescribed.min");
+  const Vec<Dim> hi = per_direction<Dim>(cfg, "prescribed.max");
+  const Vec<Dim> v = per_direction<Dim>(cfg, "prescribed.velocity");
+  PrescribedVelocity pv;
+  for (int d = 0; d < Dim; ++d) {
+    if (!(hi[d] >= lo[d]))
+      throw InputError(fmt::format("{}: prescribed.max = {} is below prescribed.min = {} in {}",
+                                   cfg.where("prescribed.max"), hi[d], lo[d], "xyz"[d]));
+    const auto k = static_cast<std::size_t>(d);
+    pv.min[k] = lo[d];
+    pv.max[k] = hi[d];
+    pv.velocity[k] = v[d];
+  }
+  const std::string c = cfg.get_string("prescribed.components");
+  if (c != "all") {
+    const auto d = static_cast<int>(c[0] - 'x');
+    if (d >= Dim)
+      throw InputError(
+          fmt::format("{}: prescribed.components = \"{}\" in {}D; the components "
+                      "are {}",
+                      cfg.where("prescribed.components"), c, Dim,
+                      Dim == 1 ? "x" : (Dim == 2 ? "x, y" : "x, y, z")));
+    pv.components = 1u << d;
+  }
+  pb.prescribed = pv;
+}
+
 // Dirichlet conditions of the grid sides (boundary.*) and tractions on the body faces
 // (traction.*), in Dim directions.
 template <int Dim>
@@ -540,8 +584,8 @@ void check_boxes(const Config& cfg, const Vec<Dim>& g0, const Vec<Dim>& g1, cons
 
 bool read_by_custom_alone(std::string_view key) {
   if (key == "traction.amplitude") return false;  // (the traction bar's)
-  for (std::string_view section :
-       {"boundary.", "traction.", "pressure.", "body.", "initial.", "loading.", "exact."})
+  for (std::string_view section : {"boundary.", "traction.", "pressure.", "body.", "initial.",
+                                   "loading.", "exact.", "prescribed."})
     if (key.starts_with(section)) return true;
   return false;
 }
@@ -611,6 +655,7 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
   refuse_keys_of_more_dimensions(cfg, 1);
   sides_from_config<1>(pb, cfg, Vec<1>(b0), Vec<1>(b1),
                        static_cast<int>(cfg.get_int("particles.per_cell")));
+  prescribed_from_config<1>(pb, cfg);
   pb.exact = exact_from_config<1>(cfg);
   return pb;
 }
@@ -673,6 +718,7 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
 
   sides_from_config<2>(pb, cfg, b0, b1, per_cell);
   named_boundaries(pb, cfg);
+  prescribed_from_config<2>(pb, cfg);
   named_loads(pb, cfg, scope);
   pb.exact = exact_from_config<2>(cfg);
   return pb;
@@ -750,6 +796,7 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
   };
 
   sides_from_config<3>(pb, cfg, b0, b1, per_cell);
+  prescribed_from_config<3>(pb, cfg);
   pb.exact = exact_from_config<3>(cfg);
   return pb;
 }

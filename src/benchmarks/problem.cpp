@@ -488,6 +488,30 @@ AnyProblem make_problem(const Config& cfg, const SeedScope& scope) {
         "custom problem; benchmark = \"{}\"{} has none",
         cfg.where(key), key, cfg.get_string("benchmark"), meshed ? "" : " without grid.mesh"));
   }
+  if (cfg.get_bool("output.reactions")) {
+    const std::string where = cfg.where("output.reactions");
+    if (cfg.get_string("method.solver") != "mpm")
+      throw InputError(fmt::format(
+          "{}: output.reactions sums the grid forces of the MPM solver; method.solver = \"{}\" "
+          "has none (use method.solver = \"mpm\")",
+          where, cfg.get_string("method.solver")));
+    if (cfg.get_string("method.mass") != "lumped")
+      throw InputError(fmt::format(
+          "{}: output.reactions needs method.mass = \"lumped\" (the reaction -f_i of a "
+          "constrained degree of freedom; with a consistent mass matrix it would need the "
+          "inertia of its neighbours), got \"{}\"",
+          where, cfg.get_string("method.mass")));
+    std::visit(
+        [&](auto& p) {
+          p.reactions = true;
+          if (reaction_names(p).empty())
+            throw InputError(fmt::format(
+                "{}: output.reactions: benchmark = \"{}\" has no constrained boundary (no "
+                "boundary.* is \"fixed\" or \"roller\" and prescribed.nodes = \"none\")",
+                where, cfg.get_string("benchmark")));
+        },
+        pb);
+  }
   std::visit([&](const auto& p) { check_grid_memory(cfg, p.grid, scope); }, pb);
   return pb;
 }

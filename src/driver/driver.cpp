@@ -155,6 +155,14 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
   // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
   // report their maxima, which summary.json has).
   if (mapping_errors_) history_header_ += ",mass_error,momentum_error";
+  // output.reactions: the reaction [N; N/m in 2D] on each constrained boundary, per component
+  // (0 in the first row, before any step).
+  if (pb.reactions)
+    for (const std::string& name : reaction_names(pb))
+      for (int d = 0; d < Dim; ++d) {
+        history_header_ += fmt::format(",reaction_{}_{}", name, "xyz"[d]);
+        ++reaction_columns_;
+      }
   history_header_ += "\n";
 }
 
@@ -213,6 +221,13 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
     row += sim.diag ? fmt::format(",{:.17g},{:.17g}", sim.diag->rel_mass_error,
                                   sim.diag->rel_momentum_error)
                     : ",0,0";
+  if (reaction_columns_ > 0) {
+    const std::vector<double>* r = sim.diag ? &sim.diag->reactions : nullptr;
+    if (r != nullptr && !r->empty() && r->size() != reaction_columns_)
+      throw std::logic_error("history_row: reactions of another set of boundaries");
+    for (std::size_t k = 0; k < reaction_columns_; ++k)
+      row += r != nullptr && !r->empty() ? fmt::format(",{:.17g}", (*r)[k]) : std::string(",0");
+  }
   row += "\n";
   // Appended as the run goes (io::AppendFile): constant memory, and a killed run keeps every row
   // written so far. A fresh run starts the file with the header at its first row.

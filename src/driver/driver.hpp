@@ -140,8 +140,9 @@ class OutputSession {
   ExactSolution<Dim> exact_;
   bool csv_ = true, vtk_ = true, vtk_binary_ = true;
   std::string history_header_;
-  io::AppendFile history_;       // history.csv
-  bool mapping_errors_ = false;  // history.csv has mass_error, momentum_error
+  io::AppendFile history_;            // history.csv
+  bool mapping_errors_ = false;       // history.csv has mass_error, momentum_error
+  std::size_t reaction_columns_ = 0;  // history.csv's reaction_* columns (output.reactions)
   bool history_continues_ = false;
   io::PvdSeries pvd_;
   // A distributed run's CSV frame: every process writes rows of it into the one file, in

@@ -119,6 +119,7 @@ class TypedStepper final : public Stepper<Dim> {
     sim_.spline_degree = basis_degree(method.basis);
     if (method.partial_lumping > 0.0) setup_partial_lumping(sim_, method.partial_lumping);
     sim_.conservation_limit = method.conservation_limit;
+    sim_.local_damping = method.local_damping;
     sim_.sorting.mode = method.sort;
     for (const auto& f : pb.fixed_sides) {
       Vec<Dim> n;
@@ -131,6 +132,18 @@ class TypedStepper final : public Stepper<Dim> {
         sim_.fix_boundary_normal(f.boundary, n);
       else
         sim_.fix_boundary(f.boundary, f.components);
+    }
+    std::vector<Index> prescribed;
+    if (pb.prescribed) {
+      prescribed = sim_.prescribe_box(*pb.prescribed);
+      if (prescribed.empty())
+        throw InputError(
+            "prescribed.min, prescribed.max: the box holds no degree of freedom of the basis (its "
+            "positions: the grid nodes, a B-spline's Greville abscissae, the mesh's vertices)");
+    }
+    if (pb.reactions) {
+      for (const auto& f : pb.fixed_sides) sim_.reaction_dofs.push_back(sim_.side_dofs(f));
+      if (pb.prescribed) sim_.reaction_dofs.push_back(prescribed);
     }
     sim_.body_force = pb.body_force;
     sim_.tractions = pb.tractions;

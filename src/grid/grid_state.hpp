@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/dof_array.hpp"
@@ -33,6 +34,9 @@ struct GridState {
     Mat<Dim> free;
   };
   std::vector<Projected> projected;
+  // DOFs whose velocity is prescribed (Problem::prescribed), with the velocity [m/s] their
+  // `fixed` components take (the acceleration there is zero); sorted by DOF.
+  std::vector<std::pair<Index, Vec<Dim>>> prescribed;
 
   // The basis's DOF count (not the window's).
   Index size() const { return dofs_; }

@@ -50,6 +50,20 @@ struct FixedSide {
   std::vector<std::pair<Index, std::array<double, 3>>> vertex_normals = {};
 };
 
+// A velocity prescribed on the degrees of freedom whose positions (Basis::dof_position: the grid
+// nodes, a B-spline's Greville abscissae, a mesh's vertices) lie in the box [min, max]: a rigid
+// footing or plate pushed at constant speed (prescribed.*). `components`: bit d set where
+// component d is prescribed (all: a rough footing; the normal one: a smooth footing).
+struct PrescribedVelocity {
+  std::array<double, 3> min = {}, max = {};  // [m]
+  std::array<double, 3> velocity = {};       // [m/s]
+  unsigned components = ~0u;
+};
+
+// The names of the sides of the grid by direction (0 lower, 1 upper), as the boundary.* keys.
+inline constexpr const char* kSideNames[3][2] = {
+    {"left", "right"}, {"bottom", "top"}, {"back", "front"}};
+
 template <int Dim>
 struct Problem {
   static constexpr int kDim = Dim;
@@ -58,6 +72,11 @@ struct Problem {
   Particles<Dim> particles;
   Material material;
   std::vector<FixedSide> fixed_sides;
+  // At most one box of prescribed velocities (MPM solver, lumped mass).
+  std::optional<PrescribedVelocity> prescribed;
+  // output.reactions: history.csv gets the reaction force on each constrained boundary (each of
+  // fixed_sides, then the prescribed box), reaction_names() in order.
+  bool reactions = false;
   // The triangles of a mesh file (grid.mesh; 2D, P1 and Powell-Sabin bases), shared with the
   // basis; then `grid` is the mesh's bounding box. Null: the basis lives on the grid (for the
   // triangle bases, a structured triangulation of it).
@@ -77,6 +96,21 @@ struct Problem {
   // unstable, ...): printed when the run starts and kept in summary.json's "warnings".
   std::vector<std::string> warnings;
 };
+
+// The boundaries whose reactions history.csv has (Problem::reactions): a grid side by its key
+// (left, right, bottom, top, back, front), a named boundary of a mesh by its name, and
+// "prescribed" for the box of prescribed velocities.
+template <int Dim>
+std::vector<std::string> reaction_names(const Problem<Dim>& pb) {
+  std::vector<std::string> names;
+  for (const FixedSide& f : pb.fixed_sides)
+    names.emplace_back(
+        f.boundary.empty()
+            ? kSideNames[static_cast<std::size_t>(f.direction)][static_cast<std::size_t>(f.side)]
+            : f.boundary);
+  if (pb.prescribed) names.emplace_back("prescribed");
+  return names;
+}
 
 using AnyProblem = std::variant<Problem<1>, Problem<2>, Problem<3>>;
 

@@ -581,16 +581,88 @@ void solve_grid(RunState<Dim>& sim, const DofArray<V>& r, DofArray<V>& y) {
 }
 }  // namespace
 
-// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46).
+// The reaction on each constrained boundary (RunState::reaction_dofs) into diag.reactions:
+// R_i = C_i (m_i a_i - f_i) summed over the boundary's DOFs, C_i the projector onto DOF i's
+// constrained velocities (its fixed components, or 1 - the free projector of an inclined
+// roller): the force the support exerts on the body, so that m_i a_i = f_i + R_i. With lumped
+// mass a_i vanishes on the constrained components, so R_i = -C_i f_i (f_i the nodal force of
+// the step, internal, external and body forces). A DOF on two boundaries (a corner) counts in
+// both. A distributed run sums each DOF once (its owner's), then over the processes in rank
+// order.
 template <int Dim>
-void solve_acceleration(RunState<Dim>& sim) {
-  solve_grid(sim, sim.nodes.force, sim.nodes.accel);
+void sum_reactions(RunState<Dim>& sim) {
+  const auto& nd = sim.nodes;
+  const auto [first, end] = sim.dof_window();
+  const bool split = sim.comm != nullptr && sim.comm->distributed();
+  auto& out = sim.diag.reactions;
+  out.assign(sim.reaction_dofs.size() * Dim, 0.0);
+  for (std::size_t g = 0; g < sim.reaction_dofs.size(); ++g) {
+    Vec<Dim> sum = Vec<Dim>::Zero();
+    for (const Index i : sim.reaction_dofs[g]) {
+      if (i < first || i >= end) continue;
+      if (split && !sim.shared.owns(sim.comm->rank(), i)) continue;
+      const auto k = static_cast<std::size_t>(i);
+      Mat<Dim> C = Mat<Dim>::Zero();
+      for (int d = 0; d < Dim; ++d)
+        if (nd.fixed[k] & (1u << d)) C(d, d) = 1.0;
+      const auto it = std::lower_bound(
+          nd.projected.begin(), nd.projected.end(), i,
+          [](const typename GridState<Dim>::Projected& e, Index j) { return e.dof < j; });
+      if (it != nd.projected.end() && it->dof == i) C = Mat<Dim>::Identity() - it->free;
+      sum += C * (nd.mass[k] * nd.accel[k] - nd.force[k]);
+    }
+    for (int d = 0; d < Dim; ++d) out[g * Dim + static_cast<std::size_t>(d)] = sum[d];
+  }
+  if (split) sim.comm->sum(std::span<double>(out));
 }
 
-// v_i = M^{-1} q_i with Dirichlet components zero (D eq. 2.35 / 2.49).
+// Cundall's local non-viscous damping (method.local_damping; Cundall 1987, as in PFC, FLAC,
+// Anura3D and cb-geo's MPM): each free component of an active DOF's force loses alpha |f| against
+// the DOF's velocity v_i = q_i / m_i (the row sum of the mass matrix: the sign alone is needed),
+//   f_i,d <- f_i,d - alpha |f_i,d| sign(v_i,d).
+// It removes a fraction alpha of the unbalanced force while the node moves and none at rest, so
+// an equilibrium, and the limit load of a quasi-static problem, are those of the undamped
+// equations; the transient is not. Every scheme maps the momentum of the step before its
+// acceleration is solved (MUSL too when damping is on).
+template <int Dim>
+void damp_forces(RunState<Dim>& sim) {
+  auto& nd = sim.nodes;
+  const double alpha = sim.local_damping;
+  const auto [first, end] = sim.dof_window();
+  const Index offset = first;
+  parallel_for(end - first, [&](Index k) {
+    const auto i = static_cast<std::size_t>(offset + k);
+    if (!nd.active[i]) return;
+    for (int d = 0; d < Dim; ++d) {
+      if (nd.fixed[i] & (1u << d)) continue;
+      const double q = nd.momentum[i][d];
+      const double s = q > 0.0 ? 1.0 : (q < 0.0 ? -1.0 : 0.0);
+      nd.force[i][d] -= alpha * std::abs(nd.force[i][d]) * s;
+    }
+  });
+}
+
+// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46), after the local damping and with
+// the reactions where asked.
+template <int Dim>
+void solve_acceleration(RunState<Dim>& sim) {
+  if (sim.local_damping > 0.0) damp_forces(sim);
+  solve_grid(sim, sim.nodes.force, sim.nodes.accel);
+  if (!sim.reaction_dofs.empty()) sum_reactions(sim);
+}
+
+// v_i = M^{-1} q_i with Dirichlet components zero (D eq. 2.35 / 2.49), and the prescribed
+// velocities (RunState's nodes.prescribed) in their components.
 template <int Dim>
 void solve_velocity(RunState<Dim>& sim) {
-  solve_grid(sim, sim.nodes.momentum, sim.nodes.velocity);
+  auto& nd = sim.nodes;
+  solve_grid(sim, nd.momentum, nd.velocity);
+  for (const auto& [i, v] : nd.prescribed) {
+    if (!nd.velocity.holds(i)) continue;
+    const auto k = static_cast<std::size_t>(i);
+    for (int d = 0; d < Dim; ++d)
+      if (nd.fixed[k] & (1u << d)) nd.velocity[k][d] = v[d];
+  }
 }
 
 // Euler-Cromer on the grid: v_i^{s+1} = v_i^s + dt a_i^s (D eq. 2.36; USL, USF).

@@ -46,8 +46,12 @@ struct Musl {
     using namespace stages;
     evaluate_basis(sim);
     refresh_body_force(sim);
-    map_to_grid<grid_sum::kMass | grid_sum::kForces>(sim);  // M^s (2.44), f^s (2.45)
-    solve_acceleration(sim);                                // a^s                (2.46)
+    // M^s (2.44), f^s (2.45); q^s too where the local damping needs the nodes' velocities
+    if (sim.local_damping > 0.0)
+      map_to_grid<grid_sum::kMass | grid_sum::kMomentum | grid_sum::kForces>(sim);
+    else
+      map_to_grid<grid_sum::kMass | grid_sum::kForces>(sim);
+    solve_acceleration(sim);                // a^s                (2.46)
     update_velocity_map_momentum(sim, dt);  // v_p^{s+1} (2.47), q from it (2.48): one pass
     solve_velocity(sim);                    // v_i^{s+1}          (2.49)
     mapped_strain_rates(sim);               // L_p where the mapping defines it

@@ -99,8 +99,11 @@ KeySpec expression(std::string name, std::string unit, std::string def, std::str
 }
 
 // One value per direction (RealVector) or component (ExpressionVector); see KeyType.
-KeySpec real_vector(std::string name, std::string unit, double def, std::string description) {
-  return numeric(std::move(name), KeyType::RealVector, std::move(unit), Value(def), any(),
+KeySpec real_vector(std::string name, std::string unit, std::optional<double> def,
+                    std::string description) {
+  std::optional<Value> v;
+  if (def) v = Value(*def);
+  return numeric(std::move(name), KeyType::RealVector, std::move(unit), v, any(),
                  std::move(description));
 }
 
@@ -233,6 +236,10 @@ std::vector<KeySpec> declare() {
       real("method.conservation_limit", "", 0.5, greater_than(0),
            "a step whose relative mass or momentum error on the grid (summary.json "
            "'conservation') exceeds this stops the run (exit code 9)"),
+      real("method.local_damping", "", 0.0, closed_open(0, 1),
+           "Cundall's local non-viscous damping alpha: each free component of a nodal force "
+           "loses alpha |f| against the node's velocity, f - alpha |f| sign(v) (quasi-static "
+           "problems; 0: none; 0.8 is usual for them; MPM solver)"),
       choice("method.solver", "mpm", kSolvers, "time-stepping method"),
       choice("method.triangles", "right", kTrianglePatterns,
              "triangulation of the grid cells for method.basis = \"p1_triangles\" and "
@@ -360,6 +367,21 @@ std::vector<KeySpec> declare() {
              "condition on the grid side z = grid.min (3D custom)"),
       choice("boundary.front", "fixed", kBoundaryTypes,
              "condition on the grid side z = grid.max (3D custom)"),
+      choice("prescribed.nodes", "none", kPrescribedModes,
+             "degrees of freedom with a prescribed velocity: a rigid footing or plate pushed at "
+             "constant speed (2D and 3D custom; MPM, lumped mass)"),
+      when_read(real_vector("prescribed.min", "m", std::nullopt,
+                            "lower corner of the box of prescribed.nodes = \"box\": the degrees "
+                            "of freedom whose positions lie in it (grid nodes; B-splines: "
+                            "Greville abscissae; mesh vertices)")),
+      when_read(real_vector("prescribed.max", "m", std::nullopt,
+                            "upper corner of the box of prescribed.nodes = \"box\"")),
+      when_read(real_vector("prescribed.velocity", "m/s", std::nullopt,
+                            "the constant velocity of the box's degrees of freedom, per "
+                            "component")),
+      choice("prescribed.components", "all", kPrescribedComponents,
+             "the velocity components prescribed in the box (all: a rough footing; the normal "
+             "one: a smooth footing)"),
       choice("boundary.fixed", "", {},
              "named boundaries of grid.mesh (its physical groups of lines; `mpm mesh FILE` "
              "lists them) whose velocity is zero, separated by commas, e.g. \"inlet, base\" "
@@ -423,6 +445,10 @@ std::vector<KeySpec> declare() {
               "frames evenly spaced in time after the initial one, the final state always "
               "written (0: initial and final only)"),
       boolean("output.csv", true, "write particle frames as CSV"),
+      boolean("output.reactions", false,
+              "history.csv gets the reaction force on each constrained boundary (grid sides, "
+              "named mesh boundaries, the prescribed box), reaction_<name>_<x|y|z> [N; N/m in "
+              "2D] (MPM, lumped mass)"),
       boolean("output.vtk", true, "write particle and grid frames as VTK XML (.vtu + .pvd)"),
       choice("output.vtk_format", "binary", kVtkFormats, "encoding of the .vtu arrays"),
       integer("output.history_every", 1, at_least(1), "write a history.csv row every N steps"),

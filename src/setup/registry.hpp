@@ -192,6 +192,21 @@ inline constexpr Entry kGeostaticModes[] = {
      "(2D) or -z (3D)"},
 };
 
+// prescribed.nodes: which degrees of freedom get a prescribed velocity (custom).
+inline constexpr Entry kPrescribedModes[] = {
+    {"none", "no prescribed velocity"},
+    {"box",
+     "the degrees of freedom whose positions lie in the box prescribed.min - prescribed.max move "
+     "at prescribed.velocity"},
+};
+// prescribed.components: the prescribed velocity components.
+inline constexpr Entry kPrescribedComponents[] = {
+    {"all", "every component (a rough footing)"},
+    {"x", "the x component alone"},
+    {"y", "the y component alone (a smooth footing on a surface normal to y)"},
+    {"z", "the z component alone (3D)"},
+};
+
 inline constexpr Entry kSortModes[] = {
     {"auto", "sort by cell when the order has degraded (chunk DOF spans twice the sorted ones)"},
     {"never", "keep the particles in their order (seeded, or as a checkpoint stored them)"},

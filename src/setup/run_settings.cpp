@@ -179,6 +179,12 @@ RunSettings run_settings(const Config& cfg, int dim) {
           cfg.where("method.mass_solver"), cfg.get_string("method.solver"), name_of(m.basis)));
   }
   m.conservation_limit = cfg.get_real("method.conservation_limit");
+  m.local_damping = cfg.get_real("method.local_damping");
+  if (m.local_damping > 0.0 && m.solver != Solver::Mpm)
+    throw InputError(fmt::format(
+        "{}: method.local_damping damps the grid forces of the MPM solver; method.solver = "
+        "\"{}\" has none (use method.solver = \"mpm\" or leave method.local_damping out)",
+        cfg.where("method.local_damping"), cfg.get_string("method.solver")));
   m.sort = cfg.get_string("method.sort") == "never" ? SortMode::Never : SortMode::Auto;
   if (m.solver != Solver::Ulfem)
     m.mapping = dim == 1   ? configured_mapping<1>(m.mapping, cfg)

@@ -46,6 +46,7 @@ struct MethodSettings {
   MassSolverSettings mass_solver;  // method.mass_solver and its keys (consistent mass)
   double partial_lumping = 0.0;    // method.partial_lumping (consistent mass; 0: off)
   double conservation_limit = 0.5;
+  double local_damping = 0.0;  // method.local_damping (Cundall's alpha; 0: off)
   SortMode sort = SortMode::Auto;
   std::string where_solver, where_basis, where_mapping, where_tls_completion, where_mass;
 };

@@ -1,4 +1,6 @@
 #pragma once
+#include <vector>
+
 #include "core/types.hpp"
 
 namespace mpm {
@@ -19,6 +21,11 @@ struct Diagnostics {
   // any step; not checkpointed.
   Index lumped_dofs = 0;
   Index max_lumped_dofs = 0;
+  // Problem::reactions: the reaction force [N; N/m in 2D, per unit thickness] on each
+  // constrained boundary (RunState::reaction_dofs), Dim components per boundary, from the
+  // latest step's grid forces (stages::solve_acceleration); empty before the first step; not
+  // checkpointed.
+  std::vector<double> reactions;
 };
 
 }  // namespace mpm

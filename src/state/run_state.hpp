@@ -60,6 +60,9 @@ struct SolveState {
   double mass_tolerance = 1e-10;  // relative to the largest nodal mass
   // Largest relative mass or momentum error of one mapping before the run stops (exit code 9).
   double conservation_limit = 0.5;
+  // Cundall's local non-viscous damping alpha (method.local_damping; 0: off), applied to the
+  // nodal forces by stages::solve_acceleration.
+  double local_damping = 0.0;
   GridState<Dim> nodes;
   ConsistentMass consistent;
   // A distributed run's p-multigrid hierarchy (method.mass_solver = "pmg"), built with the
@@ -106,6 +109,9 @@ struct SolveState {
   // adjoint rate), written by stages::mapped_strain_rates just before the stress update that
   // reads them, which empties it; empty: each particle's gradient from its stencil (D eq. 2.52).
   std::vector<Mat<Dim>> mapped_gradient;
+  // Problem::reactions: the DOFs of each constrained boundary (reaction_names order), whose
+  // reactions stages::solve_acceleration sums into diag.reactions; empty: none computed.
+  std::vector<std::vector<Index>> reaction_dofs;
 };
 
 // A distributed run: the processes, the DOFs they share, the ghost particles lent between them,

@@ -20,6 +20,7 @@
 #include "core/comm.hpp"
 #include "core/parallel.hpp"
 #include "grid/grid.hpp"
+#include "model/problem.hpp"
 #include "particles/particles.hpp"
 #include "state/run_state.hpp"
 
@@ -82,6 +83,37 @@ struct BasisState : RunState<Dim> {
   // bit is set in `components` (all by default); conditions on several sides combine.
   void fix_side(int d, int side, unsigned components = ~0u) {
     fix_dofs(basis.boundary_dofs(d, side), components);
+  }
+  // Prescribes the velocity of `pv` on the DOFs whose positions lie in its box (to 1e-9 of the
+  // largest cell size) in its components; returns those DOFs (none: the box holds no DOF).
+  std::vector<Index> prescribe_box(const PrescribedVelocity& pv) {
+    const double tol = 1e-9 * this->grid.h.maxCoeff();
+    std::vector<Index> dofs;
+    for (Index i = 0; i < basis.num_dofs(); ++i) {
+      const Vec<Dim> x = basis.dof_position(i);
+      bool in = true;
+      for (int d = 0; d < Dim; ++d) {
+        const auto k = static_cast<std::size_t>(d);
+        in = in && x[d] >= pv.min[k] - tol && x[d] <= pv.max[k] + tol;
+      }
+      if (in) dofs.push_back(i);
+    }
+    if (dofs.empty()) return dofs;
+    fix_dofs(dofs, pv.components);
+    Vec<Dim> v;
+    for (int d = 0; d < Dim; ++d) v[d] = pv.velocity[static_cast<std::size_t>(d)];
+    auto& pr = this->nodes.prescribed;
+    for (Index i : dofs) pr.emplace_back(i, v);
+    std::sort(pr.begin(), pr.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    return dofs;
+  }
+  // The DOFs of a grid side (d, side) or of a named boundary of the basis's mesh.
+  std::vector<Index> side_dofs(const FixedSide& f) const {
+    if (f.boundary.empty()) return basis.boundary_dofs(f.direction, f.side);
+    if constexpr (Basis::kTriangleMesh)
+      return basis.boundary_dofs(f.boundary);
+    else
+      throw std::logic_error("side_dofs: named boundaries belong to bases on triangles");
   }
   // The same on a named boundary of the basis's triangle mesh (FixedSide::boundary).
   void fix_boundary(std::string_view name, unsigned components = ~0u) {

@@ -87,6 +87,34 @@ std::unique_ptr<driver::Stepper<Dim>> compiled_stepper(StepperSpec<Dim> spec) {
   return driver::make_stepper<Dim>(spec.basis, driver::StepperInput<Dim>{pb, method, false});
 }
 
+// The problem and method of a configuration stepped as `mpm run` steps them (time.dt, the
+// step's time and count set as the driver sets them), without output: for tests that look at
+// the state between steps. The problem is built here; the stepper holds its particles.
+template <int Dim>
+struct ConfiguredRun {
+  explicit ConfiguredRun(const Config& cfg)
+      : problem(std::get<Problem<Dim>>(make_problem(cfg))),
+        method(run_settings(cfg, Dim).method),
+        dt(cfg.get_real("time.dt")),
+        stepper(driver::make_stepper<Dim>(method.basis,
+                                          driver::StepperInput<Dim>{problem, method, false})) {}
+  RunState<Dim>& state() { return stepper->state(); }
+  // `steps` more steps.
+  void advance(int steps) {
+    RunState<Dim>& sim = state();
+    for (int s = 0; s < steps; ++s) {
+      sim.time = static_cast<double>(sim.step) * dt;
+      stepper->step(dt);
+      ++sim.step;
+      sim.time = static_cast<double>(sim.step) * dt;
+    }
+  }
+  Problem<Dim> problem;
+  MethodSettings method;
+  double dt;
+  std::unique_ptr<driver::Stepper<Dim>> stepper;
+};
+
 // The mapping's run report (summary.json's "tls" or "mls" object; empty for the others).
 template <int Dim>
 nlohmann::ordered_json mapping_report(const driver::Stepper<Dim>& s) {
