@@ -209,6 +209,12 @@ CASES = [
     # A material with internal variables (material/tracked_elastic.hpp): a block thrown up
     # across the cuts, its particles' state migrating with them and written in the frames.
     ("2d_custom_thrown_tracked_elastic", "examples/custom_plate_2d.toml", TRACKED_BLOCK, "any"),
+    # An elasto-plastic law (von Mises: its plastic strain and yield mode migrate with the
+    # particles) under a box of prescribed velocities, its reactions summed over the processes
+    # (history.csv), with local damping: the strip footing on its coarse grid.
+    ("2d_footing_plastic_reactions_damped", "examples/footing_2d.toml",
+     ["grid.cells=20", "time.dt=5e-4", "time.end=0.1", "prescribed.min=[0, 2.3]",
+      "prescribed.max=[0.5, 2.7]", "output.frames=1"], "none"),
     # The bases on the grid's triangles with the direct mapping: P1 on criss-cross triangles
     # (whose centre DOFs follow the corners'), Powell-Sabin on right triangles.
     ("2d_plate_p1_triangles_criss_cross", "examples/plate_triangles_2d.toml",

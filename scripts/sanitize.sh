@@ -118,7 +118,7 @@ SLOW+='|Vortex2D\.QuadraticBsplinesConvergeInDisplacementAndStress|MlsConservati
 # 2D runs of 20-40 s under the sanitizers whose stages the 1D and smaller 2D tests exercise.
 SLOW+='|Parallel\.Plate2DQuadraticBSplineEverySchemeSameForOneAndTwoThreads'
 SLOW+='|Traction2D\.PlaneStrainColumnMatchesTheTractionBarRowByRow|Custom2D\.GravityPlateMatchesTheQuasiStaticSolution'
-SLOW+='|VerticalCut\.'  # two runs of 5000 steps (2.6 s in Release)
+SLOW+='|VerticalCut\.|StripFooting\.'  # 10000 and 3000 steps (2.6 s and 1.8 s in Release)
 # Iterative solves on grids up to 1/h = 32-64 (67 and 55 s here); MassSolver.* runs the same CG
 # and p-multigrid code on small grids. The plate-motion study of TLS on triangles (21 s): its
 # fits are those of the other TlsTriangle tests.
