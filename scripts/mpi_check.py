@@ -209,12 +209,14 @@ CASES = [
     # A material with internal variables (material/tracked_elastic.hpp): a block thrown up
     # across the cuts, its particles' state migrating with them and written in the frames.
     ("2d_custom_thrown_tracked_elastic", "examples/custom_plate_2d.toml", TRACKED_BLOCK, "any"),
-    # An elasto-plastic law (von Mises: its plastic strain and yield mode migrate with the
-    # particles) under a box of prescribed velocities, its reactions summed over the processes
-    # (history.csv), with local damping: the strip footing on its coarse grid.
-    ("2d_footing_plastic_reactions_damped", "examples/footing_2d.toml",
-     ["grid.cells=20", "time.dt=5e-4", "time.end=0.1", "prescribed.min=[0, 2.3]",
-      "prescribed.max=[0.5, 2.7]", "output.frames=1"], "none"),
+    # A box of prescribed velocities (the top of the custom plate's column pushed down), the
+    # reactions of the rollers, the base and the box summed over the processes (history.csv),
+    # and local damping.
+    ("2d_column_pushed_reactions_damped", "examples/custom_plate_2d.toml",
+     ["time.end=0.05", "method.basis=bspline", 'prescribed.nodes="box"',
+      "prescribed.min=[0, 0.95]", "prescribed.max=[0.2, 1.0]", "prescribed.velocity=[0, -0.05]",
+      'prescribed.components="y"', "output.reactions=true", "method.local_damping=0.8",
+      "output.frames=1"], "none"),
     # The bases on the grid's triangles with the direct mapping: P1 on criss-cross triangles
     # (whose centre DOFs follow the corners'), Powell-Sabin on right triangles.
     ("2d_plate_p1_triangles_criss_cross", "examples/plate_triangles_2d.toml",
@@ -417,6 +419,11 @@ def compare_tables(what, a, b, failures):
         m = re.match(r"^(.*)_\d+$", name)
         if m:
             group = [k for k, h in enumerate(ha) if re.match(rf"^{re.escape(m.group(1))}_\d+$", h)]
+        # The reactions (reaction_<boundary>_<x|y|z>) are sums of nodal forces, the largest of
+        # them their scale: a component that vanishes by symmetry (a fixed base's x) is round-off
+        # of those sums.
+        if name.startswith("reaction_"):
+            group = [k for k, h in enumerate(ha) if h.startswith("reaction_")]
         scale = max([abs(r[k]) for r in ra + rb for k in group] + [0.0])
         if name.startswith("momentum_"):
             scale = max(scale, momentum_scale)
