@@ -33,9 +33,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # the package beside this file, however the script is started
 
-from verification import (bases, chapter5, cube, footing, item3, large_bar,  # noqa: E402
-                          massmatrix, mesh_boundaries, mms, otm, plate, plate_001, ps_mpm,
-                          ps_partial, reconstruction, small_bar, static, tls_robust, vortex)
+from verification import (bases, chapter5, cube, element_block, footing, item3,  # noqa: E402
+                          large_bar, massmatrix, mesh_boundaries, mms, otm, plate, plate_001,
+                          ps_mpm, ps_partial, reconstruction, small_bar, static, tls_robust,
+                          vortex)
 from verification.common import ROOT  # noqa: E402
 from verification.quick import quick  # noqa: E402
 from verification.report import full  # noqa: E402
@@ -74,6 +75,7 @@ SECTIONS = [
     ("001 long study", plate_001.sec_001),
     ("2D traction and custom", static.sec_traction_2d),
     ("3D cube", cube.sec_cube),
+    ("plane-strain compression of a soil block", element_block.sec_element_block),
     ("strip footing", footing.sec_footing),
 ]
 # Appended with --long (hours).
