@@ -56,6 +56,15 @@ def sec_footing(R, ctx):
     keys.append("nu49")
     specs.append(("footing_2d", b2 + ["material.poisson_ratio=0.49", "time.dt=1.25e-4"], 0,
                   "footing_nu49"))
+    # At h = B/8: the smooth footing (its vertical velocity alone prescribed), and the
+    # B-splines with TLS's mapping.
+    variants = [("linear, smooth footing", BASES[0][1] + footing_box(BASES[0][0], 5.0 / 40) +
+                 ['prescribed.components="y"']),
+                ("B-splines, degree 2, smooth footing", b2 + ['prescribed.components="y"']),
+                ("B-splines, degree 2, TLS", b2 + ["method.mapping=tls"])]
+    for label, sets in variants:
+        keys.append(label)
+        specs.append(("footing_2d", sets, 0, "footing_" + label.replace(",", "")))
     res = dict(zip(keys, R.many(specs)))
     curves = {k: curve(r) for k, r in res.items()}
 
@@ -70,6 +79,13 @@ def sec_footing(R, ctx):
     t = ["| basis | h = B/4 | h = B/8 | h = B/16 |", "|---|---|---|---|"]
     for label, _ in BASES:
         t.append(f"| {label} | " + " | ".join(cell((label, n)) for n in CELLS) + " |")
+    t2 = ["| run, h = B/8 | q / c_u |", "|---|---|"]
+    t2.append(f"| linear, rough footing (above) | {cell((BASES[0][0], CELLS[1]))} |")
+    t2.append(f"| B-splines, degree 2, rough footing, direct mapping (above) | "
+              f"{cell((BASES[-1][0], CELLS[1]))} |")
+    for label, _ in variants:
+        t2.append(f"| {label} | {cell(label)} |")
+    t2.append(f"| B-splines, degree 2, rough footing, nu = 0.49 | {cell('nu49')} |")
 
     figs = []
     plt = pyplot()
@@ -106,6 +122,7 @@ def sec_footing(R, ctx):
                       b2_pct=100 * (b2[2] / PRANDTL - 1), lin_4=lin[0], lin_8=lin[1],
                       lin_16=lin[2], lin_pct=100 * (lin[2] / PRANDTL - 1), nu49=nu49,
                       nu49_pct=100 * (nu49 / PRANDTL - 1),
-                      lin_side="further above" if lin[2] > b2[2] else "below them")
-    return render("footing", "section", table="\n".join(t), text=text,
+                      lin_side="further above" if lin[2] > b2[2] else "below them",
+                      lin_rate=math.sqrt(max(lin[2] - PRANDTL, 0.0) / (lin[0] - PRANDTL)))
+    return render("footing", "section", table="\n".join(t), t2="\n".join(t2), text=text,
                   figures=fig_md(ctx, figs, "strip footing: load against settlement"))
