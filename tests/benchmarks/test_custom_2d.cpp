@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/stepper.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "driver/run.hpp"
 #include "driver/stepper.hpp"
@@ -28,25 +29,6 @@ namespace MPM_UNITY_ID {
 namespace {
 
 void expect_input_error(const std::string& toml, const std::vector<std::string>& needles);
-
-// Steps a problem as run() does (P1 basis, direct mapping, MUSL, lumped mass), with the
-// library's compiled stepper.
-template <int Dim>
-Particles<Dim> step_problem(Problem<Dim> pb, double dt, int steps) {
-  MethodSettings method;
-  method.basis = LinearKind{};
-  method.mapping = DirectMapping{};
-  method.scheme = Musl{};
-  auto stepper =
-      driver::make_stepper<Dim>(method.basis, driver::StepperInput<Dim>{pb, method, false});
-  RunState<Dim>& sim = stepper->state();
-  for (int s = 0; s < steps; ++s) {
-    stepper->step(dt);
-    sim.step = s + 1;
-    sim.time = static_cast<double>(sim.step) * dt;
-  }
-  return sim.particles;
-}
 
 // The traction bar of examples/traction_bar.toml on a coarser grid: rho = 100 kg/m^3,
 // E = 100 Pa, nu = 0 (c = 1 m/s), L = 1 m in a 1.25 m grid of 40 cells, 2 PPC.
@@ -123,8 +105,8 @@ TEST(Traction2D, PlaneStrainColumnMatchesTheTractionBarRowByRow) {
   const TractionBarExact ex{1.0, 100.0, 1.0, 1.0};
   const double dt = 1e-3;
   const int steps = 1500;  // T = 1.5 s: the wave has reflected at the fixed end (c T > L)
-  const auto P1 = step_problem<1>(std::move(p1), dt, steps);
-  const auto P2 = step_problem<2>(std::move(p2), dt, steps);
+  const auto P1 = test::step_problem<1>(std::move(p1), dt, steps);
+  const auto P2 = test::step_problem<2>(std::move(p2), dt, steps);
   const std::size_t nx = P1.x.size();
   ASSERT_EQ(P2.x.size() % nx, 0u);
   const std::size_t rows = P2.x.size() / nx;
@@ -199,8 +181,8 @@ right = "-A*sin(pi*c*t/L)"
   auto pc = std::get<Problem<1>>(make_problem(cc));
   ASSERT_EQ(pc.fixed_sides.size(), 1u);
   EXPECT_EQ(pc.fixed_sides[0].components, 1u);
-  const auto P1 = step_problem<1>(std::get<Problem<1>>(make_problem(c1)), 1e-3, 1500);
-  const auto PC = step_problem<1>(std::move(pc), 1e-3, 1500);
+  const auto P1 = test::step_problem<1>(std::get<Problem<1>>(make_problem(c1)), 1e-3, 1500);
+  const auto PC = test::step_problem<1>(std::move(pc), 1e-3, 1500);
   ASSERT_EQ(PC.x.size(), P1.x.size());
   double max_ds = 0.0;
   for (std::size_t i = 0; i < P1.x.size(); ++i)
@@ -253,7 +235,7 @@ top = ["q0", "p0"]
   ASSERT_EQ(pb.tractions.size(), 2u);
   const double dt = 1e-4;
   const int steps = 200;
-  const auto P = step_problem<2>(std::move(pb), dt, steps);
+  const auto P = test::step_problem<2>(std::move(pb), dt, steps);
   // Right face: height 0.4 m; top face: width 0.5 m (reference areas per unit thickness).
   Vec<2> impulse = Vec<2>::Zero();
   for (int s = 0; s < steps; ++s) {

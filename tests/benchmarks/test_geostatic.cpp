@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/stepper.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "driver/stepper.hpp"
 #include "methods/kinds.hpp"
@@ -19,24 +20,6 @@
 namespace mpm {
 namespace MPM_UNITY_ID {
 namespace {
-
-// Steps a problem with the linear basis, direct mapping, USL and lumped mass.
-template <int Dim>
-Particles<Dim> step_problem(Problem<Dim> pb, double dt, int steps) {
-  MethodSettings method;
-  method.basis = LinearKind{};
-  method.mapping = DirectMapping{};
-  method.scheme = Usl{};
-  auto stepper =
-      driver::make_stepper<Dim>(method.basis, driver::StepperInput<Dim>{pb, method, false});
-  RunState<Dim>& sim = stepper->state();
-  for (int s = 0; s < steps; ++s) {
-    stepper->step(dt);
-    sim.step = s + 1;
-    sim.time = static_cast<double>(sim.step) * dt;
-  }
-  return sim.particles;
-}
 
 // A Mohr-Coulomb layer 1 m deep on a fixed base between rollers, its top on a grid line, under
 // gravity, elastic at K0 = 0.5 (c = 10 kPa, phi = 30 deg).
@@ -124,7 +107,8 @@ void expect_still(const std::string& toml) {
       EXPECT_NEAR(P0.state[i][2], -0.5 * rho_g * depth, 1e-9 * rho_g);
     }
   }
-  const Particles<Dim> P = step_problem(pb, 1e-4, 200);
+  // Linear basis, direct mapping, USL, lumped mass.
+  const Particles<Dim> P = test::step_problem(pb, 1e-4, 200, Usl{});
   double vmax = 0.0, drift = 0.0;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     vmax = std::max(vmax, P.v[i].norm());

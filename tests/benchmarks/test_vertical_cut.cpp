@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/stepper.hpp"
 #include "benchmarks/benchmarks.hpp"
 #include "driver/stepper.hpp"
 #include "methods/kinds.hpp"
@@ -28,17 +29,9 @@ double largest_slide(double c, double* plastic) {
   const Config cfg =
       Config::load(std::string(MPM_SOURCE_DIR) + "/examples/vertical_cut_2d.toml",
                    {"grid.cells=20", "time.dt=4e-4", fmt::format("material.cohesion={}", c)});
-  Problem<2> pb = std::get<Problem<2>>(make_problem(cfg));
-  const MethodSettings method = run_settings(cfg, 2).method;
-  auto stepper = driver::make_stepper<2>(method.basis, driver::StepperInput<2>{pb, method, false});
-  RunState<2>& sim = stepper->state();
-  const double dt = cfg.get_real("time.dt");
-  const int steps = static_cast<int>(std::llround(cfg.get_real("time.end") / dt));
-  for (int s = 0; s < steps; ++s) {
-    sim.time = s * dt;
-    stepper->step(dt);
-    sim.step = s + 1;
-  }
+  test::ConfiguredRun<2> run(cfg);
+  run.advance(static_cast<int>(std::llround(cfg.get_real("time.end") / run.dt)));
+  const RunState<2>& sim = run.state();
   const auto& P = sim.particles;
   double slide = 0.0;
   *plastic = 0.0;

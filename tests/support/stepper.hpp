@@ -87,6 +87,26 @@ std::unique_ptr<driver::Stepper<Dim>> compiled_stepper(StepperSpec<Dim> spec) {
   return driver::make_stepper<Dim>(spec.basis, driver::StepperInput<Dim>{pb, method, false});
 }
 
+// Steps a problem with the linear basis, the direct mapping, lumped mass and `scheme`, with the
+// library's compiled stepper (the step's count and time set after each step, as run() does);
+// the particles after `steps` steps.
+template <int Dim>
+Particles<Dim> step_problem(Problem<Dim> pb, double dt, int steps, Scheme scheme = Musl{}) {
+  MethodSettings method;
+  method.basis = LinearKind{};
+  method.mapping = DirectMapping{};
+  method.scheme = scheme;
+  auto stepper =
+      driver::make_stepper<Dim>(method.basis, driver::StepperInput<Dim>{pb, method, false});
+  RunState<Dim>& sim = stepper->state();
+  for (int s = 0; s < steps; ++s) {
+    stepper->step(dt);
+    sim.step = s + 1;
+    sim.time = static_cast<double>(sim.step) * dt;
+  }
+  return sim.particles;
+}
+
 // The problem and method of a configuration stepped as `mpm run` steps them (time.dt, the
 // step's time and count set as the driver sets them), without output: for tests that look at
 // the state between steps. The problem is built here; the stepper holds its particles.
