@@ -143,7 +143,17 @@ auto finite_load(const Config& cfg, const std::string& key, const std::string& p
 // constrained rows with zero values leaves out).
 template <int Dim>
 void prescribed_from_config(Problem<Dim>& pb, const Config& cfg) {
-  if (cfg.get_string("prescribed.nodes") == "none") return;
+  if (cfg.get_string("prescribed.nodes") == "none") {
+    // The box's keys are read only with a box: given without one, they would do nothing.
+    for (const char* key :
+         {"prescribed.min", "prescribed.max", "prescribed.velocity", "prescribed.components"})
+      if (!cfg.at_default(key))
+        throw InputError(
+            fmt::format("{}: {} is read with prescribed.nodes = \"box\", and this run has "
+                        "prescribed.nodes = \"none\" (set it to \"box\", or leave {} out)",
+                        cfg.where(key), key, key));
+    return;
+  }
   const std::string where = cfg.where("prescribed.nodes");
   if (cfg.get_string("method.solver") != "mpm")
     throw InputError(fmt::format(

@@ -33,7 +33,14 @@ template <int Dim>
 std::optional<K0Stress<Dim>> k0_stress_from_config(const Config& cfg, const Problem<Dim>& pb,
                                                    const std::vector<Expression>& body_force,
                                                    double rho) {
-  if (cfg.get_string("initial.geostatic") == "none") return std::nullopt;
+  if (cfg.get_string("initial.geostatic") == "none") {
+    if (!cfg.at_default("initial.k0"))
+      throw InputError(
+          fmt::format("{}: initial.k0 is read with initial.geostatic = \"k0\", and this run has "
+                      "initial.geostatic = \"none\" (set it to \"k0\", or leave initial.k0 out)",
+                      cfg.where("initial.k0")));
+    return std::nullopt;
+  }
   const std::string where = cfg.where("initial.geostatic");
   const std::vector<std::string> given = cfg.get_expressions("initial.stress");
   if (!(given.size() == 1 && given[0] == "0"))

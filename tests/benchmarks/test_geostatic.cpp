@@ -152,6 +152,8 @@ TEST(Geostatic, WhatTheProcedureCannotDoIsRefusedNamingTheKey) {
   expect_input_error(with("k0 = 0.5", "k0 = 0.5\nstress = [\"-1\", \"0\", \"0\"]"),
                      {"computes the initial stress; leave initial.stress"});
   expect_input_error(with("k0 = 0.5\n", ""), {"required key 'initial.k0'"});
+  expect_input_error(with("geostatic = \"k0\"\n", ""),
+                     {"initial.k0 is read with initial.geostatic = \"k0\""});
   std::string elastic = with("model = \"mohr_coulomb\"", "model = \"linear_elastic\"");
   elastic.erase(elastic.find("cohesion"),
                 std::string("cohesion = 10e3\nfriction_angle = 30.0\n").size());

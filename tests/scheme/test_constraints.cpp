@@ -248,6 +248,8 @@ max = [0.0, 1.0]
 velocity = [0.0, -0.1]
 )toml")),
       "prescribed.max = 0 is below prescribed.min = 0.5 in x");
+  has(refusal(block("[prescribed]\nvelocity = [0.0, -0.1]\n")),
+      "case.toml:24:12: prescribed.velocity is read with prescribed.nodes = \"box\"");
   has(refusal(block("[output]\nreactions = true\n")),
       "output.reactions: benchmark = \"custom\" has no constrained boundary");
   has(refusal(std::string(kLayer) + "[method]\nmass = \"consistent\"\n"),
