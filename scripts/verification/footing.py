@@ -5,7 +5,7 @@ import csv
 import math
 import os
 
-from .common import fig_md
+from .common import EX, fig_md
 from .plots import pyplot, save_figure
 from .template import render
 
@@ -19,6 +19,7 @@ BASES = [("linear", ["method.basis=linear"]),
          ("CPDI", ["method.basis=cpdi"]),
          ("B-splines, degree 2", ["method.basis=bspline", "method.degree=2"])]
 CELLS = (20, 40, 80)  # h = B / 4, B / 8, B / 16 over the 5 m grid
+PHI_FRICTIONAL = 20.0  # [deg] the frictional soil's friction angle
 
 
 def footing_box(label, h):
@@ -65,6 +66,26 @@ def sec_footing(R, ctx):
     for label, sets in variants:
         keys.append(label)
         specs.append(("footing_2d", sets, 0, "footing_" + label.replace(",", "")))
+    # A frictional soil: Mohr-Coulomb, c = c_u, phi = 20 deg, psi = 0, pushed to 4 % of B, against
+    # Prandtl's N_c = (N_q - 1) cot phi, N_q = exp(pi tan phi) tan^2(45 deg + phi / 2). The
+    # example's von Mises parameter is replaced in a copy (a law refuses another's parameters).
+    with open(os.path.join(EX, "footing_2d.toml")) as f:
+        text = f.read()
+    own = "model = \"von_mises\"\n"
+    if own not in text or "yield_stress = " not in text:
+        raise SystemExit("footing.py: examples/footing_2d.toml has changed its [material]; "
+                         "update the frictional runs")
+    lines = [x for x in text.replace(own, f"model = \"mohr_coulomb\"\ncohesion = {C_U:g}\n"
+                                              f"friction_angle = {PHI_FRICTIONAL:g}\n").split("\n")
+             if not x.startswith("yield_stress = ")]
+    frictional = os.path.join(R.work, "footing_frictional")
+    with open(frictional + ".toml", "w") as f:
+        f.write("\n".join(lines))
+    frictional_runs = [("linear", BASES[0][1] + footing_box(BASES[0][0], 5.0 / 40)),
+                       ("B-splines, degree 2", b2)]
+    for label, sets in frictional_runs:
+        keys.append(("frictional", label))
+        specs.append((frictional, sets + ["time.end=4"], 0, "footing_frictional_" + label[:6]))
     res = dict(zip(keys, R.many(specs)))
     curves = {k: curve(r) for k, r in res.items()}
 
@@ -86,6 +107,16 @@ def sec_footing(R, ctx):
     for label, _ in variants:
         t2.append(f"| {label} | {cell(label)} |")
     t2.append(f"| B-splines, degree 2, rough footing, nu = 0.49 | {cell('nu49')} |")
+    tp = math.tan(math.radians(PHI_FRICTIONAL))
+    n_q = math.exp(math.pi * tp) * math.tan(math.radians(45 + PHI_FRICTIONAL / 2)) ** 2
+    n_c = (n_q - 1) / tp
+    t3 = ["| basis, h = B/8 | q / c at 4 % of B | Prandtl's N_c | difference |",
+          "|---|---|---|---|"]
+    for label, _ in frictional_runs:
+        q = final(("frictional", label))
+        t3.append(f"| {label} | {q:.3f} | {n_c:.3f} | {100 * (q / n_c - 1):+.1f} % |"
+                  if q is not None else
+                  f"| {label} | {res[('frictional', label)].get('status')} | {n_c:.3f} | - |")
 
     figs = []
     plt = pyplot()
@@ -124,5 +155,6 @@ def sec_footing(R, ctx):
                       nu49_pct=100 * (nu49 / PRANDTL - 1),
                       lin_side="further above" if lin[2] > b2[2] else "below them",
                       lin_rate=math.sqrt(max(lin[2] - PRANDTL, 0.0) / (lin[0] - PRANDTL)))
-    return render("footing", "section", table="\n".join(t), t2="\n".join(t2), text=text,
+    return render("footing", "section", table="\n".join(t), t2="\n".join(t2),
+                  t3="\n".join(t3), phi=PHI_FRICTIONAL, text=text,
                   figures=fig_md(ctx, figs, "strip footing: load against settlement"))
