@@ -135,6 +135,11 @@ struct Vortex2DExact {
 // refuses them when they are not at their default (make_problem), rather than ignore them.
 bool read_by_custom_alone(std::string_view key);
 
+// InputError naming `key` (the feature it enables, `what` it does) unless the run uses the MPM
+// solver with lumped mass (`why_lumped`: why consistent mass cannot have it).
+void require_mpm_lumped(const Config& cfg, const char* key, std::string_view what,
+                        std::string_view why_lumped);
+
 Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope = {});
 
 // The same in 2D (grid.dimension = 2): a box body in a box grid, vector keys as arrays

@@ -21,8 +21,8 @@ namespace mpm {
 namespace {
 
 // The sides of the grid (boundary.*) and faces of the body (traction.*, pressure.*) by direction:
-// x, y, then z (back: z = min, front: z = max).
-constexpr const char* kSideKeys[3][2] = {{"left", "right"}, {"bottom", "top"}, {"back", "front"}};
+// x, y, then z (back: z = min, front: z = max): kSideNames of model/problem.hpp.
+constexpr const auto& kSideKeys = kSideNames;
 
 // The values of a RealVector key, one per direction; InputError naming its line otherwise.
 template <int Dim>
@@ -154,17 +154,8 @@ void prescribed_from_config(Problem<Dim>& pb, const Config& cfg) {
                         cfg.where(key), key, key));
     return;
   }
-  const std::string where = cfg.where("prescribed.nodes");
-  if (cfg.get_string("method.solver") != "mpm")
-    throw InputError(fmt::format(
-        "{}: prescribed.nodes prescribes grid velocities of the MPM solver; method.solver = "
-        "\"{}\" has none (use method.solver = \"mpm\")",
-        where, cfg.get_string("method.solver")));
-  if (cfg.get_string("method.mass") != "lumped")
-    throw InputError(
-        fmt::format("{}: prescribed.nodes needs method.mass = \"lumped\" (a consistent mass matrix "
-                    "couples the prescribed velocities to the free ones), got \"{}\"",
-                    where, cfg.get_string("method.mass")));
+  require_mpm_lumped(cfg, "prescribed.nodes", "prescribes grid velocities of the MPM solver",
+                     "a consistent mass matrix couples the prescribed velocities to the free ones");
   const Vec<Dim> lo = per_direction<Dim>(cfg, "prescribed.min");
   const Vec<Dim> hi = per_direction<Dim>(cfg, "prescribed.max");
   const Vec<Dim> v = per_direction<Dim>(cfg, "prescribed.velocity");

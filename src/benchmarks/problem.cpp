@@ -454,6 +454,18 @@ AnyProblem make_any_problem(const Config& cfg, const SeedScope& scope) {
 }
 }  // namespace
 
+void require_mpm_lumped(const Config& cfg, const char* key, std::string_view what,
+                        std::string_view why_lumped) {
+  const std::string where = cfg.where(key);
+  if (cfg.get_string("method.solver") != "mpm")
+    throw InputError(
+        fmt::format("{}: {} {}; method.solver = \"{}\" has none (use method.solver = \"mpm\")",
+                    where, key, what, cfg.get_string("method.solver")));
+  if (cfg.get_string("method.mass") != "lumped")
+    throw InputError(fmt::format("{}: {} needs method.mass = \"lumped\" ({}), got \"{}\"", where,
+                                 key, why_lumped, cfg.get_string("method.mass")));
+}
+
 AnyProblem make_problem(const Config& cfg, const SeedScope& scope) {
   AnyProblem pb = make_any_problem(cfg, scope);
   const int dim = std::visit([](const auto& p) { return std::decay_t<decltype(p)>::kDim; }, pb);
@@ -490,17 +502,9 @@ AnyProblem make_problem(const Config& cfg, const SeedScope& scope) {
   }
   if (cfg.get_bool("output.reactions")) {
     const std::string where = cfg.where("output.reactions");
-    if (cfg.get_string("method.solver") != "mpm")
-      throw InputError(fmt::format(
-          "{}: output.reactions sums the grid forces of the MPM solver; method.solver = \"{}\" "
-          "has none (use method.solver = \"mpm\")",
-          where, cfg.get_string("method.solver")));
-    if (cfg.get_string("method.mass") != "lumped")
-      throw InputError(fmt::format(
-          "{}: output.reactions needs method.mass = \"lumped\" (the reaction -f_i of a "
-          "constrained degree of freedom; with a consistent mass matrix it would need the "
-          "inertia of its neighbours), got \"{}\"",
-          where, cfg.get_string("method.mass")));
+    require_mpm_lumped(cfg, "output.reactions", "sums the grid forces of the MPM solver",
+                       "the reaction -f_i of a constrained degree of freedom; with a consistent "
+                       "mass matrix it would need the inertia of its neighbours");
     std::visit(
         [&](auto& p) {
           p.reactions = true;

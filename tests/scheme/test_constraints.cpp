@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/soil_layer.hpp"
 #include "../support/stepper.hpp"
 #include "setup/config.hpp"
 
@@ -119,40 +120,7 @@ components = "y"
 // A Mohr-Coulomb layer at rest under gravity at K0 (as tests/benchmarks/test_geostatic.cpp): the
 // base carries its weight rho g H W and each roller the earth pressure K0 rho g H^2 / 2, in
 // every step, to round-off (the particles integrate the linear stress exactly).
-constexpr const char* kLayer = R"toml(benchmark = "custom"
-[grid]
-dimension = 2
-cells = 4
-min = [0.0, 0.0]
-max = [1.0, 1.5]
-[body]
-min = [0.0, 0.0]
-max = [1.0, 1.0]
-[particles]
-per_cell = 2
-[time]
-dt = 1e-4
-end = 2e-2
-[material]
-model = "mohr_coulomb"
-density = 2000.0
-youngs_modulus = 20e6
-poisson_ratio = 0.3
-cohesion = 10e3
-friction_angle = 30.0
-[boundary]
-left = "roller"
-right = "roller"
-bottom = "fixed"
-top = "free"
-[loading]
-body_force = ["0", "-9.81"]
-[initial]
-geostatic = "k0"
-k0 = 0.5
-[output]
-reactions = true
-)toml";
+const std::string kLayer = std::string(test::kK0Layer2D) + "[output]\nreactions = true\n";
 
 TEST(Constraints, TheReactionsOfALayerAtRestAreItsWeightAndEarthPressure) {
   const Config cfg = Config::parse(kLayer, "layer.toml");
