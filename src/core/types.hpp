@@ -64,6 +64,8 @@ inline constexpr int kConservation = 9;
 inline constexpr int kBasis = 10;
 // An iterative mass solver (method.mass_solver = "cg" or "pmg") did not reach its tolerance.
 inline constexpr int kSolver = 11;
+// A constitutive law's return mapping found no admissible stress at some particle.
+inline constexpr int kReturnMapping = 12;
 }  // namespace exit_code
 
 }  // namespace mpm

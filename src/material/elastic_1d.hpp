@@ -19,11 +19,12 @@ struct Elastic1DSmall {
   static constexpr NoParameters kParameters{};
   ElasticParameters p;
   template <int Dim>
-  void update(Mat<Dim>& sigma, StateOf<Elastic1DSmall> /*state*/, const Mat<Dim>& /*F*/,
+  bool update(Mat<Dim>& sigma, StateOf<Elastic1DSmall> /*state*/, const Mat<Dim>& /*F*/,
               const Mat<Dim>& dtL) const {
     // One-dimensional law: make_material() rejects it for Dim > 1, and the stress stage
     // instantiates no update for it there.
     if constexpr (Dim == 1) sigma(0, 0) += p.youngs_modulus * dtL(0, 0);
+    return true;
   }
   // Stored energy [J] of a particle: sigma^2 / (2E) per current volume.
   template <int Dim>
@@ -52,9 +53,10 @@ struct Elastic1DLarge {
   static constexpr NoParameters kParameters{};
   ElasticParameters p;
   template <int Dim>
-  void update(Mat<Dim>& sigma, StateOf<Elastic1DLarge> /*state*/, const Mat<Dim>& /*F*/,
+  bool update(Mat<Dim>& sigma, StateOf<Elastic1DLarge> /*state*/, const Mat<Dim>& /*F*/,
               const Mat<Dim>& dtL) const {
     if constexpr (Dim == 1) sigma(0, 0) += (p.youngs_modulus - sigma(0, 0)) * dtL(0, 0);
+    return true;
   }
   // Energy of the closed form: W(F) = E (F - 1 - ln F) per reference volume (P = sigma in 1D).
   template <int Dim>

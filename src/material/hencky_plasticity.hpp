@@ -89,18 +89,22 @@ inline constexpr double kYieldTolerance = 1e-12;
 //   plastic_strain: the accumulated equivalent plastic strain sum sqrt(2/3 |d eps_p|^2) [-],
 //     d eps_p = C^-1 : (tau_trial - tau) per step (for von Mises the hardening variable);
 //   yield_mode: the yield surfaces active in the last update: 0 elastic, 1 a smooth surface or
-//     face, 2 an edge or the cone's rim, 3 or more a corner or apex [-];
+//     face, 2 an edge or the cone's rim, 3 or more a corner or apex, kNoReturn (-1) when the
+//     return found no admissible stress [-];
 //   stress_zz: the Cauchy stress normal to the plane [Pa] (2D plane strain, where the stress
 //     omits it; 3D: the stress's zz, kept alike).
 inline constexpr std::array<std::string_view, 3> kPlasticStateNames = {
     "plastic_strain", "yield_mode", kOutOfPlaneStressName};
+inline constexpr double kNoReturn = -1.0;
 
 // The Hencky kinematics of a plastic law Law, which declares its name, description and
 // parameters and the return in principal Kirchhoff stresses:
 //   int return_map(Vec3d& tau, double plastic_strain) const;
+//   double yield_function(const Vec3d& tau, double plastic_strain) const;  [Pa]
 // tau: the trial principal stresses in, the returned ones out; the result is the number of
-// active yield surfaces (0: the trial is elastic), or -1 when no return exists (the stress
-// becomes NaN and the run stops there, naming the particle).
+// active yield surfaces (0: the trial is elastic), or -1 when no return exists. Then update()
+// leaves the trial stress, sets yield_mode to kNoReturn and returns false, and the stage stops the
+// run (exit_code::kReturnMapping) naming the particle, its trial stress and failed_return().
 template <class Law>
 struct HenckyPlastic {
   static constexpr auto kStateNames = kPlasticStateNames;
@@ -112,14 +116,14 @@ struct HenckyPlastic {
   explicit HenckyPlastic(const ElasticParameters& params) : p(params), elastic(params) {}
 
   template <int Dim>
-  void update(Mat<Dim>& sigma, std::span<double, 3> state, const Mat<Dim>& F,
+  bool update(Mat<Dim>& sigma, std::span<double, 3> state, const Mat<Dim>& F,
               const Mat<Dim>& dtL) const {
-    Mat3d f = Mat3d::Identity(), tau_n = Mat3d::Zero();
-    f.topLeftCorner<Dim, Dim>() += dtL;
     const double J = F.determinant();
-    const double Jn = J / f.determinant();
-    tau_n.topLeftCorner<Dim, Dim>() = Jn * sigma;
-    if constexpr (Dim == 2) tau_n(2, 2) = Jn * state[2];
+    // The stage stops the run at det F <= 0 (inverted deformation), naming the particle.
+    if (!(J > 0.0)) return true;
+    Mat3d f = Mat3d::Identity();
+    f.topLeftCorner<Dim, Dim>() += dtL;
+    const Mat3d tau_n = kirchhoff(sigma, std::span<const double, 3>(state), J / f.determinant());
     // b_e,n = exp(2 C^-1 : tau_n) on the principal directions of tau_n (I when stress-free).
     Vec3d values;
     Mat3d Q;
@@ -134,15 +138,25 @@ struct HenckyPlastic {
     const Vec3d tau_trial = elastic.stress(0.5 * values.array().log().matrix());
     Vec3d tau = tau_trial;
     const int mode = static_cast<const Law&>(*this).return_map(tau, state[0]);
-    if (mode < 0 || !(J > 0.0)) {
-      sigma.setConstant(std::numeric_limits<double>::quiet_NaN());
-      return;
-    }
+    if (mode < 0) tau = tau_trial;
     if (mode > 0) state[0] += std::sqrt(2.0 / 3.0) * elastic.strain(Vec3d(tau_trial - tau)).norm();
-    state[1] = mode;
+    state[1] = mode < 0 ? kNoReturn : mode;
     const Mat3d tau_new = Q * tau.asDiagonal() * Q.transpose();
     sigma = tau_new.topLeftCorner<Dim, Dim>() / J;
     state[2] = tau_new(2, 2) / J;
+    return mode >= 0;
+  }
+
+  // The yield function [Pa] at the stress a failed update left (the trial stress), for a particle
+  // whose yield_mode is kNoReturn; NaN for any other.
+  template <int Dim>
+  double failed_return(const Mat<Dim>& sigma, std::span<const double, 3> state,
+                       const Mat<Dim>& F) const {
+    if (state[1] != kNoReturn) return std::numeric_limits<double>::quiet_NaN();
+    Vec3d values;
+    Mat3d Q;
+    principal<Dim>(kirchhoff(sigma, state, F.determinant()), values, Q);
+    return static_cast<const Law&>(*this).yield_function(values, state[0]);
   }
 
   // The elastic energy of the particle [J]: the Hencky energy of eps_e = C^-1 : (J sigma) per
@@ -150,11 +164,7 @@ struct HenckyPlastic {
   template <int Dim>
   double energy(const Mat<Dim>& sigma, std::span<const double, 3> state, const Mat<Dim>& F,
                 double /*V*/, double V0) const {
-    const double J = F.determinant();
-    Mat3d tau = Mat3d::Zero();
-    tau.topLeftCorner<Dim, Dim>() = J * sigma;
-    if constexpr (Dim == 2) tau(2, 2) = J * state[2];
-    return elastic.energy_density(elastic.strain(tau)) * V0;
+    return elastic.energy_density(elastic.strain(kirchhoff(sigma, state, F.determinant()))) * V0;
   }
   // The elastic P-wave speed sqrt((K + 4G/3) / rho0) [m/s] (plastic flow only slows waves).
   double wave_speed() const { return std::sqrt((elastic.K + 4.0 * elastic.G / 3.0) / p.density); }
@@ -162,6 +172,16 @@ struct HenckyPlastic {
   double out_of_plane_stress(const Mat<Dim>& /*sigma*/, std::span<const double, 3> state,
                              const Mat<Dim>& /*F*/) const {
     return state[2];
+  }
+
+ private:
+  // The Kirchhoff stress J sigma as a 3x3 tensor (2D: the plane-strain stress_zz completes it).
+  template <int Dim>
+  static Mat3d kirchhoff(const Mat<Dim>& sigma, std::span<const double, 3> state, double J) {
+    Mat3d tau = Mat3d::Zero();
+    tau.topLeftCorner<Dim, Dim>() = J * sigma;
+    if constexpr (Dim == 2) tau(2, 2) = J * state[2];
+    return tau;
   }
 };
 

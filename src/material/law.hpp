@@ -95,6 +95,10 @@ ConstStateOf<Law> state_row(const MaterialState& state, std::size_t i) {
 //   which the particles carry through sorting, checkpoints, processes and outputs;
 // - update(sigma, state, F, dtL): the per-particle stress update over a step (dtL = dt L, the
 //   velocity gradient times the increment; F already updated), which also advances the state;
+//   false when the law has no stress for the increment (a return mapping that found no
+//   admissible stress): the stage then stops the run (exit_code::kReturnMapping), and a law that
+//   can fail says why with failed_return(sigma, state, F), a residual [Pa] that is NaN for a
+//   particle whose update succeeded (material/materials.hpp, failed_update);
 // - energy(sigma, state, F, V, V0): the strain energy of a particle [J] (history.csv);
 // - wave_speed(): the elastic wave speed [m/s] of the stability limit;
 // - out_of_plane_stress(sigma, state, F): the stress normal to the plane of a 2D run, which the
@@ -111,7 +115,7 @@ concept ConstitutiveLaw = requires(const Law& law, Mat<Dim>& sigma, StateOf<Law>
   {std::span<const std::string_view>(Law::kStateNames)};
   {std::span<const MaterialParameter>(Law::kParameters)};
   { Law::kIncremental } -> std::convertible_to<bool>;
-  law.update(sigma, state, F, dtL);
+  { law.update(sigma, state, F, dtL) } -> std::same_as<bool>;
   { law.energy(sigma, cstate, F, V, V0) } -> std::convertible_to<double>;
   { law.wave_speed() } -> std::convertible_to<double>;
   { law.out_of_plane_stress(sigma, cstate, F) } -> std::convertible_to<double>;

@@ -21,9 +21,10 @@ struct LinearElastic {
   explicit LinearElastic(const ElasticParameters& params = {})
       : p(params), lambda_(params.lambda()), mu_(params.mu()) {}
   template <int Dim>
-  void update(Mat<Dim>& sigma, StateOf<LinearElastic> /*state*/, const Mat<Dim>& F,
+  bool update(Mat<Dim>& sigma, StateOf<LinearElastic> /*state*/, const Mat<Dim>& F,
               const Mat<Dim>& /*dtL*/) const {
     sigma = stress(F);
+    return true;
   }
   template <int Dim>
   Mat<Dim> stress(const Mat<Dim>& F) const {

@@ -4,10 +4,14 @@
 // says what it declares); the stress stage visits the material variant once and then loops over
 // particles (no virtual calls in the loop). Stress is the Cauchy stress [Pa]; F the deformation
 // gradient. A new law: its header, and its type in the list below.
+#include <cmath>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
+#include <tuple>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -68,6 +72,27 @@ inline std::string_view material_name(const Material& m) {
 inline std::span<const std::string_view> state_names(const Material& m) {
   return std::visit(
       [](const auto& law) { return std::span<const std::string_view>(law.kStateNames); }, m);
+}
+// A particle whose last stress update failed (the law's update returned false: the plastic
+// laws' return mapping found no admissible stress, and left the trial stress): the law's
+// residual there, the yield function at that stress [Pa]; nullopt for a particle whose update
+// succeeded, and for every particle of a law that cannot fail.
+template <int Dim>
+std::optional<double> failed_update(const Material& m, const Mat<Dim>& sigma,
+                                    std::span<const double> state, const Mat<Dim>& F) {
+  return std::visit(
+      [&](const auto& law) -> std::optional<double> {
+        using Law = std::decay_t<decltype(law)>;
+        constexpr std::size_t n = std::tuple_size_v<decltype(Law::kStateNames)>;
+        if constexpr (requires {
+                        law.failed_return(sigma, std::span<const double, n>(state.data(), n), F);
+                      }) {
+          const double r = law.failed_return(sigma, std::span<const double, n>(state.data(), n), F);
+          if (!std::isnan(r)) return r;
+        }
+        return std::nullopt;
+      },
+      m);
 }
 // Whether the law advances the stress from the previous one (an initial stress is meaningful).
 inline bool incremental(const Material& m) {

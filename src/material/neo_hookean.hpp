@@ -20,11 +20,12 @@ struct NeoHookean {
   explicit NeoHookean(const ElasticParameters& params = {})
       : p(params), lambda_(params.lambda()), mu_(params.mu()) {}
   template <int Dim>
-  void update(Mat<Dim>& sigma, StateOf<NeoHookean> /*state*/, const Mat<Dim>& F,
+  bool update(Mat<Dim>& sigma, StateOf<NeoHookean> /*state*/, const Mat<Dim>& F,
               const Mat<Dim>& /*dtL*/) const {
     const double J = F.determinant();
     sigma = (lambda_ * std::log(J) / J) * Mat<Dim>::Identity() +
             (mu_ / J) * (F * F.transpose() - Mat<Dim>::Identity());
+    return true;
   }
   // W = mu/2 (tr(F^T F) - d) - mu ln J + lambda/2 (ln J)^2 per reference volume.
   template <int Dim>

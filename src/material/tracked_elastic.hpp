@@ -25,11 +25,12 @@ struct TrackedElastic {
   ElasticParameters p;
   explicit TrackedElastic(const ElasticParameters& params = {}) : p(params), elastic_(params) {}
   template <int Dim>
-  void update(Mat<Dim>& sigma, StateOf<TrackedElastic> state, const Mat<Dim>& F,
+  bool update(Mat<Dim>& sigma, StateOf<TrackedElastic> state, const Mat<Dim>& F,
               const Mat<Dim>& dtL) const {
     sigma = elastic_.stress(F);
     state[0] += 1.0;
     state[1] += (0.5 * (dtL + dtL.transpose())).norm();
+    return true;
   }
   template <int Dim>
   double energy(const Mat<Dim>& sigma, ConstStateOf<TrackedElastic> /*state*/, const Mat<Dim>& F,

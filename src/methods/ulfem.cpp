@@ -140,7 +140,11 @@ void Ulfem1D::step(double dt) {
           el_.v[e][0] = 0.5 * (v_[e] + v_[e + 1]);
           el_.body[e] = 0.5 * (nodes_.body[e] + nodes_.body[e + 1]);
           using Law = std::decay_t<decltype(law)>;
-          law.update(el_.stress[e], state_row<Law>(el_.state, e), el_.F[e], dtL);
+          const bool updated =
+              law.update(el_.stress[e], state_row<Law>(el_.state, e), el_.F[e], dtL);
+          // (The 1D laws have no return mapping that could fail: make_material refuses the
+          // plastic ones in 1D.)
+          if (!updated) throw std::logic_error("ULFEM: a 1D law's stress update failed");
           bad |= !(F_new > 0.0) || !std::isfinite(el_.stress[e](0, 0));
         }
       },

@@ -28,8 +28,8 @@ bool deform_particles(Particles<Dim>& P, const Material& material, Index b, Inde
             P.F[i] = (Mat<Dim>::Identity() + dtL) * P.F[i];  // D eq. 2.40
             const double J = P.F[i].determinant();
             P.volume[i] = J * P.volume0[i];  // D eq. 2.41-2.42
-            law.update(P.stress[i], state_row<Law>(P.state, i), P.F[i], dtL);
-            bad = bad || !(J > 0.0) || !std::isfinite(P.stress[i].sum());
+            const bool updated = law.update(P.stress[i], state_row<Law>(P.state, i), P.F[i], dtL);
+            bad = bad || !updated || !(J > 0.0) || !std::isfinite(P.stress[i].sum());
           }
           return bad;
         }

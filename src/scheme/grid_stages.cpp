@@ -105,13 +105,40 @@ void throw_face_left_grid(const RunState<Dim>& sim, std::size_t i, const Vec<Dim
 template <int Dim>
 void throw_particle_failure(const RunState<Dim>& sim) {
   const auto& P = sim.particles;
-  std::vector<Index> inverted, nonfinite;
+  std::vector<Index> inverted, nonfinite, unreturned;
+  std::vector<double> residual;
   for (Index p = 0; p < P.size(); ++p) {
     const auto i = static_cast<std::size_t>(p);
-    if (!std::isfinite(P.stress[i].sum()) || !std::isfinite(P.F[i].sum()))
+    if (!std::isfinite(P.stress[i].sum()) || !std::isfinite(P.F[i].sum())) {
       nonfinite.push_back(p);
-    else if (!(P.F[i].determinant() > 0.0))
+    } else if (!(P.F[i].determinant() > 0.0)) {
       inverted.push_back(p);
+    } else if (const auto r = failed_update(sim.material, P.stress[i], P.state[i], P.F[i])) {
+      unreturned.push_back(p);
+      residual.push_back(*r);
+    }
+  }
+  if (!unreturned.empty()) {
+    // Each particle with the stress its update left (the trial stress) and the residual.
+    std::string what;
+    constexpr std::size_t kLimit = 8;
+    for (std::size_t k = 0; k < unreturned.size() && k < kLimit; ++k) {
+      const auto i = static_cast<std::size_t>(unreturned[k]);
+      what += fmt::format("{}{}: trial Cauchy stress [", k ? "; " : "",
+                          describe_particles(P, {unreturned[k]}));
+      for (int a = 0; a < Dim; ++a)
+        for (int b = a; b < Dim; ++b)
+          what += fmt::format("{}s{}{} = {:.6g}", a + b ? ", " : "", "xyz"[a], "xyz"[b],
+                              P.stress[i](a, b));
+      what += fmt::format("] Pa, yield function there {:.6g} Pa", residual[k]);
+    }
+    if (unreturned.size() > kLimit)
+      what += fmt::format("; and {} more", unreturned.size() - kLimit);
+    throw RunError(
+        exit_code::kReturnMapping,
+        fmt::format("step {}, t = {:.9g} s: the return mapping of material.model = "
+                    "\"{}\" found no admissible stress at {} particle(s): {}",
+                    sim.step, sim.time, material_name(sim.material), unreturned.size(), what));
   }
   if (!nonfinite.empty())
     throw RunError(

@@ -11,7 +11,9 @@
 #include <functional>
 #include <numbers>
 #include <random>
+#include <span>
 #include <string>
+#include <string_view>
 
 #include "material/materials.hpp"
 
@@ -344,6 +346,68 @@ TEST(Plasticity, TheIntegrationErrorFallsAtFirstOrderWithTheStrainIncrement) {
   check(von_mises(60e3, 1e6), "von_mises");
   check(drucker_prager(10e3, 30, 10, 1), "drucker_prager");
   check(mohr_coulomb(10e3, 30, 10), "mohr_coulomb");
+}
+
+// A law whose return never finds a stress beyond its von Mises surface q = 100 kPa: what
+// HenckyPlastic does with a return mapping that fails.
+struct NoReturn : HenckyPlastic<NoReturn> {
+  static constexpr std::string_view kName = "no_return";
+  static constexpr std::string_view kDescription = "a return mapping that always fails";
+  static constexpr NoParameters kParameters{};
+  explicit NoReturn(const ElasticParameters& params) : HenckyPlastic(params) {}
+  double yield_function(const Vec3d& tau, double /*plastic_strain*/) const {
+    const Vec3d s = tau - Vec3d::Constant(tau.sum() / 3.0);
+    return std::sqrt(1.5 * s.squaredNorm()) - 100e3;
+  }
+  int return_map(const Vec3d& tau, double plastic_strain) const {
+    return yield_function(tau, plastic_strain) > 0.0 ? -1 : 0;
+  }
+};
+
+TEST(Plasticity, AFailedReturnKeepsTheTrialStressAndSaysSo) {
+  // Simple shear in steps of 0.1 %: elastic (Hencky, as von Mises far below yield) until the
+  // trial stress leaves the surface; that update returns false, leaves the trial stress, marks
+  // yield_mode kNoReturn and keeps the plastic strain, and failed_return is the yield function
+  // there. A law that returns reports nothing.
+  const NoReturn law(soil());
+  const VonMises elastic = von_mises(1e12);
+  Point<2> a(50e3), b(50e3);
+  Mat<2> f = Mat<2>::Identity();
+  f(0, 1) = 1e-3;
+  int steps = 0;
+  bool updated = true;
+  for (; updated && steps < 100; ++steps) {
+    const Mat<2> dtL = f - Mat<2>::Identity();
+    a.F = f * a.F;
+    b.F = f * b.F;
+    updated = law.update(a.sigma, std::span<double, 3>(a.state), a.F, dtL);
+    ASSERT_TRUE(elastic.update(b.sigma, std::span<double, 3>(b.state), b.F, dtL));
+    EXPECT_EQ(a.sigma, b.sigma) << "step " << steps;
+    EXPECT_EQ(a.state[2], b.state[2]) << "step " << steps;
+    const double residual = law.failed_return(a.sigma, std::span<const double, 3>(a.state), a.F);
+    if (updated) {
+      EXPECT_EQ(a.state[1], 0.0);
+      EXPECT_TRUE(std::isnan(residual));
+    } else {
+      EXPECT_EQ(a.state[1], kNoReturn);
+      EXPECT_EQ(a.state[0], 0.0);
+      const Mat3d tau = a.tau();
+      const double q = std::sqrt(1.5 * (tau - tau.trace() / 3 * Mat3d::Identity()).squaredNorm());
+      EXPECT_NEAR(residual, q - 100e3, 1e-9 * q);
+      EXPECT_GT(residual, 0.0);
+    }
+  }
+  EXPECT_FALSE(updated);
+  EXPECT_EQ(steps, 8);  // q = sqrt(3) G gamma: 100 kPa at gamma = 0.75 %
+  // A real law's plastic step, and an elastic law: nothing to report.
+  Point<2> c(50e3);
+  const MohrCoulomb mc = mohr_coulomb(20e3, 30, 0);
+  for (int s = 0; s < 30; ++s) c.step(mc, f);
+  EXPECT_GE(c.state[1], 1.0);
+  EXPECT_FALSE(failed_update<2>(Material(mc), c.sigma, c.state, c.F).has_value());
+  EXPECT_FALSE(
+      failed_update<2>(Material(LinearElastic(soil())), c.sigma, std::span<const double>(), c.F)
+          .has_value());
 }
 
 }  // namespace
