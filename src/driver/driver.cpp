@@ -579,6 +579,12 @@ nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& set
                    {"density", settings.material.density},
                    {"youngs_modulus", settings.material.youngs_modulus},
                    {"poisson_ratio", settings.material.poisson_ratio}};
+  for (const MaterialParameterValue& m : settings.material_parameters) {
+    if (m.choice.empty())
+      j["material"][m.name] = m.value;
+    else
+      j["material"][m.name] = m.choice;
+  }
   j["cells"] = res.cells;
   j["h"] = res.h;
   if (res.cell_size.size() > 1) j["cell_size"] = res.cell_size;

@@ -142,6 +142,13 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.material.density = cfg.get_real("material.density");
   s.material.youngs_modulus = cfg.get_real("material.youngs_modulus");
   s.material.poisson_ratio = cfg.get_real("material.poisson_ratio");
+  for (const MaterialParameter& m : parameters_of(cfg.get_string("material.model"))) {
+    const std::string key = fmt::format("material.{}", m.name);
+    if (m.choices.empty())
+      s.material_parameters.push_back({std::string(m.name), cfg.get_real(key), ""});
+    else
+      s.material_parameters.push_back({std::string(m.name), 0.0, cfg.get_string(key)});
+  }
   s.reference_dofs = cfg.get_int("reference.dofs");
   m.mass = cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;
   m.mass_tolerance = cfg.get_real("method.mass_tolerance");

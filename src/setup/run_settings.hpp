@@ -4,6 +4,7 @@
 // messages keep where they were set (Config::where: file:line:col or the --set option).
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "material/materials.hpp"
 #include "methods/kinds.hpp"
@@ -57,12 +58,21 @@ struct ParallelSettings {
   double rebalance = 0.25;
 };
 
+// A law's parameter beyond the elastic ones as configured (material.<name>): a real number, or
+// one of its choices by name (summary.json's "material" object lists them).
+struct MaterialParameterValue {
+  std::string name;
+  double value = 0.0;
+  std::string choice;  // empty for a real number
+};
+
 struct RunSettings {
   TimeSettings time;
   OutputSettings output;
   ParallelSettings parallel;
   MethodSettings method;
   ElasticParameters material;       // material.* (the problem holds the law built from them)
+  std::vector<MaterialParameterValue> material_parameters;  // those of material.model's law
   std::int64_t reference_dofs = 0;  // reference.dofs: the ULFEM reference of benchmarks without
                                     // an exact solution
 };

@@ -218,6 +218,35 @@ TEST(Cli, Custom3DExampleRunsAndWritesOutput) {
   EXPECT_NE(b.out.find("512 particles, 4 cells per direction"), std::string::npos) << b.out;
 }
 
+TEST(Cli, TheSummaryNamesTheLawsParameters) {
+  // Every parameter of the chosen law, given or default, real or a choice; no other law's.
+  const auto out = temp_dir("law_parameters");
+  for (const std::string law : {"mohr_coulomb", "drucker_prager"}) {
+    std::filesystem::remove_all(out);
+    const std::string extra = law == "drucker_prager"
+                                  ? " --set material.model=drucker_prager --set "
+                                    "material.dp_match=compression"
+                                  : "";
+    auto r = sh("run " + src("examples/element_block_2d.toml") + " -q --out " + out.string() +
+                " --set time.end=0.01 --set output.frames=0 --set output.vtk=false" + extra);
+    ASSERT_EQ(r.code, 0) << r.out;
+    std::ifstream f(out / "summary.json");
+    const auto m = nlohmann::json::parse(f)["material"];
+    EXPECT_EQ(m["model"], law);
+    EXPECT_EQ(m["youngs_modulus"], 20e6);
+    EXPECT_EQ(m["cohesion"], 10e3);
+    EXPECT_EQ(m["friction_angle"], 30.0);
+    EXPECT_EQ(m["dilatancy_angle"], 0.0);  // the default
+    EXPECT_TRUE(m.contains("tension_cutoff")) << m;
+    EXPECT_EQ(m.contains("dp_match"), law == "drucker_prager") << m;
+    if (law == "drucker_prager") {
+      EXPECT_EQ(m["dp_match"], "compression");
+    }
+    EXPECT_FALSE(m.contains("yield_stress")) << m;
+  }
+  std::filesystem::remove_all(out);
+}
+
 TEST(Cli, BodyOutsideTheGridAndUnsupportedReconstructionAreRefusedBeforeTheFirstStep) {
   const auto out = temp_dir("outside");
   auto b = sh("run " + src("tests/data/body_outside_grid.toml") + " -q --out " + out.string());
