@@ -217,6 +217,14 @@ CASES = [
       "prescribed.min=[0, 0.95]", "prescribed.max=[0.2, 1.0]", "prescribed.velocity=[0, -0.05]",
       'prescribed.components="y"', "output.reactions=true", "method.local_damping=0.8",
       "output.frames=1"], "none"),
+    # The column on a frictional floor and against a frictional wall it leaves, under gravity
+    # tilted along the floor (boundary.* = "friction"): the walls' contact on the DOFs of the
+    # processes' slabs, their reactions summed over the processes.
+    ("2d_column_frictional_walls", "examples/custom_plate_2d.toml",
+     ["grid.max=[1.0, 1.1]", "grid.cells=20", "time.end=0.05", "method.basis=bspline",
+      'boundary.bottom="friction"', 'boundary.left="friction"', 'boundary.right="free"',
+      "boundary.friction=0.3", 'loading.body_force=["6*min(t/0.02, 1)", "-8*min(t/0.02, 1)"]',
+      "output.reactions=true", "output.frames=1"], "none"),
     # The bases on the grid's triangles with the direct mapping: P1 on criss-cross triangles
     # (whose centre DOFs follow the corners'), Powell-Sabin on right triangles.
     ("2d_plate_p1_triangles_criss_cross", "examples/plate_triangles_2d.toml",

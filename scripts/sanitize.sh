@@ -98,6 +98,7 @@ SLOW+='|EmptyCellsAndFreeEnds|BSplineDegreeOneEqualsLinear)|TlsReconstruction2D\
 SLOW+='|BasesInTheStep\.BsmpmCutsTheColumnCompactionStressError|Ulfem\.LargeDeformationBarSelfConverges'
 SLOW+='|ReconstructionMpm\.(TlsImprovesMpmOnTheColumn|ReconstructionsReduceTheLargeDeformationError'
 SLOW+='|EveryBasisSchemeAndMassWithTlsAndCubicSpline)'
+SLOW+='|Friction\.ABlock'  # the inclined plane in every scheme and basis
 SLOW+='|VerifyQuick\.'  # refinement studies through build/mpm (scripts/verify.py --quick)
 # A refinement study over three mesh files through build/mpm: 63 s alone under the sanitizers,
 # past its 120 s limit on a loaded machine; the Release suite runs it.

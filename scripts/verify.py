@@ -36,7 +36,7 @@ if HERE not in sys.path:
 from verification import (bases, chapter5, cube, element_block, footing, item3,  # noqa: E402
                           large_bar, massmatrix, mesh_boundaries, mms, otm, plate, plate_001,
                           ps_mpm, ps_partial, reconstruction, small_bar, static, tls_robust,
-                          vortex)
+                          vertical_cut, vortex)
 from verification.common import ROOT  # noqa: E402
 from verification.quick import quick  # noqa: E402
 from verification.report import full  # noqa: E402
@@ -77,6 +77,7 @@ SECTIONS = [
     ("3D cube", cube.sec_cube),
     ("plane-strain compression of a soil block", element_block.sec_element_block),
     ("strip footing", footing.sec_footing),
+    ("vertical cut", vertical_cut.sec_vertical_cut),
 ]
 # Appended with --long (hours).
 LONG_SECTIONS = [

@@ -49,7 +49,7 @@ Linearised linearise(Sim& sim) {
   lin.mass.resize(n);
   for (Index i = 0; i < n; ++i) lin.mass[i] = sim.nodes.mass[static_cast<std::size_t>(i)];
   for (auto& f : sim.nodes.force) f = Vec<kDim>::Ones();
-  stages::solve_acceleration(sim);
+  stages::solve_acceleration(sim, 0.0);  // (no frictional walls here: dt unused)
   lin.fixed.resize(static_cast<std::size_t>(comps));
   for (Index i = 0; i < n; ++i)
     for (int d = 0; d < kDim; ++d)

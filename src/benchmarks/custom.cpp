@@ -188,12 +188,35 @@ void prescribed_from_config(Problem<Dim>& pb, const Config& cfg) {
 template <int Dim>
 void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, const Vec<Dim>& b1,
                        int per_cell) {
+  // boundary.friction is read with a frictional side: given without one, it would do nothing.
+  bool frictional = false;
+  for (int d = 0; d < Dim; ++d)
+    for (int side = 0; side < 2; ++side)
+      frictional = frictional ||
+                   cfg.get_string(fmt::format("boundary.{}", kSideKeys[d][side])) == "friction";
+  if (!frictional && !cfg.at_default("boundary.friction"))
+    throw InputError(
+        fmt::format("{}: boundary.friction is the coefficient of the sides whose boundary.* is "
+                    "\"friction\", and this run has none (set one, or leave boundary.friction out)",
+                    cfg.where("boundary.friction")));
   for (int d = 0; d < Dim; ++d)
     for (int side = 0; side < 2; ++side) {
       const std::string type = cfg.get_string(fmt::format("boundary.{}", kSideKeys[d][side]));
       // A roller fixes the normal component; in 1D that is the only one (as "fixed").
       if (type == "fixed") pb.fixed_sides.push_back({d, side});
       if (type == "roller") pb.fixed_sides.push_back({d, side, 1u << d});
+      if (type == "friction") {
+        const std::string key = fmt::format("boundary.{}", kSideKeys[d][side]);
+        if (pb.mesh)
+          throw InputError(fmt::format(
+              "{}: boundary.{} = \"friction\": frictional walls are the sides of a grid, and "
+              "this run's grid is the mesh {} (use \"fixed\", \"roller\" or \"free\")",
+              cfg.where(key), kSideKeys[d][side], pb.mesh->source()));
+        require_mpm_lumped(cfg, key.c_str(), "is a frictional wall of the MPM solver's grid",
+                           "the contact and friction forces of a node are its own mass times "
+                           "its velocity change; a consistent mass matrix couples the nodes");
+        pb.friction_walls.push_back({d, side, cfg.get_real("boundary.friction")});
+      }
       if constexpr (Dim == 2) {
         if (pb.mesh && type != "free" && !pb.mesh->has_boundary(side_name(d, side)))
           throw InputError(fmt::format(

@@ -511,7 +511,8 @@ AnyProblem make_problem(const Config& cfg, const SeedScope& scope) {
           if (reaction_names(p).empty())
             throw InputError(fmt::format(
                 "{}: output.reactions: benchmark = \"{}\" has no constrained boundary (no "
-                "boundary.* is \"fixed\" or \"roller\" and prescribed.nodes = \"none\")",
+                "boundary.* is \"fixed\", \"roller\" or \"friction\" and prescribed.nodes = "
+                "\"none\")",
                 where, cfg.get_string("benchmark")));
         },
         pb);

@@ -3,6 +3,7 @@
 // (driver/stepper_kind.cpp.in), one per (dimension, basis kind), which instantiate it for every
 // mapping of that dimension.
 #include <fmt/format.h>
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -141,9 +142,20 @@ class TypedStepper final : public Stepper<Dim> {
             "prescribed.min, prescribed.max: the box holds no degree of freedom of the basis (its "
             "positions: the grid nodes, a B-spline's Greville abscissae, the mesh's vertices)");
     }
+    for (const FrictionWall& w : pb.friction_walls) {
+      std::vector<Index> dofs = sim_.side_dofs(FixedSide{w.direction, w.side});
+      std::sort(dofs.begin(), dofs.end());  // (searched: stages::solve_velocity)
+      const std::size_t n = dofs.size();
+      sim_.walls.push_back({std::move(dofs), w.direction, w.side == 0 ? -1.0 : 1.0, w.mu,
+                            std::vector<unsigned char>(n, 0)});
+    }
     if (pb.reactions) {
       for (const auto& f : pb.fixed_sides) sim_.reaction_dofs.push_back(sim_.side_dofs(f));
+      for (const auto& w : sim_.walls) sim_.reaction_dofs.push_back(w.dofs);
       if (pb.prescribed) sim_.reaction_dofs.push_back(prescribed);
+      sim_.reaction_whole.assign(sim_.reaction_dofs.size(), 0);
+      for (std::size_t k = 0; k < sim_.walls.size(); ++k)
+        sim_.reaction_whole[pb.fixed_sides.size() + k] = 1;
     }
     sim_.body_force = pb.body_force;
     sim_.tractions = pb.tractions;

@@ -518,7 +518,7 @@ void Otm<Dim>::step(double dt) {
   // v_i = M^-1 (q + dt f) with the Dirichlet conditions, a_i = M^-1 f; x_i += dt v_i (4.31,
   // 4.84-4.86, constant dt).
   stages::solve_velocity(st_);
-  stages::solve_acceleration(st_);
+  stages::solve_acceleration(st_, dt);
   stages::advance_grid_velocity(st_, dt);
 
   // x_p = sum phi_i x_i^{s+1} written as x_p + dt sum phi_i v_i (the same by linear

@@ -60,6 +60,16 @@ struct PrescribedVelocity {
   unsigned components = ~0u;
 };
 
+// A grid side that is a rigid wall with Coulomb friction (boundary.* = "friction"): the body
+// cannot cross it but may leave it; where it presses on it, the tangential velocity sticks while
+// the friction force it needs stays below mu times the contact force, and slips otherwise
+// (stages::solve_acceleration).
+struct FrictionWall {
+  int direction = 0;
+  int side = 0;     // 0: the lower side (outward normal -e_d), 1: the upper (+e_d)
+  double mu = 0.0;  // Coulomb's coefficient [-]
+};
+
 // The names of the sides of the grid by direction (0 lower, 1 upper), as the boundary.* keys.
 inline constexpr const char* kSideNames[3][2] = {
     {"left", "right"}, {"bottom", "top"}, {"back", "front"}};
@@ -72,10 +82,11 @@ struct Problem {
   Particles<Dim> particles;
   Material material;
   std::vector<FixedSide> fixed_sides;
+  std::vector<FrictionWall> friction_walls;  // MPM solver, lumped mass
   // At most one box of prescribed velocities (MPM solver, lumped mass).
   std::optional<PrescribedVelocity> prescribed;
   // output.reactions: history.csv gets the reaction force on each constrained boundary (each of
-  // fixed_sides, then the prescribed box), reaction_names() in order.
+  // fixed_sides, then of friction_walls, then the prescribed box), reaction_names() in order.
   bool reactions = false;
   // The triangles of a mesh file (grid.mesh; 2D, P1 and Powell-Sabin bases), shared with the
   // basis; then `grid` is the mesh's bounding box. Null: the basis lives on the grid (for the
@@ -108,6 +119,9 @@ std::vector<std::string> reaction_names(const Problem<Dim>& pb) {
         f.boundary.empty()
             ? kSideNames[static_cast<std::size_t>(f.direction)][static_cast<std::size_t>(f.side)]
             : f.boundary);
+  for (const FrictionWall& w : pb.friction_walls)
+    names.emplace_back(
+        kSideNames[static_cast<std::size_t>(w.direction)][static_cast<std::size_t>(w.side)]);
   if (pb.prescribed) names.emplace_back("prescribed");
   return names;
 }

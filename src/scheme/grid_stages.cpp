@@ -611,11 +611,13 @@ void solve_grid(RunState<Dim>& sim, const DofArray<V>& r, DofArray<V>& y) {
 // The reaction on each constrained boundary (RunState::reaction_dofs) into diag.reactions:
 // R_i = C_i (m_i a_i - f_i) summed over the boundary's DOFs, C_i the projector onto DOF i's
 // constrained velocities (its fixed components, or 1 - the free projector of an inclined
-// roller): the force the support exerts on the body, so that m_i a_i = f_i + R_i. With lumped
-// mass a_i vanishes on the constrained components, so R_i = -C_i f_i (f_i the nodal force of
-// the step, internal, external and body forces). A DOF on two boundaries (a corner) counts in
-// both. A distributed run sums each DOF once (its owner's), then over the processes in rank
-// order.
+// roller; the identity on a frictional wall, whose normal and friction forces act in every
+// component):
+// the force the support exerts on the body, so that m_i a_i = f_i + R_i. With lumped mass a_i
+// vanishes on the fixed components, so there R_i = -C_i f_i (f_i the nodal force of the step,
+// internal, external and body forces); on a frictional wall it is the normal and friction
+// force. A DOF on two boundaries (a corner) counts in both. A distributed run sums each DOF once
+// (its owner's), then over the processes in rank order.
 template <int Dim>
 void sum_reactions(RunState<Dim>& sim) {
   const auto& nd = sim.nodes;
@@ -630,6 +632,7 @@ void sum_reactions(RunState<Dim>& sim) {
       if (split && !sim.shared.owns(sim.comm->rank(), i)) continue;
       const auto k = static_cast<std::size_t>(i);
       Mat<Dim> C = Mat<Dim>::Zero();
+      if (!sim.reaction_whole.empty() && sim.reaction_whole[g]) C.setIdentity();
       for (int d = 0; d < Dim; ++d)
         if (nd.fixed[k] & (1u << d)) C(d, d) = 1.0;
       const auto it = std::lower_bound(
@@ -669,17 +672,84 @@ void damp_forces(RunState<Dim>& sim) {
   });
 }
 
-// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46), after the local damping and with
-// the reactions where asked.
+namespace {
+// The wall conditions on a velocity v of DOF i (in place): on each frictional wall through i, no
+// normal velocity where the wall held i in the last acceleration solve, none into the wall
+// elsewhere. Every velocity solve applies them and the walls' friction starts from the velocity
+// so conditioned, so that the velocity a scheme advances (v_i^{s+1} = v_i^s + dt a_i: USL, USF,
+// USAVG) is the one the friction took, and a remapped one (MUSL, USAVG) holds the DOFs the wall
+// held in the step (neither entering the wall nor drifting off it by rectified round-off).
 template <int Dim>
-void solve_acceleration(RunState<Dim>& sim) {
+void wall_conditions(const RunState<Dim>& sim, Index i, Vec<Dim>& v) {
+  for (const auto& w : sim.walls) {
+    const auto it = std::lower_bound(w.dofs.begin(), w.dofs.end(), i);
+    if (it == w.dofs.end() || *it != i) continue;
+    const bool held = w.contact[static_cast<std::size_t>(it - w.dofs.begin())] != 0;
+    if (held || w.sign * v[w.direction] > 0.0) v[w.direction] = 0.0;
+  }
+}
+
+// Coulomb friction on the rigid walls (boundary.* = "friction"; lumped mass), on the
+// accelerations of the step, so that every scheme's particle and grid updates carry it. For a
+// DOF of a wall with outward normal n, velocity v (q_i / m_i, its fixed components zero, under
+// wall_conditions) and acceleration a:
+//   the normal velocity after the step, w_n = (v + dt a) . n; w_n <= 0: the node leaves the
+//   wall or stays on it without pressing, and nothing acts;
+//   w_n > 0: contact. The wall stops the normal velocity (an impulse per unit mass p = w_n,
+//   the contact force m p / dt), and friction acts on the tangential velocity after the step,
+//   w_t = (v + dt a)_t: it sticks (w_t = 0) when |w_t| <= mu p, and otherwise slips, |w_t|
+//   reduced by mu p against its direction
+// (the rigid-wall form of Bardenhagen et al. 2001's contact, as cb-geo's frictional boundaries
+// apply it, with separation). A node that does not press is free, so that a vibrating body's
+// tension at the wall neither holds it nor adds friction. A DOF on two walls (a corner) meets
+// them in turn.
+template <int Dim>
+void apply_wall_friction(RunState<Dim>& sim, double dt) {
+  auto& nd = sim.nodes;
+  for (auto& w : sim.walls) {
+    const int d = w.direction;
+    for (std::size_t k = 0; k < w.dofs.size(); ++k) {
+      const Index dof = w.dofs[k];
+      if (!nd.accel.holds(dof)) continue;
+      const auto i = static_cast<std::size_t>(dof);
+      if (!nd.active[i]) {
+        w.contact[k] = 0;
+        continue;
+      }
+      Vec<Dim> v = nd.momentum[i] / nd.mass[i];
+      for (int c = 0; c < Dim; ++c)
+        if (nd.fixed[i] & (1u << c)) v[c] = 0.0;
+      wall_conditions(sim, dof, v);
+      Vec<Dim> after = v + dt * nd.accel[i];
+      const double pn = w.sign * after[d];  // the normal impulse per unit mass [m/s]
+      w.contact[k] = pn > 0.0 ? 1 : 0;
+      if (!w.contact[k]) continue;
+      after[d] = 0.0;  // the tangential part w_t
+      const double wt = after.norm();
+      if (wt > w.mu * pn)
+        after *= 1.0 - w.mu * pn / wt;  // slip
+      else
+        after.setZero();  // stick
+      for (int c = 0; c < Dim; ++c)
+        if (!(nd.fixed[i] & (1u << c))) nd.accel[i][c] = (after[c] - v[c]) / dt;
+    }
+  }
+}
+}  // namespace
+
+// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46), after the local damping, with
+// the walls' contact and friction, and with the reactions where asked.
+template <int Dim>
+void solve_acceleration(RunState<Dim>& sim, double dt) {
   if (sim.local_damping > 0.0) damp_forces(sim);
   solve_grid(sim, sim.nodes.force, sim.nodes.accel);
+  if (!sim.walls.empty()) apply_wall_friction(sim, dt);
   if (!sim.reaction_dofs.empty()) sum_reactions(sim);
 }
 
-// v_i = M^{-1} q_i with Dirichlet components zero (D eq. 2.35 / 2.49), and the prescribed
-// velocities (RunState's nodes.prescribed) in their components.
+// v_i = M^{-1} q_i with Dirichlet components zero (D eq. 2.35 / 2.49), the prescribed
+// velocities (RunState's nodes.prescribed) in their components, and the frictional walls'
+// conditions (wall_conditions: a particle never crosses a wall).
 template <int Dim>
 void solve_velocity(RunState<Dim>& sim) {
   auto& nd = sim.nodes;
@@ -690,6 +760,10 @@ void solve_velocity(RunState<Dim>& sim) {
     for (int d = 0; d < Dim; ++d)
       if (nd.fixed[k] & (1u << d)) nd.velocity[k][d] = v[d];
   }
+  for (const auto& w : sim.walls)
+    for (const Index dof : w.dofs)
+      if (nd.velocity.holds(dof) && nd.active[static_cast<std::size_t>(dof)])
+        wall_conditions(sim, dof, nd.velocity[static_cast<std::size_t>(dof)]);
 }
 
 // Euler-Cromer on the grid: v_i^{s+1} = v_i^s + dt a_i^s (D eq. 2.36; USL, USF).
@@ -709,15 +783,15 @@ template void share_grid_sums<2>(RunState<2>&, unsigned);
 template void share_grid_sums<3>(RunState<3>&, unsigned);
 template void after_mass<1>(RunState<1>&);
 template void after_momentum<1>(RunState<1>&);
-template void solve_acceleration<1>(RunState<1>&);
+template void solve_acceleration<1>(RunState<1>&, double);
 template void solve_velocity<1>(RunState<1>&);
 template void advance_grid_velocity<1>(RunState<1>&, double);
 template void after_mass<2>(RunState<2>&);
 template void after_mass<3>(RunState<3>&);
 template void after_momentum<2>(RunState<2>&);
 template void after_momentum<3>(RunState<3>&);
-template void solve_acceleration<2>(RunState<2>&);
-template void solve_acceleration<3>(RunState<3>&);
+template void solve_acceleration<2>(RunState<2>&, double);
+template void solve_acceleration<3>(RunState<3>&, double);
 template void solve_velocity<2>(RunState<2>&);
 template void solve_velocity<3>(RunState<3>&);
 template void advance_grid_velocity<2>(RunState<2>&, double);

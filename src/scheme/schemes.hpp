@@ -25,8 +25,9 @@ struct Usl {
     refresh_body_force(sim);
     // M^s (2.31), q^s (2.32), f^s (2.33) in one pass over the particles
     map_to_grid<grid_sum::kMass | grid_sum::kMomentum | grid_sum::kForces>(sim);
-    solve_acceleration(sim);         // a^s       (2.34)
+    // v_i^s first: the walls' friction starts from it (the two solves are otherwise independent)
     solve_velocity(sim);             // v_i^s     (2.35)
+    solve_acceleration(sim, dt);     // a^s       (2.34)
     advance_grid_velocity(sim, dt);  // v_i^{s+1} (2.36)
     mapped_strain_rates(sim);        // L_p from v_i^{s+1} where the mapping defines it
     // x_p^{s+1} (2.38), v_p^{s+1} (2.39), F, V, rho, sigma from v_i^{s+1} (2.40-2.43) in one pass
@@ -46,12 +47,13 @@ struct Musl {
     using namespace stages;
     evaluate_basis(sim);
     refresh_body_force(sim);
-    // M^s (2.44), f^s (2.45); q^s too where the local damping needs the nodes' velocities
-    if (sim.local_damping > 0.0)
+    // M^s (2.44), f^s (2.45); q^s too where the local damping or a frictional wall needs the
+    // nodes' velocities
+    if (sim.forces_need_momentum())
       map_to_grid<grid_sum::kMass | grid_sum::kMomentum | grid_sum::kForces>(sim);
     else
       map_to_grid<grid_sum::kMass | grid_sum::kForces>(sim);
-    solve_acceleration(sim);                // a^s                (2.46)
+    solve_acceleration(sim, dt);            // a^s                (2.46)
     update_velocity_map_momentum(sim, dt);  // v_p^{s+1} (2.47), q from it (2.48): one pass
     solve_velocity(sim);                    // v_i^{s+1}          (2.49)
     mapped_strain_rates(sim);               // L_p where the mapping defines it
@@ -78,7 +80,7 @@ struct Usf {
     mapped_strain_rates(sim);                                 // L_p where the mapping defines it
     update_stress(sim, dt);                                   // sigma^{s+1} from v_i^s
     map_forces(sim);  // f with the updated stress and volume
-    solve_acceleration(sim);
+    solve_acceleration(sim, dt);
     advance_grid_velocity(sim, dt);  // v_i^{s+1} = v_i^s + dt a_i
     // v_p^{s+1} from a^s (the grid update leaves it), x_p^{s+1} from v_i^{s+1}: one pass
     update_particles<particle_update::kVelocity | particle_update::kPosition>(sim, dt);
@@ -103,7 +105,7 @@ struct Usavg {
     mapped_strain_rates(sim);                                 // L_p where the mapping defines it
     update_stress(sim, 0.5 * dt);                             // USF half
     map_forces(sim);
-    solve_acceleration(sim);
+    solve_acceleration(sim, dt);
     update_velocity_map_momentum(sim, dt);  // v_p^{s+1}, q from v_p^{s+1}: one pass
     solve_velocity(sim);                    // v_i^{s+1}
     mapped_strain_rates(sim);               // L_p where the mapping defines it

@@ -292,11 +292,13 @@ void map_forces(Sim& sim) {
   map_to_grid<grid_sum::kForces>(sim);
 }
 
-// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46; scheme/grid_stages.cpp).
+// a_i = M^{-1} f_i with Dirichlet components zero (D eq. 2.46; scheme/grid_stages.cpp), with
+// the frictional walls' contact and friction over the step's increment dt [s].
 template <int Dim>
-void solve_acceleration(RunState<Dim>& sim);
+void solve_acceleration(RunState<Dim>& sim, double dt);
 
-// v_i = M^{-1} q_i with Dirichlet components zero (D eq. 2.35 / 2.49).
+// v_i = M^{-1} q_i with Dirichlet components zero (D eq. 2.35 / 2.49); no velocity into a
+// frictional wall.
 template <int Dim>
 void solve_velocity(RunState<Dim>& sim);
 

@@ -367,6 +367,9 @@ std::vector<KeySpec> declare() {
              "condition on the grid side z = grid.min (3D custom)"),
       choice("boundary.front", "fixed", kBoundaryTypes,
              "condition on the grid side z = grid.max (3D custom)"),
+      when_read(real("boundary.friction", "", kRequired, at_least(0),
+                     "Coulomb friction coefficient mu = tan(delta) of the grid sides whose "
+                     "boundary.* is \"friction\" (0: a smooth wall the body may leave)")),
       choice("prescribed.nodes", "none", kPrescribedModes,
              "degrees of freedom with a prescribed velocity: a rigid footing or plate pushed at "
              "constant speed (2D and 3D custom; MPM, lumped mass)"),

@@ -219,6 +219,9 @@ inline constexpr Entry kBoundaryTypes[] = {
     {"fixed", "all velocity components zero at the boundary degrees of freedom"},
     {"free", "traction-free (natural) boundary, or the traction.* of that side"},
     {"roller", "normal velocity component zero, tangential free (1D: as fixed)"},
+    {"friction",
+     "a rigid wall with Coulomb friction (coefficient boundary.friction): the body may leave "
+     "it; pressed on it, it sticks or slips (MPM solver, lumped mass)"},
 };
 
 }  // namespace mpm::registry

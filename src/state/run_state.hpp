@@ -63,6 +63,20 @@ struct SolveState {
   // Cundall's local non-viscous damping alpha (method.local_damping; 0: off), applied to the
   // nodal forces by stages::solve_acceleration.
   double local_damping = 0.0;
+  // The frictional walls (Problem::friction_walls): each side's DOFs (ascending), its outward
+  // normal e_d times `sign`, and Coulomb's mu; applied by stages::solve_acceleration and
+  // solve_velocity. `contact`: per DOF, whether the wall held it in the last acceleration solve.
+  struct Wall {
+    std::vector<Index> dofs;
+    int direction = 0;
+    double sign = 1.0;
+    double mu = 0.0;
+    std::vector<unsigned char> contact;
+  };
+  std::vector<Wall> walls;
+  // The forces' stage needs the nodes' velocities of the step start (q^s): for the damping's
+  // signs and the walls' contact (MUSL maps q^s with the forces then).
+  bool forces_need_momentum() const { return local_damping > 0.0 || !walls.empty(); }
   GridState<Dim> nodes;
   ConsistentMass consistent;
   // A distributed run's p-multigrid hierarchy (method.mass_solver = "pmg"), built with the
@@ -112,6 +126,9 @@ struct SolveState {
   // Problem::reactions: the DOFs of each constrained boundary (reaction_names order), whose
   // reactions stages::solve_acceleration sums into diag.reactions; empty: none computed.
   std::vector<std::vector<Index>> reaction_dofs;
+  // Per entry of reaction_dofs: 1 when it is a frictional wall, whose reaction has every
+  // component (the contact and friction forces), 0 for the fixed components alone.
+  std::vector<unsigned char> reaction_whole;
 };
 
 // A distributed run: the processes, the DOFs they share, the ghost particles lent between them,
