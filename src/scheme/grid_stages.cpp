@@ -674,7 +674,7 @@ void damp_forces(RunState<Dim>& sim) {
 
 namespace {
 // The wall conditions on a velocity v of DOF i (in place): on each frictional wall through i, no
-// normal velocity where the wall held i in the last acceleration solve, none into the wall
+// normal velocity where the wall held i in this step's acceleration solve, none into the wall
 // elsewhere. Every velocity solve applies them and the walls' friction starts from the velocity
 // so conditioned, so that the velocity a scheme advances (v_i^{s+1} = v_i^s + dt a_i: USL, USF,
 // USAVG) is the one the friction took, and a remapped one (MUSL, USAVG) holds the DOFs the wall
@@ -684,7 +684,8 @@ void wall_conditions(const RunState<Dim>& sim, Index i, Vec<Dim>& v) {
   for (const auto& w : sim.walls) {
     const auto it = std::lower_bound(w.dofs.begin(), w.dofs.end(), i);
     if (it == w.dofs.end() || *it != i) continue;
-    const bool held = w.contact[static_cast<std::size_t>(it - w.dofs.begin())] != 0;
+    const bool held =
+        w.contact_step == sim.step && w.contact[static_cast<std::size_t>(it - w.dofs.begin())] != 0;
     if (held || w.sign * v[w.direction] > 0.0) v[w.direction] = 0.0;
   }
 }
@@ -699,23 +700,22 @@ void wall_conditions(const RunState<Dim>& sim, Index i, Vec<Dim>& v) {
 //   the contact force m p / dt), and friction acts on the tangential velocity after the step,
 //   w_t = (v + dt a)_t: it sticks (w_t = 0) when |w_t| <= mu p, and otherwise slips, |w_t|
 //   reduced by mu p against its direction
-// (the rigid-wall form of Bardenhagen et al. 2001's contact, as cb-geo's frictional boundaries
-// apply it, with separation). A node that does not press is free, so that a vibrating body's
-// tension at the wall neither holds it nor adds friction. A DOF on two walls (a corner) meets
-// them in turn.
+// (the rigid-wall form of Bardenhagen et al. 2001's contact, with separation: cb-geo's frictional
+// boundaries hold the normal velocity instead). A node that does not press is free, so that a
+// vibrating body's tension at the wall neither holds it nor adds friction. A DOF on two walls (a
+// corner) meets them in turn.
 template <int Dim>
 void apply_wall_friction(RunState<Dim>& sim, double dt) {
   auto& nd = sim.nodes;
   for (auto& w : sim.walls) {
     const int d = w.direction;
+    w.contact_step = -1;  // the velocities start from the conditions before this solve
     for (std::size_t k = 0; k < w.dofs.size(); ++k) {
       const Index dof = w.dofs[k];
+      w.contact[k] = 0;
       if (!nd.accel.holds(dof)) continue;
       const auto i = static_cast<std::size_t>(dof);
-      if (!nd.active[i]) {
-        w.contact[k] = 0;
-        continue;
-      }
+      if (!nd.active[i]) continue;
       Vec<Dim> v = nd.momentum[i] / nd.mass[i];
       for (int c = 0; c < Dim; ++c)
         if (nd.fixed[i] & (1u << c)) v[c] = 0.0;
@@ -734,6 +734,7 @@ void apply_wall_friction(RunState<Dim>& sim, double dt) {
         if (!(nd.fixed[i] & (1u << c))) nd.accel[i][c] = (after[c] - v[c]) / dt;
     }
   }
+  for (auto& w : sim.walls) w.contact_step = sim.step;
 }
 }  // namespace
 

@@ -65,13 +65,16 @@ struct SolveState {
   double local_damping = 0.0;
   // The frictional walls (Problem::friction_walls): each side's DOFs (ascending), its outward
   // normal e_d times `sign`, and Coulomb's mu; applied by stages::solve_acceleration and
-  // solve_velocity. `contact`: per DOF, whether the wall held it in the last acceleration solve.
+  // solve_velocity. `contact`: per DOF, whether the wall held it in the acceleration solve of
+  // step `contact_step` (-1: none yet); read in that step only, so that a DOF's conditions do not
+  // depend on which processes held it in earlier steps.
   struct Wall {
     std::vector<Index> dofs;
     int direction = 0;
     double sign = 1.0;
     double mu = 0.0;
     std::vector<unsigned char> contact;
+    Index contact_step = -1;
   };
   std::vector<Wall> walls;
   // The forces' stage needs the nodes' velocities of the step start (q^s): for the damping's

@@ -153,11 +153,11 @@ TEST(Friction, ABlockSlidesDownTheInclineWithCoulombsAcceleration) {
           scheme, basis[9] == 'l' ? "linear" : "B2", m.vx / (a * t) - 1.0, m.lift, m.lowest);
       EXPECT_NEAR(m.vx, a * t, 0.02 * a * t) << scheme << ", " << basis;
       // The block stays on the floor: it neither enters it (beyond its elastic compression,
-      // about 3e-6 m) nor rises by more than 0.15 % of its height. (The schemes but USL lift it
-      // by up to 8e-5 m once its front crosses a grid line: nodes of small mass there that
+      // about 3e-6 m) nor rises by more than 0.3 % of its height. (The schemes but USL lift it
+      // by up to 1.3e-4 m once its front crosses a grid line: nodes of small mass there that
       // leave the wall are free, those that would enter it are held.)
       EXPECT_GT(m.lowest, -1e-5) << scheme << ", " << basis;
-      EXPECT_LT(std::abs(m.lift), 1.5e-4) << scheme << ", " << basis;
+      EXPECT_LT(std::abs(m.lift), 3e-4) << scheme << ", " << basis;
       // The floor holds the weight's normal part and brakes the block by mu times it.
       EXPECT_NEAR(m.ry, weight * std::cos(th), 0.02 * weight) << scheme << ", " << basis;
       EXPECT_NEAR(m.rx, -mu * m.ry, 0.02 * weight) << scheme << ", " << basis;
