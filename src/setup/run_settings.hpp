@@ -71,7 +71,7 @@ struct RunSettings {
   OutputSettings output;
   ParallelSettings parallel;
   MethodSettings method;
-  ElasticParameters material;       // material.* (the problem holds the law built from them)
+  ElasticParameters material;  // material.* (the problem holds the law built from them)
   std::vector<MaterialParameterValue> material_parameters;  // those of material.model's law
   std::int64_t reference_dofs = 0;  // reference.dofs: the ULFEM reference of benchmarks without
                                     // an exact solution
