@@ -259,6 +259,13 @@ CASES = [
     ("2d_plate_mesh_file_ps_tls", "examples/plate_ps_unstructured_2d.toml",
      ["time.end=2e-3", "grid.cells=32", "method.mass=lumped", "method.mapping=tls",
       "output.frames=1"], "none"),
+    # Bodies from files on a wider grid: every process reads the body mesh and keeps the
+    # particles of its slab (the plate with a hole sagging under gravity; the ball of
+    # tetrahedra thrown onto the frictional floor, its slabs cut along z).
+    ("2d_plate_hole_body_mesh", "examples/plate_hole_2d.toml",
+     ["time.end=0.2", "output.frames=1"], "none"),
+    ("3d_sphere_body_mesh_friction", "examples/sphere_friction_3d.toml",
+     ["time.end=0.1", "output.frames=1", "output.reactions=true"], "none"),
     ("2d_plate_maxent", "examples/plate_mms_2d.toml",
      ["grid.cells=8", "time.end=2e-3", "method.basis=maxent", "output.frames=1"], "none"),
     ("3d_cube_bspline2", "examples/cube_mms_3d.toml",

@@ -549,8 +549,10 @@ int run_main(int argc, char** argv) {
   auto* mesh = app.add_subcommand(
       "mesh",
       "read a Gmsh mesh (or generate a triangulation) and print its vertices, triangles, "
-      "quality and named boundaries");
-  mesh->add_option("file", mesh_file, "Gmsh .msh file (MSH 4.1 or 2.2, linear triangles)");
+      "quality and named boundaries, and as a body (body.mesh: triangles or tetrahedra) its "
+      "volume and parts");
+  mesh->add_option("file", mesh_file,
+                   "Gmsh .msh file (MSH 4.1 or 2.2, linear triangles or tetrahedra)");
   mesh->add_option("--rectangle", mesh_box, "generate instead: x0,y0,x1,y1 [m]")
       ->delimiter(',')
       ->expected(4);
@@ -620,6 +622,13 @@ int run_main(int argc, char** argv) {
             "nx,ny (one of the two)");
       if (!mesh_box.empty() && mesh_cells.empty())
         throw mpm::InputError("mpm mesh: --rectangle needs --cells nx,ny");
+      if (!mesh_file.empty() && mpm::gmsh_mesh_dimension(mesh_file) == 3) {
+        if (!mesh_vtu.empty())
+          throw mpm::InputError(
+              "mpm mesh: --vtu writes meshes of triangles; this one holds tetrahedra");
+        mpm::print_body_summary(std::cout, mpm::read_gmsh_body<3>(mesh_file));
+        return 0;
+      }
       const auto m = mesh_file.empty()
                          ? mpm::structured_triangles(
                                {mesh_box[0], mesh_box[1]}, {mesh_box[2], mesh_box[3]},
@@ -629,6 +638,7 @@ int run_main(int argc, char** argv) {
                          : mpm::with_box_sides(mpm::read_gmsh_mesh(mesh_file));  // as grid.mesh
       const auto q = mpm::mesh_quality(m);
       mpm::print_mesh_summary(std::cout, m, q);
+      if (!mesh_file.empty()) mpm::print_body_summary(std::cout, mpm::read_gmsh_body<2>(mesh_file));
       if (!mesh_vtu.empty()) mpm::write_mesh_vtu(mesh_vtu, m, q);
       return 0;
     }

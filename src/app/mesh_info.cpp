@@ -7,6 +7,8 @@
 #include <limits>
 #include <numbers>
 #include <ostream>
+#include <string>
+#include <vector>
 
 #include "io/output.hpp"
 
@@ -65,6 +67,49 @@ void print_mesh_summary(std::ostream& os, const TriangleMesh& m, const MeshQuali
                       b.vertices.size(), length);
   }
 }
+
+template <int Dim>
+void print_body_summary(std::ostream& os, const BodyMesh<Dim>& m) {
+  const char* kind = Dim == 2 ? "triangles" : "tetrahedra";
+  const char* unit = Dim == 2 ? "m^2" : "m^3";
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0, worst = 180.0;
+  Index worst_at = 0;
+  std::vector<double> group_volume(m.group_names().size() + 1, 0.0);
+  std::vector<Index> group_count(m.group_names().size() + 1, 0);
+  for (Index e = 0; e < m.num_elements(); ++e) {
+    lo = std::min(lo, m.element_volume(e));
+    hi = std::max(hi, m.element_volume(e));
+    const double a = m.min_angle(e);
+    if (a < worst) worst = a, worst_at = e;
+    const auto g = static_cast<std::size_t>(m.group(e) + 1);  // 0: in no group
+    group_volume[g] += m.element_volume(e);
+    ++group_count[g];
+  }
+  os << fmt::format("as a body (body.mesh, {}D): {} {}, {} vertices, {} {:.10g} {}\n", Dim,
+                    m.num_elements(), kind, m.num_vertices(), Dim == 2 ? "area" : "volume",
+                    m.volume(), unit);
+  std::string box;
+  for (int d = 0; d < Dim; ++d)
+    box += fmt::format("{}[{:.6g}, {:.6g}]", d == 0 ? "" : " x ", m.lower()[d], m.upper()[d]);
+  os << fmt::format("  bounding box {} m\n", box);
+  os << fmt::format("  element {} {:.4g} to {:.4g} {} (ratio {:.3g})\n",
+                    Dim == 2 ? "area" : "volume", lo, hi, unit, hi / lo);
+  os << fmt::format("  smallest {} {:.3g} degrees (element {})\n",
+                    Dim == 2 ? "angle" : "dihedral angle", worst, m.tag(worst_at));
+  if (m.group_names().empty()) {
+    os << fmt::format("  no parts (Gmsh: physical groups of dimension {})\n", Dim);
+    return;
+  }
+  os << fmt::format("  parts (physical groups of dimension {}):\n", Dim);
+  for (std::size_t g = 0; g < m.group_names().size(); ++g)
+    os << fmt::format("    \"{}\": {} {}, {} {:.10g} {}\n", m.group_names()[g], group_count[g + 1],
+                      kind, Dim == 2 ? "area" : "volume", group_volume[g + 1], unit);
+  if (group_count[0] > 0)
+    os << fmt::format("    in no part: {} {}, {} {:.10g} {}\n", group_count[0], kind,
+                      Dim == 2 ? "area" : "volume", group_volume[0], unit);
+}
+template void print_body_summary<2>(std::ostream&, const BodyMesh<2>&);
+template void print_body_summary<3>(std::ostream&, const BodyMesh<3>&);
 
 void write_mesh_vtu(const std::string& path, const TriangleMesh& m, const MeshQuality& q) {
   io::write_file_atomic(

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "benchmarks/benchmarks.hpp"
+#include "benchmarks/bodies.hpp"
 #include "benchmarks/initial_stress.hpp"
 #include "grid/triangle_mesh.hpp"
 #include "methods/kinds.hpp"
@@ -420,6 +421,12 @@ void named_loads(Problem<2>& pb, const Config& cfg, const SeedScope& scope) {
                       traction ? "traction.loaded" : "pressure.loaded"));
     return;
   }
+  for (const char* key : {"body.mesh", "body.particles"})
+    if (!cfg.get_string(key).empty())
+      throw InputError(fmt::format(
+          "{}: boundary.loaded loads the particles of a box body next to the mesh's boundaries; "
+          "with {} the body's particles come from a file (load through the grid: prescribed.*)",
+          cfg.where("boundary.loaded"), key));
   if (!pb.mesh)
     throw InputError(fmt::format(
         "{}: boundary.loaded names boundaries of a mesh file (grid.mesh); without one the body's "
@@ -604,10 +611,100 @@ void check_boxes(const Config& cfg, const Vec<Dim>& g0, const Vec<Dim>& g1, cons
   }
 }
 
+// The body of a 2D or 3D custom problem from body.mesh or body.particles, seeded on pb.grid (and
+// in 2D inside the triangles of grid.mesh): every point must lie on the grid. What acts on the
+// faces of a box body (traction.*, pressure.*), the discretisations of a box body (OTM and the
+// unified solver) and the seeding of a mesh grid's triangles are refused, naming the key.
+template <int Dim>
+Particles<Dim> seed_file_body(const Config& cfg, const Problem<Dim>& pb, const FileBody<Dim>& body,
+                              double rho, const SeedScope& scope) {
+  const std::string where = cfg.where(body.key());
+  if (cfg.get_string("method.solver") != "mpm")
+    throw InputError(fmt::format(
+        "{}: {} gives the body by its particles; method.solver = \"{}\" discretises a box body "
+        "(body.min, body.max) itself (use method.solver = \"mpm\")",
+        where, body.key(), cfg.get_string("method.solver")));
+  if (cfg.get_int("particles.per_triangle") != 0)
+    throw InputError(fmt::format(
+        "{}: particles.per_triangle seeds the triangles of the grid; the body of {} is seeded "
+        "by {} (leave particles.per_triangle out)",
+        cfg.where("particles.per_triangle"), body.key(),
+        std::string_view(body.key()) == "body.mesh" ? "particles.per_element" : "its file"));
+  for (int d = 0; d < Dim; ++d)
+    for (int side = 0; side < 2; ++side)
+      for (const char* what : {"traction", "pressure"}) {
+        const std::string key = fmt::format("{}.{}", what, kSideKeys[d][side]);
+        if (what[0] == 't' ? !is_zero(cfg, key.c_str()) : cfg.get_string(key) != "0")
+          throw InputError(fmt::format(
+              "{}: {} loads a face of the box body (body.min, body.max); this run's body comes "
+              "from {} (load it through the grid: prescribed.*, boundary.*)",
+              cfg.where(key), key, body.source()));
+      }
+  if constexpr (Dim == 2) {
+    if (pb.mesh) {
+      body.check_inside(
+          cfg, [&](const Vec<2>& x) { return pb.mesh->inside(x); },
+          fmt::format("the triangles of {}", pb.mesh->source()));
+    }
+  }
+  const Vec<Dim> lo = pb.grid.origin, hi = pb.grid.upper();
+  body.check_inside(
+      cfg, [&](const Vec<Dim>& x) { return pb.grid.inside(x); },
+      Dim == 2
+          ? fmt::format("the grid [{:.6g}, {:.6g}] x [{:.6g}, {:.6g}]", lo[0], hi[0], lo[1], hi[1])
+          : fmt::format("the grid [{:.6g}, {:.6g}] x [{:.6g}, {:.6g}] x "
+                        "[{:.6g}, {:.6g}]",
+                        lo[0], hi[0], lo[1], hi[1], lo[Dim - 1], hi[Dim - 1]));
+  check_seed_memory<Dim>(static_cast<double>(body.count()), scope.machine_share, body.source());
+  SeedSink<Dim> sink(&pb.grid, rho, scope);
+  sink.reserve(body.count());
+  body.for_each([&](const Vec<Dim>& x, double vol) { sink.add(x, vol); });
+  return sink.finish();
+}
+
+// The initial velocity and stress a particle file gives (FileBody), on the particles this
+// process keeps (each named by its row: its id); the keys that would give them too must be at
+// their defaults. Called after set_initial_stress, which checks initial.stress's keys.
+template <int Dim>
+void file_initial_fields(const Config& cfg, Problem<Dim>& pb, const FileBody<Dim>& body) {
+  auto& P = pb.particles;
+  if (!body.velocity().empty()) {
+    if (!cfg.at_default("initial.velocity"))
+      throw InputError(
+          fmt::format("{}: initial.velocity, and {} gives the velocity of every particle (leave "
+                      "initial.velocity out, or the velocity columns)",
+                      cfg.where("initial.velocity"), body.source()));
+    for (std::size_t i = 0; i < P.x.size(); ++i) P.v[i] = body.velocity()[P.id[i]];
+  }
+  if (body.stress().empty() && body.stress_zz().empty()) return;
+  for (const char* key : {"initial.stress", "initial.stress_zz", "initial.geostatic"})
+    if (!cfg.at_default(key))
+      throw InputError(fmt::format(
+          "{}: {}, and {} gives the stress of every particle (leave {} out, or the stress "
+          "columns)",
+          cfg.where(key), key, body.source(), key));
+  const auto names = state_names(pb.material);
+  const auto column = std::find(names.begin(), names.end(), kOutOfPlaneStressName);
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    const auto row = static_cast<std::size_t>(P.id[i]);
+    const bool stressed = (!body.stress().empty() && body.stress()[row] != Mat<Dim>::Zero()) ||
+                          (!body.stress_zz().empty() && body.stress_zz()[row] != 0.0);
+    if (stressed) refuse_initial_stress(cfg, pb.material, Dim, body.key());
+    if (!body.stress().empty()) P.stress[i] = body.stress()[row];
+    if (body.stress_zz().empty() || body.stress_zz()[row] == 0.0) continue;
+    if (column == names.end())
+      throw InputError(fmt::format(
+          "{}: {} gives stress_zz, and material.model = \"{}\" keeps no stress normal to the "
+          "plane (leave the column out)",
+          cfg.where(body.key()), body.source(), material_name(pb.material)));
+    P.state[i][static_cast<std::size_t>(column - names.begin())] = body.stress_zz()[row];
+  }
+}
 }  // namespace
 
 bool read_by_custom_alone(std::string_view key) {
   if (key == "traction.amplitude") return false;  // (the traction bar's)
+  if (key == "particles.per_element") return true;
   for (std::string_view section : {"boundary.", "traction.", "pressure.", "body.", "initial.",
                                    "loading.", "exact.", "prescribed."})
     if (key.starts_with(section)) return true;
@@ -617,6 +714,12 @@ bool read_by_custom_alone(std::string_view key) {
 Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "custom";
+  for (const char* key : {"body.mesh", "body.particles", "particles.per_element"})
+    if (!cfg.at_default(key))
+      throw InputError(fmt::format(
+          "{}: {} gives a body of a 2D or 3D custom problem (set grid.dimension = 2 or 3); a 1D "
+          "body is the segment body.min, body.max",
+          cfg.where(key), key));
   const double g0 = cfg.get_real("grid.min"), g1 = cfg.get_real("grid.max");
   const double b0 = cfg.get_real("body.min"), b1 = cfg.get_real("body.max");
   if (!(g1 > g0))
@@ -697,8 +800,10 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   };
   const Vec<2> g0 = given_or("grid.min", pb.mesh ? pb.mesh->lower() : Vec<2>::Zero());
   const Vec<2> g1 = given_or("grid.max", pb.mesh ? pb.mesh->upper() : Vec<2>::Zero());
-  const Vec<2> b0 = given_or("body.min", g0), b1 = given_or("body.max", g1);
-  check_boxes<2>(cfg, g0, g1, b0, b1);
+  const auto file_body = FileBody<2>::from_config(cfg);
+  const Vec<2> b0 = file_body ? file_body->lower() : given_or("body.min", g0);
+  const Vec<2> b1 = file_body ? file_body->upper() : given_or("body.max", g1);
+  check_boxes<2>(cfg, g0, g1, file_body ? g0 : b0, file_body ? g1 : b1);
   pb.material = material_from_config(cfg, 2);
   const double rho = cfg.get_real("material.density");
   const auto cx = static_cast<Index>(cfg.get_int("grid.cells"));
@@ -707,7 +812,8 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   pb.grid = Grid<2>(g0, g1, IVec<2>{cx, cy});
   if (pb.mesh) check_mesh_box(cfg, *pb.mesh, pb.grid);
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
-  pb.particles = seed_body_2d(cfg, pb.grid, b0, b1, rho, pb.mesh.get(), scope);
+  pb.particles = file_body ? seed_file_body<2>(cfg, pb, *file_body, rho, scope)
+                           : seed_body_2d(cfg, pb.grid, b0, b1, rho, pb.mesh.get(), scope);
   pb.body_min = b0;
   pb.body_max = b1;
 
@@ -725,6 +831,7 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   }
   set_initial_stress<2>(
       cfg, pb, [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0, 0.0); }, b);
+  if (file_body) file_initial_fields<2>(cfg, pb, *file_body);
 
   pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time();
   pb.body_force.position_dependent = b[0].uses_position() || b[1].uses_position();
@@ -769,8 +876,10 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
           "pressure.left ... front",
           cfg.where(key), key));
   const Vec<3> g0 = per_direction<3>(cfg, "grid.min"), g1 = per_direction<3>(cfg, "grid.max");
-  const Vec<3> b0 = per_direction<3>(cfg, "body.min"), b1 = per_direction<3>(cfg, "body.max");
-  check_boxes<3>(cfg, g0, g1, b0, b1);
+  const auto file_body = FileBody<3>::from_config(cfg);
+  const Vec<3> b0 = file_body ? file_body->lower() : per_direction<3>(cfg, "body.min");
+  const Vec<3> b1 = file_body ? file_body->upper() : per_direction<3>(cfg, "body.max");
+  check_boxes<3>(cfg, g0, g1, file_body ? g0 : b0, file_body ? g1 : b1);
   pb.material = material_from_config(cfg, 3);
   const double rho = cfg.get_real("material.density");
   // Cells in y and z: given, or (0) the count closest to the cell width in x (cubic cells).
@@ -784,7 +893,8 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
       Grid<3>(g0, g1, IVec<3>{cx, cells_along("grid.cells_y", 1), cells_along("grid.cells_z", 2)});
   // particles.per_cell per cell and direction, as in 2D and cube_mms_3d (x fastest, then y, z).
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
-  pb.particles = seed_particles<3>(pb.grid, b0, b1, per_cell, rho, scope);
+  pb.particles = file_body ? seed_file_body<3>(cfg, pb, *file_body, rho, scope)
+                           : seed_particles<3>(pb.grid, b0, b1, per_cell, rho, scope);
   pb.body_min = b0;
   pb.body_max = b1;
 
@@ -803,6 +913,7 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
   }
   set_initial_stress<3>(
       cfg, pb, [s0](const Vec<3>& X) { return stress_from<3>(s0, X[0], X[1], X[2], 0.0); }, b);
+  if (file_body) file_initial_fields<3>(cfg, pb, *file_body);
 
   pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time() || b[2].uses_time();
   pb.body_force.position_dependent =

@@ -53,6 +53,15 @@ std::optional<K0Stress<Dim>> k0_stress_from_config(const Config& cfg, const Prob
         "{}: initial.geostatic = \"k0\" computes the initial stress, out of the plane too; leave "
         "initial.stress_zz (given at {}) at 0",
         where, cfg.where("initial.stress_zz")));
+  for (const char* key : {"body.mesh", "body.particles"})
+    if (!cfg.get_string(key).empty())
+      throw InputError(fmt::format(
+          "{}: initial.geostatic = \"k0\" takes the overburden of a box body (body.min, "
+          "body.max), not of a body from a file ({}); give initial.stress{} as expressions of "
+          "the position{} instead",
+          where, key, Dim == 2 ? " and initial.stress_zz" : "",
+          std::string_view(key) == "body.particles" ? ", or the stress columns of the particle file"
+                                                    : ""));
   if (pb.mesh)
     throw InputError(fmt::format(
         "{}: initial.geostatic = \"k0\" takes the overburden of a box body (body.min, "

@@ -11,6 +11,7 @@
 #include <variant>
 
 #include "benchmarks/benchmarks.hpp"
+#include "benchmarks/bodies.hpp"
 #include "grid/grid_state.hpp"
 #include "grid/triangle_mesh.hpp"
 #include "setup/config.hpp"
@@ -73,6 +74,21 @@ void for_each_lattice_point(const IVec<Dim>& n, const Vec<Dim>& lo, const Vec<Di
 }
 
 }  // namespace
+
+template <int Dim>
+void check_seed_memory(double count, double share, const std::string& what) {
+  // (The state of an elastic law: a material's internal variables come on top.)
+  const double bytes = share * count * static_cast<double>(Particles<Dim>::bytes_per_particle(0));
+  const double memory = physical_memory();
+  if (memory > 0.0 && bytes > memory)
+    throw InputError(fmt::format(
+        "{}: its {:.4g} particles need about {:.3g} GB for their state alone{}; this machine has "
+        "{:.3g} GB of memory",
+        what, count, bytes / 1e9, share < 1.0 ? " on the processes of this machine" : "",
+        memory / 1e9));
+}
+template void check_seed_memory<2>(double, double, const std::string&);
+template void check_seed_memory<3>(double, double, const std::string&);
 
 template <int Dim>
 Particles<Dim> seed_particles(const Grid<Dim>& g, const Vec<Dim>& lo, const Vec<Dim>& hi,
@@ -147,7 +163,6 @@ std::pair<int, int> triangle_seed_pattern(int per_triangle) {
   return {0, 0};
 }
 
-namespace {
 // The pattern of seed_particles_in_triangles in reference coordinates (xi, eta): the centroids
 // of the parts, each with the same share 1 / per_triangle of the area.
 std::vector<Vec<2>> triangle_seed_reference(int per_triangle) {
@@ -190,6 +205,7 @@ std::vector<Vec<2>> triangle_seed_reference(int per_triangle) {
   return ref;
 }
 
+namespace {
 // A triangulation whose particle state alone would not fit in memory (`share`:
 // SeedScope::machine_share) is refused before anything is allocated.
 void check_triangle_seed_memory(const TriangleMesh& mesh, Index per, double share) {

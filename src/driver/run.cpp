@@ -162,34 +162,47 @@ int run_threads(int requested, Index particles, int dim, int available) {
 
 RunResult run(const Config& given, const RunOptions& given_options) {
   RunOptions opt = given_options;
-  // The stored configuration (config.toml, checkpoints) names the mesh file by its absolute
-  // path, so that `mpm run DIR/config.toml` and a restart from the checkpoint alone read the
-  // same file wherever they are started; the checkpoints hold its hash, so that a restart
-  // refuses a file that changed since.
+  // The stored configuration (config.toml, checkpoints) names the files a run reads (the mesh
+  // of grid.mesh, the body of body.mesh or body.particles) by their absolute paths, so that
+  // `mpm run DIR/config.toml` and a restart from the checkpoint alone read the same files
+  // wherever they are started; the checkpoints hold their hash, so that a restart refuses a
+  // file that changed since.
   Config cfg = given;
-  if (!cfg.get_string("grid.mesh").empty()) {
+  std::vector<std::string> files;  // "key 'path'" of each file read, for the restart's message
+  for (const char* key : io::kHashedInputKeys) {
+    if (cfg.get_string(key).empty()) continue;
     std::error_code ec;
-    const std::filesystem::path file = cfg.file_path("grid.mesh");
+    const std::filesystem::path file = cfg.file_path(key);
     const std::filesystem::path absolute = std::filesystem::absolute(file, ec).lexically_normal();
+    std::uint64_t hash = 0;
     try {
-      opt.mesh_hash = io::fnv1a64(read_input_file(file, "mesh file"));
+      hash = io::fnv1a64(read_input_file(
+          file, std::string_view(key) == "body.particles" ? "particle file" : "mesh file"));
     } catch (const InputError& e) {
-      throw InputError(fmt::format("{}: grid.mesh: {}", cfg.where("grid.mesh"), e.what()));
+      throw InputError(fmt::format("{}: {}: {}", cfg.where(key), key, e.what()));
     }
+    // One hash for every file (with grid.mesh alone: its bytes' hash).
+    opt.mesh_hash =
+        opt.mesh_hash == 0 ? hash : io::fnv1a64(fmt::format("{:016x}{:016x}", opt.mesh_hash, hash));
+    files.push_back(fmt::format("{} '{}'", key, file.string()));
     if (!ec) {
       try {
-        cfg.set("grid.mesh", toml_string(absolute.string()), cfg.where("grid.mesh"));
+        cfg.set(key, toml_string(absolute.string()), cfg.where(key));
       } catch (const InputError&) {
         // (A path TOML cannot hold, e.g. not UTF-8: stored as given.)
       }
     }
-    if (opt.restart && opt.restart->mesh_hash != opt.mesh_hash)
-      throw InputError(fmt::format(
-          "{}: grid.mesh: the mesh file '{}' is not the one checkpoint '{}' was written with (its "
-          "bytes hash to {:016x}, the checkpoint's mesh to {:016x}); restore that file, or start "
-          "a new run",
-          cfg.where("grid.mesh"), file.string(), opt.restart_name, opt.mesh_hash,
-          opt.restart->mesh_hash));
+  }
+  if (opt.restart && opt.restart->mesh_hash != opt.mesh_hash) {
+    std::string list;
+    for (const auto& f : files) list += (list.empty() ? "" : ", ") + f;
+    throw InputError(fmt::format(
+        "{}: {} {} checkpoint '{}' was written with (the bytes hash to {:016x}, the "
+        "checkpoint's to {:016x}); restore {}, or start a new run",
+        cfg.where(files.empty() ? "grid.mesh" : files.front().substr(0, files.front().find(' '))),
+        list.empty() ? "no input file (grid.mesh, body.mesh, body.particles)" : list,
+        files.size() > 1 ? "are not the ones" : "is not the one", opt.restart_name, opt.mesh_hash,
+        opt.restart->mesh_hash, files.size() > 1 ? "those files" : "that file"));
   }
   // summary.json's peak_memory_bytes: this run's, the problem's set-up included (a batch runs
   // several in one process).

@@ -1,6 +1,7 @@
 #include "io/checkpoint.hpp"
 
 #include <fmt/format.h>
+#include <algorithm>
 #include <bit>
 #include <fstream>
 #include <iterator>
@@ -571,9 +572,10 @@ Config restart_config(const Checkpoint& c, const std::string& name, const Config
   std::vector<std::string> diff;
   for (const KeySpec& k : schema()) {
     if (k.name.starts_with("output.") || k.name == "time.end") continue;
-    if (k.name == "grid.mesh") {
+    if (std::find(std::begin(kHashedInputKeys), std::end(kHashedInputKeys), k.name) !=
+        std::end(kHashedInputKeys)) {
       // The same file, named from another directory (the stored configuration holds its
-      // absolute path, a configuration file one relative to itself), is the same mesh.
+      // absolute path, a configuration file one relative to itself), is the same file.
       std::error_code ea, eb;
       const auto fa = std::filesystem::absolute(stored.file_path(k.name), ea).lexically_normal();
       const auto fb = std::filesystem::absolute(run.file_path(k.name), eb).lexically_normal();

@@ -131,8 +131,15 @@ struct Checkpoint {
     std::uint64_t hash = 0;   // the FNV-1a hash of its payload (its header's)
   };
   std::vector<Piece> pieces;
-  std::uint64_t mesh_hash = 0;  // fnv1a64 of the grid.mesh file's bytes; 0: no mesh
+  // fnv1a64 of the bytes of the files of kHashedInputKeys (one file: its hash; several: each
+  // next one's hash folded in, fnv1a64 of the two as 16 hex digits each); 0: no such file.
+  std::uint64_t mesh_hash = 0;
 };
+
+// The keys that name input files a run reads besides its configuration: stored by their
+// absolute paths, hashed into Checkpoint::mesh_hash (driver/run.cpp), the same file named from
+// another directory the same key (restart_config).
+inline constexpr const char* kHashedInputKeys[] = {"grid.mesh", "body.mesh", "body.particles"};
 
 // One process's share of a distributed checkpoint: its particles in its order, each one's cell
 // at the last basis evaluation and the basis's carried state (basis_state, as Checkpoint's).

@@ -349,9 +349,11 @@ class PrivateCopy {
   std::filesystem::path dir_, file_;
 };
 
-}  // namespace
-
-TriangleMesh read_gmsh_mesh(const std::string& path) {
+// Reads the file at `path` (checked as above: a regular file, a MSH header) into Gmsh through a
+// private copy and returns f(session, where, bytes, format) with the model loaded; `where` names
+// the file in messages.
+template <class F>
+auto with_gmsh_file(const std::string& path, F&& f) {
   const std::string where = fmt::format("mesh file \"{}\"", path);
   // Refuses FIFOs and devices (which would block or never end) before anything else.
   const std::string bytes = read_input_file(path, "mesh file");
@@ -363,47 +365,21 @@ TriangleMesh read_gmsh_mesh(const std::string& path) {
   int ierr = 0;
   lib.open(copy.file().c_str(), &ierr);
   g.check(ierr, where + ": Gmsh could not read it");
-  // Only linear triangles: a mesh that mixes them with quadrilaterals (or other surface
-  // elements) is refused whole, never read in part.
-  {
-    int* types = nullptr;
-    std::size_t nt = 0;
-    lib.element_types(&types, &nt, 2, -1, &ierr);
-    const auto surface_types = g.take(types, nt);
-    g.check(ierr, where);
-    std::string others;
-    for (int t : surface_types)
-      if (t != 2) others += (others.empty() ? "" : ", ") + g.element_name(t);
-    const bool has_triangles =
-        std::find(surface_types.begin(), surface_types.end(), 2) != surface_types.end();
-    if (has_triangles && !others.empty())
-      throw InputError(fmt::format(
-          "{}: it mixes 3-node triangles with other surface elements ({}); mpm reads meshes of "
-          "linear triangles only: mesh with Mesh.ElementOrder = 1 and without recombination "
-          "into quadrilaterals",
-          where, others));
-  }
-  auto [tri_tags, tri_nodes] = g.elements(2, -1, where);
-  if (tri_tags.empty()) {
-    int* types = nullptr;
-    std::size_t nt = 0;
-    lib.element_types(&types, &nt, 2, -1, &ierr);
-    std::string found;
-    for (int t : g.take(types, nt)) found += (found.empty() ? "" : ", ") + g.element_name(t);
-    throw InputError(fmt::format(
-        "{}: no 3-node triangles (Gmsh element type 2){}; mpm reads linear triangles: mesh with "
-        "Mesh.ElementOrder = 1 and without recombination into quadrilaterals",
-        where,
-        found.empty() ? std::string(" and no other surface elements") : "; it holds " + found));
-  }
-  // The triangles' nodes, numbered by ascending Gmsh tag.
-  std::vector<std::size_t> used(tri_nodes);
-  std::sort(used.begin(), used.end());
-  used.erase(std::unique(used.begin(), used.end()), used.end());
-  std::unordered_map<std::size_t, Index> index;
-  for (std::size_t k = 0; k < used.size(); ++k) index.emplace(used[k], static_cast<Index>(k));
+  return f(g, where, bytes, format);
+}
+
+// The coordinates (x, y, z) of the nodes `used` (Gmsh tags, sorted and unique: the nodes of the
+// elements read), in that order. InputError for a node defined twice or a used node the file
+// does not define.
+std::vector<Vec<3>> node_coordinates(const GmshSession& g, const std::vector<std::size_t>& used,
+                                     const std::string& where, const std::string& bytes,
+                                     MshFormat format) {
+  const GmshLibrary& lib = g.lib_;
+  std::unordered_map<std::size_t, std::size_t> index;
+  for (std::size_t k = 0; k < used.size(); ++k) index.emplace(used[k], k);
   std::size_t *tags_p = nullptr, ntags = 0, ncoord = 0, nparam = 0;
   double *coord_p = nullptr, *param_p = nullptr;
+  int ierr = 0;
   // (Every node once: each is classified on one entity, and boundaries are not included.)
   lib.nodes(&tags_p, &ntags, &coord_p, &ncoord, &param_p, &nparam, -1, -1, 0, 0, &ierr);
   const auto node_tags = g.take(tags_p, ntags);
@@ -411,7 +387,7 @@ TriangleMesh read_gmsh_mesh(const std::string& path) {
   g.take(param_p, nparam);
   g.check(ierr, where);
   {
-    // A node defined twice (two coordinates for one id) leaves it open which one a triangle
+    // A node defined twice (two coordinates for one id) leaves it open which one an element
     // means: refused, not resolved by whichever Gmsh keeps.
     std::vector<std::size_t> sorted(node_tags);
     std::sort(sorted.begin(), sorted.end());
@@ -426,26 +402,86 @@ TriangleMesh read_gmsh_mesh(const std::string& path) {
         throw InputError(fmt::format("{}: node {} is defined twice in $Nodes", where, *again));
     }
   }
-  std::vector<Vec<2>> vertices(used.size(), Vec<2>::Zero());
+  std::vector<Vec<3>> x(used.size(), Vec<3>::Zero());
   std::vector<char> seen(used.size(), 0);
-  double extent = 0.0;
   for (std::size_t k = 0; k < node_tags.size(); ++k) {
     const auto it = index.find(node_tags[k]);
     if (it == index.end()) continue;
-    const auto v = static_cast<std::size_t>(it->second);
-    vertices[v] = Vec<2>(coord[3 * k], coord[3 * k + 1]);
-    seen[v] = 1;
-    extent = std::max({extent, std::abs(coord[3 * k]), std::abs(coord[3 * k + 1])});
+    x[it->second] = Vec<3>(coord[3 * k], coord[3 * k + 1], coord[3 * k + 2]);
+    seen[it->second] = 1;
   }
-  for (std::size_t k = 0; k < node_tags.size(); ++k)
-    if (index.count(node_tags[k]) != 0 &&
-        !(std::abs(coord[3 * k + 2]) <= 1e-12 * std::max(extent, 1.0)))
-      throw InputError(fmt::format("{}: node {} has z = {}; mpm reads planar meshes in z = 0",
-                                   where, node_tags[k], coord[3 * k + 2]));
   for (std::size_t v = 0; v < used.size(); ++v)
     if (!seen[v])
       throw InputError(fmt::format(
-          "{}: a triangle refers to node {}, which the file does not define", where, used[v]));
+          "{}: an element refers to node {}, which the file does not define", where, used[v]));
+  return x;
+}
+
+// The sorted, unique node tags of `node_tags` (the nodes of the elements read).
+std::vector<std::size_t> used_nodes(std::vector<std::size_t> node_tags) {
+  std::sort(node_tags.begin(), node_tags.end());
+  node_tags.erase(std::unique(node_tags.begin(), node_tags.end()), node_tags.end());
+  return node_tags;
+}
+
+// InputError unless every vertex lies in the plane z = 0 (to 1e-12 of the largest coordinate).
+void check_planar(const std::vector<Vec<3>>& x, const std::vector<std::size_t>& tags,
+                  const std::string& where) {
+  double extent = 0.0;
+  for (const auto& p : x) extent = std::max({extent, std::abs(p[0]), std::abs(p[1])});
+  for (std::size_t k = 0; k < x.size(); ++k)
+    if (!(std::abs(x[k][2]) <= 1e-12 * std::max(extent, 1.0)))
+      throw InputError(fmt::format("{}: node {} has z = {}; mpm reads planar meshes in z = 0",
+                                   where, tags[k], x[k][2]));
+}
+
+// The element types of dimension `dim` in the file other than `wanted`, named ("" when none).
+std::string other_types(const GmshSession& g, int dim, int wanted, const std::string& where,
+                        bool* has_wanted) {
+  int* types = nullptr;
+  std::size_t nt = 0;
+  int ierr = 0;
+  g.lib_.element_types(&types, &nt, dim, -1, &ierr);
+  const auto found = g.take(types, nt);
+  g.check(ierr, where);
+  std::string others;
+  for (int t : found)
+    if (t != wanted) others += (others.empty() ? "" : ", ") + g.element_name(t);
+  *has_wanted = std::find(found.begin(), found.end(), wanted) != found.end();
+  return others;
+}
+
+// The file's linear triangles as a TriangleMesh, with its physical groups of dimension 1 as
+// named boundaries.
+TriangleMesh triangle_mesh_of(const GmshSession& g, const std::string& where,
+                              const std::string& bytes, MshFormat format) {
+  const GmshLibrary& lib = g.lib_;
+  int ierr = 0;
+  // Only linear triangles: a mesh that mixes them with quadrilaterals (or other surface
+  // elements) is refused whole, never read in part.
+  bool has_triangles = false;
+  const std::string others = other_types(g, 2, 2, where, &has_triangles);
+  if (has_triangles && !others.empty())
+    throw InputError(fmt::format(
+        "{}: it mixes 3-node triangles with other surface elements ({}); mpm reads meshes of "
+        "linear triangles only: mesh with Mesh.ElementOrder = 1 and without recombination "
+        "into quadrilaterals",
+        where, others));
+  auto [tri_tags, tri_nodes] = g.elements(2, -1, where);
+  if (tri_tags.empty())
+    throw InputError(fmt::format(
+        "{}: no 3-node triangles (Gmsh element type 2){}; mpm reads linear triangles: mesh with "
+        "Mesh.ElementOrder = 1 and without recombination into quadrilaterals",
+        where,
+        others.empty() ? std::string(" and no other surface elements") : "; it holds " + others));
+  // The triangles' nodes, numbered by ascending Gmsh tag.
+  const std::vector<std::size_t> used = used_nodes(tri_nodes);
+  std::unordered_map<std::size_t, Index> index;
+  for (std::size_t k = 0; k < used.size(); ++k) index.emplace(used[k], static_cast<Index>(k));
+  const std::vector<Vec<3>> x = node_coordinates(g, used, where, bytes, format);
+  check_planar(x, used, where);
+  std::vector<Vec<2>> vertices(used.size());
+  for (std::size_t v = 0; v < used.size(); ++v) vertices[v] = x[v].head<2>();
   std::vector<TriangleMesh::Triangle> triangles(tri_tags.size());
   for (std::size_t e = 0; e < tri_tags.size(); ++e)
     for (std::size_t a = 0; a < 3; ++a) triangles[e][a] = index.at(tri_nodes[3 * e + a]);
@@ -483,6 +519,108 @@ TriangleMesh read_gmsh_mesh(const std::string& path) {
           where, name, tag));
   }
   return TriangleMesh(std::move(vertices), std::move(triangles), std::move(boundaries), where);
+}
+
+// The file's linear triangles (Dim 2) or tetrahedra (Dim 3) as a body, each element in the
+// physical group of dimension Dim that holds it.
+template <int Dim>
+BodyMesh<Dim> body_mesh_of(const GmshSession& g, const std::string& where, const std::string& bytes,
+                           MshFormat format) {
+  const GmshLibrary& lib = g.lib_;
+  constexpr int kType = Dim == 2 ? 2 : 4;  // Gmsh: 3-node triangle, 4-node tetrahedron
+  const char* kinds = Dim == 2 ? "3-node triangles" : "4-node tetrahedra";
+  bool has = false;
+  const std::string others = other_types(g, Dim, kType, where, &has);
+  if (!others.empty())
+    throw InputError(fmt::format(
+        "{}: {} {}; a {}D body mesh is made of {} only: mesh with Mesh.ElementOrder = 1{}", where,
+        has ? fmt::format("it mixes {} with", kinds) : "it holds", others, Dim, kinds,
+        Dim == 2 ? " and without recombination into quadrilaterals"
+                 : ", without recombination or extrusion into hexahedra and prisms"));
+  auto [tags, nodes] = g.elements(kType, -1, where);
+  if (tags.empty())
+    throw InputError(fmt::format(
+        "{}: no {} (Gmsh element type {}){}", where, kinds, kType,
+        Dim == 3 ? "; a 3D body needs a volume mesh (gmsh -3), and a mesh of triangles is a 2D "
+                   "body (grid.dimension = 2)"
+                 : "; a 2D body needs a surface mesh of the plane z = 0 (gmsh -2)"));
+  const std::vector<std::size_t> used = used_nodes(nodes);
+  std::unordered_map<std::size_t, Index> index;
+  for (std::size_t k = 0; k < used.size(); ++k) index.emplace(used[k], static_cast<Index>(k));
+  const std::vector<Vec<3>> x = node_coordinates(g, used, where, bytes, format);
+  if constexpr (Dim == 2) check_planar(x, used, where);
+  std::vector<Vec<Dim>> vertices(used.size());
+  for (std::size_t v = 0; v < used.size(); ++v) vertices[v] = x[v].template head<Dim>();
+  std::vector<typename BodyMesh<Dim>::Element> elements(tags.size());
+  std::unordered_map<std::size_t, std::size_t> position;  // element tag -> index
+  for (std::size_t e = 0; e < tags.size(); ++e) {
+    for (std::size_t a = 0; a <= Dim; ++a) elements[e][a] = index.at(nodes[(Dim + 1) * e + a]);
+    if (!position.emplace(tags[e], e).second)
+      throw InputError(fmt::format("{}: element {} is defined twice", where, tags[e]));
+  }
+  // Physical groups of dimension Dim: the body's named parts. An element in two of them would
+  // belong to two parts at once: refused, naming both.
+  std::vector<int> group(tags.size(), -1);
+  std::vector<std::string> names;
+  int ierr = 0;
+  int* groups_p = nullptr;
+  std::size_t ngroups = 0;
+  lib.physical_groups(&groups_p, &ngroups, Dim, &ierr);
+  const auto groups = g.take(groups_p, ngroups);  // (dim, tag) pairs
+  g.check(ierr, where);
+  for (std::size_t k = 0; k + 1 < groups.size(); k += 2) {
+    const int dim = groups[k], tag = groups[k + 1];
+    char* name_p = nullptr;
+    lib.physical_name(dim, tag, &name_p, &ierr);
+    std::string name = g.take(name_p);
+    if (name.empty()) name = std::to_string(tag);
+    const int id = static_cast<int>(names.size());
+    names.push_back(name);
+    int* ent_p = nullptr;
+    std::size_t nent = 0;
+    lib.group_entities(dim, tag, &ent_p, &nent, &ierr);
+    for (int entity : g.take(ent_p, nent)) {
+      const auto [own, own_nodes] = g.elements(kType, entity, where);
+      for (std::size_t t : own) {
+        const std::size_t e = position.at(t);
+        if (group[e] >= 0 && group[e] != id)
+          throw InputError(fmt::format(
+              "{}: element {} is in the physical groups \"{}\" and \"{}\"; each part of a body "
+              "is one group",
+              where, t, names[static_cast<std::size_t>(group[e])], name));
+        group[e] = id;
+      }
+    }
+  }
+  return BodyMesh<Dim>(std::move(vertices), std::move(elements), std::move(tags), std::move(group),
+                       std::move(names), where);
+}
+
+}  // namespace
+
+TriangleMesh read_gmsh_mesh(const std::string& path) {
+  return with_gmsh_file(path,
+                        [](const GmshSession& g, const std::string& where, const std::string& bytes,
+                           MshFormat format) { return triangle_mesh_of(g, where, bytes, format); });
+}
+
+template <int Dim>
+BodyMesh<Dim> read_gmsh_body(const std::string& path) {
+  return with_gmsh_file(
+      path, [](const GmshSession& g, const std::string& where, const std::string& bytes,
+               MshFormat format) { return body_mesh_of<Dim>(g, where, bytes, format); });
+}
+
+template BodyMesh<2> read_gmsh_body<2>(const std::string&);
+template BodyMesh<3> read_gmsh_body<3>(const std::string&);
+
+int gmsh_mesh_dimension(const std::string& path) {
+  return with_gmsh_file(
+      path, [](const GmshSession& g, const std::string& where, const std::string&, MshFormat) {
+        bool tets = false;
+        const bool volumes = !other_types(g, 3, 4, where, &tets).empty() || tets;
+        return volumes ? 3 : 2;
+      });
 }
 
 }  // namespace mpm

@@ -176,6 +176,12 @@ std::vector<KeySpec> declare() {
 
       integer("particles.per_cell", 4, at_least(1),
               "material points per cell per direction, evenly spaced"),
+      integer("particles.per_element", 0, at_least(0),
+              "material points per element of body.mesh, equal volumes: per triangle m k^2 with "
+              "m = 1, 3 or 6 (as particles.per_triangle: 1, 3, 4, 6, 9, 12, ...), per "
+              "tetrahedron m 8^r with m = 1 (centroid) or 4 (the degree-2 rule) in each of the "
+              "8^r tetrahedra of r red refinements (1, 4, 8, 32, 64, ...); 0: the degree-2 "
+              "rules, 3 per triangle and 4 per tetrahedron"),
       integer("particles.per_triangle", 0, at_least(0),
               "material points per triangle of method.basis = \"p1_triangles\" or "
               "\"powell_sabin\", m k^2 with m = 1, 3 or 6 (k^2 similar sub-triangles, each split "
@@ -334,6 +340,18 @@ std::vector<KeySpec> declare() {
                   "lower corner of the material body, one value per direction (custom)"),
       real_vector("body.max", "m", 1.0,
                   "upper corner of the material body, one value per direction (custom)"),
+      choice("body.mesh", "", {},
+             "Gmsh mesh file (.msh 4.1 or 2.2; linear triangles in the plane z = 0 in 2D, "
+             "linear tetrahedra in 3D) whose elements are the body instead of the box body.min, "
+             "body.max, on the run's own grid, which it need not fill; seeded per element by "
+             "particles.per_element (2D and 3D custom; relative to the configuration file's "
+             "directory; `mpm mesh FILE` reports it)"),
+      choice("body.particles", "", {},
+             "CSV file of the body's particles instead of the box body.min, body.max: a header, "
+             "then one row per particle with columns x_1, x_2[, x_3] (or x, y, z) [m], volume "
+             "[m^3 per m of thickness in 2D], optionally v_1... (or vx...) [m/s], stress_11, "
+             "stress_12, ... [Pa] (incremental laws) and in 2D stress_zz; lines starting with # "
+             "are comments (2D and 3D custom; relative to the configuration file's directory)"),
 
       expression_vector("initial.velocity", "m/s", "0",
                         "initial velocity, one expression of the position x, y, z per "

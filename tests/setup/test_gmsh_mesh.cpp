@@ -1,6 +1,7 @@
 // Gmsh meshes through Gmsh's library (setup/gmsh_mesh.hpp): the same mesh in MSH 4.1, 2.2 and
 // 4.1 binary, its named and unnamed boundary groups, and the refusals with their reasons
-// (tests/data/meshes/README.md says how the files were made).
+// (tests/data/meshes/README.md says how the files were made); body meshes (read_gmsh_body) of
+// tetrahedra in MSH 4.1 and 2.2 with their parts, and their refusals.
 #include <gtest/gtest.h>
 
 #include <sys/stat.h>
@@ -10,7 +11,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "grid/triangle_mesh.hpp"
 #include "setup/gmsh_mesh.hpp"
@@ -226,6 +229,66 @@ TEST(GmshMesh, AGroupNamedLikeABoxSideIsRefused) {
   EXPECT_TRUE(sided.has_boundary("wall"));
   EXPECT_TRUE(sided.has_boundary("x-"));
   EXPECT_TRUE(sided.boundary("wall").outer);
+}
+
+TEST(GmshMesh, ABodyOfTetrahedraWithItsPartsFromBothFormats) {
+  const BodyMesh<3> a = read_gmsh_body<3>(mesh_path("cube_tets.msh"));
+  const BodyMesh<3> b = read_gmsh_body<3>(mesh_path("cube_tets_v22.msh"));
+  EXPECT_NEAR(a.volume(), 1.0, 1e-14);
+  ASSERT_EQ(a.group_names(), (std::vector<std::string>{"lower", "upper"}));
+  double part[2] = {0.0, 0.0};
+  for (Index e = 0; e < a.num_elements(); ++e) {
+    ASSERT_GE(a.group(e), 0);
+    part[a.group(e)] += a.element_volume(e);
+    // Each element in its part: "lower" below z = 0.5, "upper" above.
+    for (Index v : a.element(e))
+      EXPECT_TRUE(a.group(e) == 0 ? a.vertex(v)[2] <= 0.5 + 1e-15 : a.vertex(v)[2] >= 0.5 - 1e-15);
+  }
+  EXPECT_NEAR(part[0], 0.5, 1e-14);
+  EXPECT_NEAR(part[1], 0.5, 1e-14);
+  // The same mesh in MSH 2.2: the same vertices, elements and parts.
+  ASSERT_EQ(b.num_elements(), a.num_elements());
+  ASSERT_EQ(b.num_vertices(), a.num_vertices());
+  for (Index v = 0; v < a.num_vertices(); ++v) EXPECT_EQ(a.vertex(v), b.vertex(v));
+  for (Index e = 0; e < a.num_elements(); ++e) {
+    EXPECT_EQ(a.element(e), b.element(e));
+    EXPECT_EQ(a.group(e), b.group(e));
+  }
+  EXPECT_EQ(gmsh_mesh_dimension(mesh_path("cube_tets.msh")), 3);
+  EXPECT_EQ(gmsh_mesh_dimension(mesh_path("square_v41.msh")), 2);
+}
+
+TEST(GmshMesh, ABodyOfTrianglesHasItsSurfaceGroupAsItsPart) {
+  const BodyMesh<2> m = read_gmsh_body<2>(mesh_path("square_v41.msh"));
+  EXPECT_NEAR(m.volume(), 1.0, 1e-14);
+  ASSERT_EQ(m.group_names(), std::vector<std::string>{"body"});
+  for (Index e = 0; e < m.num_elements(); ++e) EXPECT_EQ(m.group(e), 0);
+}
+
+TEST(GmshMesh, BodyRefusalsNameTheFileAndTheElements) {
+  auto refused = [](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string hexes = refused([] { read_gmsh_body<3>(mesh_path("cube_hexes.msh")); });
+  EXPECT_NE(hexes.find("cube_hexes.msh"), std::string::npos) << hexes;
+  EXPECT_NE(hexes.find("Hexahedron"), std::string::npos) << hexes;
+  const std::string flat = refused([] { read_gmsh_body<3>(mesh_path("square_v41.msh")); });
+  EXPECT_NE(flat.find("no 4-node tetrahedra"), std::string::npos) << flat;
+  EXPECT_NE(flat.find("grid.dimension = 2"), std::string::npos) << flat;
+  const std::string solid = refused([] { read_gmsh_body<2>(mesh_path("cube_tets.msh")); });
+  EXPECT_NE(solid.find("no 3-node triangles"), std::string::npos) << solid;
+  const std::string quads = refused([] { read_gmsh_body<2>(mesh_path("square_quads.msh")); });
+  EXPECT_NE(quads.find("Quadrilateral"), std::string::npos) << quads;
+  // A script is never a mesh, as for grid.mesh.
+  const TempDir dir("body_script");
+  const std::string geo = dir.write("body.msh", "Point(1) = {0, 0, 0};\n");
+  const std::string script = refused([&] { read_gmsh_body<3>(geo); });
+  EXPECT_NE(script.find("$MeshFormat"), std::string::npos) << script;
 }
 
 }  // namespace
