@@ -339,6 +339,21 @@ TEST(HostileInput, EveryExampleRerunsFromItsConfigAndRestartsFromItsCheckpoint) 
   const auto refused = mpm("run --restart " + (dir / "o" / "checkpoint.bin").string() + " -q");
   EXPECT_EQ(refused.code, 2) << refused.out;
   EXPECT_TRUE(contains(refused.out, "is not the one checkpoint")) << refused.out;
+  // The same for a body's particle file (body.particles), on a grid mesh (grid.mesh): both files
+  // are named, and the change of either is refused.
+  const auto body = dir / "particles.csv";
+  std::ofstream(body) << "x,y,volume\n0.3,0.3,0.01\n0.4,0.35,0.01\n";
+  const auto both =
+      mpm("run " + (dir / "incline.toml").string() + " -q --set time.end=7.5e-4 " +
+          "--set output.checkpoint_every=2 --set body.particles=particles.csv " +
+          "--set particles.per_triangle=0 --set boundary.loaded= --set pressure.loaded=0 " +
+          "--out " + (dir / "p").string());
+  ASSERT_EQ(both.code, 0) << both.out;
+  std::ofstream(body, std::ios::app) << "# one more line\n";
+  const auto changed = mpm("run --restart " + (dir / "p" / "checkpoint.bin").string() + " -q");
+  EXPECT_EQ(changed.code, 2) << changed.out;
+  EXPECT_TRUE(contains(changed.out, "are not the ones checkpoint")) << changed.out;
+  EXPECT_TRUE(contains(changed.out, "body.particles '")) << changed.out;
 }
 
 }  // namespace
