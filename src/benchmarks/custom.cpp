@@ -190,7 +190,7 @@ template <int Dim>
 void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, const Vec<Dim>& b1,
                        int per_cell) {
   // boundary.friction is read with a frictional side: given without one, it would do nothing.
-  bool frictional = false;
+  bool frictional = !cfg.get_string("boundary.frictional").empty();
   for (int d = 0; d < Dim; ++d)
     for (int side = 0; side < 2; ++side)
       frictional = frictional ||
@@ -210,9 +210,11 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
         const std::string key = fmt::format("boundary.{}", kSideKeys[d][side]);
         if (pb.mesh)
           throw InputError(fmt::format(
-              "{}: boundary.{} = \"friction\": frictional walls are the sides of a grid, and "
-              "this run's grid is the mesh {} (use \"fixed\", \"roller\" or \"free\")",
-              cfg.where(key), kSideKeys[d][side], pb.mesh->source()));
+              "{}: boundary.{} = \"friction\": this run's grid is the mesh {}, whose frictional "
+              "walls are named boundaries: boundary.frictional = \"{}\" (its boundary edges on "
+              "this side; use \"free\" here)",
+              cfg.where(key), kSideKeys[d][side], pb.mesh->source(),
+              Dim == 2 ? side_name(d, side) : std::string()));
         require_mpm_lumped(cfg, key.c_str(), "is a frictional wall of the MPM solver's grid",
                            "the contact and friction forces of a node are its own mass times "
                            "its velocity change; a consistent mass matrix couples the nodes");
@@ -356,8 +358,11 @@ std::vector<std::pair<Index, std::array<double, 3>>> roller_vertex_normals(const
 // bent boundary, P1 only, v_i . n_i = 0 with a normal per vertex).
 void named_boundaries(Problem<2>& pb, const Config& cfg) {
   const auto fixed = names_of(cfg, "boundary.fixed"), roller = names_of(cfg, "boundary.roller");
-  if (fixed.empty() && roller.empty()) return;
-  const char* first_key = fixed.empty() ? "boundary.roller" : "boundary.fixed";
+  const auto frictional = names_of(cfg, "boundary.frictional");
+  if (fixed.empty() && roller.empty() && frictional.empty()) return;
+  const char* first_key = !fixed.empty()    ? "boundary.fixed"
+                          : !roller.empty() ? "boundary.roller"
+                                            : "boundary.frictional";
   if (!pb.mesh)
     throw InputError(fmt::format(
         "{}: {} names boundaries of a mesh file (grid.mesh); without one the grid's sides take "
@@ -399,6 +404,40 @@ void named_boundaries(Problem<2>& pb, const Config& cfg) {
       pb.fixed_sides.push_back({d, 0, 1u << d, name});
     else  // inclined: v . n = 0, which couples the components (GridState::projected)
       pb.fixed_sides.push_back({0, 0, 0u, name, {n[0], n[1], 0.0}});
+  }
+  // Frictional walls on named boundaries: straight lines on the mesh's outside, whose DOFs are
+  // its vertices (the wall acts on nodal velocities), each named in no other list.
+  const auto cells_at =
+      frictional.empty() ? std::vector<std::vector<Index>>{} : cells_at_vertices(*pb.mesh);
+  for (const auto& name : frictional) {
+    const char* key = "boundary.frictional";
+    check(name, key);
+    for (const auto* other : {&fixed, &roller})
+      if (std::find(other->begin(), other->end(), name) != other->end())
+        throw InputError(fmt::format(
+            "{}: boundary \"{}\" is in boundary.frictional and in {}; name it in one of them",
+            cfg.where(key), name, other == &fixed ? "boundary.fixed" : "boundary.roller"));
+    const std::string basis = cfg.get_string("method.basis");
+    const auto vertex_dofs = [](const auto& k) { return k.kVertexDofs; };
+    if (!basis_named_has(basis, vertex_dofs))
+      throw InputError(
+          fmt::format("{}: boundary.frictional: a frictional wall acts on nodal velocities, which "
+                      "method.basis = {} has at the mesh's vertices; \"{}\" has none",
+                      cfg.where(key), basis_names_where(vertex_dofs), basis));
+    require_mpm_lumped(cfg, key, "names frictional walls of the MPM solver's grid",
+                       "the contact and friction forces of a node are its own mass times its "
+                       "velocity change; a consistent mass matrix couples the nodes");
+    if (!straight_boundary(*pb.mesh, name) || !pb.mesh->boundary(name).outer)
+      throw InputError(fmt::format(
+          "{}: boundary.frictional: boundary \"{}\" of {} {}; a frictional wall is a straight "
+          "line on the mesh's outer boundary (split a bent one into straight physical groups)",
+          cfg.where(key), name, pb.mesh->source(),
+          pb.mesh->boundary(name).outer ? "does not lie on one straight line"
+                                        : "runs through the mesh's inside"));
+    const Vec<2> n =
+        edge_cell_and_normal(*pb.mesh, cells_at, pb.mesh->boundary(name).edges.front()).second;
+    FrictionWall w{0, 0, cfg.get_real("boundary.friction"), name, {n[0], n[1], 0.0}};
+    pb.friction_walls.push_back(std::move(w));
   }
 }
 
@@ -861,7 +900,8 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
   // Named boundaries and their loads are the physical groups of a Gmsh file of triangles, which
   // only the 2D problem reads (grid.mesh); the six faces of a 3D grid take boundary.left, right,
   // bottom, top, back, front and the body's faces traction.* and pressure.*.
-  for (const char* key : {"boundary.fixed", "boundary.roller", "boundary.loaded"})
+  for (const char* key :
+       {"boundary.fixed", "boundary.roller", "boundary.frictional", "boundary.loaded"})
     if (!cfg.get_string(key).empty())
       throw InputError(fmt::format(
           "{}: {} names boundaries of a 2D mesh file (grid.mesh: triangles); a 3D custom "

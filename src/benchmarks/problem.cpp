@@ -498,11 +498,12 @@ AnyProblem make_problem(const Config& cfg, const SeedScope& scope) {
         "builds its own grid (leave grid.mesh out)",
         cfg.where("grid.mesh"), cfg.get_string("benchmark"),
         dim != 2 ? fmt::format(" in {}D", dim) : ""));
-  // boundary.fixed / roller name the boundaries of a mesh file in the 2D custom problem, which
-  // reads them; every other problem fixes its own.
+  // boundary.fixed / roller / frictional name the boundaries of a mesh file in the 2D custom
+  // problem, which reads them; every other problem fixes its own.
   // (So do boundary.loaded and the loads on it.)
   const bool custom_mesh = meshed && cfg.get_string("benchmark") == "custom";
-  for (const char* key : {"boundary.fixed", "boundary.roller", "boundary.loaded"})
+  for (const char* key :
+       {"boundary.fixed", "boundary.roller", "boundary.frictional", "boundary.loaded"})
     if (!cfg.get_string(key).empty() && !custom_mesh)
       throw InputError(fmt::format(
           "{}: {} names boundaries of a mesh file (grid.mesh) in the 2D custom problem; "

@@ -143,11 +143,18 @@ class TypedStepper final : public Stepper<Dim> {
             "positions: the grid nodes, a B-spline's Greville abscissae, the mesh's vertices)");
     }
     for (const FrictionWall& w : pb.friction_walls) {
-      std::vector<Index> dofs = sim_.side_dofs(FixedSide{w.direction, w.side});
+      FixedSide where{w.direction, w.side};
+      Vec<Dim> normal = Vec<Dim>::Zero();
+      if (w.boundary.empty()) {
+        normal[w.direction] = w.side == 0 ? -1.0 : 1.0;
+      } else {
+        where.boundary = w.boundary;
+        for (int d = 0; d < Dim; ++d) normal[d] = w.normal[static_cast<std::size_t>(d)];
+      }
+      std::vector<Index> dofs = sim_.side_dofs(where);
       std::sort(dofs.begin(), dofs.end());  // (searched: stages::solve_velocity)
       const std::size_t n = dofs.size();
-      sim_.walls.push_back({std::move(dofs), w.direction, w.side == 0 ? -1.0 : 1.0, w.mu,
-                            std::vector<unsigned char>(n, 0)});
+      sim_.walls.push_back({std::move(dofs), normal, w.mu, std::vector<unsigned char>(n, 0)});
     }
     if (pb.reactions) {
       for (const auto& f : pb.fixed_sides) sim_.reaction_dofs.push_back(sim_.side_dofs(f));

@@ -60,14 +60,19 @@ struct PrescribedVelocity {
   unsigned components = ~0u;
 };
 
-// A grid side that is a rigid wall with Coulomb friction (boundary.* = "friction"): the body
-// cannot cross it but may leave it; where it presses on it, the tangential velocity sticks while
-// the friction force it needs stays below mu times the contact force, and slips otherwise
+// A grid side (boundary.* = "friction") or a straight named boundary of the run's triangle mesh
+// (boundary.frictional) that is a rigid wall with Coulomb friction: the body cannot cross it but
+// may leave it; where it presses on it, the tangential velocity sticks while the friction force
+// it needs stays below mu times the contact force, and slips otherwise
 // (stages::solve_acceleration).
 struct FrictionWall {
   int direction = 0;
   int side = 0;     // 0: the lower side (outward normal -e_d), 1: the upper (+e_d)
   double mu = 0.0;  // Coulomb's coefficient [-]
+  // Not empty: the named boundary of the mesh (its vertices' DOFs) instead of the grid side, with
+  // its unit normal pointing out of the mesh, into the wall (x, y, z).
+  std::string boundary = {};
+  std::array<double, 3> normal = {};
 };
 
 // The names of the sides of the grid by direction (0 lower, 1 upper), as the boundary.* keys.
@@ -121,7 +126,9 @@ std::vector<std::string> reaction_names(const Problem<Dim>& pb) {
             : f.boundary);
   for (const FrictionWall& w : pb.friction_walls)
     names.emplace_back(
-        kSideNames[static_cast<std::size_t>(w.direction)][static_cast<std::size_t>(w.side)]);
+        w.boundary.empty()
+            ? kSideNames[static_cast<std::size_t>(w.direction)][static_cast<std::size_t>(w.side)]
+            : w.boundary);
   if (pb.prescribed) names.emplace_back("prescribed");
   return names;
 }

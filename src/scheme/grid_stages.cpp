@@ -686,7 +686,9 @@ void wall_conditions(const RunState<Dim>& sim, Index i, Vec<Dim>& v) {
     if (it == w.dofs.end() || *it != i) continue;
     const bool held =
         w.contact_step == sim.step && w.contact[static_cast<std::size_t>(it - w.dofs.begin())] != 0;
-    if (held || w.sign * v[w.direction] > 0.0) v[w.direction] = 0.0;
+    // (On a grid side, n = +-e_d: v_d is set to 0 exactly.)
+    const double vn = v.dot(w.normal);
+    if (held || vn > 0.0) v -= vn * w.normal;
   }
 }
 
@@ -708,7 +710,6 @@ template <int Dim>
 void apply_wall_friction(RunState<Dim>& sim, double dt) {
   auto& nd = sim.nodes;
   for (auto& w : sim.walls) {
-    const int d = w.direction;
     w.contact_step = -1;  // the velocities start from the conditions before this solve
     for (std::size_t k = 0; k < w.dofs.size(); ++k) {
       const Index dof = w.dofs[k];
@@ -721,10 +722,10 @@ void apply_wall_friction(RunState<Dim>& sim, double dt) {
         if (nd.fixed[i] & (1u << c)) v[c] = 0.0;
       wall_conditions(sim, dof, v);
       Vec<Dim> after = v + dt * nd.accel[i];
-      const double pn = w.sign * after[d];  // the normal impulse per unit mass [m/s]
+      const double pn = after.dot(w.normal);  // the normal impulse per unit mass [m/s]
       w.contact[k] = pn > 0.0 ? 1 : 0;
       if (!w.contact[k]) continue;
-      after[d] = 0.0;  // the tangential part w_t
+      after -= pn * w.normal;  // the tangential part w_t
       const double wt = after.norm();
       if (wt > w.mu * pn)
         after *= 1.0 - w.mu * pn / wt;  // slip

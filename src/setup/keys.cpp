@@ -412,6 +412,11 @@ std::vector<KeySpec> declare() {
              "each must lie on one straight line, which may be inclined (v . n = 0 couples the "
              "velocity components), or with method.basis = \"p1_triangles\" may bend (a normal "
              "per vertex; corners turning by more than 45 degrees are fixed) (2D custom)"),
+      choice("boundary.frictional", "", {},
+             "named boundaries of grid.mesh that are rigid walls with Coulomb friction "
+             "boundary.friction (as boundary.* = \"friction\" on a grid side), separated by "
+             "commas; each must lie on one straight line on the mesh's outer boundary, which may "
+             "be inclined (2D custom, method.basis = \"p1_triangles\", MPM, lumped mass)"),
       choice("boundary.loaded", "", {},
              "named boundaries of grid.mesh loaded by traction.loaded and pressure.loaded, "
              "separated by commas; the body must lie along them (2D custom)"),

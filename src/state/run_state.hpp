@@ -63,15 +63,15 @@ struct SolveState {
   // Cundall's local non-viscous damping alpha (method.local_damping; 0: off), applied to the
   // nodal forces by stages::solve_acceleration.
   double local_damping = 0.0;
-  // The frictional walls (Problem::friction_walls): each side's DOFs (ascending), its outward
-  // normal e_d times `sign`, and Coulomb's mu; applied by stages::solve_acceleration and
+  // The frictional walls (Problem::friction_walls): each wall's DOFs (ascending), its unit
+  // normal n pointing into the wall (a grid side's: +-e_d), and Coulomb's mu; applied by
+  // stages::solve_acceleration and
   // solve_velocity. `contact`: per DOF, whether the wall held it in the acceleration solve of
   // step `contact_step` (-1: none yet); read in that step only, so that a DOF's conditions do not
   // depend on which processes held it in earlier steps.
   struct Wall {
     std::vector<Index> dofs;
-    int direction = 0;
-    double sign = 1.0;
+    Vec<Dim> normal = Vec<Dim>::Zero();
     double mu = 0.0;
     std::vector<unsigned char> contact;
     Index contact_step = -1;
