@@ -33,10 +33,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 if HERE not in sys.path:
     sys.path.insert(0, HERE)  # the package beside this file, however the script is started
 
-from verification import (bases, chapter5, cube, element_block, footing, item3,  # noqa: E402
-                          large_bar, massmatrix, mesh_boundaries, mms, otm, plate, plate_001,
-                          ps_mpm, ps_partial, reconstruction, small_bar, static, tls_robust,
-                          vertical_cut, vortex)
+from verification import (bases, chapter5, column_collapse, cube, element_block,  # noqa: E402
+                          footing, item3, large_bar, massmatrix, mesh_boundaries, mms, otm, plate,
+                          plate_001, ps_mpm, ps_partial, reconstruction, small_bar, static,
+                          tls_robust, vertical_cut, vortex)
 from verification.common import ROOT  # noqa: E402
 from verification.quick import quick  # noqa: E402
 from verification.report import full  # noqa: E402
@@ -78,6 +78,7 @@ SECTIONS = [
     ("plane-strain compression of a soil block", element_block.sec_element_block),
     ("strip footing", footing.sec_footing),
     ("vertical cut", vertical_cut.sec_vertical_cut),
+    ("granular column collapse", column_collapse.sec_column_collapse),
 ]
 # Appended with --long (hours).
 LONG_SECTIONS = [
