@@ -110,98 +110,10 @@ std::string tetrahedron_seed_counts() {
   return "1, 4, 8, 32, 64, 256, 512, ...";
 }
 
+// A particle file's rows into x_, vol_, line_ and the initial fields, volume_ summed; InputError
+// naming source_ and the line for a malformed one. Whether the file had a header.
 template <int Dim>
-std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
-  const std::string mesh = cfg.get_string("body.mesh");
-  const std::string particles = cfg.get_string("body.particles");
-  if (mesh.empty() && particles.empty()) {
-    if (!cfg.at_default("particles.per_element"))
-      throw InputError(fmt::format(
-          "{}: particles.per_element seeds the elements of a body mesh, and this run has none "
-          "(give body.mesh, or leave particles.per_element out)",
-          cfg.where("particles.per_element")));
-    return std::nullopt;
-  }
-  if (!mesh.empty() && !particles.empty())
-    throw InputError(
-        fmt::format("{}: body.mesh (at {}) and body.particles both give the body; give one of them",
-                    cfg.where("body.particles"), cfg.where("body.mesh")));
-  for (const char* key : {"body.min", "body.max"})
-    if (!cfg.at_default(key))
-      throw InputError(fmt::format(
-          "{}: {} is a corner of a box body, and this run's body comes from {} = \"{}\" (leave "
-          "{} out)",
-          cfg.where(key), key, mesh.empty() ? "body.particles" : "body.mesh",
-          mesh.empty() ? particles : mesh, key));
-  FileBody b;
-  b.key_ = mesh.empty() ? "body.particles" : "body.mesh";
-  const std::filesystem::path path = cfg.file_path(b.key_);
-  std::error_code ec;
-  const bool from_file = std::filesystem::is_regular_file(cfg.source(), ec);
-  const std::string note = path.is_relative() && !from_file
-                               ? " (taken from the working directory: the configuration is not a "
-                                 "file, as in a restart from a checkpoint alone; give the "
-                                 "configuration file too)"
-                               : "";
-  if (!mesh.empty()) {
-    if (!cfg.at_default("particles.per_cell"))
-      throw InputError(fmt::format(
-          "{}: particles.per_cell seeds the cells of a box body; a body mesh is seeded per "
-          "element by particles.per_element (leave particles.per_cell out)",
-          cfg.where("particles.per_cell")));
-    auto per = static_cast<int>(cfg.get_int("particles.per_element"));
-    if (per == 0) per = Dim == 2 ? 3 : 4;  // the degree-2 rules
-    try {
-      if constexpr (Dim == 2)
-        b.ref_ = triangle_seed_reference(per);
-      else
-        b.ref_ = tetrahedron_seed_reference(per);
-    } catch (const InputError& e) {
-      throw InputError(fmt::format("{}: particles.per_element: {}",
-                                   cfg.where("particles.per_element"), e.what()));
-    }
-    try {
-      b.mesh_ = std::make_shared<const BodyMesh<Dim>>(read_gmsh_body<Dim>(path.string()));
-    } catch (const InputError& e) {
-      throw InputError(fmt::format("{}: body.mesh: {}{}", cfg.where("body.mesh"), e.what(), note));
-    }
-    b.source_ = fmt::format("body mesh \"{}\"", path.string());
-    // Overlapping elements would count their common volume twice: refused where a particle of
-    // one lies inside another (an overlap thinner than the particles' spacing goes unseen).
-    {
-      const BodyMesh<Dim>& m = *b.mesh_;
-      const auto per = static_cast<Index>(b.ref_.size());
-      Index k = 0;
-      b.for_each([&](const Vec<Dim>& x, double) {
-        const Index own = k++ / per;
-        if (const Index other = m.other_element_holding(x, own); other >= 0)
-          throw InputError(fmt::format(
-              "{}: body.mesh: elements {} and {} of {} overlap (a particle of the first lies "
-              "inside the second); a body mesh's elements must not overlap (one physical group "
-              "meshed twice?)",
-              cfg.where("body.mesh"), m.tag(own), m.tag(other), b.source_));
-      });
-    }
-    b.count_ = b.mesh_->num_elements() * static_cast<Index>(b.ref_.size());
-    b.lo_ = b.mesh_->lower();
-    b.hi_ = b.mesh_->upper();
-    b.for_each([&](const Vec<Dim>&, double v) { b.volume_ += v; });
-    return b;
-  }
-  if (!cfg.at_default("particles.per_cell") || !cfg.at_default("particles.per_element"))
-    throw InputError(
-        fmt::format("{}: a particle file gives every particle; leave particles.per_cell and "
-                    "particles.per_element out",
-                    cfg.where(cfg.at_default("particles.per_cell") ? "particles.per_element"
-                                                                   : "particles.per_cell")));
-  b.source_ = fmt::format("particle file \"{}\"", path.string());
-  std::string bytes;
-  try {
-    bytes = read_input_file(path, "particle file");
-  } catch (const InputError& e) {
-    throw InputError(
-        fmt::format("{}: body.particles: {}{}", cfg.where("body.particles"), e.what(), note));
-  }
+bool FileBody<Dim>::read_rows(std::string_view text) {
   // The columns: name -> what it holds (kind, component(s)).
   enum Kind { kPosition, kVolume, kVelocity, kStress, kStressZz };
   struct Column {
@@ -218,21 +130,17 @@ std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
   }
   known["volume"] = {kVolume};
   if constexpr (Dim == 2) known["stress_zz"] = {kStressZz};
-  std::string valid;
-  for (const char* n : {"x_1", "x_2", "x_3"})
-    if (n[2] - '0' <= Dim) valid += fmt::format("{}{}", valid.empty() ? "" : ", ", n);
-  valid += Dim == 2 ? " (or x, y), volume; optional: v_1, v_2 (or vx, vy), stress_11, "
-                      "stress_12, stress_21, stress_22 (the upper triangle, or all four), "
-                      "stress_zz"
-                    : " (or x, y, z), volume; optional: v_1, v_2, v_3 (or vx, vy, vz), "
-                      "stress_ij for i, j = 1..3 (the upper triangle, or all nine)";
+  const std::string valid =
+      Dim == 2 ? "x_1, x_2 (or x, y), volume; optional: v_1, v_2 (or vx, vy), stress_11, "
+                 "stress_12, stress_21, stress_22 (the upper triangle, or all four), stress_zz"
+               : "x_1, x_2, x_3 (or x, y, z), volume; optional: v_1, v_2, v_3 (or vx, vy, vz), "
+                 "stress_ij for i, j = 1..3 (the upper triangle, or all nine)";
   std::vector<Column> columns;
   std::vector<std::string> names;
   bool has_velocity = false, has_stress = false, has_zz = false;
   std::array<int, Dim> position_given{}, velocity_given{};
   std::array<std::array<int, Dim>, Dim> stress_given{};
   int volume_given = 0;
-  const std::string_view text(bytes);
   std::size_t at = 0;
   Index line_no = 0;
   bool header = true;
@@ -243,7 +151,7 @@ std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.find_first_not_of(" \t") == std::string_view::npos || line.front() == '#') continue;
-    const std::string where = fmt::format("{}, line {}", b.source_, line_no);
+    const std::string where = fmt::format("{}, line {}", source_, line_no);
     const auto fields = split(line);
     if (header) {
       header = false;
@@ -352,19 +260,115 @@ std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
           s(j, i) = s(i, j);
         }
       }
-    if (!std::isfinite(b.volume_ + vol))
+    if (!std::isfinite(volume_ + vol))
       throw InputError(fmt::format("{}: the volumes' sum overflows", where));
-    b.x_.push_back(x);
-    b.vol_.push_back(vol);
-    b.line_.push_back(line_no);
-    b.volume_ += vol;
-    if (has_velocity) b.velocity_.push_back(v);
-    if (has_stress) b.stress_.push_back(s);
-    if (has_zz) b.stress_zz_.push_back(zz);
+    x_.push_back(x);
+    vol_.push_back(vol);
+    line_.push_back(line_no);
+    volume_ += vol;
+    if (has_velocity) velocity_.push_back(v);
+    if (has_stress) stress_.push_back(s);
+    if (has_zz) stress_zz_.push_back(zz);
   }
+  return !header;
+}
+
+template <int Dim>
+std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
+  const std::string mesh = cfg.get_string("body.mesh");
+  const std::string particles = cfg.get_string("body.particles");
+  if (mesh.empty() && particles.empty()) {
+    if (!cfg.at_default("particles.per_element"))
+      throw InputError(fmt::format(
+          "{}: particles.per_element seeds the elements of a body mesh, and this run has none "
+          "(give body.mesh, or leave particles.per_element out)",
+          cfg.where("particles.per_element")));
+    return std::nullopt;
+  }
+  if (!mesh.empty() && !particles.empty())
+    throw InputError(
+        fmt::format("{}: body.mesh (at {}) and body.particles both give the body; give one of them",
+                    cfg.where("body.particles"), cfg.where("body.mesh")));
+  for (const char* key : {"body.min", "body.max"})
+    if (!cfg.at_default(key))
+      throw InputError(fmt::format(
+          "{}: {} is a corner of a box body, and this run's body comes from {} = \"{}\" (leave "
+          "{} out)",
+          cfg.where(key), key, mesh.empty() ? "body.particles" : "body.mesh",
+          mesh.empty() ? particles : mesh, key));
+  FileBody b;
+  b.key_ = mesh.empty() ? "body.particles" : "body.mesh";
+  const std::filesystem::path path = cfg.file_path(b.key_);
+  std::error_code ec;
+  const bool from_file = std::filesystem::is_regular_file(cfg.source(), ec);
+  const std::string note = path.is_relative() && !from_file
+                               ? " (taken from the working directory: the configuration is not a "
+                                 "file, as in a restart from a checkpoint alone; give the "
+                                 "configuration file too)"
+                               : "";
+  if (!mesh.empty()) {
+    if (!cfg.at_default("particles.per_cell"))
+      throw InputError(fmt::format(
+          "{}: particles.per_cell seeds the cells of a box body; a body mesh is seeded per "
+          "element by particles.per_element (leave particles.per_cell out)",
+          cfg.where("particles.per_cell")));
+    auto per = static_cast<int>(cfg.get_int("particles.per_element"));
+    if (per == 0) per = Dim == 2 ? 3 : 4;  // the degree-2 rules
+    try {
+      if constexpr (Dim == 2)
+        b.ref_ = triangle_seed_reference(per);
+      else
+        b.ref_ = tetrahedron_seed_reference(per);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: particles.per_element: {}",
+                                   cfg.where("particles.per_element"), e.what()));
+    }
+    try {
+      b.mesh_ = std::make_shared<const BodyMesh<Dim>>(read_gmsh_body<Dim>(path.string()));
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: body.mesh: {}{}", cfg.where("body.mesh"), e.what(), note));
+    }
+    b.source_ = fmt::format("body mesh \"{}\"", path.string());
+    // Overlapping elements would count their common volume twice: refused where a particle of
+    // one lies inside another (an overlap thinner than the particles' spacing goes unseen).
+    {
+      const BodyMesh<Dim>& m = *b.mesh_;
+      const auto per = static_cast<Index>(b.ref_.size());
+      Index k = 0;
+      b.for_each([&](const Vec<Dim>& x, double) {
+        const Index own = k++ / per;
+        if (const Index other = m.other_element_holding(x, own); other >= 0)
+          throw InputError(fmt::format(
+              "{}: body.mesh: elements {} and {} of {} overlap (a particle of the first lies "
+              "inside the second); a body mesh's elements must not overlap (one physical group "
+              "meshed twice?)",
+              cfg.where("body.mesh"), m.tag(own), m.tag(other), b.source_));
+      });
+    }
+    b.count_ = b.mesh_->num_elements() * static_cast<Index>(b.ref_.size());
+    b.lo_ = b.mesh_->lower();
+    b.hi_ = b.mesh_->upper();
+    b.for_each([&](const Vec<Dim>&, double v) { b.volume_ += v; });
+    return b;
+  }
+  if (!cfg.at_default("particles.per_cell") || !cfg.at_default("particles.per_element"))
+    throw InputError(
+        fmt::format("{}: a particle file gives every particle; leave particles.per_cell and "
+                    "particles.per_element out",
+                    cfg.where(cfg.at_default("particles.per_cell") ? "particles.per_element"
+                                                                   : "particles.per_cell")));
+  b.source_ = fmt::format("particle file \"{}\"", path.string());
+  std::string bytes;
+  try {
+    bytes = read_input_file(path, "particle file");
+  } catch (const InputError& e) {
+    throw InputError(
+        fmt::format("{}: body.particles: {}{}", cfg.where("body.particles"), e.what(), note));
+  }
+  const bool had_header = b.read_rows(bytes);
   if (b.x_.empty())
     throw InputError(fmt::format("{}: {}: no particles (a header{})", cfg.where("body.particles"),
-                                 b.source_, header ? " is missing too" : " and no rows"));
+                                 b.source_, had_header ? " and no rows" : " is missing too"));
   b.count_ = static_cast<Index>(b.x_.size());
   b.lo_ = b.hi_ = b.x_[0];
   for (const auto& x : b.x_) {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/types.hpp"
@@ -86,6 +87,8 @@ class FileBody {
   std::vector<Mat<Dim>> stress_;
   std::vector<double> stress_zz_;
   std::vector<Index> line_;  // each row's line in the file, for messages
+  // Reads a particle file's rows (bodies.cpp); whether it had a header.
+  bool read_rows(std::string_view text);
 };
 
 extern template class FileBody<2>;
