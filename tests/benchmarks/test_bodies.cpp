@@ -98,8 +98,10 @@ TEST(Bodies, TheTetrahedronRulesIntegrateAsTheyClaim) {
 }
 
 TEST(Bodies, AMeshBodyHoldsItsVolumeAndMassToRoundOff) {
+  // (Few seedings: under the sanitizers, at -O0, each costs seconds.)
   for (const char* file : {"cube_tets.msh", "cube_tets_v22.msh"})
-    for (int per : {1, 4, 8}) {
+    for (int per : {1, 8}) {
+      if (std::string_view(file) == "cube_tets_v22.msh" && per == 8) continue;  // (compared below)
       const Config cfg = Config::parse(
           free_body(3, -0.5, 1.5, 8,
                     fmt::format("mesh = \"{}\"", mesh_path("tests/data/meshes", file)),
@@ -122,7 +124,8 @@ TEST(Bodies, AMeshBodyHoldsItsVolumeAndMassToRoundOff) {
     return std::get<Problem<3>>(
                make_problem(Config::parse(
                    free_body(3, -0.5, 1.5, 8,
-                             fmt::format("mesh = \"{}\"", mesh_path("tests/data/meshes", file))),
+                             fmt::format("mesh = \"{}\"", mesh_path("tests/data/meshes", file)),
+                             "[particles]\nper_element = 1\n"),
                    "mesh_body.toml")))
         .particles;
   };
@@ -166,9 +169,10 @@ void falls_freely(const std::string& text) {
 
 TEST(Bodies, MeshBodiesFallFreelyOnAGridTheyDoNotFill) {
   const std::string gravity2 = "[loading]\nbody_force = [\"0\", \"-10\"]\n";
-  falls_freely<2>(free_body(
-      2, -0.25, 1.25, 12,
-      fmt::format("mesh = \"{}\"", mesh_path("examples/meshes", "plate_hole.msh")), gravity2));
+  falls_freely<2>(
+      free_body(2, -0.25, 1.25, 12,
+                fmt::format("mesh = \"{}\"", mesh_path("examples/meshes", "plate_hole.msh")),
+                "[particles]\nper_element = 1\n" + gravity2));
   const std::string gravity3 = "[loading]\nbody_force = [\"0\", \"0\", \"-10\"]\n";
   falls_freely<3>(free_body(
       3, 0.0, 0.5, 10, fmt::format("mesh = \"{}\"", mesh_path("examples/meshes", "sphere.msh")),
