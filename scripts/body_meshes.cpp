@@ -10,6 +10,11 @@
 //                                    groups "lower" (z < 0.5) and "upper"
 //   tests/data/meshes/cube_tets_v22.msh  the same in MSH 2.2
 //   tests/data/meshes/cube_hexes.msh the unit cube of 2 x 2 x 2 hexahedra (refused as a body)
+//   tests/data/meshes/layered_column.msh  the column [0, 0.2] x [0, 1] of structured right
+//                                    triangles (h = 0.05), surface groups "lower" (y < 0.5) and
+//                                    "upper"
+//   examples/meshes/slope_layered.msh  a 6 m high slope of 45 degrees, group "slope", on a 4 m
+//                                    thick foundation 20 m long, group "foundation" (edge 0.5 m)
 #include <gmsh.h>
 
 #include <string>
@@ -96,6 +101,54 @@ void cube(const std::string& file, double version, bool hexes) {
   write(file, 3, version);
 }
 
+// The column of two layers: transfinite (structured) rectangles cut into two triangles each.
+void layered_column() {
+  start("layered_column");
+  const double h = 0.05;
+  const int p0 = gmsh::model::geo::addPoint(0, 0, 0, h),
+            p1 = gmsh::model::geo::addPoint(0.2, 0, 0, h);
+  const int p2 = gmsh::model::geo::addPoint(0.2, 0.5, 0, h),
+            p3 = gmsh::model::geo::addPoint(0, 0.5, 0, h);
+  const int p4 = gmsh::model::geo::addPoint(0.2, 1, 0, h),
+            p5 = gmsh::model::geo::addPoint(0, 1, 0, h);
+  const int bottom = gmsh::model::geo::addLine(p0, p1), right1 = gmsh::model::geo::addLine(p1, p2);
+  const int middle = gmsh::model::geo::addLine(p2, p3), left1 = gmsh::model::geo::addLine(p3, p0);
+  const int right2 = gmsh::model::geo::addLine(p2, p4), top = gmsh::model::geo::addLine(p4, p5);
+  const int left2 = gmsh::model::geo::addLine(p5, p3);
+  const int lower = gmsh::model::geo::addPlaneSurface(
+      {gmsh::model::geo::addCurveLoop({bottom, right1, middle, left1})});
+  const int upper = gmsh::model::geo::addPlaneSurface(
+      {gmsh::model::geo::addCurveLoop({-middle, right2, top, left2})});
+  for (const int l : {bottom, middle, top}) gmsh::model::geo::mesh::setTransfiniteCurve(l, 5);
+  for (const int l : {right1, left1, right2, left2})
+    gmsh::model::geo::mesh::setTransfiniteCurve(l, 11);
+  for (const int s : {lower, upper}) gmsh::model::geo::mesh::setTransfiniteSurface(s);
+  gmsh::model::geo::synchronize();
+  gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {lower}), "lower");
+  gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {upper}), "upper");
+  write("tests/data/meshes/layered_column.msh", 2);
+}
+
+// A slope of soft soil on a stiffer foundation: two surfaces sharing the line y = 4 m.
+void slope_layered() {
+  start("slope_layered");
+  const double lc = 0.5;
+  std::vector<int> p;
+  for (const auto& [x, y] : std::vector<std::pair<double, double>>{
+           {0, 0}, {20, 0}, {20, 4}, {14, 4}, {0, 4}, {8, 10}, {0, 10}})
+    p.push_back(gmsh::model::geo::addPoint(x, y, 0, lc));
+  auto line = [&](int a, int b) { return gmsh::model::geo::addLine(p[a], p[b]); };
+  const int interface = line(4, 3);  // (0, 4) to (14, 4)
+  const int foundation = gmsh::model::geo::addPlaneSurface({gmsh::model::geo::addCurveLoop(
+      {line(0, 1), line(1, 2), line(2, 3), -interface, line(4, 0)})});
+  const int slope = gmsh::model::geo::addPlaneSurface(
+      {gmsh::model::geo::addCurveLoop({interface, line(3, 5), line(5, 6), line(6, 4)})});
+  gmsh::model::geo::synchronize();
+  gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {foundation}), "foundation");
+  gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {slope}), "slope");
+  write("examples/meshes/slope_layered.msh", 2);
+}
+
 }  // namespace
 
 int main() {
@@ -105,6 +158,8 @@ int main() {
   cube("tests/data/meshes/cube_tets.msh", 4.1, false);
   cube("tests/data/meshes/cube_tets_v22.msh", 2.2, false);
   cube("tests/data/meshes/cube_hexes.msh", 4.1, true);
+  layered_column();
+  slope_layered();
   gmsh::finalize();
   return 0;
 }

@@ -249,7 +249,7 @@ CASES = [
     # 2 and 4 processes were 1.0e-12 and 1.1e-12 of their scale from one process's at 1e-3 s,
     # at the check's tolerance; the distributed CG is checked on the grid's plates).
     ("2d_incline_mesh_file_p1", "examples/incline_pressure_2d.toml",
-     ["time.end=0.05", "output.frames=1"], "none"),
+     ["time.end=1.5", "output.frames=1"], "none"),
     # A roller along a bent boundary (the unit square's top and left sides, tests/data/meshes/
     # square_v41.msh): each vertex of it keeps its normals (FixedSide::vertex_normals) under the
     # numbering along y; the incline's pressure on the square's bottom.
@@ -263,9 +263,13 @@ CASES = [
     # particles of its slab (the plate with a hole sagging under gravity; the ball of
     # tetrahedra thrown onto the frictional floor, its slabs cut along z).
     ("2d_plate_hole_body_mesh", "examples/plate_hole_2d.toml",
-     ["time.end=0.2", "output.frames=1"], "none"),
+     ["time.end=1.5", "output.frames=1"], "none"),
     ("3d_sphere_body_mesh_friction", "examples/sphere_friction_3d.toml",
      ["time.end=0.1", "output.frames=1", "output.reactions=true"], "none"),
+    # Two materials, one a part of a body mesh each, thrown up through the cuts: the particles
+    # carry their material's index and their law's block of state from process to process.
+    ("2d_two_materials_thrown", "tests/data/two_materials_thrown_2d.toml", ["output.frames=2"],
+     "none"),
     ("2d_plate_maxent", "examples/plate_mms_2d.toml",
      ["grid.cells=8", "time.end=2e-3", "method.basis=maxent", "output.frames=1"], "none"),
     ("3d_cube_bspline2", "examples/cube_mms_3d.toml",

@@ -119,7 +119,7 @@ void analyse(const Config& cfg, Problem<kDim>& pb, const Particles<kDim>& P, boo
     return sim;
   };
   Simulation<kDim, Basis, DirectMapping> direct(pb.grid, Basis(pb.grid), DirectMapping{}, P,
-                                                pb.material);
+                                                pb.materials);
   const Linearised d = linearise(with_sides(direct));
   auto row = [&](const char* force, const char* mass, const Linearised& f, const Linearised& m) {
     StiffnessRow r = spectrum(f, m);
@@ -130,7 +130,7 @@ void analyse(const Config& cfg, Problem<kDim>& pb, const Particles<kDim>& P, boo
   row("direct", "direct", d, d);
   if (!tls) return;
   Simulation<kDim, Basis, TlsMapping> fit(
-      pb.grid, Basis(pb.grid), TlsMapping(tls_settings(cfg, kDim), kDim), P, pb.material);
+      pb.grid, Basis(pb.grid), TlsMapping(tls_settings(cfg, kDim), kDim), P, pb.materials);
   const Linearised t = linearise(with_sides(fit));
   row("tls", "tls", t, t);
   row("tls", "direct", t, d);
@@ -180,7 +180,7 @@ StiffnessReport stiffness_spectrum(const StiffnessOptions& opt) {
           fmt::format("{} holds a {} run in {}D, not a 2D mpm run", what, c.solver, c.dim));
     P = io::unpack_particles<kDim>(c.particles, what);
     try {
-      P.state.set_names(state_names(pb->material));
+      P.state.set_names(pb->materials.state_names());
     } catch (const std::invalid_argument& e) {
       throw InputError(fmt::format("{}: {}", what, e.what()));
     }

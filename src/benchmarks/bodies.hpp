@@ -65,6 +65,15 @@ class FileBody {
   void check_inside(const Config& cfg, const std::function<bool(const Vec<Dim>&)>& inside,
                     const std::string& grid) const;
 
+  // The parts of a body mesh (its physical groups of the body's dimension; none for a particle
+  // file), and the part of point `id` (an index into part_names(), -1 for none).
+  std::vector<std::string> part_names() const {
+    return mesh_ ? mesh_->group_names() : std::vector<std::string>{};
+  }
+  int part_of(Index id) const {
+    return mesh_ ? mesh_->group(id / static_cast<Index>(ref_.size())) : -1;
+  }
+
   // A particle file's initial fields by point (empty when its columns are not given): the
   // velocity [m/s], the Cauchy stress [Pa], and in 2D the stress normal to the plane [Pa].
   const std::vector<Vec<Dim>>& velocity() const { return velocity_; }

@@ -30,12 +30,12 @@ ExactState<1> ColumnExact::operator()(const Vec<1>& X, double t) const {
 Problem<1> make_column_compaction(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "column_compaction";
-  pb.material = material_from_config(cfg, 1);
-  if (!std::holds_alternative<Elastic1DLarge>(pb.material))
+  pb.materials = material_from_config(cfg, 1);
+  if (!std::holds_alternative<Elastic1DLarge>(pb.materials.single()))
     throw InputError(
         fmt::format("{}: the column-compaction exact solution is that of material.model = "
                     "\"elastic_1d_large\" (D 5.4.2), not \"{}\"",
-                    cfg.where("material.model"), material_name(pb.material)));
+                    cfg.where("material.model"), material_name(pb.materials.single())));
   ColumnExact ex{cfg.get_real("column.height"), cfg.get_real("material.density"),
                  cfg.get_real("material.youngs_modulus"), cfg.get_real("column.body_force"),
                  cfg.get_real("column.ramp_time")};

@@ -59,8 +59,9 @@ ExactState<3> CubeMms3DExact::operator()(const Vec<3>& X, double t) const {
 Problem<3> make_cube_mms_3d(const Config& cfg, const SeedScope& scope) {
   Problem<3> pb;
   pb.benchmark = "cube_mms_3d";
-  pb.material = material_from_config(cfg, 3);
-  const auto* law = &require_neo_hookean(cfg, pb.material, pb.benchmark, "scripts/cube_mms.py");
+  pb.materials = material_from_config(cfg, 3);
+  const auto* law =
+      &require_neo_hookean(cfg, pb.materials.single(), pb.benchmark, "scripts/cube_mms.py");
   const double L = cfg.get_real("cube.length");
   const double rho = cfg.get_real("material.density");
   // c = sqrt(E / rho0), as the plate of 001 (not the P-wave speed).

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
@@ -279,6 +280,95 @@ std::vector<std::string> names_of(const Config& cfg, const char* key) {
     b = e + 1;
   }
   return out;
+}
+
+// Each particle's material (body.material; with body.part_materials, that of its part of
+// body.mesh) and mass rho0 V0 of its material's density; pb.materials already holds the
+// configured materials. A part or material that does not exist, a part named twice, and a named
+// material no body uses are refused, naming the key. Before the initial stress (its law decides
+// whether it may be given).
+// The body's parts, where they come from a body mesh: their names, the part of each particle by
+// its id (-1: none), and the body's source for messages.
+struct BodyParts {
+  std::vector<std::string> names;
+  std::function<int(Index id)> of;
+  std::string source;  // "body mesh \"FILE\"", "particle file ...", "the box body.min, ..."
+  bool mesh = false;   // from body.mesh
+};
+template <int Dim>
+BodyParts parts_of(const FileBody<Dim>* body) {
+  if (!body) return {{}, {}, "is the box body.min, body.max", false};
+  return {body->part_names(), [body](Index id) { return body->part_of(id); },
+          "comes from " + body->source(), std::string_view(body->key()) == "body.mesh"};
+}
+
+template <int Dim>
+void assign_materials(const Config& cfg, Problem<Dim>& pb, const BodyParts& body_parts) {
+  const std::size_t body = material_index(cfg, pb.materials, "body.material");
+  if (pb.materials.size() > 1 && cfg.get_string("method.solver") != "mpm")
+    throw InputError(fmt::format(
+        "{}: [material.{}]: several materials are for method.solver = \"mpm\"; \"{}\" takes "
+        "the one of [material]",
+        cfg.instance_where("material", pb.materials.name(1)), pb.materials.name(1),
+        cfg.get_string("method.solver")));
+  std::vector<bool> used(pb.materials.size(), false);
+  used[body] = true;
+  // The material of each part of the body mesh (none: body.material).
+  std::vector<std::size_t> of_part;
+  if (!cfg.get_string("body.part_materials").empty()) {
+    const char* key = "body.part_materials";
+    const std::vector<std::string>& parts = body_parts.names;
+    if (!body_parts.mesh)
+      throw InputError(fmt::format(
+          "{}: {} gives materials to the parts (physical groups) of body.mesh, and this run's "
+          "body {}; give the body's material by body.material",
+          cfg.where(key), key, body_parts.source));
+    of_part.assign(parts.size(), body);
+    std::vector<bool> named(parts.size(), false);
+    for (const std::string& item : names_of(cfg, key)) {
+      const auto colon = item.find(':');
+      const auto trim = [](std::string t) {
+        const auto a = t.find_first_not_of(" \t"), b = t.find_last_not_of(" \t");
+        return a == std::string::npos ? std::string() : t.substr(a, b - a + 1);
+      };
+      const std::string part = trim(item.substr(0, colon));
+      const std::string name = colon == std::string::npos ? "" : trim(item.substr(colon + 1));
+      if (colon == std::string::npos || part.empty() || name.empty())
+        throw InputError(fmt::format(
+            "{}: {}: \"{}\" is not PART: NAME (e.g. \"clay: soft_clay, sand: material\")",
+            cfg.where(key), key, item));
+      const auto it = std::find(parts.begin(), parts.end(), part);
+      if (it == parts.end()) {
+        std::string list;
+        for (const auto& n : parts) list += (list.empty() ? "\"" : ", \"") + n + "\"";
+        throw InputError(fmt::format(
+            "{}: {}: the body mesh has no part \"{}\"; its parts: {}", cfg.where(key), key, part,
+            list.empty() ? "none (no physical group of its elements)" : list));
+      }
+      const auto j = static_cast<std::size_t>(it - parts.begin());
+      if (named[j])
+        throw InputError(
+            fmt::format("{}: {}: the part \"{}\" is named twice", cfg.where(key), key, part));
+      named[j] = true;
+      of_part[j] = material_index(cfg, pb.materials, key, name);
+      used[of_part[j]] = true;
+    }
+  }
+  for (std::size_t k = 1; k < pb.materials.size(); ++k)
+    if (!used[k])
+      throw InputError(fmt::format(
+          "{}: [material.{}] is the material of no body (body.material, body.part_materials); "
+          "name it there, or leave it out",
+          cfg.instance_where("material", pb.materials.name(k)), pb.materials.name(k)));
+  auto& P = pb.particles;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    std::size_t k = body;
+    if (!of_part.empty())
+      if (const int part = body_parts.of(P.id[i]); part >= 0)
+        k = of_part[static_cast<std::size_t>(part)];
+    P.material[i] = static_cast<MaterialIndex>(k);
+    P.mass[i] = pb.materials.density(k) * P.volume[i];
+  }
 }
 
 // InputError naming `key` and the mesh's boundaries when the mesh has no boundary `name`.
@@ -722,21 +812,23 @@ void file_initial_fields(const Config& cfg, Problem<Dim>& pb, const FileBody<Dim
           "{}: {}, and {} gives the stress of every particle (leave {} out, or the stress "
           "columns)",
           cfg.where(key), key, body.source(), key));
-  const auto names = state_names(pb.material);
-  const auto column = std::find(names.begin(), names.end(), kOutOfPlaneStressName);
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     const auto row = static_cast<std::size_t>(P.id[i]);
+    const Material& law = pb.materials[P.material[i]];
     const bool stressed = (!body.stress().empty() && body.stress()[row] != Mat<Dim>::Zero()) ||
                           (!body.stress_zz().empty() && body.stress_zz()[row] != 0.0);
-    if (stressed) refuse_initial_stress(cfg, pb.material, Dim, body.key());
+    if (stressed) refuse_initial_stress(cfg, law, Dim, body.key());
     if (!body.stress().empty()) P.stress[i] = body.stress()[row];
     if (body.stress_zz().empty() || body.stress_zz()[row] == 0.0) continue;
+    const auto names = state_names(law);
+    const auto column = std::find(names.begin(), names.end(), kOutOfPlaneStressName);
     if (column == names.end())
       throw InputError(fmt::format(
           "{}: {} gives stress_zz, and material.model = \"{}\" keeps no stress normal to the "
           "plane (leave the column out)",
-          cfg.where(body.key()), body.source(), material_name(pb.material)));
-    P.state[i][static_cast<std::size_t>(column - names.begin())] = body.stress_zz()[row];
+          cfg.where(body.key()), body.source(), material_name(law)));
+    P.state[i][pb.materials.state_offset(P.material[i]) +
+               static_cast<std::size_t>(column - names.begin())] = body.stress_zz()[row];
   }
 }
 }  // namespace
@@ -773,12 +865,13 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
     throw InputError(
         fmt::format("{}: the body [{}, {}] must lie inside the grid [{}, {}] (grid.min, grid.max)",
                     cfg.where(b0 < g0 ? "body.min" : "body.max"), b0, b1, g0, g1));
-  pb.material = material_from_config(cfg, 1);
+  pb.materials = materials_from_config(cfg, 1);
   const double rho = cfg.get_real("material.density");
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
   pb.grid = Grid<1>(Vec<1>(g0), Vec<1>(g1), IVec<1>{cells});
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(b0), Vec<1>(b1),
                                    static_cast<int>(cfg.get_int("particles.per_cell")), rho, scope);
+  assign_materials<1>(cfg, pb, parts_of<2>(nullptr));
 
   const auto& constants = cfg.constants();
   const Expression v0(cfg.get_string("initial.velocity"), constants);
@@ -803,7 +896,7 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
         throw InputError(fmt::format("{}: {} = \"{}\" is not finite at x = {:.6g} (particle {})",
                                      cfg.where(key), key, cfg.get_string(key), P.x0[i][0],
                                      P.id[i]));
-    if (P.stress[i](0, 0) != 0.0) refuse_initial_stress(cfg, pb.material, 1);
+    if (P.stress[i](0, 0) != 0.0) refuse_initial_stress(cfg, pb.materials[P.material[i]], 1);
   }
 
   const Expression b(cfg.get_string("loading.body_force"), constants);
@@ -843,7 +936,7 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   const Vec<2> b0 = file_body ? file_body->lower() : given_or("body.min", g0);
   const Vec<2> b1 = file_body ? file_body->upper() : given_or("body.max", g1);
   check_boxes<2>(cfg, g0, g1, file_body ? g0 : b0, file_body ? g1 : b1);
-  pb.material = material_from_config(cfg, 2);
+  pb.materials = materials_from_config(cfg, 2);
   const double rho = cfg.get_real("material.density");
   const auto cx = static_cast<Index>(cfg.get_int("grid.cells"));
   auto cy = static_cast<Index>(cfg.get_int("grid.cells_y"));
@@ -855,6 +948,7 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
                            : seed_body_2d(cfg, pb.grid, b0, b1, rho, pb.mesh.get(), scope);
   pb.body_min = b0;
   pb.body_max = b1;
+  assign_materials<2>(cfg, pb, parts_of<2>(file_body ? &*file_body : nullptr));
 
   const auto v0 = expressions(cfg, "initial.velocity", 2, kComponents[2]);
   const auto s0 = expressions(cfg, "initial.stress", 3, kStressComponents[2]);
@@ -920,7 +1014,7 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
   const Vec<3> b0 = file_body ? file_body->lower() : per_direction<3>(cfg, "body.min");
   const Vec<3> b1 = file_body ? file_body->upper() : per_direction<3>(cfg, "body.max");
   check_boxes<3>(cfg, g0, g1, file_body ? g0 : b0, file_body ? g1 : b1);
-  pb.material = material_from_config(cfg, 3);
+  pb.materials = materials_from_config(cfg, 3);
   const double rho = cfg.get_real("material.density");
   // Cells in y and z: given, or (0) the count closest to the cell width in x (cubic cells).
   const auto cx = static_cast<Index>(cfg.get_int("grid.cells"));
@@ -937,6 +1031,7 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
                            : seed_particles<3>(pb.grid, b0, b1, per_cell, rho, scope);
   pb.body_min = b0;
   pb.body_max = b1;
+  assign_materials<3>(cfg, pb, parts_of<3>(file_body ? &*file_body : nullptr));
 
   const auto v0 = expressions(cfg, "initial.velocity", 3, kComponents[3]);
   const auto s0 = expressions(cfg, "initial.stress", kStressCount[3], kStressComponents[3]);

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <string>
 
+#include "setup/material_settings.hpp"
+
 namespace mpm {
 
 namespace {
@@ -90,7 +92,9 @@ std::optional<K0Stress<Dim>> k0_stress_from_config(const Config& cfg, const Prob
         "{}: initial.geostatic = \"k0\" needs a body force downwards, along -{}; "
         "loading.body_force (at {}) has {} = {}",
         where, kAxes[Dim - 1], cfg.where("loading.body_force"), kAxes[Dim - 1], g[Dim - 1]));
-  refuse_initial_stress(cfg, pb.material, Dim, "initial.geostatic");
+  // (A box body: one material, body.material's.)
+  refuse_initial_stress(cfg, pb.materials[material_index(cfg, pb.materials, "body.material")], Dim,
+                        "initial.geostatic");
   K0Stress<Dim> k;
   k.weight = rho * g[Dim - 1];
   k.top = pb.body_max[Dim - 1];
@@ -102,7 +106,8 @@ template <int Dim>
 void set_initial_stress(const Config& cfg, Problem<Dim>& pb,
                         std::function<Mat<Dim>(const Vec<Dim>&)> from_expressions,
                         const std::vector<Expression>& body_force) {
-  const double rho = cfg.get_real("material.density");
+  // The overburden of a box body, whose material is body.material's.
+  const double rho = pb.materials.density(material_index(cfg, pb.materials, "body.material"));
   const std::optional<K0Stress<Dim>> k0 = k0_stress_from_config<Dim>(cfg, pb, body_force, rho);
   std::optional<Expression> zz;
   if constexpr (Dim == 2) {
@@ -113,12 +118,8 @@ void set_initial_stress(const Config& cfg, Problem<Dim>& pb,
         "initial.stress gives every component",
         cfg.where("initial.stress_zz"), Dim));
   }
-  // Where the law keeps the stress normal to the plane of a 2D run, if it does.
-  const auto names = state_names(pb.material);
-  const auto column = std::find(names.begin(), names.end(), kOutOfPlaneStressName);
-  const bool keeps_zz = Dim == 2 && column != names.end();
   auto& P = pb.particles;
-  if (keeps_zz) P.state.set_names(names);
+  P.state.set_names(pb.materials.state_names());
   if (k0)
     pb.initial_stress = [k = *k0](const Vec<Dim>& X) { return k.stress(X); };
   else
@@ -136,16 +137,24 @@ void set_initial_stress(const Config& cfg, Problem<Dim>& pb,
         throw InputError(fmt::format("{}: initial.stress_zz is not finite at {} (particle {})",
                                      cfg.where("initial.stress_zz"), point<Dim>(P.x0[i]), P.id[i]));
     }
-    if (P.stress[i] != Mat<Dim>::Zero()) refuse_initial_stress(cfg, pb.material, Dim, key);
+    // The particle's law: whether it takes an initial stress, and where it keeps the stress
+    // normal to the plane of a 2D run, if it does.
+    const Material& law = pb.materials[P.material[i]];
+    if (P.stress[i] != Mat<Dim>::Zero()) refuse_initial_stress(cfg, law, Dim, key);
+    const auto names = state_names(law);
+    const auto column = std::find(names.begin(), names.end(), kOutOfPlaneStressName);
+    const bool keeps_zz = Dim == 2 && column != names.end();
     if (out_of_plane != 0.0) {
-      refuse_initial_stress(cfg, pb.material, Dim, k0 ? key : "initial.stress_zz");
+      refuse_initial_stress(cfg, law, Dim, k0 ? key : "initial.stress_zz");
       if (!keeps_zz)
         throw InputError(
             fmt::format("{}: material.model = \"{}\" keeps no stress normal to the plane; leave "
                         "initial.stress_zz at 0",
-                        cfg.where("initial.stress_zz"), material_name(pb.material)));
+                        cfg.where("initial.stress_zz"), material_name(law)));
     }
-    if (keeps_zz) P.state[i][static_cast<std::size_t>(column - names.begin())] = out_of_plane;
+    if (keeps_zz)
+      P.state[i][pb.materials.state_offset(P.material[i]) +
+                 static_cast<std::size_t>(column - names.begin())] = out_of_plane;
   }
 }
 

@@ -49,8 +49,8 @@ ExactState<1> Mms1DExact::operator()(const Vec<1>& X, double t) const {
 Problem<1> make_mms_1d(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "mms_1d";
-  pb.material = material_from_config(cfg, 1);
-  const auto* law = &require_neo_hookean(cfg, pb.material, pb.benchmark, "003 eq. 42");
+  pb.materials = material_from_config(cfg, 1);
+  const auto* law = &require_neo_hookean(cfg, pb.materials.single(), pb.benchmark, "003 eq. 42");
   const double L = cfg.get_real("bar.length");
   const double rho = cfg.get_real("material.density");
   // 003: c = sqrt(E / rho0), not the 1D neo-Hookean modulus sqrt((lambda + 2 mu) / rho0).

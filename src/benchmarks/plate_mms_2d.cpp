@@ -74,8 +74,8 @@ ExactState<2> PlateMms2DExact::operator()(const Vec<2>& X, double t) const {
 Problem<2> make_plate_mms_2d(const Config& cfg, const SeedScope& scope) {
   Problem<2> pb;
   pb.benchmark = "plate_mms_2d";
-  pb.material = material_from_config(cfg, 2);
-  const auto* law = &require_neo_hookean(cfg, pb.material, pb.benchmark, "001 eq. 40-42");
+  pb.materials = material_from_config(cfg, 2);
+  const auto* law = &require_neo_hookean(cfg, pb.materials.single(), pb.benchmark, "001 eq. 40-42");
   const double L = cfg.get_real("plate.length");
   const double rho = cfg.get_real("material.density");
   // 001: c = sqrt(E / rho0) (its "sqrt(E)/gamma", METHODS.md errata), not the P-wave speed.

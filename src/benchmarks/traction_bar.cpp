@@ -43,7 +43,7 @@ ExactState<1> TractionBarExact::operator()(const Vec<1>& X, double t) const {
 Problem<1> make_traction_bar(const Config& cfg, const SeedScope& scope) {
   Problem<1> pb;
   pb.benchmark = "traction_bar";
-  pb.material = material_from_config(cfg, 1);
+  pb.materials = material_from_config(cfg, 1);
   const double L = cfg.get_real("bar.length");
   const double g0 = cfg.get_real("grid.min"), g1 = cfg.get_real("grid.max");
   if (g0 != 0.0 || !(g1 > L))
@@ -60,7 +60,8 @@ Problem<1> make_traction_bar(const Config& cfg, const SeedScope& scope) {
   pb.body_max = Vec<1>(L);
   pb.initial_velocity = [](const Vec<1>&) { return Vec<1>(0.0); };
   pb.fixed_sides = {{0, 0}};
-  const TractionBarExact ex{L, rho, wave_speed(pb.material), cfg.get_real("traction.amplitude")};
+  const TractionBarExact ex{L, rho, wave_speed(pb.materials.single()),
+                            cfg.get_real("traction.amplitude")};
   // The end particle's outer edge x_p + V_p / 2 at X = L (Traction, D 4.6.2).
   const auto tr =
       body_face_traction<1>(pb.grid, Vec<1>(0.0), Vec<1>(L), per_cell, 0, +1, [ex](double t) {

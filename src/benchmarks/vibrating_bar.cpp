@@ -48,8 +48,8 @@ Problem<1> make_vibrating_bar(const Config& cfg, bool large, const SeedScope& sc
   const double L = cfg.get_real("bar.length");
   const double v0 = cfg.get_real("bar.v0");
   const double rho = cfg.get_real("material.density");
-  pb.material = material_from_config(cfg, 1);
-  const std::string model{material_name(pb.material)};
+  pb.materials = material_from_config(cfg, 1);
+  const std::string model{material_name(pb.materials.single())};
   if (!large && model != "elastic_1d_small" && model != "linear_elastic")
     throw InputError(fmt::format(
         "{}: benchmark \"vibrating_bar\" compares with the small-deformation exact solution, "
@@ -60,7 +60,7 @@ Problem<1> make_vibrating_bar(const Config& cfg, bool large, const SeedScope& sc
     return Vec<1>(v0 * std::sin(std::numbers::pi * X[0] / L));
   });
   if (!large)
-    pb.exact = VibratingBarExact{L, v0, rho, wave_speed(pb.material)};
+    pb.exact = VibratingBarExact{L, v0, rho, wave_speed(pb.materials.single())};
   else
     pb.fem_reference = true;
   return pb;

@@ -119,8 +119,9 @@ ExactState<2> Vortex2DExact::operator()(const Vec<2>& X, double t) const {
 Problem<2> make_vortex_2d(const Config& cfg, const SeedScope& scope) {
   Problem<2> pb;
   pb.benchmark = "vortex_2d";
-  pb.material = material_from_config(cfg, 2);
-  const auto* law = &require_neo_hookean(cfg, pb.material, pb.benchmark, "scripts/vortex_mms.py");
+  pb.materials = material_from_config(cfg, 2);
+  const auto* law =
+      &require_neo_hookean(cfg, pb.materials.single(), pb.benchmark, "scripts/vortex_mms.py");
   const double rho = cfg.get_real("material.density");
   const Vortex2DExact ex{cfg.get_real("vortex.inner_radius"),
                          cfg.get_real("vortex.outer_radius"),

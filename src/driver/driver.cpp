@@ -192,17 +192,16 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
   const auto& P = sim.particles;
   double kin = 0.0, strain = 0.0, mass = 0.0;
   Vec<Dim> mom = Vec<Dim>::Zero();
-  std::visit(
-      [&](const auto& law) {
-        for (std::size_t i = 0; i < P.x.size(); ++i) {
-          kin += 0.5 * P.mass[i] * P.v[i].squaredNorm();
-          strain += law.energy(P.stress[i], state_row<std::decay_t<decltype(law)>>(P.state, i),
-                               P.F[i], P.volume[i], P.volume0[i]);
-          mass += P.mass[i];
-          mom += P.mass[i] * P.v[i];
-        }
-      },
-      sim.material);
+  sim.materials.for_each_particle(
+      P.material, 0, P.x.size(),
+      [&](const auto& law, std::size_t, std::size_t offset, std::size_t i) {
+        kin += 0.5 * P.mass[i] * P.v[i].squaredNorm();
+        strain +=
+            law.energy(P.stress[i], state_row<std::decay_t<decltype(law)>>(P.state, i, offset),
+                       P.F[i], P.volume[i], P.volume0[i]);
+        mass += P.mass[i];
+        mom += P.mass[i] * P.v[i];
+      });
   if (comm_) {
     // The sums over every rank's particles (rank order: the same bits in every run).
     comm_->check();
@@ -271,6 +270,16 @@ std::vector<io::ScalarField> exact_fields(
   return extra;
 }
 
+// In a run of several materials, each particle's material (its index in summary.json's
+// "materials") as the column "material" after `extra`; `column` holds its values.
+template <int Dim>
+void add_material_field(const Materials& materials, const Particles<Dim>& P,
+                        std::vector<double>& column, std::vector<io::ScalarField>& extra) {
+  if (materials.size() < 2) return;
+  column.assign(P.material.begin(), P.material.end());
+  extra.push_back({"material", &column});
+}
+
 // A frame's VTU: the exact displacement and velocity (the first 2 Dim of exact_fields' columns)
 // as vectors u_exact and v_exact like u and v, so that an error is one calculator line; the
 // exact stress per component; in 2D the stress normal to the plane of the (plane-strain) law in
@@ -279,9 +288,10 @@ template <int Dim>
 std::string frame_vtu(const Particles<Dim>& P, double time,
                       const std::vector<io::ScalarField>& extra,
                       const std::array<std::vector<double>, 2 * Dim + Dim * Dim>& values,
-                      const Material& material, bool binary) {
+                      const Materials& materials, bool binary) {
   const std::size_t n = P.x.size();
   std::vector<io::ScalarField> scalars;
+  std::vector<double> material_column;
   std::array<std::vector<Vec<Dim>>, 2> uv;
   std::vector<io::VectorField<Dim>> vectors;
   if (!extra.empty()) {
@@ -297,14 +307,13 @@ std::string frame_vtu(const Particles<Dim>& P, double time,
   std::vector<double> zz;
   if constexpr (Dim == 2) {
     zz.resize(n);
-    std::visit(
-        [&](const auto& law) {
+    materials.for_each_particle(
+        P.material, 0, n, [&](const auto& law, std::size_t, std::size_t offset, std::size_t i) {
           using Law = std::decay_t<decltype(law)>;
-          for (std::size_t i = 0; i < n; ++i)
-            zz[i] = law.out_of_plane_stress(P.stress[i], state_row<Law>(P.state, i), P.F[i]);
-        },
-        material);
+          zz[i] = law.out_of_plane_stress(P.stress[i], state_row<Law>(P.state, i, offset), P.F[i]);
+        });
   }
+  add_material_field(materials, P, material_column, scalars);
   return io::particles_vtu(P, time, scalars, binary, vectors, Dim == 2 ? &zz : nullptr);
 }
 }  // namespace
@@ -321,7 +330,8 @@ std::string frame_vtu(const Particles<Dim>& P, double time,
 // ones down to N / (R kRowsPerRound). Collective.
 template <int Dim>
 void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path,
-                                               const Particles<Dim>& P, double time) {
+                                               const Particles<Dim>& P, const Materials& materials,
+                                               double time) {
   constexpr Index kRowsPerRound = Index{1} << 17;
   // Written under a temporary name (rank 0's pid: io::remove_stale_temporaries removes it after
   // a killed run), renamed by rank 0 once every process has written: a frame is whole or absent.
@@ -349,10 +359,12 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
   const std::vector<CompactIndex> by_id = id_order(P);
   const auto id_at = [&](std::size_t k) { return static_cast<Index>(P.id[by_id[k]]); };
   std::array<std::vector<double>, 2 * Dim + Dim * Dim> values;
+  std::vector<double> material_column;
   OrderedFile file(*comm_, tmp.string(), path.string());
   {
     const Particles<Dim> none = P.empty_like();  // the header line, rank 0's
-    const auto extra = exact_fields(exact_, none, time, values);
+    auto extra = exact_fields(exact_, none, time, values);
+    add_material_field(materials, none, material_column, extra);
     file.append(comm_->root() ? io::particles_csv(none, extra, /*header=*/true) : std::string());
   }
   // (Ids are below 2^31: exact as doubles, the reductions' type.)
@@ -380,7 +392,8 @@ void OutputSession<Dim>::write_distributed_csv(const std::filesystem::path& path
     Permutation perm;
     perm.order = id_order(mine_rows);
     mine_rows.for_each_field([&](auto& field) { perm.apply(field); });
-    const auto extra = exact_fields(exact_, mine_rows, time, values);
+    auto extra = exact_fields(exact_, mine_rows, time, values);
+    add_material_field(materials, mine_rows, material_column, extra);
     file.append(io::particles_csv(mine_rows, extra, /*header=*/false));
   }
   if (const auto f = file.close()) {
@@ -429,11 +442,11 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
     // writes the rows of its range of ids, in id order, into the one file (MPI-IO; no process
     // gathers the body), then its VTU piece; rank 0 writes the .pvtu over the pieces.
     comm_->check();
-    if (csv_) write_distributed_csv(dir_ / (stem + ".csv"), sim.particles, sim.time);
+    if (csv_) write_distributed_csv(dir_ / (stem + ".csv"), sim.particles, sim.materials, sim.time);
     if (vtk_) {
       const auto extra = exact_fields(exact_, sim.particles, sim.time, values);
       const std::string piece =
-          frame_vtu(sim.particles, sim.time, extra, values, sim.material, vtk_binary_);
+          frame_vtu(sim.particles, sim.time, extra, values, sim.materials, vtk_binary_);
       // Every piece on disk (agreed) before rank 0 writes the .pvtu that names them all.
       agreed([&] {
         io::write_file_atomic(dir_ / fmt::format("{}_p{:04d}.vtu", stem, comm_->rank()), piece);
@@ -455,10 +468,15 @@ void OutputSession<Dim>::frame(const StateView<Dim>& sim) {
   if (!sim.particles.in_id_order()) ordered = particles_in_id_order(sim.particles);
   const Particles<Dim>& P = ordered ? *ordered : sim.particles;
   const auto extra = exact_fields(exact_, P, sim.time, values);
-  if (csv_) io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(P, extra));
+  if (csv_) {
+    auto columns = extra;
+    std::vector<double> material_column;
+    add_material_field(sim.materials, P, material_column, columns);
+    io::write_file_atomic(dir_ / (stem + ".csv"), io::particles_csv(P, columns));
+  }
   if (vtk_) {
     io::write_file_atomic(dir_ / (stem + ".vtu"),
-                          frame_vtu(P, sim.time, extra, values, sim.material, vtk_binary_));
+                          frame_vtu(P, sim.time, extra, values, sim.materials, vtk_binary_));
     pvd_.add(sim.time, stem + ".vtu");
     io::write_file_atomic(dir_ / "particles.pvd", pvd_.str());
   }
@@ -548,19 +566,20 @@ void OutputSession<Dim>::checkpoint(io::Checkpoint& c, const std::string* piece)
 }
 
 // Stops before the first step when dt exceeds the limit, unless time.allow_unstable.
-void check_stability(const TimeSettings& time, double h, const Material& material, double factor,
+void check_stability(const TimeSettings& time, double h, const Materials& materials, double factor,
                      int dim, std::string_view what) {
-  const double c = wave_speed(material);
+  const double c = materials.max_wave_speed();
   const double limit = factor * h / (c * std::sqrt(static_cast<double>(dim)));
   if (time.dt > limit && !time.allow_unstable)
     throw InputError(fmt::format(
         "{}: time.dt = {:.6g} s exceeds the explicit stability limit {:.6g} s = {:.4g} h / c "
-        "(h = {:.6g} m, c = {:.6g} m/s, {}); reduce time.dt or set time.allow_unstable = true",
-        time.where_dt, time.dt, limit, factor, h, c, what));
+        "(h = {:.6g} m, c = {:.6g} m/s{}, {}); reduce time.dt or set time.allow_unstable = true",
+        time.where_dt, time.dt, limit, factor, h, c,
+        materials.size() > 1 ? " of the stiffest material" : "", what));
 }
 
 nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& settings,
-                                    const Material& material, double t_end,
+                                    const Materials& materials, double t_end,
                                     nlohmann::ordered_json method, double velocity_time) {
   nlohmann::ordered_json j;
   j["mpmlab_version"] = kVersion;
@@ -575,15 +594,30 @@ nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& set
   if (!res.warnings.empty()) j["warnings"] = res.warnings;
   j["dim"] = res.dim;
   j["method"] = std::move(method);
-  j["material"] = {{"model", std::string(material_name(material))},
-                   {"density", settings.material.density},
-                   {"youngs_modulus", settings.material.youngs_modulus},
-                   {"poisson_ratio", settings.material.poisson_ratio}};
-  for (const MaterialParameterValue& m : settings.material_parameters) {
-    if (m.choice.empty())
-      j["material"][m.name] = m.value;
-    else
-      j["material"][m.name] = m.choice;
+  // Each material's law and parameters as configured: [material] as "material" and, in a run of
+  // several, every one (with its name) under "materials", in the order of their indices.
+  const auto material_json = [&](std::size_t k) {
+    const MaterialSettings& ms = settings.materials.at(k);
+    nlohmann::ordered_json m = {{"model", std::string(material_name(materials[k]))},
+                                {"density", ms.elastic.density},
+                                {"youngs_modulus", ms.elastic.youngs_modulus},
+                                {"poisson_ratio", ms.elastic.poisson_ratio}};
+    for (const MaterialParameterValue& p : ms.parameters) {
+      if (p.choice.empty())
+        m[p.name] = p.value;
+      else
+        m[p.name] = p.choice;
+    }
+    return m;
+  };
+  j["material"] = material_json(0);
+  if (materials.size() > 1) {
+    j["materials"] = nlohmann::ordered_json::array();
+    for (std::size_t k = 0; k < materials.size(); ++k) {
+      nlohmann::ordered_json m = {{"name", materials.name(k)}, {"index", k}};
+      m.update(material_json(k));
+      j["materials"].push_back(std::move(m));
+    }
   }
   j["cells"] = res.cells;
   j["h"] = res.h;

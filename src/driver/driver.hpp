@@ -89,12 +89,12 @@ inline nlohmann::ordered_json opt_json(const std::optional<double>& v) {
 }
 
 // What the time loop sees of a solver's state: the particles (MPM) or element midpoints (FEM)
-// with the time and the material, for history rows and frames.
+// with the time and the materials, for history rows and frames.
 template <int Dim>
 struct StateView {
   const Particles<Dim>& particles;
   double time;
-  const Material& material;
+  const Materials& materials;
   // The MPM mapping's conservation errors (history.csv columns); null for other solvers.
   const Diagnostics* diag = nullptr;
 };
@@ -148,7 +148,7 @@ class OutputSession {
   // A distributed run's CSV frame: every process writes rows of it into the one file, in
   // rounds over the ids (collective; driver.cpp).
   void write_distributed_csv(const std::filesystem::path& path, const Particles<Dim>& P,
-                             double time);
+                             const Materials& materials, double time);
   Index root_pid_ = -1;     // rank 0's process id (the frame's temporary name), once known
   Index history_rows_ = 0;  // rows of history.csv below its header
   // Runs a write that some processes make and others do not (rank 0's history row, series,
@@ -164,7 +164,8 @@ class OutputSession {
 
 // Stops before the first step when time.dt exceeds the limit factor h / (c sqrt(dim)), unless
 // time.allow_unstable; `what` names the basis and bound in the message.
-void check_stability(const TimeSettings& time, double h, const Material& material, double factor,
+// c is the largest wave speed of the materials.
+void check_stability(const TimeSettings& time, double h, const Materials& materials, double factor,
                      int dim, std::string_view what);
 
 // The time loop shared by every solver: `advance(s)` takes step s to s + 1 (timed; may throw
@@ -268,7 +269,7 @@ void check_error_norms(RunResult& res);
 
 // The fields of summary.json common to every solver; `method` describes the solver.
 nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& settings,
-                                    const Material& material, double t_end,
+                                    const Materials& materials, double t_end,
                                     nlohmann::ordered_json method, double velocity_time);
 
 // Stress errors of the particles against the FEM reference at their material positions

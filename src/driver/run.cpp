@@ -50,7 +50,7 @@ RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::stri
   const auto elements =
       std::max<Index>(1, std::llround((pb.body_max[0] - pb.body_min[0]) / pb.grid.h[0]));
   check_stability(ts, (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements),
-                  pb.material, 1.0, 1, "linear elements");
+                  pb.materials, 1.0, 1, "linear elements");
   Ulfem1D fem(pb, elements);
   RunResult res;
   res.benchmark = pb.benchmark;
@@ -72,7 +72,7 @@ RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::stri
   drive<1>(
       settings, opt, out, start, [&](Index) { fem.step(ts.dt); }, [] {},
       [&] {
-        return StateView<1>{fem.elements(), fem.time(), pb.material};
+        return StateView<1>{fem.elements(), fem.time(), pb.materials};
       },
       [&](Index step) {
         io::Checkpoint c;
@@ -96,7 +96,7 @@ RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::stri
   }
   res.wall_seconds = seconds_since(t_start);
   res.summary =
-      make_summary(res, settings, pb.material, fem.time(),
+      make_summary(res, settings, pb.materials, fem.time(),
                    {{"solver", "ulfem"}, {"elements", elements}, {"mass", "lumped"}}, -0.5);
   out.summary(res.summary);
   return res;
@@ -215,6 +215,17 @@ RunResult run(const Config& given, const RunOptions& given_options) {
       std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);
   if (!distributed)
     particles = std::visit([](const auto& pb) { return pb.particles.size(); }, problem);
+  // Named materials ([material.NAME]) are for the bodies of the custom problem, which reads them;
+  // a problem that did not is refused rather than run without them.
+  const std::vector<std::string> named = cfg.instances("material");
+  const std::size_t materials =
+      std::visit([](const auto& pb) { return pb.materials.size(); }, problem);
+  if (!named.empty() && materials != named.size() + 1)
+    throw InputError(fmt::format(
+        "{}: [material.{}] is a named material, for the bodies of benchmark = \"custom\" "
+        "(body.material, body.part_materials); benchmark = \"{}\" has the one material of "
+        "[material]",
+        cfg.instance_where("material", named.front()), named.front(), cfg.get_string("benchmark")));
   // Before the first step, so that a long run shows them at once (opt.quiet on all but rank 0).
   if (!opt.quiet)
     std::visit(

@@ -237,11 +237,16 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
   const io::Checkpoint& c = pieces ? joined : stored;
   auto p = io::unpack_particles<Dim>(c.particles, what);
   try {
-    p.state.set_names(state_names(sim.material));
+    p.state.set_names(sim.materials.state_names());
   } catch (const std::invalid_argument& e) {
     throw InputError(fmt::format("{} does not fit the problem: {} (material.model = \"{}\")", what,
-                                 e.what(), material_name(sim.material)));
+                                 e.what(), sim.materials.law_names()));
   }
+  for (std::size_t i = 0; i < p.material.size(); ++i)
+    if (p.material[i] >= sim.materials.size())
+      throw InputError(fmt::format(
+          "{} does not fit the problem: particle {} has material {}, the run has {} materials",
+          what, p.id[i], static_cast<int>(p.material[i]), sim.materials.size()));
   // (Each particle's cell: OTM keeps none. A distributed run holds a part of them.)
   const std::size_t cells = comm ? static_cast<std::size_t>(p.size()) : sim.cell.size();
   if ((!pieces || !comm) && p.size() != particles)
@@ -397,14 +402,14 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 
   if constexpr (Dim == 2) {
     if (pb.mesh)  // h: the smallest altitude of the mesh's triangles
-      check_stability(ts, pb.mesh->min_altitude(), pb.material, altitude_stability_factor(basis),
+      check_stability(ts, pb.mesh->min_altitude(), pb.materials, altitude_stability_factor(basis),
                       Dim,
                       fmt::format("{} basis on {}, lumped-mass bound, h the smallest triangle "
                                   "altitude",
                                   basis_name(basis), pb.mesh->source()));
   }
   if (!pb.mesh)
-    check_stability(ts, pb.grid.h.minCoeff(), pb.material, stability_factor(basis), Dim,
+    check_stability(ts, pb.grid.h.minCoeff(), pb.materials, stability_factor(basis), Dim,
                     fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
 
   // A distributed run: each process has set up only the particles of its slab
@@ -543,7 +548,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
         if (reference) reference->step(ts.dt);
       },
       [&] {
-        return StateView<Dim>{sim.particles, sim.time, sim.material, &sim.diag};
+        return StateView<Dim>{sim.particles, sim.time, sim.materials, &sim.diag};
       },
       [&](Index) {
         Captured<Dim> cap =
@@ -626,7 +631,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
       method_json["mass_solver_max_iterations_per_solve"] = res.diag.max_mass_solver_iterations;
     }
   }
-  res.summary = make_summary(res, settings, sim.material, sim.time, std::move(method_json),
+  res.summary = make_summary(res, settings, sim.materials, sim.time, std::move(method_json),
                              scheme_velocity_time);
   stepper->report(res.summary);
   res.summary["peak_memory_bytes"] = peak_memory;

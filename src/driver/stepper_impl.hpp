@@ -106,7 +106,7 @@ class TypedStepper final : public Stepper<Dim> {
   TypedStepper(const StepperInput<Dim>& in, Basis basis, Mapping mapping)
       : scheme_(in.method.scheme),
         sim_(in.problem.grid, std::move(basis), std::move(mapping), std::move(in.problem.particles),
-             in.problem.material,
+             in.problem.materials,
              // A process of a distributed run allocates the grid arrays of its slab only, from
              // the first step on (RunState::fit_dof_window).
              /*whole_grid=*/in.comm == nullptr || !in.comm->distributed()) {

@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -37,6 +39,8 @@ template <class T>
 void flatten(const std::vector<T>& in, std::vector<double>& out) {
   if constexpr (std::is_same_v<T, double>) {
     out = in;
+  } else if constexpr (std::is_integral_v<T>) {
+    out.assign(in.begin(), in.end());  // a particle's material index: exact in a double
   } else {
     out.clear();
     out.reserve(in.size() * static_cast<std::size_t>(T::SizeAtCompileTime));
@@ -53,7 +57,8 @@ template <class T>
 void unflatten(const std::vector<double>& in, std::vector<T>& out, std::size_t n,
                const std::string& what, const std::string& field) {
   std::size_t k = 1;
-  if constexpr (!std::is_same_v<T, double>) k = static_cast<std::size_t>(T::SizeAtCompileTime);
+  if constexpr (!std::is_same_v<T, double> && !std::is_integral_v<T>)
+    k = static_cast<std::size_t>(T::SizeAtCompileTime);
   // (Compared by division: n is read from the file, and n * k may wrap around.)
   if (in.size() % k != 0 || in.size() / k != n)
     throw InputError(
@@ -62,6 +67,17 @@ void unflatten(const std::vector<double>& in, std::vector<T>& out, std::size_t n
                     what, field, in.size(), k, n));
   if constexpr (std::is_same_v<T, double>) {
     out = in;
+  } else if constexpr (std::is_integral_v<T>) {
+    out.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      // (A whole number in T's range: the run checks it against its materials.)
+      if (!(in[i] >= static_cast<double>(std::numeric_limits<T>::min()) &&
+            in[i] <= static_cast<double>(std::numeric_limits<T>::max()) &&
+            in[i] == std::floor(in[i])))
+        throw InputError(fmt::format("{}: particle field {} holds {} at particle {}, not an index",
+                                     what, field, in[i], i));
+      out[i] = static_cast<T>(in[i]);
+    }
   } else {
     out.resize(n);
     for (std::size_t i = 0; i < n; ++i)
@@ -394,6 +410,9 @@ void put_particles(ByteWriter& w, const Particles<Dim>& p) {
       using T = typename std::decay_t<decltype(field)>::value_type;
       if constexpr (std::is_same_v<T, double>) {
         w.reals(field);
+      } else if constexpr (std::is_same_v<T, MaterialIndex>) {
+        w.u64(field.size());
+        for (const auto m : field) w.f64(static_cast<double>(m));  // as flatten(): exact
       } else if constexpr (!std::is_same_v<T, CompactIndex>) {
         constexpr auto k = static_cast<std::size_t>(T::SizeAtCompileTime);
         w.u64(field.size() * k);
@@ -412,9 +431,10 @@ std::string encode_piece(std::int64_t step, std::int64_t rank, std::int64_t rank
                          const Particles<Dim>& particles, std::span<const CompactIndex> cells,
                          const std::vector<double>& basis_state) {
   const auto n = static_cast<std::size_t>(particles.size());
-  // (Per particle: the real fields, the id and the cell; the counts.)
+  // (Per particle: the real fields, the material's index as a double, the id and the cell; the
+  // counts.)
   ByteWriter p = framing(8 * (5 + particle_field_names().size() + 2) +
-                         n * (particles.record_bytes() + 2 * 8) + 8 * basis_state.size());
+                         n * (particles.record_bytes() + 8 + 2 * 8) + 8 * basis_state.size());
   p.i64(step);
   p.i64(rank);
   p.i64(ranks);

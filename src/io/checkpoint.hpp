@@ -17,10 +17,11 @@
 //   str config (Config::to_toml() of the run), str solver ("mpm" or "ulfem"), i64 dim,
 //   i64 step, f64 time,
 //   particles: i64 dim, i64 count, then one f64[] per real field of Particles::for_each_field
-//     (x, x0, v, mass, volume, volume0, F, stress, body, state; vectors Dim values per
-//     particle, tensors Dim x Dim column-major, state the material's internal variables, its
-//     kStateNames.size() values per particle, version 8), i64[] id (version 3: the stable ids in
-//     the stored order, which re-sorting may have changed),
+//     (x, x0, v, mass, volume, volume0, F, stress, body, state, material; vectors Dim values
+//     per particle, tensors Dim x Dim column-major, state the materials' internal variables,
+//     the columns of every law of the run per particle (version 8), material the index of the
+//     particle's material, one value (version 9)), i64[] id (version 3: the stable ids in the
+//     stored order, which re-sorting may have changed),
 //   i64[] cell of each particle at the last basis evaluation,
 //   version 3: i64 re-sorting reference span (-1: none), i64 sorts so far (state/sort.hpp),
 //   diagnostics: f64 max_rel_mass_error, f64 max_rel_momentum_error, i64 grid_crossings,
@@ -61,10 +62,10 @@
 namespace mpm::io {
 
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
-// A file of another version is refused by its version: the layout above is version 8's (the
+// A file of another version is refused by its version: the layout above is version 9's (the
 // displacement and density derived, not stored; a distributed run's pieces and manifest; the
-// mesh file's hash; the material's internal variables).
-inline constexpr std::uint32_t kCheckpointVersion = 8;
+// mesh file's hash; the materials' internal variables; each particle's material).
+inline constexpr std::uint32_t kCheckpointVersion = 9;
 inline constexpr std::string_view kPieceMagic = "MPMLABCP";
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";

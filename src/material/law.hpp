@@ -76,14 +76,15 @@ template <class Law>
 using StateOf = std::span<double, std::tuple_size_v<decltype(Law::kStateNames)>>;
 template <class Law>
 using ConstStateOf = std::span<const double, std::tuple_size_v<decltype(Law::kStateNames)>>;
-// Particle i's row of `state` (named by Law's kStateNames: Particles::state.set_names).
+// Law's block of particle i's row of `state`, from column `offset` (the columns named by the
+// laws' kStateNames: Particles::state.set_names; Materials::state_offset in a run of several).
 template <class Law>
-StateOf<Law> state_row(MaterialState& state, std::size_t i) {
-  return StateOf<Law>(state[i].data(), std::tuple_size_v<decltype(Law::kStateNames)>);
+StateOf<Law> state_row(MaterialState& state, std::size_t i, std::size_t offset = 0) {
+  return StateOf<Law>(state[i].data() + offset, std::tuple_size_v<decltype(Law::kStateNames)>);
 }
 template <class Law>
-ConstStateOf<Law> state_row(const MaterialState& state, std::size_t i) {
-  return ConstStateOf<Law>(state[i].data(), std::tuple_size_v<decltype(Law::kStateNames)>);
+ConstStateOf<Law> state_row(const MaterialState& state, std::size_t i, std::size_t offset = 0) {
+  return ConstStateOf<Law>(state[i].data() + offset, std::tuple_size_v<decltype(Law::kStateNames)>);
 }
 
 // The constitutive-law concept, what the stages, outputs and set-up ask of a law:

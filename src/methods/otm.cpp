@@ -41,7 +41,7 @@ void for_each_neighbour(const IVec<Dim>& c, const IVec<Dim>& n, Fn&& fn) {
 
 template <int Dim>
 Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
-    : st_(pb.grid, std::move(pb.particles), pb.material), s_(s) {
+    : st_(pb.grid, std::move(pb.particles), pb.materials), s_(s) {
   const char* solver = s.unified ? "unified" : "otm";
   // OTM-P1 in 2D: the bilinear functions of the advected quadrilaterals, i.e. the unified
   // approach's isoparametric map with degree 1 (a particle keeps its material coordinate, as
@@ -544,7 +544,7 @@ void Otm<Dim>::step(double dt) {
       P.v[i] = dx / dt;  // OTM: the momentum of the next step (4.29)
     }
   }
-  const bool bad = stages::deform_particles(P, st_.material, 0, P.size(), L.data(), dt);
+  const bool bad = stages::deform_particles(P, st_.materials, 0, P.size(), L.data(), dt);
   if (bad) stages::throw_particle_failure(st_);
   for (Index i = 0; i < n; ++i)
     for (int d = 0; d < Dim; ++d)

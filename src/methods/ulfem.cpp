@@ -34,7 +34,7 @@ std::string describe_elements(const Particles<1>& E, const std::vector<Index>& i
 }  // namespace
 
 Ulfem1D::Ulfem1D(const Problem<1>& pb, Index elements)
-    : material_(pb.material), body_force_(pb.body_force), tractions_(pb.tractions) {
+    : material_(pb.materials.single()), body_force_(pb.body_force), tractions_(pb.tractions) {
   const double lo = pb.body_min[0], hi = pb.body_max[0];
   if (elements < 1)
     throw InputError(fmt::format("ULFEM needs at least one element, got {}", elements));

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "grid/grid.hpp"
-#include "material/materials.hpp"
+#include "material/material_set.hpp"
 #include "model/loads.hpp"
 #include "particles/particles.hpp"
 
@@ -85,7 +85,9 @@ struct Problem {
   std::string benchmark;
   Grid<Dim> grid;
   Particles<Dim> particles;
-  Material material;
+  // The laws of the body's materials (one in every problem but a custom one whose bodies name
+  // several: [material.NAME]); each particle's is Particles::material.
+  Materials materials;
   std::vector<FixedSide> fixed_sides;
   std::vector<FrictionWall> friction_walls;  // MPM solver, lumped mass
   // At most one box of prescribed velocities (MPM solver, lumped mass).

@@ -16,8 +16,7 @@ namespace mpm {
 
 class MaterialState {
  public:
-  // The names of the variables, one per column (a law's static kStateNames: they outlive the
-  // particles).
+  // The names of the variables, one per column (the laws' static kStateNames).
   std::span<const std::string_view> names() const { return names_; }
   std::size_t width() const { return names_.size(); }
   std::size_t size() const { return n_; }
@@ -33,7 +32,8 @@ class MaterialState {
             " internal variables each, the material declares " + std::to_string(names.size()));
       values_.assign(n_ * names.size(), 0.0);
     }
-    names_ = names;
+    std::vector<std::string_view> fresh(names.begin(), names.end());  // names may be names_
+    names_.swap(fresh);
     raw_ = false;
   }
   // n rows of unnamed values, row after row (a checkpoint's, before set_names names them).
@@ -88,7 +88,7 @@ class MaterialState {
   }
 
  private:
-  std::span<const std::string_view> names_;
+  std::vector<std::string_view> names_;
   std::vector<double> values_;
   std::size_t n_ = 0;
   bool raw_ = false;

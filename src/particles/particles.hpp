@@ -1,6 +1,7 @@
 #pragma once
 // Material points as a struct of arrays (one contiguous array per field), D Algorithm 2 input.
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <numeric>
 #include <span>
@@ -12,6 +13,9 @@
 #include "particles/material_state.hpp"
 
 namespace mpm {
+
+// A particle's material: its index in the run's materials (material/material_set.hpp).
+using MaterialIndex = std::uint8_t;
 
 template <class Field>
 inline constexpr bool kIsMaterialState = std::is_same_v<std::remove_cvref_t<Field>, MaterialState>;
@@ -30,6 +34,8 @@ struct Particles {
   // The material's internal variables, a row per particle (none for an elastic law; named by
   // the law's kStateNames: set_names when the run starts).
   MaterialState state;
+  // The particle's material, an index in the run's materials (0 in a run of one material).
+  std::vector<MaterialIndex> material;
   // Stable id: the particle's index when it was created. Re-sorting (state/sort.hpp) moves the
   // particles in memory; outputs list them in id order and error messages name the id.
   std::vector<CompactIndex> id;
@@ -52,6 +58,7 @@ struct Particles {
     stress.resize(s, Mat<Dim>::Zero());
     body.resize(s, Vec<Dim>::Zero());
     state.resize(s);
+    material.resize(s, 0);
     // New particles get the next ids: the creation order (existing ones keep theirs).
     const std::size_t old = id.size();
     id.resize(s);
@@ -190,10 +197,10 @@ struct Particles {
 
   // Bytes of particle state per particle of a material with `state_width` internal variables
   // (the memory figures and checks): x, x0, v, body; mass, volume, volume0; F, stress; the
-  // material state; id.
+  // material state; the material's index; id.
   static constexpr std::size_t bytes_per_particle(std::size_t state_width) {
     return 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + 2 * sizeof(Mat<Dim>) +
-           state_width * sizeof(double) + sizeof(CompactIndex);
+           state_width * sizeof(double) + sizeof(MaterialIndex) + sizeof(CompactIndex);
   }
   // Those of these particles (pack()'s record).
   std::size_t record_bytes() const { return bytes_per_particle(state.width()); }
@@ -211,6 +218,7 @@ struct Particles {
     f("stress", p.stress);
     f("body", p.body);
     f("state", p.state);
+    f("material", p.material);
     f("id", p.id);
   }
 };

@@ -102,6 +102,19 @@ void throw_face_left_grid(const RunState<Dim>& sim, std::size_t i, const Vec<Dim
                                   : "grid " + describe_box(sim.grid)));
 }
 
+// The laws of the particles `which` (their materials'), as "a" or "a and b".
+template <int Dim>
+std::string failed_law_names(const RunState<Dim>& sim, const std::vector<Index>& which) {
+  Materials laws;
+  for (const Index p : which) {
+    const std::size_t k =
+        sim.materials.size() == 1 ? 0 : sim.particles.material[static_cast<std::size_t>(p)];
+    if (laws.find(sim.materials.name(k)) == laws.size())
+      laws.add(sim.materials.name(k), sim.materials[k]);
+  }
+  return laws.law_names();
+}
+
 template <int Dim>
 void throw_particle_failure(const RunState<Dim>& sim) {
   const auto& P = sim.particles;
@@ -113,7 +126,7 @@ void throw_particle_failure(const RunState<Dim>& sim) {
       nonfinite.push_back(p);
     } else if (!(P.F[i].determinant() > 0.0)) {
       inverted.push_back(p);
-    } else if (const auto r = failed_update(sim.material, P.stress[i], P.state[i], P.F[i])) {
+    } else if (const auto r = failed_update<Dim>(sim.materials, P, i)) {
       unreturned.push_back(p);
       residual.push_back(*r);
     }
@@ -134,11 +147,11 @@ void throw_particle_failure(const RunState<Dim>& sim) {
     }
     if (unreturned.size() > kLimit)
       what += fmt::format("; and {} more", unreturned.size() - kLimit);
-    throw RunError(
-        exit_code::kReturnMapping,
-        fmt::format("step {}, t = {:.9g} s: the return mapping of material.model = "
-                    "\"{}\" found no admissible stress at {} particle(s): {}",
-                    sim.step, sim.time, material_name(sim.material), unreturned.size(), what));
+    throw RunError(exit_code::kReturnMapping,
+                   fmt::format("step {}, t = {:.9g} s: the return mapping of material.model = "
+                               "\"{}\" found no admissible stress at {} particle(s): {}",
+                               sim.step, sim.time, failed_law_names(sim, unreturned),
+                               unreturned.size(), what));
   }
   if (!nonfinite.empty())
     throw RunError(

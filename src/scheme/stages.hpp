@@ -49,12 +49,12 @@ template <int Dim>
 
 // F, V, rho, the stress and the law's internal variables of the particles [b, e) from their
 // velocity gradients L[0, e - b) over the increment dt (D eq. 2.40-2.43): F = (I + dt L) F,
-// V = det F V0 (so rho = m / V), sigma by the material's law. True when a particle failed
-// (det F <= 0 or a non-finite stress). Compiled once per dimension (scheme/deform.cpp): the
+// V = det F V0 (so rho = m / V), sigma by each particle's material's law. True when a particle
+// failed (det F <= 0 or a non-finite stress). Compiled once per dimension (scheme/deform.cpp): the
 // laws' return mappings are instantiated there, not once per basis in every stepper unit.
 // Shared by the MPM stages and OTM (methods/otm.cpp).
 template <int Dim>
-bool deform_particles(Particles<Dim>& P, const Material& material, Index b, Index e,
+bool deform_particles(Particles<Dim>& P, const Materials& materials, Index b, Index e,
                       const Mat<Dim>* L, double dt);
 
 // The particles per block of update_particles' stress pass: their velocity gradients (a
@@ -357,7 +357,7 @@ void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
       for (Index p = b; p < e; ++p)
         gather(static_cast<std::size_t>(p),
                mapped != nullptr ? nullptr : &Ls[static_cast<std::size_t>(p - b)]);
-      return deform_particles(P, sim.material, b, e, mapped != nullptr ? mapped + b : Ls.data(),
+      return deform_particles(P, sim.materials, b, e, mapped != nullptr ? mapped + b : Ls.data(),
                               stress_dt);
     });
   } else {

@@ -4,10 +4,12 @@
 
 #include <toml++/toml.h>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -331,7 +333,22 @@ std::string shown(std::string_view s) {
   return std::string(s.substr(0, kShown)) + cut_note(s);
 }
 
+bool instance_name(std::string_view section, std::string_view name);
+
 std::string unknown_key_message(std::string_view name) {
+  // A key of a named instance ([material.NAME]) is suggested among its section's keys.
+  const auto first = name.find('.');
+  const auto second = first == std::string_view::npos ? first : name.find('.', first + 1);
+  if (second != std::string_view::npos &&
+      instance_name(name.substr(0, first), name.substr(first + 1, second - first - 1))) {
+    const std::string as_section =
+        std::string(name.substr(0, first)) + std::string(name.substr(second));
+    std::string hint = suggestion(as_section);
+    if (const auto at = hint.find("'" + std::string(name.substr(0, first)) + ".");
+        at != std::string::npos)
+      hint.insert(at + first + 2, std::string(name.substr(first + 1, second - first)));
+    return "unknown key '" + shown(name) + "'" + hint + valid_list(name.substr(0, first));
+  }
   return "unknown key '" + shown(name) + "'" + suggestion(name) + valid_list(name);
 }
 
@@ -341,6 +358,41 @@ bool is_identifier(std::string_view s) {
   if (!alpha(s.front())) return false;
   return std::all_of(s.begin(), s.end(),
                      [&](char c) { return alpha(c) || (c >= '0' && c <= '9'); });
+}
+
+// Sections that also hold named instances: [material.NAME] is a material of its own, with the
+// keys of [material] (material/material_set.hpp: the run's materials; the bodies name theirs).
+constexpr std::array<std::string_view, 1> kInstanced = {"material"};
+
+// Whether NAME of "SECTION.NAME" names an instance of SECTION: an identifier, not the section's
+// own name, and neither a key nor a sub-section of it.
+bool instance_name(std::string_view section, std::string_view name) {
+  if (std::find(kInstanced.begin(), kInstanced.end(), section) == kInstanced.end()) return false;
+  const std::string full = std::string(section) + "." + std::string(name);
+  return is_identifier(name) && name != section && find_key(full) == nullptr && !is_section(full);
+}
+
+// The instance "SECTION.NAME" and the key of SECTION of a key "SECTION.NAME.KEY", if it is one.
+std::optional<std::pair<std::string, std::string>> split_instance_key(std::string_view key) {
+  const auto first = key.find('.');
+  if (first == std::string_view::npos) return std::nullopt;
+  const auto second = key.find('.', first + 1);
+  if (second == std::string_view::npos) return std::nullopt;
+  const std::string_view section = key.substr(0, first);
+  if (!instance_name(section, key.substr(first + 1, second - first - 1))) return std::nullopt;
+  return std::pair{std::string(key.substr(0, second)),
+                   std::string(section) + std::string(key.substr(second))};
+}
+
+// The spec of "SECTION.KEY" named as `key` = "SECTION.NAME.KEY" of an instance, if it is one.
+std::optional<KeySpec> instance_spec(std::string_view key) {
+  const auto split = split_instance_key(key);
+  if (!split) return std::nullopt;
+  const KeySpec* spec = find_key(split->second);
+  if (spec == nullptr) return std::nullopt;
+  KeySpec out = *spec;
+  out.name = std::string(key);
+  return out;
 }
 
 std::string location(const std::string& file, const toml::source_region& r) {
@@ -530,6 +582,10 @@ void print_schema(std::ostream& os) {
   os << "\n[constants]\n"
         "  User constants, NAME = number (e.g. L = 2.0), usable in every expression key. NAME is\n"
         "  an identifier other than x, y, z, t, pi, e and muparser's built-in names.\n"
+        "\n[material.NAME]\n"
+        "  A named material with the keys of [material] (e.g. [material.clay] model = ...),\n"
+        "  for the bodies and mesh parts that name it (body.material, body.part_materials);\n"
+        "  NAME is an identifier. The others take [material].\n"
         "\nExpressions use muparser syntax: variables x, y, z (position, m) and t (time, s),\n"
         "constants pi, e and the [constants]; functions sin, cos, tan, exp, ln, log10, sqrt,\n"
         "abs, sign, min, max, ...; operators + - * / ^ and the ternary c ? a : b.\n"
@@ -556,6 +612,14 @@ class ConfigBuilder {
         constants_table(node);
       } else if (const KeySpec* spec = find_key(name)) {
         assign(*spec, node, at(node.source()), position(node.source()));
+      } else if (const auto instance = instance_spec(name)) {
+        note_instance(split_instance_key(name)->first, at(node.source()));
+        assign(*instance, node, at(node.source()), position(node.source()));
+      } else if (const toml::table* sub = node.as_table();
+                 sub && instance_name(prefix, std::string_view(k.str()))) {
+        // [material.NAME]: a named material with the keys of [material].
+        note_instance(name, at(k.source()));
+        from_table(*sub, name);
       } else if (is_section(name)) {
         if (const toml::table* sub = node.as_table()) {
           from_table(*sub, name);
@@ -605,6 +669,9 @@ class ConfigBuilder {
       constant(key.substr(kConstants.size() + 1), node, origin, origin, kOverride);
     } else if (const KeySpec* spec = find_key(key)) {
       assign(*spec, node, origin, kOverride);
+    } else if (const auto instance = instance_spec(key)) {
+      note_instance(split_instance_key(key)->first, origin);
+      assign(*instance, node, origin, kOverride);
     } else if (key == kConstants) {
       error_at(origin, kOverride, "set one constant at a time: constants.NAME=VALUE");
     } else {
@@ -615,10 +682,14 @@ class ConfigBuilder {
   // Checks that need every value: expressions (they see the final constants) and, for a whole
   // configuration, the required keys. Throws the collected errors.
   void finish(bool check_required) {
-    for (const KeySpec& spec : schema()) {
+    for (auto it = cfg_.values_.begin(); it != cfg_.values_.end(); ++it) {
+      // (Defaults are valid expressions: only the given values are compiled.)
+      const std::optional<KeySpec> instance =
+          find_key(it->first) ? std::nullopt : instance_spec(it->first);
+      const KeySpec* found = instance ? &*instance : find_key(it->first);
+      if (found == nullptr) continue;
+      const KeySpec& spec = *found;
       if (spec.type != KeyType::Expression && spec.type != KeyType::ExpressionVector) continue;
-      const auto it = cfg_.values_.find(spec.name);
-      if (it == cfg_.values_.end()) continue;  // defaults are valid expressions
       std::vector<std::string> texts;
       if (const auto* list = std::get_if<std::vector<std::string>>(&it->second.value))
         texts = *list;
@@ -639,6 +710,17 @@ class ConfigBuilder {
       for (const KeySpec& spec : schema()) {
         if (spec.required() && !spec.required_when_read && !cfg_.values_.contains(spec.name)) {
           error_at(cfg_.source_, kRequired, missing_message(spec));
+        }
+      }
+      // Each named instance has its section's required keys.
+      for (const auto& [instance, origin] : cfg_.instances_) {
+        const std::string section = instance.substr(0, instance.find('.'));
+        for (const KeySpec& spec : schema()) {
+          if (spec.section() != section || !spec.required() || spec.required_when_read) continue;
+          KeySpec named = spec;
+          named.name = instance + spec.name.substr(section.size());
+          if (!cfg_.values_.contains(named.name))
+            error_at(origin, kRequired, missing_message(named) + " (in [" + instance + "])");
         }
       }
     }
@@ -670,6 +752,11 @@ class ConfigBuilder {
   };
 
   std::string at(const toml::source_region& r) const { return location(cfg_.source_, r); }
+
+  // A named instance ("material.NAME") met first at `origin`.
+  void note_instance(const std::string& instance, const std::string& origin) {
+    cfg_.instances_.emplace(instance, origin);
+  }
 
   // Sort position of a stored value: its place in the file, or after the file for --set.
   Order order_of(const std::string& key) const {
@@ -897,10 +984,11 @@ void Config::set(std::string_view key, const std::string& value_text, const std:
 // ---------------------------------------------------------------------------------------------
 namespace {
 
-const KeySpec& spec_or_throw(std::string_view key) {
-  const KeySpec* spec = find_key(key);
-  if (!spec) throw std::logic_error("undeclared configuration key '" + std::string(key) + "'");
-  return *spec;
+// The key's spec (a key of a named instance, [material.NAME], as its section's, named in full).
+KeySpec spec_or_throw(std::string_view key) {
+  if (const KeySpec* spec = find_key(key)) return *spec;
+  if (auto spec = instance_spec(key)) return std::move(*spec);
+  throw std::logic_error("undeclared configuration key '" + std::string(key) + "'");
 }
 
 [[noreturn]] void wrong_accessor(const KeySpec& spec, std::string_view accessor) {
@@ -995,6 +1083,22 @@ Expression Config::get_expression(std::string_view key) const {
   }
 }
 
+std::vector<std::string> Config::instances(std::string_view section) const {
+  std::vector<std::string> names;
+  for (const auto& [instance, origin] : instances_)
+    if (instance.size() > section.size() && instance.starts_with(section) &&
+        instance[section.size()] == '.')
+      names.push_back(instance.substr(section.size() + 1));
+  return names;
+}
+
+std::string Config::instance_where(std::string_view section, std::string_view name) const {
+  const auto it = instances_.find(std::string(section) + "." + std::string(name));
+  if (it == instances_.end())
+    throw std::logic_error("no instance [" + std::string(section) + "." + std::string(name) + "]");
+  return it->second;
+}
+
 bool Config::is_set(std::string_view key) const {
   if (key.starts_with(kConstants + ".")) {
     return constants_.contains(std::string(key.substr(kConstants.size() + 1)));
@@ -1043,7 +1147,14 @@ std::string Config::to_toml() const {
       sections.push_back(k.section());
     }
   }
+  // Each section, and after it its named instances ([material.NAME]) with every key of it.
+  std::vector<std::pair<std::string, std::string>> tables;  // (section, table name)
   for (const std::string& section : sections) {
+    tables.emplace_back(section, section);
+    for (const auto& [instance, origin] : instances_)
+      if (instance.substr(0, instance.find('.')) == section) tables.emplace_back(section, instance);
+  }
+  for (const auto& [section, table] : tables) {
     struct Line {
       std::string assignment, comment;
     };
@@ -1052,7 +1163,7 @@ std::string Config::to_toml() const {
       if (k.section() != section) continue;
       const std::string leaf = section.empty() ? k.name : k.name.substr(section.size() + 1);
       std::string comment = (k.unit.empty() ? "" : "[" + k.unit + "] ") + k.description;
-      const Stored* s = stored(k.name);
+      const Stored* s = stored(table.empty() ? k.name : table + "." + leaf);
       if (s) {
         comment += "; from " + s->origin;
         lines.push_back({leaf + " = " + value_text(s->value), comment});
@@ -1064,7 +1175,7 @@ std::string Config::to_toml() const {
         lines.push_back({"# " + leaf + " = (required, missing)", comment});
       }
     }
-    if (!section.empty()) os << "\n[" << section << "]\n";
+    if (!table.empty()) os << "\n[" << table << "]\n";
     std::size_t width = 0;
     for (const Line& l : lines) width = std::max(width, l.assignment.size());
     for (const Line& l : lines) {

@@ -79,6 +79,12 @@ class Config {
   std::vector<double> get_reals(std::string_view key) const;
   std::vector<std::string> get_expressions(std::string_view key) const;
 
+  // The names of the named instances of `section` ([material.NAME]: a material of its own with
+  // the keys of [material], read as "material.NAME.density" ...), in alphabetical order.
+  std::vector<std::string> instances(std::string_view section) const;
+  // Where the instance [section.name] was given first (its table, or a --set of one of its keys).
+  std::string instance_where(std::string_view section, std::string_view name) const;
+
   // Given in the file or by --set / set(). Also accepts "constants.NAME".
   bool is_set(std::string_view key) const;
   // Not given, or given with its default value (a stored config.toml gives every key).
@@ -114,6 +120,8 @@ class Config {
 
   std::map<std::string, Stored, std::less<>> values_;
   std::map<std::string, double> constants_;
+  // Named instances ("material.NAME") and where each was given first.
+  std::map<std::string, std::string, std::less<>> instances_;
   std::map<std::string, std::string, std::less<>> constant_origins_;
   std::string source_;
 

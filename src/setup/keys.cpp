@@ -346,6 +346,13 @@ std::vector<KeySpec> declare() {
              "body.max, on the run's own grid, which it need not fill; seeded per element by "
              "particles.per_element (2D and 3D custom; relative to the configuration file's "
              "directory; `mpm mesh FILE` reports it)"),
+      choice("body.material", "material", {},
+             "the body's material: \"material\" (the [material] table) or the NAME of a "
+             "[material.NAME] table (custom)"),
+      choice("body.part_materials", "", {},
+             "parts of body.mesh (its physical groups) that have their own material, as "
+             "\"PART: NAME, ...\" with NAME as in body.material; the other parts take "
+             "body.material (2D and 3D custom)"),
       choice("body.particles", "", {},
              "CSV file of the body's particles instead of the box body.min, body.max: a header, "
              "then one row per particle with columns x_1, x_2[, x_3] (or x, y, z) [m], volume "

@@ -139,15 +139,22 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.output.csv = cfg.get_bool("output.csv");
   s.output.vtk = cfg.get_bool("output.vtk");
   s.output.vtk_binary = cfg.get_string("output.vtk_format") == "binary";
-  s.material.density = cfg.get_real("material.density");
-  s.material.youngs_modulus = cfg.get_real("material.youngs_modulus");
-  s.material.poisson_ratio = cfg.get_real("material.poisson_ratio");
-  for (const MaterialParameter& m : parameters_of(cfg.get_string("material.model"))) {
-    const std::string key = fmt::format("material.{}", m.name);
-    if (m.choices.empty())
-      s.material_parameters.push_back({std::string(m.name), cfg.get_real(key), ""});
-    else
-      s.material_parameters.push_back({std::string(m.name), 0.0, cfg.get_string(key)});
+  std::vector<std::string> tables{"material"};
+  for (const std::string& name : cfg.instances("material")) tables.push_back("material." + name);
+  for (const std::string& table : tables) {
+    MaterialSettings& ms = s.materials.emplace_back();
+    ms.name = table == "material" ? table : table.substr(std::string("material.").size());
+    ms.model = cfg.get_string(table + ".model");
+    ms.elastic.density = cfg.get_real(table + ".density");
+    ms.elastic.youngs_modulus = cfg.get_real(table + ".youngs_modulus");
+    ms.elastic.poisson_ratio = cfg.get_real(table + ".poisson_ratio");
+    for (const MaterialParameter& m : parameters_of(ms.model)) {
+      const std::string key = fmt::format("{}.{}", table, m.name);
+      if (m.choices.empty())
+        ms.parameters.push_back({std::string(m.name), cfg.get_real(key), ""});
+      else
+        ms.parameters.push_back({std::string(m.name), 0.0, cfg.get_string(key)});
+    }
   }
   s.reference_dofs = cfg.get_int("reference.dofs");
   m.mass = cfg.get_string("method.mass") == "consistent" ? MassType::Consistent : MassType::Lumped;

@@ -66,13 +66,22 @@ struct MaterialParameterValue {
   std::string choice;  // empty for a real number
 };
 
+// A material as configured, for summary.json.
+struct MaterialSettings {
+  std::string name;   // "material" for [material], NAME for [material.NAME]
+  std::string model;  // its law's name (TABLE.model)
+  ElasticParameters elastic;
+  std::vector<MaterialParameterValue> parameters;  // those of its law
+};
+
 struct RunSettings {
   TimeSettings time;
   OutputSettings output;
   ParallelSettings parallel;
   MethodSettings method;
-  ElasticParameters material;  // material.* (the problem holds the law built from them)
-  std::vector<MaterialParameterValue> material_parameters;  // those of material.model's law
+  // [material] first, then each [material.NAME] in alphabetical order (the order of the run's
+  // materials: setup/material_settings.hpp); the problem holds the laws built from them.
+  std::vector<MaterialSettings> materials;
   std::int64_t reference_dofs = 0;  // reference.dofs: the ULFEM reference of benchmarks without
                                     // an exact solution
 };

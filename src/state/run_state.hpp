@@ -17,7 +17,7 @@
 #include "core/parallel.hpp"
 #include "grid/grid.hpp"
 #include "grid/grid_state.hpp"
-#include "material/materials.hpp"
+#include "material/material_set.hpp"
 #include "model/loads.hpp"
 #include "particles/particles.hpp"
 #include "solver/mass_matrix.hpp"
@@ -33,18 +33,18 @@ template <int Dim>
 class DistributedPmg;  // parallel/distributed_pmg.hpp
 
 // The model as the run advances it: what the driver reads and writes between steps (outputs,
-// checkpoints, error norms). The particles carry the material's internal variables, named by the
-// material (MaterialState::set_names).
+// checkpoints, error norms). The particles carry the materials' internal variables, named by
+// the materials (MaterialState::set_names), and each its material's index.
 template <int Dim>
 struct ModelState {
-  ModelState(const Grid<Dim>& g, Particles<Dim> p, Material mat)
-      : grid(g), particles(std::move(p)), material(std::move(mat)) {
-    particles.state.set_names(state_names(material));
+  ModelState(const Grid<Dim>& g, Particles<Dim> p, Materials mat)
+      : grid(g), particles(std::move(p)), materials(std::move(mat)) {
+    particles.state.set_names(materials.state_names());
   }
 
   Grid<Dim> grid;
   Particles<Dim> particles;
-  Material material;
+  Materials materials;
   BodyForce<Dim> body_force;
   std::vector<Traction<Dim>> tractions;
   double time = 0.0;  // t^s [s]
@@ -187,7 +187,7 @@ template <int Dim>
 struct RunState : ModelState<Dim>, SolveState<Dim>, DistributedState<Dim> {
   static constexpr int kDim = Dim;
 
-  RunState(const Grid<Dim>& g, Particles<Dim> p, Material mat)
+  RunState(const Grid<Dim>& g, Particles<Dim> p, Materials mat)
       : ModelState<Dim>(g, std::move(p), std::move(mat)) {}
 
   // Adds the constrained directions range(c) (c symmetric positive semi-definite) to those of

@@ -56,7 +56,7 @@ struct BasisState : RunState<Dim> {
   // whole_grid = false (a process of a distributed run): the grid arrays start with an empty
   // window, placed by the first evaluate_basis (RunState::fit_dof_window), so that no process
   // allocates them for the whole grid.
-  BasisState(const Grid<Dim>& g, Basis b, Particles<Dim> p, Material mat, bool whole_grid = true)
+  BasisState(const Grid<Dim>& g, Basis b, Particles<Dim> p, Materials mat, bool whole_grid = true)
       : RunState<Dim>(g, std::move(p), std::move(mat)), basis(std::move(b)) {
     auto& particles = this->particles;
     this->nodes.resize(basis.num_dofs(), whole_grid);
@@ -164,7 +164,7 @@ template <int Dim, class Basis, class Mapping>
 struct Simulation : BasisState<Dim, Basis> {
   using MappingT = Mapping;
 
-  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Material mat,
+  Simulation(const Grid<Dim>& g, Basis b, Mapping m, Particles<Dim> p, Materials mat,
              bool whole_grid = true)
       : BasisState<Dim, Basis>(g, std::move(b), std::move(p), std::move(mat), whole_grid),
         mapping(std::move(m)) {}

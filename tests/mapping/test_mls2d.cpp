@@ -441,7 +441,7 @@ double total_energy(const RunState<2>& sim) {
                law.energy(P.stress[i], state_row<std::decay_t<decltype(law)>>(P.state, i), P.F[i],
                           P.volume[i], P.volume0[i]);
       },
-      sim.material);
+      sim.materials.single());
   return e;
 }
 

@@ -122,7 +122,7 @@ void expect_plane_strain_equals_2d(const PlaneStrainCase& c) {
     const Grid<2>& g2 = pb2.grid;
 
     Problem<3> pb3;
-    pb3.material = pb2.material;
+    pb3.materials = pb2.materials;
     const double hz = g2.h[0];
     pb3.grid = Grid<3>(Vec<3>::Zero(), Vec<3>(1.0, 1.0, c.nz * hz), IVec<3>{8, 8, c.nz});
     pb3.particles =

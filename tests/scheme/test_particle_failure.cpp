@@ -30,7 +30,7 @@ TEST(ParticleFailure, AFailedReturnIsNamedWithItsStressAndResidual) {
   const std::size_t k = 7;
   P.stress[k](0, 1) = P.stress[k](1, 0) = 250e3;
   P.state[k][1] = kNoReturn;
-  const auto residual = failed_update<2>(sim.material, P.stress[k], P.state[k], P.F[k]);
+  const auto residual = failed_update<2>(sim.materials, P, k);
   ASSERT_TRUE(residual.has_value());
   EXPECT_GT(*residual, 400e3);  // Tresca: 2 * 250 kPa of shear against 2 c_u = 40 kPa
   try {
@@ -51,7 +51,7 @@ TEST(ParticleFailure, AFailedReturnIsNamedWithItsStressAndResidual) {
   }
   // A non-finite stress is not a failed return.
   P.state[k][1] = 0.0;
-  EXPECT_FALSE(failed_update<2>(sim.material, P.stress[k], P.state[k], P.F[k]).has_value());
+  EXPECT_FALSE(failed_update<2>(sim.materials, P, k).has_value());
   P.stress[k + 1](0, 0) = std::numeric_limits<double>::quiet_NaN();
   try {
     stages::throw_particle_failure(sim);

@@ -72,7 +72,7 @@ std::unique_ptr<driver::Stepper<Dim>> compiled_stepper(StepperSpec<Dim> spec) {
   Problem<Dim> pb;
   pb.grid = spec.grid;
   pb.particles = std::move(spec.particles);
-  pb.material = std::move(spec.material);
+  pb.materials = std::move(spec.material);
   pb.fixed_sides = std::move(spec.fixed_sides);
   pb.body_force = std::move(spec.body_force);
   pb.tractions = std::move(spec.tractions);
