@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <stdexcept>
 #include <string_view>
 #include <system_error>
 
@@ -394,6 +395,14 @@ void FileBody<Dim>::for_each(const std::function<void(const Vec<Dim>& X, double 
     const double vol = m.element_volume(e) * share;
     for (const Vec<Dim>& r : ref_) f(x0 + J * r, vol);
   }
+}
+
+template <int Dim>
+double FileBody<Dim>::integral_above(const Vec<Dim>& X,
+                                     const std::function<double(int part)>& weight) const {
+  if (!mesh_) throw std::logic_error("FileBody::integral_above: a particle file has no elements");
+  const BodyMesh<Dim>& m = *mesh_;
+  return m.integral_above(X, [&](Index e) { return weight(m.group(e)); });
 }
 
 template <int Dim>

@@ -74,6 +74,12 @@ class FileBody {
     return mesh_ ? mesh_->group(id / static_cast<Index>(ref_.size())) : -1;
   }
 
+  // A body mesh's integral along the vertical above X of a weight per part (BodyMesh::
+  // integral_above; part -1: an element in no part), e.g. the mass above X per unit area of
+  // parts of those densities. std::logic_error for a particle file.
+  double integral_above(const Vec<Dim>& X, const std::function<double(int part)>& weight) const;
+  bool is_mesh() const { return mesh_ != nullptr; }
+
   // A particle file's initial fields by point (empty when its columns are not given): the
   // velocity [m/s], the Cauchy stress [Pa], and in 2D the stress normal to the plane [Pa].
   const std::vector<Vec<Dim>>& velocity() const { return velocity_; }

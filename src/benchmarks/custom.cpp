@@ -302,8 +302,11 @@ BodyParts parts_of(const FileBody<Dim>* body) {
           "comes from " + body->source(), std::string_view(body->key()) == "body.mesh"};
 }
 
+// Returns the material of each part of the body mesh (body.material for those
+// body.part_materials does not name; empty without parts).
 template <int Dim>
-void assign_materials(const Config& cfg, Problem<Dim>& pb, const BodyParts& body_parts) {
+std::vector<std::size_t> assign_materials(const Config& cfg, Problem<Dim>& pb,
+                                          const BodyParts& body_parts) {
   const std::size_t body = material_index(cfg, pb.materials, "body.material");
   if (pb.materials.size() > 1 && cfg.get_string("method.solver") != "mpm")
     throw InputError(fmt::format(
@@ -314,8 +317,9 @@ void assign_materials(const Config& cfg, Problem<Dim>& pb, const BodyParts& body
   std::vector<bool> used(pb.materials.size(), false);
   used[body] = true;
   // The material of each part of the body mesh (none: body.material).
-  std::vector<std::size_t> of_part;
-  if (!cfg.get_string("body.part_materials").empty()) {
+  std::vector<std::size_t> of_part(body_parts.names.size(), body);
+  const bool by_part = !cfg.get_string("body.part_materials").empty();
+  if (by_part) {
     const char* key = "body.part_materials";
     const std::vector<std::string>& parts = body_parts.names;
     if (!body_parts.mesh)
@@ -323,7 +327,6 @@ void assign_materials(const Config& cfg, Problem<Dim>& pb, const BodyParts& body
           "{}: {} gives materials to the parts (physical groups) of body.mesh, and this run's "
           "body {}; give the body's material by body.material",
           cfg.where(key), key, body_parts.source));
-    of_part.assign(parts.size(), body);
     std::vector<bool> named(parts.size(), false);
     for (const std::string& item : names_of(cfg, key)) {
       const auto colon = item.find(':');
@@ -363,12 +366,29 @@ void assign_materials(const Config& cfg, Problem<Dim>& pb, const BodyParts& body
   auto& P = pb.particles;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
     std::size_t k = body;
-    if (!of_part.empty())
+    if (by_part)
       if (const int part = body_parts.of(P.id[i]); part >= 0)
         k = of_part[static_cast<std::size_t>(part)];
     P.material[i] = static_cast<MaterialIndex>(k);
     P.mass[i] = pb.materials.density(k) * P.volume[i];
   }
+  return of_part;
+}
+
+// The mass above a point per unit area of a body mesh whose parts have the densities of their
+// materials `of_part` (the others' body.material's), for initial.geostatic; none for a box body
+// or a particle file.
+template <int Dim>
+MassAbove<Dim> mass_above(const Config& cfg, const Problem<Dim>& pb, const FileBody<Dim>* body,
+                          const std::vector<std::size_t>& of_part) {
+  if (!body || !body->is_mesh()) return {};
+  std::vector<double> rho;
+  for (const std::size_t k : of_part) rho.push_back(pb.materials.density(k));
+  const double rho_body = pb.materials.density(material_index(cfg, pb.materials, "body.material"));
+  return [body = *body, rho, rho_body](const Vec<Dim>& X) {
+    return body.integral_above(
+        X, [&](int part) { return part >= 0 ? rho[static_cast<std::size_t>(part)] : rho_body; });
+  };
 }
 
 // InputError naming `key` and the mesh's boundaries when the mesh has no boundary `name`.
@@ -871,7 +891,7 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
   pb.grid = Grid<1>(Vec<1>(g0), Vec<1>(g1), IVec<1>{cells});
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(b0), Vec<1>(b1),
                                    static_cast<int>(cfg.get_int("particles.per_cell")), rho, scope);
-  assign_materials<1>(cfg, pb, parts_of<2>(nullptr));
+  (void)assign_materials<1>(cfg, pb, parts_of<2>(nullptr));
 
   const auto& constants = cfg.constants();
   const Expression v0(cfg.get_string("initial.velocity"), constants);
@@ -948,7 +968,7 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
                            : seed_body_2d(cfg, pb.grid, b0, b1, rho, pb.mesh.get(), scope);
   pb.body_min = b0;
   pb.body_max = b1;
-  assign_materials<2>(cfg, pb, parts_of<2>(file_body ? &*file_body : nullptr));
+  const auto of_part = assign_materials<2>(cfg, pb, parts_of<2>(file_body ? &*file_body : nullptr));
 
   const auto v0 = expressions(cfg, "initial.velocity", 2, kComponents[2]);
   const auto s0 = expressions(cfg, "initial.stress", 3, kStressComponents[2]);
@@ -963,7 +983,8 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
           cfg.where("initial.velocity"), P.x0[i][0], P.x0[i][1], P.id[i]));
   }
   set_initial_stress<2>(
-      cfg, pb, [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0, 0.0); }, b);
+      cfg, pb, [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0, 0.0); }, b,
+      mass_above<2>(cfg, pb, file_body ? &*file_body : nullptr, of_part));
   if (file_body) file_initial_fields<2>(cfg, pb, *file_body);
 
   pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time();
@@ -1031,7 +1052,7 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
                            : seed_particles<3>(pb.grid, b0, b1, per_cell, rho, scope);
   pb.body_min = b0;
   pb.body_max = b1;
-  assign_materials<3>(cfg, pb, parts_of<3>(file_body ? &*file_body : nullptr));
+  const auto of_part = assign_materials<3>(cfg, pb, parts_of<3>(file_body ? &*file_body : nullptr));
 
   const auto v0 = expressions(cfg, "initial.velocity", 3, kComponents[3]);
   const auto s0 = expressions(cfg, "initial.stress", kStressCount[3], kStressComponents[3]);
@@ -1047,7 +1068,8 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
                       cfg.where("initial.velocity"), P.x0[i][0], P.x0[i][1], P.x0[i][2], P.id[i]));
   }
   set_initial_stress<3>(
-      cfg, pb, [s0](const Vec<3>& X) { return stress_from<3>(s0, X[0], X[1], X[2], 0.0); }, b);
+      cfg, pb, [s0](const Vec<3>& X) { return stress_from<3>(s0, X[0], X[1], X[2], 0.0); }, b,
+      mass_above<3>(cfg, pb, file_body ? &*file_body : nullptr, of_part));
   if (file_body) file_initial_fields<3>(cfg, pb, *file_body);
 
   pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time() || b[2].uses_time();

@@ -32,15 +32,20 @@ void refuse_initial_stress(const Config& cfg, const Material& material, int dim,
 }
 
 template <int Dim>
-std::optional<K0Stress<Dim>> k0_stress_from_config(const Config& cfg, const Problem<Dim>& pb,
-                                                   const std::vector<Expression>& body_force,
-                                                   double rho) {
+std::optional<Geostatic<Dim>> geostatic_from_config(const Config& cfg, const Problem<Dim>& pb,
+                                                    const std::vector<Expression>& body_force,
+                                                    const MassAbove<Dim>& mass_above) {
   if (cfg.get_string("initial.geostatic") == "none") {
-    if (!cfg.at_default("initial.k0"))
-      throw InputError(
-          fmt::format("{}: initial.k0 is read with initial.geostatic = \"k0\", and this run has "
-                      "initial.geostatic = \"none\" (set it to \"k0\", or leave initial.k0 out)",
-                      cfg.where("initial.k0")));
+    std::vector<std::string> keys{"initial.k0"};
+    for (std::size_t k = 0; k < pb.materials.size(); ++k)
+      keys.push_back((k == 0 ? std::string("material") : "material." + pb.materials.name(k)) +
+                     ".k0");
+    for (const std::string& key : keys)
+      if (!cfg.at_default(key))
+        throw InputError(
+            fmt::format("{}: {} is read with initial.geostatic = \"k0\", and this run has "
+                        "initial.geostatic = \"none\" (set it to \"k0\", or leave {} out)",
+                        cfg.where(key), key, key));
     return std::nullopt;
   }
   const std::string where = cfg.where("initial.geostatic");
@@ -55,20 +60,18 @@ std::optional<K0Stress<Dim>> k0_stress_from_config(const Config& cfg, const Prob
         "{}: initial.geostatic = \"k0\" computes the initial stress, out of the plane too; leave "
         "initial.stress_zz (given at {}) at 0",
         where, cfg.where("initial.stress_zz")));
-  for (const char* key : {"body.mesh", "body.particles"})
-    if (!cfg.get_string(key).empty())
-      throw InputError(fmt::format(
-          "{}: initial.geostatic = \"k0\" takes the overburden of a box body (body.min, "
-          "body.max), not of a body from a file ({}); give initial.stress{} as expressions of "
-          "the position{} instead",
-          where, key, Dim == 2 ? " and initial.stress_zz" : "",
-          std::string_view(key) == "body.particles" ? ", or the stress columns of the particle file"
-                                                    : ""));
-  if (pb.mesh)
+  if (!cfg.get_string("body.particles").empty())
     throw InputError(fmt::format(
         "{}: initial.geostatic = \"k0\" takes the overburden of a box body (body.min, "
-        "body.max), not of a body from a mesh file (grid.mesh); give initial.stress{} as "
-        "expressions of x and y instead",
+        "body.max) or of a body mesh (body.mesh), not of a particle file (body.particles); give "
+        "initial.stress{} as expressions of the position, or the stress columns of the particle "
+        "file, instead",
+        where, Dim == 2 ? " and initial.stress_zz" : ""));
+  if (pb.mesh && !mass_above)
+    throw InputError(fmt::format(
+        "{}: initial.geostatic = \"k0\" takes the overburden of a box body (body.min, "
+        "body.max) or of a body mesh (body.mesh), not of the triangles of grid.mesh; give "
+        "initial.stress{} as expressions of x and y instead",
         where, Dim == 2 ? " and initial.stress_zz" : ""));
   constexpr const char* kAxes = "xyz";
   Vec<Dim> g;
@@ -92,23 +95,39 @@ std::optional<K0Stress<Dim>> k0_stress_from_config(const Config& cfg, const Prob
         "{}: initial.geostatic = \"k0\" needs a body force downwards, along -{}; "
         "loading.body_force (at {}) has {} = {}",
         where, kAxes[Dim - 1], cfg.where("loading.body_force"), kAxes[Dim - 1], g[Dim - 1]));
-  // (A box body: one material, body.material's.)
-  refuse_initial_stress(cfg, pb.materials[material_index(cfg, pb.materials, "body.material")], Dim,
-                        "initial.geostatic");
-  K0Stress<Dim> k;
-  k.weight = rho * g[Dim - 1];
-  k.top = pb.body_max[Dim - 1];
-  k.k0 = cfg.get_real("initial.k0");
-  return k;
+  // K0 of each material: its material.k0, else initial.k0 (read only when some material takes
+  // it: a missing one is reported then).
+  Geostatic<Dim> geo;
+  for (std::size_t k = 0; k < pb.materials.size(); ++k) {
+    const std::string table = k == 0 ? std::string("material") : "material." + pb.materials.name(k);
+    const double own = cfg.get_real(table + ".k0");
+    if (own < 0.0 && own != -1.0)
+      throw InputError(fmt::format("{}: {}.k0 = {} is out of range: K0 >= 0, or -1 for initial.k0",
+                                   cfg.where(table + ".k0"), table, own));
+    geo.k0.push_back(own >= 0.0 ? own : cfg.get_real("initial.k0"));
+  }
+  const double g_v = g[Dim - 1];
+  if (mass_above) {
+    // A body mesh: g times the mass above a point per unit area (its parts' densities).
+    geo.vertical = [g_v, mass_above](const Vec<Dim>& X) { return g_v * mass_above(X); };
+  } else {
+    // A box body, of body.material's density.
+    const double weight =
+        pb.materials.density(material_index(cfg, pb.materials, "body.material")) * g_v;
+    geo.vertical = [weight, top = pb.body_max[Dim - 1]](const Vec<Dim>& X) {
+      return weight * (top - X[Dim - 1]);
+    };
+  }
+  return geo;
 }
 
 template <int Dim>
 void set_initial_stress(const Config& cfg, Problem<Dim>& pb,
                         std::function<Mat<Dim>(const Vec<Dim>&)> from_expressions,
-                        const std::vector<Expression>& body_force) {
-  // The overburden of a box body, whose material is body.material's.
-  const double rho = pb.materials.density(material_index(cfg, pb.materials, "body.material"));
-  const std::optional<K0Stress<Dim>> k0 = k0_stress_from_config<Dim>(cfg, pb, body_force, rho);
+                        const std::vector<Expression>& body_force,
+                        const MassAbove<Dim>& mass_above) {
+  const std::optional<Geostatic<Dim>> k0 =
+      geostatic_from_config<Dim>(cfg, pb, body_force, mass_above);
   std::optional<Expression> zz;
   if constexpr (Dim == 2) {
     if (!k0) zz.emplace(cfg.get_string("initial.stress_zz"), cfg.constants());
@@ -120,19 +139,21 @@ void set_initial_stress(const Config& cfg, Problem<Dim>& pb,
   }
   auto& P = pb.particles;
   P.state.set_names(pb.materials.state_names());
+  // (A function of the position alone: with K0, that of body.material's K0.)
   if (k0)
-    pb.initial_stress = [k = *k0](const Vec<Dim>& X) { return k.stress(X); };
+    pb.initial_stress = [geo = *k0, k = material_index(cfg, pb.materials, "body.material")](
+                            const Vec<Dim>& X) { return geo.stress(X, k); };
   else
     pb.initial_stress = std::move(from_expressions);
   const char* key = k0 ? "initial.geostatic" : "initial.stress";
   for (std::size_t i = 0; i < P.x.size(); ++i) {
-    P.stress[i] = pb.initial_stress(P.x0[i]);
+    P.stress[i] = k0 ? k0->stress(P.x0[i], P.material[i]) : pb.initial_stress(P.x0[i]);
     if (!P.stress[i].allFinite())
       throw InputError(fmt::format("{}: {} is not finite at {} (particle {})", cfg.where(key), key,
                                    point<Dim>(P.x0[i]), P.id[i]));
     double out_of_plane = 0.0;
     if constexpr (Dim == 2) {
-      out_of_plane = k0 ? k0->out_of_plane(P.x0[i]) : (*zz)(P.x0[i][0], P.x0[i][1]);
+      out_of_plane = k0 ? k0->out_of_plane(P.x0[i], P.material[i]) : (*zz)(P.x0[i][0], P.x0[i][1]);
       if (!std::isfinite(out_of_plane))
         throw InputError(fmt::format("{}: initial.stress_zz is not finite at {} (particle {})",
                                      cfg.where("initial.stress_zz"), point<Dim>(P.x0[i]), P.id[i]));
@@ -158,17 +179,17 @@ void set_initial_stress(const Config& cfg, Problem<Dim>& pb,
   }
 }
 
-template std::optional<K0Stress<2>> k0_stress_from_config<2>(const Config&, const Problem<2>&,
-                                                             const std::vector<Expression>&,
-                                                             double);
-template std::optional<K0Stress<3>> k0_stress_from_config<3>(const Config&, const Problem<3>&,
-                                                             const std::vector<Expression>&,
-                                                             double);
+template std::optional<Geostatic<2>> geostatic_from_config<2>(const Config&, const Problem<2>&,
+                                                              const std::vector<Expression>&,
+                                                              const MassAbove<2>&);
+template std::optional<Geostatic<3>> geostatic_from_config<3>(const Config&, const Problem<3>&,
+                                                              const std::vector<Expression>&,
+                                                              const MassAbove<3>&);
 template void set_initial_stress<2>(const Config&, Problem<2>&,
                                     std::function<Mat<2>(const Vec<2>&)>,
-                                    const std::vector<Expression>&);
+                                    const std::vector<Expression>&, const MassAbove<2>&);
 template void set_initial_stress<3>(const Config&, Problem<3>&,
                                     std::function<Mat<3>(const Vec<3>&)>,
-                                    const std::vector<Expression>&);
+                                    const std::vector<Expression>&, const MassAbove<3>&);
 
 }  // namespace mpm

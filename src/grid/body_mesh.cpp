@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <utility>
@@ -171,12 +172,81 @@ void BodyMesh<Dim>::build_buckets() const {
 }
 
 template <int Dim>
-Index BodyMesh<Dim>::other_element_holding(const Vec<Dim>& x, Index except) const {
-  if (bin_start_.empty()) build_buckets();
-  const auto b = bin_of(x);
+Index BodyMesh<Dim>::flat_bin(const std::array<Index, Dim>& b) const {
   Index k = 0;
   for (int d = Dim - 1; d >= 0; --d)
     k = k * bins_[static_cast<std::size_t>(d)] + b[static_cast<std::size_t>(d)];
+  return k;
+}
+
+template <int Dim>
+double BodyMesh<Dim>::chord_above(Index e, const Vec<Dim>& x) const {
+  // The element is the intersection of the half-spaces n_f . (y - p_f) <= 0 of its faces f
+  // (outward normals n_f, p_f a vertex of f); on the line y(s) = (x lateral, s) each bounds s
+  // from above (n_v > 0) or below (n_v < 0), or holds everywhere or nowhere (n_v = 0).
+  constexpr int V = Dim - 1;  // the vertical axis
+  const Element& el = element(e);
+  double lo = x[V], hi = std::numeric_limits<double>::infinity();
+  for (std::size_t f = 0; f <= Dim; ++f) {
+    // The face opposite vertex f.
+    const Vec<Dim>& p = vertex(el[(f + 1) % (Dim + 1)]);
+    Vec<Dim> n;
+    if constexpr (Dim == 2) {
+      const Vec<2> t = vertex(el[(f + 2) % 3]) - p;
+      n = Vec<2>(t[1], -t[0]);
+    } else {
+      n = (vertex(el[(f + 2) % 4]) - p).cross(vertex(el[(f + 3) % 4]) - p);
+    }
+    if (n.dot(vertex(el[f]) - p) > 0.0) n = -n;  // outward
+    double lateral = 0.0;
+    for (int d = 0; d < V; ++d) lateral += n[d] * (x[d] - p[d]);
+    if (n[V] > 0.0) {
+      hi = std::min(hi, p[V] - lateral / n[V]);
+    } else if (n[V] < 0.0) {
+      lo = std::max(lo, p[V] - lateral / n[V]);
+    } else {
+      // A vertical face: the line is outside, or on it (then it counts for the element on the
+      // face's far side only: outward normal's first non-zero component negative).
+      if (lateral > 0.0) return 0.0;
+      if (lateral == 0.0) {
+        int d = 0;
+        while (d < V && n[d] == 0.0) ++d;
+        if (d == V || n[d] > 0.0) return 0.0;
+      }
+    }
+  }
+  return std::max(0.0, hi - lo);
+}
+
+template <int Dim>
+double BodyMesh<Dim>::integral_above(const Vec<Dim>& x,
+                                     const std::function<double(Index)>& weight) const {
+  if (bin_start_.empty()) build_buckets();
+  constexpr auto V = static_cast<std::size_t>(Dim - 1);
+  auto b = bin_of(x);
+  const Index first = b[V];
+  double sum = 0.0;
+  for (Index j = first; j < bins_[V]; ++j) {
+    b[V] = j;
+    const auto k = static_cast<std::size_t>(flat_bin(b));
+    for (Index i = bin_start_[k]; i < bin_start_[k + 1]; ++i) {
+      const Index e = bin_elements_[static_cast<std::size_t>(i)];
+      // Each element once: in the lowest of its bins at or above x's.
+      Vec<Dim> low = x;
+      low[Dim - 1] = vertex(element(e)[0])[Dim - 1];
+      for (Index v : element(e)) low[Dim - 1] = std::min(low[Dim - 1], vertex(v)[Dim - 1]);
+      if (std::max(bin_of(low)[V], first) != j) continue;
+      const double c = chord_above(e, x);
+      if (c > 0.0) sum += weight(e) * c;
+    }
+  }
+  return sum;
+}
+
+template <int Dim>
+Index BodyMesh<Dim>::other_element_holding(const Vec<Dim>& x, Index except) const {
+  if (bin_start_.empty()) build_buckets();
+  const auto k = flat_bin(bin_of(x));
   for (Index j = bin_start_[static_cast<std::size_t>(k)];
        j < bin_start_[static_cast<std::size_t>(k) + 1]; ++j) {
     const Index e = bin_elements_[static_cast<std::size_t>(j)];

@@ -5,6 +5,7 @@
 // physical group of the body's dimension (a named part of the body: layers, inclusions).
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,12 @@ class BodyMesh {
   // the elements' bounding boxes, built on the first call. For the check that no two elements
   // overlap (benchmarks/bodies.cpp).
   Index other_element_holding(const Vec<Dim>& x, Index except) const;
+  // The integral along the vertical (the last axis) above x of a weight per element:
+  // sum_e weight(e) |{s >= x_v : (x with x_v = s) in e}| [weight m], element by element in the
+  // order of the bucket grid (the same bits wherever it is evaluated). The overburden of a point:
+  // weight = density gives the mass above it per unit area. A vertical face that the line runs
+  // along counts for the element on its far side (larger x, then y) alone.
+  double integral_above(const Vec<Dim>& x, const std::function<double(Index)>& weight) const;
 
  private:
   std::vector<Vec<Dim>> vertices_;
@@ -69,6 +76,9 @@ class BodyMesh {
   mutable std::vector<Index> bin_start_, bin_elements_;
   void build_buckets() const;
   std::array<Index, Dim> bin_of(const Vec<Dim>& x) const;
+  Index flat_bin(const std::array<Index, Dim>& b) const;
+  // The length of element e's chord along the vertical through x above x_v (0 if none).
+  double chord_above(Index e, const Vec<Dim>& x) const;
 };
 
 extern template class BodyMesh<2>;

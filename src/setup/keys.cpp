@@ -306,6 +306,9 @@ std::vector<KeySpec> declare() {
       real("material.youngs_modulus", "Pa", kRequired, greater_than(0), "Young's modulus E"),
       real("material.poisson_ratio", "", 0.0, open(-1, 0.5),
            "Poisson's ratio nu (multi-dimensional laws)"),
+      real("material.k0", "", -1.0, at_least(-1),
+           "coefficient of earth pressure at rest K0 = sigma_h / sigma_v of this material under "
+           "initial.geostatic = \"k0\" (a layer's own, e.g. 1 - sin(phi); -1: initial.k0)"),
 
       real("bar.length", "m", 1.0, greater_than(0), "length L of the vibrating bar"),
       real("bar.v0", "m/s", 0.1, any(), "amplitude v0 of the initial velocity v0 sin(pi x/L)"),
@@ -375,7 +378,7 @@ std::vector<KeySpec> declare() {
       when_read(real("initial.k0", "", kRequired, at_least(0),
                      "coefficient of earth pressure at rest K0 = sigma_h / sigma_v of "
                      "initial.geostatic = \"k0\" (e.g. 1 - sin(phi), Jaky; nu / (1 - nu) for "
-                     "an elastic layer)")),
+                     "an elastic layer), for the materials without their own material.k0")),
       expression_vector("loading.body_force", "m/s^2", "0",
                         "body force per unit mass, one expression of the current position x, y, "
                         "z and t per component (custom)"),
@@ -494,9 +497,8 @@ std::vector<KeySpec> declare() {
            "this fraction more particles than the mean (0: never)"),
   };
   // The laws' parameters after the elastic ones.
-  const auto after = std::find_if(keys.begin(), keys.end(), [](const KeySpec& k) {
-    return k.name == "material.poisson_ratio";
-  });
+  const auto after = std::find_if(keys.begin(), keys.end(),
+                                  [](const KeySpec& k) { return k.name == "material.k0"; });
   const std::vector<KeySpec> parameters = material_parameter_keys();
   keys.insert(after + 1, parameters.begin(), parameters.end());
   return keys;

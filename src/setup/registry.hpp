@@ -187,9 +187,10 @@ inline constexpr Entry kTrianglePatterns[] = {
 inline constexpr Entry kGeostaticModes[] = {
     {"none", "the initial stress is initial.stress (and initial.stress_zz in 2D)"},
     {"k0",
-     "sigma_v = rho g (top - depth) from the weight of the box body above, sigma_h = "
-     "initial.k0 sigma_v across (out of the plane too), under a constant body force along -y "
-     "(2D) or -z (3D)"},
+     "sigma_v = g times the mass above a point per unit area (rho g (top - depth) in a box "
+     "body; a body mesh's parts with their materials' densities), sigma_h = K0 sigma_v across "
+     "(out of the plane too; each material's material.k0, else initial.k0), under a constant "
+     "body force along -y (2D) or -z (3D)"},
 };
 
 // prescribed.nodes: which degrees of freedom get a prescribed velocity (custom).

@@ -3,6 +3,7 @@
 // sigma_h = K0 sigma_v, in which it stays still under gravity (the grid forces of the stress
 // balance the weight node by node); the out-of-plane stress of a 2D run is in the law's state;
 // and what the procedure cannot do is refused naming the key.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -136,6 +137,138 @@ TEST(Geostatic, WhatTheProcedureCannotDoIsRefusedNamingTheKey) {
   std::string t3 = kLayer3D;
   t3.replace(t3.find("geostatic = \"k0\"\nk0 = 0.5\n"), 26, "stress_zz = \"-1e3\"\n");
   expect_input_error(t3, {"initial.stress_zz is the out-of-plane stress of a 2D"});
+}
+
+// A body mesh of layers of different density and K0 (tests/data/meshes/layered_column.msh in 2D,
+// cube_tets.msh in 3D: parts "lower" and "upper", each 0.5 m thick): sigma_v is g times the mass
+// above, -g (rho2 0.5 + rho1 (0.5 - depth)) in the lower layer and -g rho2 (1 - y) in the upper,
+// sigma_h = K0 sigma_v with each layer's K0 (the upper layer's own material.k0, the lower one's
+// initial.k0), exactly: the vertical line through a particle crosses the layers' elements.
+template <int Dim>
+std::string layered_k0(const std::string& mesh) {
+  return fmt::format(R"toml(benchmark = "custom"
+[grid]
+dimension = {0}
+cells = 4
+min = {1}
+max = {2}
+[body]
+mesh = "{3}/tests/data/meshes/{4}"
+part_materials = "upper: soft"
+[time]
+dt = 1e-4
+end = 2e-2
+[material]
+model = "mohr_coulomb"
+density = 2000.0
+youngs_modulus = 20e6
+poisson_ratio = 0.3
+cohesion = 10e3
+friction_angle = 30.0
+[material.soft]
+model = "drucker_prager"
+density = 1000.0
+youngs_modulus = 5e6
+poisson_ratio = 0.3
+cohesion = 5e3
+friction_angle = 25.0
+k0 = 0.4
+[boundary]
+left = "roller"
+right = "roller"
+bottom = "fixed"
+top = "free"
+{5}[loading]
+body_force = {6}
+[initial]
+geostatic = "k0"
+k0 = 0.5
+)toml",
+                     Dim, Dim == 2 ? "[0.0, 0.0]" : "[0.0, 0.0, 0.0]",
+                     Dim == 2 ? "[0.2, 1.25]" : "[1.0, 1.0, 1.25]", MPM_SOURCE_DIR, mesh,
+                     Dim == 2 ? "" : "back = \"roller\"\nfront = \"roller\"\n",
+                     Dim == 2 ? "[\"0\", \"-9.81\"]" : "[\"0\", \"0\", \"-9.81\"]");
+}
+
+template <int Dim>
+void expect_layered_k0(const std::string& mesh) {
+  const auto pb =
+      std::get<Problem<Dim>>(make_problem(Config::parse(layered_k0<Dim>(mesh), "layers.toml")));
+  const auto& P = pb.particles;
+  const double g = 9.81;
+  std::size_t upper = 0;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    const double y = P.x0[i][Dim - 1];
+    const bool soft = y > 0.5;
+    ASSERT_EQ(P.material[i], soft ? 1 : 0) << i;
+    upper += soft;
+    const double v = soft ? -g * 1000.0 * (1.0 - y) : -g * (1000.0 * 0.5 + 2000.0 * (0.5 - y));
+    const double k0 = soft ? 0.4 : 0.5;
+    EXPECT_NEAR(P.stress[i](Dim - 1, Dim - 1), v, 1e-10 * g * 1500.0) << i;
+    EXPECT_NEAR(P.stress[i](0, 0), k0 * v, 1e-10 * g * 1500.0) << i;
+    EXPECT_EQ(P.stress[i](0, 1), 0.0);
+    if constexpr (Dim == 2) {
+      EXPECT_NEAR(P.state[i][2], k0 * v, 1e-10 * g * 1500.0) << i;
+    }
+  }
+  EXPECT_EQ(2 * upper, P.x.size());
+}
+
+TEST(Geostatic, ALayeredBodyMeshCarriesTheWeightOfEachLayerWithItsK0) {
+  expect_layered_k0<2>("layered_column.msh");
+  expect_layered_k0<3>("cube_tets.msh");
+}
+
+// Under a sloping surface the overburden is that of the column above each point: the slope of
+// examples/meshes/slope_layered.msh (one material here) has its surface at y = 10 m for x < 8,
+// 10 - (x - 8) for 8 < x < 14 and 4 m beyond.
+TEST(Geostatic, UnderASlopeTheOverburdenIsTheColumnAbove) {
+  std::string text = fmt::format(R"toml(benchmark = "custom"
+[grid]
+dimension = 2
+cells = 40
+min = [0.0, 0.0]
+max = [20.0, 11.0]
+[body]
+mesh = "{}/examples/meshes/slope_layered.msh"
+[particles]
+per_element = 3
+[time]
+dt = 1e-3
+end = 1e-2
+[material]
+model = "mohr_coulomb"
+density = 1800.0
+youngs_modulus = 20e6
+poisson_ratio = 0.3
+cohesion = 10e3
+friction_angle = 30.0
+[loading]
+body_force = ["0", "-10"]
+[initial]
+geostatic = "k0"
+k0 = 0.6
+)toml",
+                                 MPM_SOURCE_DIR);
+  const auto pb = std::get<Problem<2>>(make_problem(Config::parse(text, "slope.toml")));
+  const auto& P = pb.particles;
+  ASSERT_EQ(P.x.size(), 3u * 1531u);
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    const double x = P.x0[i][0], y = P.x0[i][1];
+    const double surface = x < 8.0 ? 10.0 : x < 14.0 ? 10.0 - (x - 8.0) : 4.0;
+    EXPECT_NEAR(P.stress[i](1, 1), -18000.0 * (surface - y), 1e-9 * 18000.0 * 10.0) << i;
+    EXPECT_NEAR(P.stress[i](0, 0), -0.6 * 18000.0 * (surface - y), 1e-9 * 18000.0 * 10.0) << i;
+  }
+  // A particle file has no elements to weigh; a material.k0 without initial.geostatic is refused.
+  expect_input_error(
+      [&] {
+        std::string t = text;
+        t.replace(t.find("geostatic = \"k0\""), 16, "geostatic = \"none\"");
+        t.replace(t.find("k0 = 0.6"), 8, "");
+        t.replace(t.find("friction_angle = 30.0\n"), 22, "friction_angle = 30.0\nk0 = 0.5\n");
+        return t;
+      }(),
+      {"material.k0 is read with initial.geostatic = \"k0\""});
 }
 
 }  // namespace
