@@ -74,7 +74,7 @@ def csv_rows(path):
         return list(csv.DictReader(f))
 
 
-def check_frame(path, csv_path, dim, failures, parallel=False):
+def check_frame(path, csv_path, dim, failures, parallel=False, columns=()):
     grid, errors = read(path, parallel)
     what = os.path.basename(path)
     if errors:
@@ -98,7 +98,20 @@ def check_frame(path, csv_path, dim, failures, parallel=False):
         key = "stress_11" if "stress_11" in row else "stress"
     if stress[k][0] != float(row[key]):
         failures.append(f"{what}: stress XX of particle 1 is {stress[k][0]}, the CSV's {row[key]}")
-    print(f"{what}: {grid.GetNumberOfPoints()} points, stress XX of particle 1 = {stress[k][0]:.6g}")
+    # Scalar columns (a run of several materials: each particle's "material" and its law's
+    # internal variables), every particle's value as in the CSV frame.
+    for name in columns:
+        array = pd.GetArray(name)
+        if array is None:
+            failures.append(f"{what}: no point array {name}")
+            continue
+        values = vtk_to_numpy(array)
+        by_id = {int(r["id"]): float(r[name]) for r in rows}
+        bad = [int(i) for i, v in zip(ids, values) if v != by_id[int(i)]]
+        if bad:
+            failures.append(f"{what}: {name} of particle {bad[0]} is not the CSV's")
+    print(f"{what}: {grid.GetNumberOfPoints()} points, stress XX of particle 1 = {stress[k][0]:.6g}"
+          + (f", columns {', '.join(columns)} as in the CSV" if columns else ""))
 
 
 def check_grid(path, cells, points, failures, label):
@@ -129,6 +142,12 @@ def check_pvd(path, failures):
     print(f"{os.path.basename(path)}: {len(files)} data sets, each read")
 
 
+# A body mesh of two parts and two materials (neo-Hookean and tracked_elastic, whose internal
+# variables are columns of their own).
+TWO_MATERIALS = "tests/data/two_materials_thrown_2d.toml"
+MATERIAL_COLUMNS = ("material", "updates", "strain_path")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--mpm", required=True)
@@ -147,8 +166,10 @@ def main():
             ("2D triangles of the grid's cells (criss-cross: 4 a cell)",
              "examples/plate_triangles_2d.toml", ["time.end=3e-5"], 2, 4),
             ("2D mesh file", "examples/plate_ps_unstructured_2d.toml", ["time.end=4e-5"], 2, 1),
+            ("2D two materials", TWO_MATERIALS, ["time.end=5e-4"], 2, 1),
         ]
         for k, (label, config, sets, dim, per_cell) in enumerate(cases):
+            columns = MATERIAL_COLUMNS if config == TWO_MATERIALS else ()
             out = os.path.join(tmp, f"run{k}")
             cmd = [mpm, "run", config, "--quiet", "--out", out, "--set", "output.frames=1"]
             for s in sets:
@@ -159,7 +180,7 @@ def main():
                        f"{label}: grid.vtu")
             for frame in ("particles_00000", "particles_00001"):
                 check_frame(os.path.join(out, frame + ".vtu"), os.path.join(out, frame + ".csv"),
-                            dim, failures)
+                            dim, failures, columns=columns)
             check_pvd(os.path.join(out, "particles.pvd"), failures)
         # `mpm mesh --vtu`: the mesh of a Gmsh file, its triangles and vertices.
         out = os.path.join(tmp, "mesh.vtu")
@@ -177,6 +198,15 @@ def main():
                 check_frame(os.path.join(out, frame + ".pvtu"), os.path.join(out, frame + ".csv"),
                             2, failures, parallel=True)
             check_pvd(os.path.join(out, "particles.pvd"), failures)
+            # Two materials thrown through the two processes' slabs: each piece's particles
+            # with their material and state.
+            out = os.path.join(tmp, "mpi_materials")
+            run(["mpirun", "-n", "2", "--oversubscribe", mpm, "run", TWO_MATERIALS, "--quiet",
+                 "--out", out, "--set", "output.frames=1", "--set", "time.end=5e-3"],
+                env=MPIRUN_ENV)
+            for frame in ("particles_00000", "particles_00001"):
+                check_frame(os.path.join(out, frame + ".pvtu"), os.path.join(out, frame + ".csv"),
+                            2, failures, parallel=True, columns=MATERIAL_COLUMNS)
         else:
             failures.append("mpirun not found: install openmpi-bin (scripts/deps.sh)")
     except (RuntimeError, subprocess.TimeoutExpired, StopIteration, OSError, KeyError) as e:
