@@ -282,11 +282,6 @@ std::vector<std::string> names_of(const Config& cfg, const char* key) {
   return out;
 }
 
-// Each particle's material (body.material; with body.part_materials, that of its part of
-// body.mesh) and mass rho0 V0 of its material's density; pb.materials already holds the
-// configured materials. A part or material that does not exist, a part named twice, and a named
-// material no body uses are refused, naming the key. Before the initial stress (its law decides
-// whether it may be given).
 // The body's parts, where they come from a body mesh: their names, the part of each particle by
 // its id (-1: none), and the body's source for messages.
 struct BodyParts {
@@ -295,15 +290,22 @@ struct BodyParts {
   std::string source;  // "body mesh \"FILE\"", "particle file ...", "the box body.min, ..."
   bool mesh = false;   // from body.mesh
 };
+BodyParts box_body_parts() {
+  return {{}, {}, "is the box body.min, body.max", false};
+}
 template <int Dim>
 BodyParts parts_of(const FileBody<Dim>* body) {
-  if (!body) return {{}, {}, "is the box body.min, body.max", false};
+  if (!body) return box_body_parts();
   return {body->part_names(), [body](Index id) { return body->part_of(id); },
           "comes from " + body->source(), std::string_view(body->key()) == "body.mesh"};
 }
 
-// Returns the material of each part of the body mesh (body.material for those
-// body.part_materials does not name; empty without parts).
+// Each particle's material (body.material; with body.part_materials, that of its part of
+// body.mesh) and mass rho0 V0 of its material's density; pb.materials already holds the
+// configured materials. A part or material that does not exist, a part named twice, and a named
+// material no body uses are refused, naming the key. Before the initial stress (its law decides
+// whether it may be given). Returns the material of each part of the body mesh (body.material
+// for those body.part_materials does not name; empty without parts).
 template <int Dim>
 std::vector<std::size_t> assign_materials(const Config& cfg, Problem<Dim>& pb,
                                           const BodyParts& body_parts) {
@@ -891,7 +893,7 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
   pb.grid = Grid<1>(Vec<1>(g0), Vec<1>(g1), IVec<1>{cells});
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(b0), Vec<1>(b1),
                                    static_cast<int>(cfg.get_int("particles.per_cell")), rho, scope);
-  (void)assign_materials<1>(cfg, pb, parts_of<2>(nullptr));
+  (void)assign_materials<1>(cfg, pb, box_body_parts());
 
   const auto& constants = cfg.constants();
   const Expression v0(cfg.get_string("initial.velocity"), constants);
