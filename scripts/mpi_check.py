@@ -291,6 +291,10 @@ CASES = [
     # carry their material's index and their law's block of state from process to process.
     ("2d_two_materials_thrown", "tests/data/two_materials_thrown_2d.toml", ["output.frames=2"],
      "none"),
+    # Three bodies from a body mesh, a box and a particle file ([body.NAME]), each with its
+    # material, thrown up together: each keeps its range of ids on every process.
+    ("2d_three_bodies_thrown", "tests/data/three_bodies_thrown_2d.toml", ["output.frames=2"],
+     "none"),
     ("2d_plate_maxent", "examples/plate_mms_2d.toml",
      ["grid.cells=8", "time.end=2e-3", "method.basis=maxent", "output.frames=1"], "none"),
     ("3d_cube_bspline2", "examples/cube_mms_3d.toml",

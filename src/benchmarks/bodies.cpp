@@ -275,30 +275,25 @@ bool FileBody<Dim>::read_rows(std::string_view text) {
 }
 
 template <int Dim>
-std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
-  const std::string mesh = cfg.get_string("body.mesh");
-  const std::string particles = cfg.get_string("body.particles");
-  if (mesh.empty() && particles.empty()) {
-    if (!cfg.at_default("particles.per_element"))
-      throw InputError(fmt::format(
-          "{}: particles.per_element seeds the elements of a body mesh, and this run has none "
-          "(give body.mesh, or leave particles.per_element out)",
-          cfg.where("particles.per_element")));
-    return std::nullopt;
-  }
+std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg,
+                                                        const std::string& table) {
+  const std::string mesh_key = table + ".mesh", particles_key = table + ".particles";
+  const std::string mesh = cfg.get_string(mesh_key);
+  const std::string particles = cfg.get_string(particles_key);
+  if (mesh.empty() && particles.empty()) return std::nullopt;
   if (!mesh.empty() && !particles.empty())
-    throw InputError(
-        fmt::format("{}: body.mesh (at {}) and body.particles both give the body; give one of them",
-                    cfg.where("body.particles"), cfg.where("body.mesh")));
-  for (const char* key : {"body.min", "body.max"})
+    throw InputError(fmt::format("{}: {} (at {}) and {} both give the body; give one of them",
+                                 cfg.where(particles_key), mesh_key, cfg.where(mesh_key),
+                                 particles_key));
+  for (const std::string& key : {table + ".min", table + ".max"})
     if (!cfg.at_default(key))
       throw InputError(fmt::format(
           "{}: {} is a corner of a box body, and this run's body comes from {} = \"{}\" (leave "
           "{} out)",
-          cfg.where(key), key, mesh.empty() ? "body.particles" : "body.mesh",
+          cfg.where(key), key, mesh.empty() ? particles_key : mesh_key,
           mesh.empty() ? particles : mesh, key));
   FileBody b;
-  b.key_ = mesh.empty() ? "body.particles" : "body.mesh";
+  b.key_ = mesh.empty() ? particles_key : mesh_key;
   const std::filesystem::path path = cfg.file_path(b.key_);
   std::error_code ec;
   const bool from_file = std::filesystem::is_regular_file(cfg.source(), ec);
@@ -308,11 +303,6 @@ std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
                                  "configuration file too)"
                                : "";
   if (!mesh.empty()) {
-    if (!cfg.at_default("particles.per_cell"))
-      throw InputError(fmt::format(
-          "{}: particles.per_cell seeds the cells of a box body; a body mesh is seeded per "
-          "element by particles.per_element (leave particles.per_cell out)",
-          cfg.where("particles.per_cell")));
     auto per = static_cast<int>(cfg.get_int("particles.per_element"));
     if (per == 0) per = Dim == 2 ? 3 : 4;  // the degree-2 rules
     try {
@@ -327,7 +317,7 @@ std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
     try {
       b.mesh_ = std::make_shared<const BodyMesh<Dim>>(read_gmsh_body<Dim>(path.string()));
     } catch (const InputError& e) {
-      throw InputError(fmt::format("{}: body.mesh: {}{}", cfg.where("body.mesh"), e.what(), note));
+      throw InputError(fmt::format("{}: {}: {}{}", cfg.where(mesh_key), mesh_key, e.what(), note));
     }
     b.source_ = fmt::format("body mesh \"{}\"", path.string());
     // Overlapping elements would count their common volume twice: refused where a particle of
@@ -340,10 +330,10 @@ std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
         const Index own = k++ / per;
         if (const Index other = m.other_element_holding(x, own); other >= 0)
           throw InputError(fmt::format(
-              "{}: body.mesh: elements {} and {} of {} overlap (a particle of the first lies "
+              "{}: {}: elements {} and {} of {} overlap (a particle of the first lies "
               "inside the second); a body mesh's elements must not overlap (one physical group "
               "meshed twice?)",
-              cfg.where("body.mesh"), m.tag(own), m.tag(other), b.source_));
+              cfg.where(mesh_key), mesh_key, m.tag(own), m.tag(other), b.source_));
       });
     }
     b.count_ = b.mesh_->num_elements() * static_cast<Index>(b.ref_.size());
@@ -352,23 +342,17 @@ std::optional<FileBody<Dim>> FileBody<Dim>::from_config(const Config& cfg) {
     b.for_each([&](const Vec<Dim>&, double v) { b.volume_ += v; });
     return b;
   }
-  if (!cfg.at_default("particles.per_cell") || !cfg.at_default("particles.per_element"))
-    throw InputError(
-        fmt::format("{}: a particle file gives every particle; leave particles.per_cell and "
-                    "particles.per_element out",
-                    cfg.where(cfg.at_default("particles.per_cell") ? "particles.per_element"
-                                                                   : "particles.per_cell")));
   b.source_ = fmt::format("particle file \"{}\"", path.string());
   std::string bytes;
   try {
     bytes = read_input_file(path, "particle file");
   } catch (const InputError& e) {
     throw InputError(
-        fmt::format("{}: body.particles: {}{}", cfg.where("body.particles"), e.what(), note));
+        fmt::format("{}: {}: {}{}", cfg.where(particles_key), particles_key, e.what(), note));
   }
   const bool had_header = b.read_rows(bytes);
   if (b.x_.empty())
-    throw InputError(fmt::format("{}: {}: no particles (a header{})", cfg.where("body.particles"),
+    throw InputError(fmt::format("{}: {}: no particles (a header{})", cfg.where(particles_key),
                                  b.source_, had_header ? " and no rows" : " is missing too"));
   b.count_ = static_cast<Index>(b.x_.size());
   b.lo_ = b.hi_ = b.x_[0];

@@ -42,16 +42,17 @@ void check_seed_memory(double count, double share, const std::string& what);
 template <int Dim>
 class FileBody {
  public:
-  // body.mesh or body.particles of `cfg` (relative paths from the configuration file's
-  // directory); nullopt when neither is given. InputError naming the key and the file: both
-  // given, a file that cannot be read, particles.per_element not a count of the element's rule,
-  // or (particle files) a malformed row.
-  static std::optional<FileBody> from_config(const Config& cfg);
+  // TABLE.mesh or TABLE.particles of `cfg` (TABLE: "body" or a named body "body.NAME";
+  // relative paths from the configuration file's directory); nullopt when neither is given.
+  // InputError naming the key and the file: both given, a box corner given too, a file that
+  // cannot be read, particles.per_element not a count of the element's rule, or (particle files)
+  // a malformed row. (Which seeding keys a run's bodies allow: BodySet.)
+  static std::optional<FileBody> from_config(const Config& cfg, const std::string& table = "body");
 
   // "body mesh \"FILE\"" or "particle file \"FILE\"", for messages.
   const std::string& source() const { return source_; }
-  // The key that named the file (body.mesh, body.particles).
-  const char* key() const { return key_; }
+  // The key that named the file (body.mesh, body.particles, body.NAME.mesh, ...).
+  const char* key() const { return key_.c_str(); }
   Index count() const { return count_; }
   // The sum of the points' volumes (a mesh's: its volume to round-off) [m^Dim].
   double volume() const { return volume_; }
@@ -79,6 +80,11 @@ class FileBody {
   // parts of those densities. std::logic_error for a particle file.
   double integral_above(const Vec<Dim>& X, const std::function<double(int part)>& weight) const;
   bool is_mesh() const { return mesh_ != nullptr; }
+  // The element of a body mesh whose inside holds x (BodyMesh::other_element_holding), -1 for
+  // none and for a particle file.
+  Index element_holding(const Vec<Dim>& x) const {
+    return mesh_ ? mesh_->other_element_holding(x, -1) : -1;
+  }
 
   // A particle file's initial fields by point (empty when its columns are not given): the
   // velocity [m/s], the Cauchy stress [Pa], and in 2D the stress normal to the plane [Pa].
@@ -88,7 +94,7 @@ class FileBody {
 
  private:
   std::string source_;
-  const char* key_ = "";
+  std::string key_;
   Index count_ = 0;
   double volume_ = 0.0;
   Vec<Dim> lo_, hi_;

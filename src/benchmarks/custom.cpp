@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <string_view>
@@ -12,6 +13,7 @@
 
 #include "benchmarks/benchmarks.hpp"
 #include "benchmarks/bodies.hpp"
+#include "benchmarks/body_set.hpp"
 #include "benchmarks/initial_stress.hpp"
 #include "grid/triangle_mesh.hpp"
 #include "methods/kinds.hpp"
@@ -25,23 +27,6 @@ namespace {
 // The sides of the grid (boundary.*) and faces of the body (traction.*, pressure.*) by direction:
 // x, y, then z (back: z = min, front: z = max): kSideNames of model/problem.hpp.
 constexpr const auto& kSideKeys = kSideNames;
-
-// The values of a RealVector key, one per direction; InputError naming its line otherwise.
-template <int Dim>
-Vec<Dim> per_direction(const Config& cfg, const char* key) {
-  const std::vector<double> v = cfg.get_reals(key);
-  if (v.size() != static_cast<std::size_t>(Dim))
-    throw InputError(fmt::format(
-        "{}: key '{}' needs {} values (one per direction, {}) for grid.dimension = {}, got {}",
-        cfg.where(key), key, Dim,
-        Dim == 1   ? "x"
-        : Dim == 2 ? "x, y"
-                   : "x, y, z",
-        Dim, v.size()));
-  Vec<Dim> out;
-  for (int d = 0; d < Dim; ++d) out[d] = v[static_cast<std::size_t>(d)];
-  return out;
-}
 
 // The key's value is the single expression "0" (the default of the vector keys): every
 // component zero, or, for traction.* and exact.*, none given.
@@ -282,34 +267,81 @@ std::vector<std::string> names_of(const Config& cfg, const char* key) {
   return out;
 }
 
-// The body's parts, where they come from a body mesh: their names, the part of each particle by
-// its id (-1: none), and the body's source for messages.
-struct BodyParts {
-  std::vector<std::string> names;
-  std::function<int(Index id)> of;
-  std::string source;  // "body mesh \"FILE\"", "particle file ...", "the box body.min, ..."
-  bool mesh = false;   // from body.mesh
-};
-BodyParts box_body_parts() {
-  return {{}, {}, "is the box body.min, body.max", false};
-}
+// The body that particle `id` belongs to (bodies in the order of their ids).
 template <int Dim>
-BodyParts parts_of(const FileBody<Dim>* body) {
-  if (!body) return box_body_parts();
-  return {body->part_names(), [body](Index id) { return body->part_of(id); },
-          "comes from " + body->source(), std::string_view(body->key()) == "body.mesh"};
+const Body<Dim>& body_of(const std::vector<const Body<Dim>*>& bodies, Index id) {
+  const auto it = std::upper_bound(bodies.begin(), bodies.end(), id,
+                                   [](Index x, const Body<Dim>* b) { return x < b->first_id; });
+  return **(it - 1);
 }
 
-// Each particle's material (body.material; with body.part_materials, that of its part of
-// body.mesh) and mass rho0 V0 of its material's density; pb.materials already holds the
-// configured materials. A part or material that does not exist, a part named twice, and a named
-// material no body uses are refused, naming the key. Before the initial stress (its law decides
-// whether it may be given). Returns the material of each part of the body mesh (body.material
-// for those body.part_materials does not name; empty without parts).
+// " STRING" with spaces and tabs trimmed off both ends.
+std::string trimmed(std::string_view t) {
+  const auto a = t.find_first_not_of(" \t"), b = t.find_last_not_of(" \t");
+  return a == std::string_view::npos ? std::string() : std::string(t.substr(a, b - a + 1));
+}
+
+// The material of each part of a body's mesh (TABLE.part_materials; the others TABLE.material's,
+// `body_material`), marking the materials it uses in `used`. InputError naming the key: a part
+// or material that does not exist, a part named twice, an item not "PART: NAME", parts of a
+// body that is not a mesh.
 template <int Dim>
-std::vector<std::size_t> assign_materials(const Config& cfg, Problem<Dim>& pb,
-                                          const BodyParts& body_parts) {
-  const std::size_t body = material_index(cfg, pb.materials, "body.material");
+std::vector<std::size_t> part_materials(const Config& cfg, const Materials& materials,
+                                        const Body<Dim>& body, std::size_t body_material,
+                                        std::vector<bool>& used) {
+  std::vector<std::string> parts;
+  if constexpr (Dim > 1)
+    if (body.file) parts = body.file->part_names();
+  std::vector<std::size_t> of_part(parts.size(), body_material);
+  const std::string key = body.key("part_materials");
+  if (cfg.get_string(key).empty()) return of_part;
+  bool mesh = false;
+  if constexpr (Dim > 1) mesh = body.file && body.file->is_mesh();
+  if (!mesh)
+    throw InputError(fmt::format(
+        "{}: {} gives materials to the parts (physical groups) of {}.mesh, and this body {}; "
+        "give the body's material by {}.material",
+        cfg.where(key), key, body.table,
+        body.file ? "comes from " + body.source() : "is the box " + body.table + ".min, .max",
+        body.table));
+  std::vector<bool> named(parts.size(), false);
+  for (const std::string& item : names_of(cfg, key.c_str())) {
+    const auto colon = item.find(':');
+    const std::string part = trimmed(std::string_view(item).substr(0, colon));
+    const std::string name =
+        colon == std::string::npos ? "" : trimmed(std::string_view(item).substr(colon + 1));
+    if (colon == std::string::npos || part.empty() || name.empty())
+      throw InputError(
+          fmt::format("{}: {}: \"{}\" is not PART: NAME (e.g. \"clay: soft_clay, sand: material\")",
+                      cfg.where(key), key, item));
+    const auto it = std::find(parts.begin(), parts.end(), part);
+    if (it == parts.end()) {
+      std::string list;
+      for (const auto& n : parts) list += (list.empty() ? "\"" : ", \"") + n + "\"";
+      throw InputError(
+          fmt::format("{}: {}: the body mesh has no part \"{}\"; its parts: {}", cfg.where(key),
+                      key, part, list.empty() ? "none (no physical group of its elements)" : list));
+    }
+    const auto j = static_cast<std::size_t>(it - parts.begin());
+    if (named[j])
+      throw InputError(
+          fmt::format("{}: {}: the part \"{}\" is named twice", cfg.where(key), key, part));
+    named[j] = true;
+    of_part[j] = material_index(cfg, materials, key, name);
+    used[of_part[j]] = true;
+  }
+  return of_part;
+}
+
+// Each particle's material (its body's TABLE.material; with TABLE.part_materials, that of its
+// part of the body's mesh) and mass rho0 V0 of its material's density; pb.materials already
+// holds the configured materials. A named material no body uses is refused, naming its table.
+// Before the initial stress (its law decides whether it may be given). Returns, for each body,
+// the material of each part of its mesh (TABLE.material for those part_materials does not name;
+// empty without parts) and then the body's own material.
+template <int Dim>
+std::vector<std::vector<std::size_t>> assign_materials(
+    const Config& cfg, Problem<Dim>& pb, const std::vector<const Body<Dim>*>& bodies) {
   if (pb.materials.size() > 1 && cfg.get_string("method.solver") != "mpm")
     throw InputError(fmt::format(
         "{}: [material.{}]: several materials are for method.solver = \"mpm\"; \"{}\" takes "
@@ -317,47 +349,12 @@ std::vector<std::size_t> assign_materials(const Config& cfg, Problem<Dim>& pb,
         cfg.instance_where("material", pb.materials.name(1)), pb.materials.name(1),
         cfg.get_string("method.solver")));
   std::vector<bool> used(pb.materials.size(), false);
-  used[body] = true;
-  // The material of each part of the body mesh (none: body.material).
-  std::vector<std::size_t> of_part(body_parts.names.size(), body);
-  const bool by_part = !cfg.get_string("body.part_materials").empty();
-  if (by_part) {
-    const char* key = "body.part_materials";
-    const std::vector<std::string>& parts = body_parts.names;
-    if (!body_parts.mesh)
-      throw InputError(fmt::format(
-          "{}: {} gives materials to the parts (physical groups) of body.mesh, and this run's "
-          "body {}; give the body's material by body.material",
-          cfg.where(key), key, body_parts.source));
-    std::vector<bool> named(parts.size(), false);
-    for (const std::string& item : names_of(cfg, key)) {
-      const auto colon = item.find(':');
-      const auto trim = [](std::string t) {
-        const auto a = t.find_first_not_of(" \t"), b = t.find_last_not_of(" \t");
-        return a == std::string::npos ? std::string() : t.substr(a, b - a + 1);
-      };
-      const std::string part = trim(item.substr(0, colon));
-      const std::string name = colon == std::string::npos ? "" : trim(item.substr(colon + 1));
-      if (colon == std::string::npos || part.empty() || name.empty())
-        throw InputError(fmt::format(
-            "{}: {}: \"{}\" is not PART: NAME (e.g. \"clay: soft_clay, sand: material\")",
-            cfg.where(key), key, item));
-      const auto it = std::find(parts.begin(), parts.end(), part);
-      if (it == parts.end()) {
-        std::string list;
-        for (const auto& n : parts) list += (list.empty() ? "\"" : ", \"") + n + "\"";
-        throw InputError(fmt::format(
-            "{}: {}: the body mesh has no part \"{}\"; its parts: {}", cfg.where(key), key, part,
-            list.empty() ? "none (no physical group of its elements)" : list));
-      }
-      const auto j = static_cast<std::size_t>(it - parts.begin());
-      if (named[j])
-        throw InputError(
-            fmt::format("{}: {}: the part \"{}\" is named twice", cfg.where(key), key, part));
-      named[j] = true;
-      of_part[j] = material_index(cfg, pb.materials, key, name);
-      used[of_part[j]] = true;
-    }
+  std::vector<std::vector<std::size_t>> of_part;
+  for (const Body<Dim>* b : bodies) {
+    const std::size_t own = material_index(cfg, pb.materials, b->key("material"));
+    used[own] = true;
+    of_part.push_back(part_materials<Dim>(cfg, pb.materials, *b, own, used));
+    of_part.back().push_back(own);
   }
   for (std::size_t k = 1; k < pb.materials.size(); ++k)
     if (!used[k])
@@ -367,29 +364,63 @@ std::vector<std::size_t> assign_materials(const Config& cfg, Problem<Dim>& pb,
           cfg.instance_where("material", pb.materials.name(k)), pb.materials.name(k)));
   auto& P = pb.particles;
   for (std::size_t i = 0; i < P.x.size(); ++i) {
-    std::size_t k = body;
-    if (by_part)
-      if (const int part = body_parts.of(P.id[i]); part >= 0)
-        k = of_part[static_cast<std::size_t>(part)];
+    const Body<Dim>& b = body_of(bodies, P.id[i]);
+    const auto& mine = of_part[static_cast<std::size_t>(
+        std::find(bodies.begin(), bodies.end(), &b) - bodies.begin())];
+    std::size_t k = mine.back();
+    if constexpr (Dim > 1)
+      if (b.file)
+        if (const int part = b.file->part_of(P.id[i] - b.first_id); part >= 0)
+          k = mine[static_cast<std::size_t>(part)];
     P.material[i] = static_cast<MaterialIndex>(k);
     P.mass[i] = pb.materials.density(k) * P.volume[i];
   }
   return of_part;
 }
 
-// The mass above a point per unit area of a body mesh whose parts have the densities of their
-// materials `of_part` (the others' body.material's), for initial.geostatic; none for a box body
-// or a particle file.
+// The mass above a point per unit area [kg/m^2] of the bodies, for initial.geostatic: each part
+// of a body mesh with its material's density (`of_part`, assign_materials'), a box body over the
+// part of the vertical through the point that crosses it. None for one box body (Geostatic
+// takes its top) or where a particle file has no geometry to integrate (refused there).
 template <int Dim>
-MassAbove<Dim> mass_above(const Config& cfg, const Problem<Dim>& pb, const FileBody<Dim>* body,
-                          const std::vector<std::size_t>& of_part) {
-  if (!body || !body->is_mesh()) return {};
-  std::vector<double> rho;
-  for (const std::size_t k : of_part) rho.push_back(pb.materials.density(k));
-  const double rho_body = pb.materials.density(material_index(cfg, pb.materials, "body.material"));
-  return [body = *body, rho, rho_body](const Vec<Dim>& X) {
-    return body.integral_above(
-        X, [&](int part) { return part >= 0 ? rho[static_cast<std::size_t>(part)] : rho_body; });
+MassAbove<Dim> mass_above(const Config& cfg, const Problem<Dim>& pb,
+                          const std::vector<const Body<Dim>*>& bodies,
+                          const std::vector<std::vector<std::size_t>>& of_part) {
+  if (bodies.size() == 1 && !(bodies[0]->file && bodies[0]->file->is_mesh())) return {};
+  if (cfg.get_string("initial.geostatic") == "none") return {};
+  struct Term {
+    const Body<Dim>* body;
+    std::vector<double> rho;  // each part's density, then the body's own
+  };
+  std::vector<Term> terms;
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const Body<Dim>& b = *bodies[k];
+    if (b.file && !b.file->is_mesh())
+      throw InputError(fmt::format(
+          "{}: initial.geostatic = \"k0\" integrates the weight of the bodies above each "
+          "particle, and [{}] comes from {}, which has no volume to integrate (give its stress "
+          "in the file's stress columns)",
+          cfg.where("initial.geostatic"), b.table, b.source()));
+    Term t{&b, {}};
+    for (const std::size_t m : of_part[k]) t.rho.push_back(pb.materials.density(m));
+    terms.push_back(std::move(t));
+  }
+  return [terms](const Vec<Dim>& X) {
+    double sum = 0.0;
+    for (const Term& t : terms) {
+      const Body<Dim>& b = *t.body;
+      if (b.file) {
+        sum += b.file->integral_above(X, [&](int part) {
+          return t.rho[part >= 0 ? static_cast<std::size_t>(part) : t.rho.size() - 1];
+        });
+        continue;
+      }
+      bool over = true;
+      for (int d = 0; d + 1 < Dim; ++d) over = over && X[d] >= b.lo[d] && X[d] <= b.hi[d];
+      const double length = b.hi[Dim - 1] - std::max(X[Dim - 1], b.lo[Dim - 1]);
+      if (over && length > 0.0) sum += t.rho.back() * length;
+    }
+    return sum;
   };
 }
 
@@ -730,38 +761,6 @@ void refuse_keys_of_more_dimensions(const Config& cfg, int dim) {
   }
 }
 
-// An extent [lo, hi] whose size is a finite number (1e308 - (-1e308) overflows to infinity, and
-// the cell size with it); InputError naming the key otherwise.
-void check_extent(const Config& cfg, double lo, double hi, std::string_view what, char axis) {
-  if (std::isfinite(hi - lo)) return;
-  throw InputError(fmt::format(
-      "{}: {}.max - {}.min = {} - ({}) in {} is not a finite number of metres (it overflows); "
-      "give the {} in units that keep its size below about 1e300",
-      cfg.where(fmt::format("{}.max", what)), what, what, hi, lo, axis, what));
-}
-
-// The grid [g0, g1] and the body [b0, b1] of a 2D or 3D custom problem: non-empty, the body
-// inside the grid; InputError naming the key and the direction otherwise.
-template <int Dim>
-void check_boxes(const Config& cfg, const Vec<Dim>& g0, const Vec<Dim>& g1, const Vec<Dim>& b0,
-                 const Vec<Dim>& b1) {
-  for (int d = 0; d < Dim; ++d) {
-    const char axis = "xyz"[d];
-    if (!(g1[d] > g0[d]))
-      throw InputError(fmt::format("{}: grid.max = {} must exceed grid.min = {} in {}",
-                                   cfg.where("grid.max"), g1[d], g0[d], axis));
-    check_extent(cfg, g0[d], g1[d], "grid", axis);
-    check_extent(cfg, b0[d], b1[d], "body", axis);
-    if (!(b1[d] > b0[d]))
-      throw InputError(fmt::format("{}: body.max = {} must exceed body.min = {} in {}",
-                                   cfg.where("body.max"), b1[d], b0[d], axis));
-    if (b0[d] < g0[d] || b1[d] > g1[d])
-      throw InputError(fmt::format(
-          "{}: the body [{}, {}] must lie inside the grid [{}, {}] in {} (grid.min, grid.max)",
-          cfg.where(b0[d] < g0[d] ? "body.min" : "body.max"), b0[d], b1[d], g0[d], g1[d], axis));
-  }
-}
-
 // The body of a 2D or 3D custom problem from body.mesh or body.particles, seeded on pb.grid (and
 // in 2D inside the triangles of grid.mesh): every point must lie on the grid. What acts on the
 // faces of a box body (traction.*, pressure.*), the discretisations of a box body (OTM and the
@@ -813,19 +812,28 @@ Particles<Dim> seed_file_body(const Config& cfg, const Problem<Dim>& pb, const F
   return sink.finish();
 }
 
-// The initial velocity and stress a particle file gives (FileBody), on the particles this
-// process keeps (each named by its row: its id); the keys that would give them too must be at
-// their defaults. Called after set_initial_stress, which checks initial.stress's keys.
+// The initial velocity and stress a body's particle file gives (FileBody), on the particles of
+// the body this process keeps (each named by its row: its id less the body's first); the keys
+// that would give them too must be at their defaults. Called after set_initial_stress, which
+// checks initial.stress's keys.
 template <int Dim>
-void file_initial_fields(const Config& cfg, Problem<Dim>& pb, const FileBody<Dim>& body) {
+void file_initial_fields(const Config& cfg, Problem<Dim>& pb, const Body<Dim>& of) {
   auto& P = pb.particles;
+  const FileBody<Dim>& body = *of.file;
+  // The row of particle i in the body's file, -1 for another body's particle.
+  const auto row_of = [&](std::size_t i) {
+    const Index row = P.id[i] - of.first_id;
+    return row >= 0 && row < of.count ? row : Index{-1};
+  };
   if (!body.velocity().empty()) {
     if (!cfg.at_default("initial.velocity"))
       throw InputError(
           fmt::format("{}: initial.velocity, and {} gives the velocity of every particle (leave "
                       "initial.velocity out, or the velocity columns)",
                       cfg.where("initial.velocity"), body.source()));
-    for (std::size_t i = 0; i < P.x.size(); ++i) P.v[i] = body.velocity()[P.id[i]];
+    for (std::size_t i = 0; i < P.x.size(); ++i)
+      if (const Index row = row_of(i); row >= 0)
+        P.v[i] = body.velocity()[static_cast<std::size_t>(row)];
   }
   if (body.stress().empty() && body.stress_zz().empty()) return;
   for (const char* key : {"initial.stress", "initial.stress_zz", "initial.geostatic"})
@@ -835,7 +843,8 @@ void file_initial_fields(const Config& cfg, Problem<Dim>& pb, const FileBody<Dim
           "columns)",
           cfg.where(key), key, body.source(), key));
   for (std::size_t i = 0; i < P.x.size(); ++i) {
-    const auto row = static_cast<std::size_t>(P.id[i]);
+    if (row_of(i) < 0) continue;
+    const auto row = static_cast<std::size_t>(row_of(i));
     const Material& law = pb.materials[P.material[i]];
     const bool stressed = (!body.stress().empty() && body.stress()[row] != Mat<Dim>::Zero()) ||
                           (!body.stress_zz().empty() && body.stress_zz()[row] != 0.0);
@@ -852,6 +861,22 @@ void file_initial_fields(const Config& cfg, Problem<Dim>& pb, const FileBody<Dim
     P.state[i][pb.materials.state_offset(P.material[i]) +
                static_cast<std::size_t>(column - names.begin())] = body.stress_zz()[row];
   }
+}
+
+// [body] (seeded: `main`, its count set) and the named bodies after it: seeded, with the seeding
+// keys they use and no two overlapping; pb.bodies lists them when there are several. Returns
+// them in the order of their ids.
+template <int Dim>
+std::vector<const Body<Dim>*> set_up_bodies(const Config& cfg, Problem<Dim>& pb,
+                                            const Body<Dim>& main, std::vector<Body<Dim>>& named,
+                                            double rho, const SeedScope& scope) {
+  seed_named_bodies<Dim>(cfg, pb, named, main.count, rho, scope);
+  std::vector<const Body<Dim>*> bodies{&main};
+  for (const Body<Dim>& b : named) bodies.push_back(&b);
+  if (named.empty()) return bodies;
+  check_bodies_apart<Dim>(cfg, pb, bodies);
+  for (const Body<Dim>* b : bodies) pb.bodies.push_back(b->range());
+  return bodies;
 }
 }  // namespace
 
@@ -891,9 +916,19 @@ Problem<1> make_custom_1d(const Config& cfg, const SeedScope& scope) {
   const double rho = cfg.get_real("material.density");
   const auto cells = static_cast<Index>(cfg.get_int("grid.cells"));
   pb.grid = Grid<1>(Vec<1>(g0), Vec<1>(g1), IVec<1>{cells});
+  if (const auto named = cfg.instances("body"); !named.empty())
+    throw InputError(fmt::format(
+        "{}: [body.{}]: named bodies are for 2D and 3D custom problems; a 1D one has the one "
+        "body of [body]",
+        cfg.instance_where("body", named.front()), named.front()));
+  Body<1> main;
+  main.table = "body";
+  main.lo = Vec<1>(b0);
+  main.hi = Vec<1>(b1);
   pb.particles = seed_particles<1>(pb.grid, Vec<1>(b0), Vec<1>(b1),
                                    static_cast<int>(cfg.get_int("particles.per_cell")), rho, scope);
-  (void)assign_materials<1>(cfg, pb, box_body_parts());
+  main.count = std::numeric_limits<Index>::max();  // (every id)
+  (void)assign_materials<1>(cfg, pb, {&main});
 
   const auto& constants = cfg.constants();
   const Expression v0(cfg.get_string("initial.velocity"), constants);
@@ -954,9 +989,15 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   };
   const Vec<2> g0 = given_or("grid.min", pb.mesh ? pb.mesh->lower() : Vec<2>::Zero());
   const Vec<2> g1 = given_or("grid.max", pb.mesh ? pb.mesh->upper() : Vec<2>::Zero());
-  const auto file_body = FileBody<2>::from_config(cfg);
+  check_seeding_keys(cfg);
+  Body<2> main;
+  main.table = "body";
+  main.file = FileBody<2>::from_config(cfg);
+  const FileBody<2>* file_body = main.file ? &*main.file : nullptr;
   const Vec<2> b0 = file_body ? file_body->lower() : given_or("body.min", g0);
   const Vec<2> b1 = file_body ? file_body->upper() : given_or("body.max", g1);
+  main.lo = b0;
+  main.hi = b1;
   check_boxes<2>(cfg, g0, g1, file_body ? g0 : b0, file_body ? g1 : b1);
   pb.materials = materials_from_config(cfg, 2);
   const double rho = cfg.get_real("material.density");
@@ -966,11 +1007,15 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   pb.grid = Grid<2>(g0, g1, IVec<2>{cx, cy});
   if (pb.mesh) check_mesh_box(cfg, *pb.mesh, pb.grid);
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
+  const Index before = scope.seeded;
   pb.particles = file_body ? seed_file_body<2>(cfg, pb, *file_body, rho, scope)
                            : seed_body_2d(cfg, pb.grid, b0, b1, rho, pb.mesh.get(), scope);
+  main.count = scope.seeded - before;
   pb.body_min = b0;
   pb.body_max = b1;
-  const auto of_part = assign_materials<2>(cfg, pb, parts_of<2>(file_body ? &*file_body : nullptr));
+  auto named = named_bodies_from_config<2>(cfg, pb);
+  const auto bodies = set_up_bodies<2>(cfg, pb, main, named, rho, scope);
+  const auto of_part = assign_materials<2>(cfg, pb, bodies);
 
   const auto v0 = expressions(cfg, "initial.velocity", 2, kComponents[2]);
   const auto s0 = expressions(cfg, "initial.stress", 3, kStressComponents[2]);
@@ -986,8 +1031,9 @@ Problem<2> make_custom_2d(const Config& cfg, const SeedScope& scope) {
   }
   set_initial_stress<2>(
       cfg, pb, [s0](const Vec<2>& X) { return stress_from<2>(s0, X[0], X[1], 0.0, 0.0); }, b,
-      mass_above<2>(cfg, pb, file_body ? &*file_body : nullptr, of_part));
-  if (file_body) file_initial_fields<2>(cfg, pb, *file_body);
+      mass_above<2>(cfg, pb, bodies, of_part));
+  for (const Body<2>* body : bodies)
+    if (body->file) file_initial_fields<2>(cfg, pb, *body);
 
   pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time();
   pb.body_force.position_dependent = b[0].uses_position() || b[1].uses_position();
@@ -1033,9 +1079,15 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
           "pressure.left ... front",
           cfg.where(key), key));
   const Vec<3> g0 = per_direction<3>(cfg, "grid.min"), g1 = per_direction<3>(cfg, "grid.max");
-  const auto file_body = FileBody<3>::from_config(cfg);
+  check_seeding_keys(cfg);
+  Body<3> main;
+  main.table = "body";
+  main.file = FileBody<3>::from_config(cfg);
+  const FileBody<3>* file_body = main.file ? &*main.file : nullptr;
   const Vec<3> b0 = file_body ? file_body->lower() : per_direction<3>(cfg, "body.min");
   const Vec<3> b1 = file_body ? file_body->upper() : per_direction<3>(cfg, "body.max");
+  main.lo = b0;
+  main.hi = b1;
   check_boxes<3>(cfg, g0, g1, file_body ? g0 : b0, file_body ? g1 : b1);
   pb.materials = materials_from_config(cfg, 3);
   const double rho = cfg.get_real("material.density");
@@ -1050,11 +1102,15 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
       Grid<3>(g0, g1, IVec<3>{cx, cells_along("grid.cells_y", 1), cells_along("grid.cells_z", 2)});
   // particles.per_cell per cell and direction, as in 2D and cube_mms_3d (x fastest, then y, z).
   const auto per_cell = static_cast<int>(cfg.get_int("particles.per_cell"));
+  const Index before = scope.seeded;
   pb.particles = file_body ? seed_file_body<3>(cfg, pb, *file_body, rho, scope)
                            : seed_particles<3>(pb.grid, b0, b1, per_cell, rho, scope);
+  main.count = scope.seeded - before;
   pb.body_min = b0;
   pb.body_max = b1;
-  const auto of_part = assign_materials<3>(cfg, pb, parts_of<3>(file_body ? &*file_body : nullptr));
+  auto named = named_bodies_from_config<3>(cfg, pb);
+  const auto bodies = set_up_bodies<3>(cfg, pb, main, named, rho, scope);
+  const auto of_part = assign_materials<3>(cfg, pb, bodies);
 
   const auto v0 = expressions(cfg, "initial.velocity", 3, kComponents[3]);
   const auto s0 = expressions(cfg, "initial.stress", kStressCount[3], kStressComponents[3]);
@@ -1071,8 +1127,9 @@ Problem<3> make_custom_3d(const Config& cfg, const SeedScope& scope) {
   }
   set_initial_stress<3>(
       cfg, pb, [s0](const Vec<3>& X) { return stress_from<3>(s0, X[0], X[1], X[2], 0.0); }, b,
-      mass_above<3>(cfg, pb, file_body ? &*file_body : nullptr, of_part));
-  if (file_body) file_initial_fields<3>(cfg, pb, *file_body);
+      mass_above<3>(cfg, pb, bodies, of_part));
+  for (const Body<3>* body : bodies)
+    if (body->file) file_initial_fields<3>(cfg, pb, *body);
 
   pb.body_force.time_dependent = b[0].uses_time() || b[1].uses_time() || b[2].uses_time();
   pb.body_force.position_dependent =

@@ -619,6 +619,16 @@ nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& set
       j["materials"].push_back(std::move(m));
     }
   }
+  // A custom problem's bodies, when several ([body.NAME]): each one's table, source and the
+  // range of its particles' ids (to tell them apart in the frames).
+  if (!res.bodies.empty()) {
+    j["bodies"] = nlohmann::ordered_json::array();
+    for (const BodyRange& b : res.bodies)
+      j["bodies"].push_back({{"table", b.table},
+                             {"source", b.source},
+                             {"first_id", b.first_id},
+                             {"particles", b.count}});
+  }
   j["cells"] = res.cells;
   j["h"] = res.h;
   if (res.cell_size.size() > 1) j["cell_size"] = res.cell_size;

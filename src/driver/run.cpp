@@ -169,15 +169,15 @@ RunResult run(const Config& given, const RunOptions& given_options) {
   // file that changed since.
   Config cfg = given;
   std::vector<std::string> files;  // "key 'path'" of each file read, for the restart's message
-  for (const char* key : io::kHashedInputKeys) {
+  for (const std::string& key : io::hashed_input_keys(cfg)) {
     if (cfg.get_string(key).empty()) continue;
     std::error_code ec;
     const std::filesystem::path file = cfg.file_path(key);
     const std::filesystem::path absolute = std::filesystem::absolute(file, ec).lexically_normal();
     std::uint64_t hash = 0;
     try {
-      hash = io::fnv1a64(read_input_file(
-          file, std::string_view(key) == "body.particles" ? "particle file" : "mesh file"));
+      hash = io::fnv1a64(
+          read_input_file(file, key.ends_with(".particles") ? "particle file" : "mesh file"));
     } catch (const InputError& e) {
       throw InputError(fmt::format("{}: {}: {}", cfg.where(key), key, e.what()));
     }
@@ -226,6 +226,15 @@ RunResult run(const Config& given, const RunOptions& given_options) {
         "(body.material, body.part_materials); benchmark = \"{}\" has the one material of "
         "[material]",
         cfg.instance_where("material", named.front()), named.front(), cfg.get_string("benchmark")));
+  // Named bodies ([body.NAME]) likewise: a problem that did not seed them is refused.
+  const std::vector<std::string> named_bodies = cfg.instances("body");
+  const std::size_t bodies = std::visit([](const auto& pb) { return pb.bodies.size(); }, problem);
+  if (!named_bodies.empty() && bodies != named_bodies.size() + 1)
+    throw InputError(fmt::format(
+        "{}: [body.{}] is a named body, for benchmark = \"custom\" in 2D and 3D; benchmark = "
+        "\"{}\" has its own body",
+        cfg.instance_where("body", named_bodies.front()), named_bodies.front(),
+        cfg.get_string("benchmark")));
   // Before the first step, so that a long run shows them at once (opt.quiet on all but rank 0).
   if (!opt.quiet)
     std::visit(

@@ -96,6 +96,7 @@ struct RunResult {
   Diagnostics diag;
   nlohmann::ordered_json summary;     // what summary.json holds
   std::vector<std::string> warnings;  // the problem's (Problem::warnings)
+  std::vector<BodyRange> bodies;      // the problem's (Problem::bodies: several bodies)
 };
 
 // Runs `cfg`; input errors throw InputError before the first step, numerical failures are

@@ -488,6 +488,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   RunResult res;
   res.benchmark = pb.benchmark;
   res.warnings = pb.warnings;
+  res.bodies = pb.bodies;
   res.dim = Dim;
   res.cells = sim.grid.num_cells();
   res.h = sim.grid.h.maxCoeff();

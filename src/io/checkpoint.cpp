@@ -584,16 +584,39 @@ std::optional<std::string> value_text(const Config& cfg, const KeySpec& k) {
 
 }  // namespace
 
+std::vector<std::string> hashed_input_keys(const Config& cfg) {
+  std::vector<std::string> keys(std::begin(kHashedInputKeys), std::end(kHashedInputKeys));
+  for (const std::string& n : cfg.instances("body"))
+    for (const char* leaf : {"mesh", "particles"})
+      keys.push_back(fmt::format("body.{}.{}", n, leaf));
+  return keys;
+}
+
 Config restart_config(const Checkpoint& c, const std::string& name, const Config* given,
                       const std::vector<std::string>& overrides) {
   const std::string source = fmt::format("{} (stored configuration)", name);
   const Config stored = Config::parse(c.config, source);
   const Config run = given ? *given : Config::parse(c.config, source, overrides);
   std::vector<std::string> diff;
-  for (const KeySpec& k : schema()) {
+  // Every key, and every key of each named instance either configuration has ([material.NAME],
+  // [body.NAME]: a section's keys, named in full).
+  std::vector<KeySpec> keys(schema().begin(), schema().end());
+  for (const std::string_view section : {"material", "body"}) {
+    std::vector<std::string> names = stored.instances(section);
+    for (const std::string& n : run.instances(section))
+      if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+    for (const std::string& n : names)
+      for (const KeySpec& k : schema())
+        if (k.section() == section) {
+          KeySpec named = k;
+          named.name = fmt::format("{}.{}{}", section, n, k.name.substr(section.size()));
+          keys.push_back(std::move(named));
+        }
+  }
+  const std::vector<std::string> hashed = hashed_input_keys(run);
+  for (const KeySpec& k : keys) {
     if (k.name.starts_with("output.") || k.name == "time.end") continue;
-    if (std::find(std::begin(kHashedInputKeys), std::end(kHashedInputKeys), k.name) !=
-        std::end(kHashedInputKeys)) {
+    if (std::find(hashed.begin(), hashed.end(), k.name) != hashed.end()) {
       // The same file, named from another directory (the stored configuration holds its
       // absolute path, a configuration file one relative to itself), is the same file.
       std::error_code ea, eb;

@@ -141,6 +141,8 @@ struct Checkpoint {
 // absolute paths, hashed into Checkpoint::mesh_hash (driver/run.cpp), the same file named from
 // another directory the same key (restart_config).
 inline constexpr const char* kHashedInputKeys[] = {"grid.mesh", "body.mesh", "body.particles"};
+// Those keys, and the files of the named bodies of `cfg` (body.NAME.mesh, body.NAME.particles).
+std::vector<std::string> hashed_input_keys(const Config& cfg);
 
 // One process's share of a distributed checkpoint: its particles in its order, each one's cell
 // at the last basis evaluation and the basis's carried state (basis_state, as Checkpoint's).

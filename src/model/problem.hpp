@@ -79,6 +79,16 @@ struct FrictionWall {
 inline constexpr const char* kSideNames[3][2] = {
     {"left", "right"}, {"bottom", "top"}, {"back", "front"}};
 
+// One body of a problem: its table ("body", or "body.NAME" of a custom problem's named bodies),
+// where it comes from (for messages and summary.json), and its particles' ids [first_id,
+// first_id + count): the bodies are seeded in order, each after the one before.
+struct BodyRange {
+  std::string table;
+  std::string source;
+  Index first_id = 0;
+  Index count = 0;
+};
+
 template <int Dim>
 struct Problem {
   static constexpr int kDim = Dim;
@@ -113,6 +123,8 @@ struct Problem {
   // What the set-up found questionable but not wrong (an input that makes the problem itself
   // unstable, ...): printed when the run starts and kept in summary.json's "warnings".
   std::vector<std::string> warnings;
+  // The bodies of a custom problem of several ([body.NAME] tables), [body] first; empty for one.
+  std::vector<BodyRange> bodies;
 };
 
 // The boundaries whose reactions history.csv has (Problem::reactions): a grid side by its key
@@ -178,7 +190,9 @@ class SeedSink {
       : grid_(g), rho0_(rho0), scope_(scope) {
     if ((scope.layer_counts || scope.keep) && g == nullptr)
       throw std::logic_error("SeedSink: a scope that keeps or counts by layer needs the grid");
-    if (scope.layer_counts)
+    // (Several bodies are seeded one sink after the other: their counts add up.)
+    if (scope.layer_counts &&
+        scope.layer_counts->size() != static_cast<std::size_t>(g->cells[Dim - 1]))
       scope.layer_counts->assign(static_cast<std::size_t>(g->cells[Dim - 1]), 0.0);
   }
   // `total` points to come: room for every one when all are kept (one process), for the

@@ -361,8 +361,9 @@ bool is_identifier(std::string_view s) {
 }
 
 // Sections that also hold named instances: [material.NAME] is a material of its own, with the
-// keys of [material] (material/material_set.hpp: the run's materials; the bodies name theirs).
-constexpr std::array<std::string_view, 1> kInstanced = {"material"};
+// keys of [material] (material/material_set.hpp: the run's materials; the bodies name theirs),
+// and [body.NAME] a body besides [body], with its keys (benchmarks/body_set.hpp).
+constexpr std::array<std::string_view, 2> kInstanced = {"material", "body"};
 
 // Whether NAME of "SECTION.NAME" names an instance of SECTION: an identifier, not the section's
 // own name, and neither a key nor a sub-section of it.

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/mohr_coulomb_block.hpp"
 #include "../support/stepper.hpp"
 #include "../support/threads.hpp"
 #include "benchmarks/benchmarks.hpp"
@@ -29,58 +30,17 @@ std::string data_mesh(const std::string& name) {
   return std::string(MPM_SOURCE_DIR) + "/tests/data/meshes/" + name;
 }
 
-// A Mohr-Coulomb block of little cohesion on a fixed floor, sheared (it yields in its first
-// steps); `body` and `more` are the [body]
-// table's lines and further tables (a body mesh is seeded with 3 particles per triangle, a box
-// with 2 per cell and direction).
+// A Mohr-Coulomb block of little cohesion on a fixed floor (tests/support/mohr_coulomb_block.hpp),
+// sheared (it yields in its first steps); `body` and `more` are the [body] table's lines and
+// further tables (a body mesh is seeded with 3 particles per triangle, a box with 2 per cell and
+// direction).
 std::string block(const std::string& body, const std::string& more = "") {
   const bool mesh = body.find("mesh =") != std::string::npos;
-  return fmt::format(R"toml(benchmark = "custom"
-[grid]
-dimension = 2
-cells = 8
-min = [0.0, 0.0]
-max = [1.0, 1.0]
-[body]
-{}
-[particles]
-{}
-[time]
-dt = 1e-4
-end = 1e-3
-[method]
-scheme = "musl"
-basis = "bspline"
-degree = 2
-[material]
-model = "mohr_coulomb"
-density = 2000.0
-youngs_modulus = 1e6
-poisson_ratio = 0.3
-cohesion = 50.0
-friction_angle = 30.0
-[loading]
-body_force = ["0", "-10"]
-[initial]
-velocity = ["2*y", "0"]
-[boundary]
-left = "free"
-right = "free"
-bottom = "fixed"
-top = "free"
-{})toml",
-                     body, mesh ? "per_element = 3" : "per_cell = 2", more);
+  return test::mohr_coulomb_block(body, mesh ? "per_element = 3" : "per_cell = 2",
+                                  "[initial]\nvelocity = [\"2*y\", \"0\"]\n" + more);
 }
 
-constexpr const char* kCopy = R"toml(
-[material.copy]
-model = "mohr_coulomb"
-density = 2000.0
-youngs_modulus = 1e6
-poisson_ratio = 0.3
-cohesion = 50.0
-friction_angle = 30.0
-)toml";
+constexpr const char* kCopy = test::kMohrCoulombCopy;
 
 void expect_same_particles(const std::string& a_text, const std::string& b_text,
                            std::size_t materials) {
