@@ -388,8 +388,10 @@ MassAbove<Dim> mass_above(const Config& cfg, const Problem<Dim>& pb,
                           const std::vector<std::vector<std::size_t>>& of_part) {
   if (bodies.size() == 1 && !(bodies[0]->file && bodies[0]->file->is_mesh())) return {};
   if (cfg.get_string("initial.geostatic") == "none") return {};
+  // (Each body by value: the stress functor outlives the set-up, pb.initial_stress. A body mesh
+  // is shared, and a particle file is refused below.)
   struct Term {
-    const Body<Dim>* body;
+    Body<Dim> body;
     std::vector<double> rho;  // each part's density, then the body's own
   };
   std::vector<Term> terms;
@@ -401,14 +403,14 @@ MassAbove<Dim> mass_above(const Config& cfg, const Problem<Dim>& pb,
           "particle, and [{}] comes from {}, which has no volume to integrate (give its stress "
           "in the file's stress columns)",
           cfg.where("initial.geostatic"), b.table, b.source()));
-    Term t{&b, {}};
+    Term t{b, {}};
     for (const std::size_t m : of_part[k]) t.rho.push_back(pb.materials.density(m));
     terms.push_back(std::move(t));
   }
   return [terms](const Vec<Dim>& X) {
     double sum = 0.0;
     for (const Term& t : terms) {
-      const Body<Dim>& b = *t.body;
+      const Body<Dim>& b = t.body;
       if (b.file) {
         sum += b.file->integral_above(X, [&](int part) {
           return t.rho[part >= 0 ? static_cast<std::size_t>(part) : t.rho.size() - 1];

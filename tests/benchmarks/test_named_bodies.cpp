@@ -96,6 +96,52 @@ TEST(NamedBodies, TwoStackedBoxesAreTheOneBoxTheyFill) {
   }
 }
 
+TEST(NamedBodies, ThreeDimensionalBoxesStackAsTheOneBox) {
+  // Two boxes one above the other (z) seed the particles of the box they fill, in its order, and
+  // carry its geostatic stress (the upper box's weight on the lower).
+  auto cube = [](const std::string& body, const std::string& more) {
+    return fmt::format(R"toml(benchmark = "custom"
+[grid]
+dimension = 3
+cells = 4
+min = [0.0, 0.0, 0.0]
+max = [1.0, 1.0, 1.0]
+[body]
+{}
+[time]
+dt = 1e-4
+end = 1e-3
+[material]
+model = "von_mises"
+density = 1000.0
+youngs_modulus = 1e6
+poisson_ratio = 0.25
+yield_stress = 1e5
+[loading]
+body_force = ["0", "0", "-10"]
+[initial]
+geostatic = "k0"
+k0 = 0.4
+{})toml",
+                       body, more);
+  };
+  const auto a = std::get<Problem<3>>(make_problem(
+      Config::parse(cube("min = [0.0, 0.0, 0.0]\nmax = [1.0, 1.0, 0.75]", ""), "a.toml")));
+  const auto b = std::get<Problem<3>>(make_problem(
+      Config::parse(cube("min = [0.0, 0.0, 0.0]\nmax = [1.0, 1.0, 0.5]",
+                         "[body.top]\nmin = [0.0, 0.0, 0.5]\nmax = [1.0, 1.0, 0.75]\n"),
+                    "b.toml")));
+  ASSERT_EQ(a.particles.size(), b.particles.size());
+  ASSERT_EQ(b.bodies.size(), 2u);
+  for (std::size_t i = 0; i < a.particles.x.size(); ++i) {
+    ASSERT_EQ(a.particles.id[i], b.particles.id[i]);
+    ASSERT_EQ(a.particles.x[i], b.particles.x[i]) << i;
+    ASSERT_EQ(a.particles.volume[i], b.particles.volume[i]) << i;
+    EXPECT_NEAR(b.particles.stress[i](2, 2), a.particles.stress[i](2, 2), 1e-9) << i;
+    EXPECT_NEAR(b.particles.stress[i](0, 0), a.particles.stress[i](0, 0), 1e-9) << i;
+  }
+}
+
 TEST(NamedBodies, BlocksThrownAtEachOtherKeepZeroMomentum) {
   // A light block at +1 m/s and one of twice the density at -0.5 m/s: zero momentum. No gravity,
   // free sides; they meet in the first steps and go on as one velocity field.
