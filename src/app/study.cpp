@@ -15,6 +15,7 @@
 #include <omp.h>
 
 #include "core/interrupt.hpp"
+#include "core/strings.hpp"
 #include "io/output.hpp"
 #include "setup/config.hpp"
 #include "setup/registry.hpp"
@@ -86,10 +87,8 @@ std::vector<MethodSpec> parse_methods(const std::string& text) {
   std::size_t pos = 0;
   while (pos <= text.size()) {
     const auto comma = text.find(',', pos);
-    std::string item =
-        text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-    item.erase(0, item.find_first_not_of(" \t"));
-    item.erase(item.find_last_not_of(" \t") + 1);
+    std::string item(trim(std::string_view(text).substr(
+        pos, comma == std::string::npos ? std::string::npos : comma - pos)));
     if (item.empty()) throw InputError(fmt::format("--methods '{}' has an empty item", text));
     MethodSpec m;
     m.label = item;

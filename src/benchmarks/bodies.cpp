@@ -13,6 +13,7 @@
 #include <system_error>
 
 #include "core/input_file.hpp"
+#include "core/strings.hpp"
 #include "setup/config.hpp"
 #include "setup/gmsh_mesh.hpp"
 
@@ -50,8 +51,7 @@ std::pair<int, int> tetrahedron_pattern(int count) {
 
 // A field of a particle file: a finite number, the whole field.
 double parse_number(std::string_view field, const std::string& where, const std::string& column) {
-  while (!field.empty() && (field.front() == ' ' || field.front() == '\t')) field.remove_prefix(1);
-  while (!field.empty() && (field.back() == ' ' || field.back() == '\t')) field.remove_suffix(1);
+  field = trim(field);
   double v = 0.0;
   const char* end = field.data() + field.size();
   // (from_chars takes no leading '+', which a CSV writer may put.)

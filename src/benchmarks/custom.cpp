@@ -15,6 +15,7 @@
 #include "benchmarks/bodies.hpp"
 #include "benchmarks/body_set.hpp"
 #include "benchmarks/initial_stress.hpp"
+#include "core/strings.hpp"
 #include "grid/triangle_mesh.hpp"
 #include "methods/kinds.hpp"
 #include "setup/config.hpp"
@@ -251,19 +252,12 @@ void sides_from_config(Problem<Dim>& pb, const Config& cfg, const Vec<Dim>& b0, 
     }
 }
 
-// The names of a comma-separated list key (boundary.fixed, boundary.roller), blanks trimmed.
+// The names of a comma-separated list key (boundary.fixed, boundary.roller), blanks trimmed,
+// empty ones left out.
 std::vector<std::string> names_of(const Config& cfg, const char* key) {
   std::vector<std::string> out;
-  const std::string text = cfg.get_string(key);
-  std::size_t b = 0;
-  while (b <= text.size()) {
-    const std::size_t e = std::min(text.find(',', b), text.size());
-    const auto first = text.find_first_not_of(" \t", b);
-    const auto last = text.find_last_not_of(" \t", e == 0 ? 0 : e - 1);
-    if (first != std::string::npos && first < e && last != std::string::npos && last >= first)
-      out.push_back(text.substr(first, last - first + 1));
-    b = e + 1;
-  }
+  for (std::string& item : split_trimmed(cfg.get_string(key), ','))
+    if (!item.empty()) out.push_back(std::move(item));
   return out;
 }
 
@@ -273,12 +267,6 @@ const Body<Dim>& body_of(const std::vector<const Body<Dim>*>& bodies, Index id) 
   const auto it = std::upper_bound(bodies.begin(), bodies.end(), id,
                                    [](Index x, const Body<Dim>* b) { return x < b->first_id; });
   return **(it - 1);
-}
-
-// " STRING" with spaces and tabs trimmed off both ends.
-std::string trimmed(std::string_view t) {
-  const auto a = t.find_first_not_of(" \t"), b = t.find_last_not_of(" \t");
-  return a == std::string_view::npos ? std::string() : std::string(t.substr(a, b - a + 1));
 }
 
 // The material of each part of a body's mesh (TABLE.part_materials; the others TABLE.material's,
@@ -307,9 +295,10 @@ std::vector<std::size_t> part_materials(const Config& cfg, const Materials& mate
   std::vector<bool> named(parts.size(), false);
   for (const std::string& item : names_of(cfg, key.c_str())) {
     const auto colon = item.find(':');
-    const std::string part = trimmed(std::string_view(item).substr(0, colon));
-    const std::string name =
-        colon == std::string::npos ? "" : trimmed(std::string_view(item).substr(colon + 1));
+    const std::string part = std::string(trim(std::string_view(item).substr(0, colon)));
+    const std::string name = colon == std::string::npos
+                                 ? ""
+                                 : std::string(trim(std::string_view(item).substr(colon + 1)));
     if (colon == std::string::npos || part.empty() || name.empty())
       throw InputError(
           fmt::format("{}: {}: \"{}\" is not PART: NAME (e.g. \"clay: soft_clay, sand: material\")",

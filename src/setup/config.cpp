@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "core/input_file.hpp"
+#include "core/strings.hpp"
 #include "core/types.hpp"
 
 namespace mpm {
@@ -92,11 +93,9 @@ std::string join(const std::vector<std::string>& items, std::string_view sep) {
   return out;
 }
 
-std::string_view trim(std::string_view s) {
-  const auto first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string_view::npos) return {};
-  const auto last = s.find_last_not_of(" \t\r\n");
-  return s.substr(first, last - first + 1);
+// A --set argument's key or value without the blanks around it (line ends included).
+std::string_view trim_blanks(std::string_view s) {
+  return trim(s, " \t\r\n");
 }
 
 // What a TOML node holds, for "got ..." in type errors.
@@ -658,8 +657,8 @@ class ConfigBuilder {
       error_at(origin, kOverride, "expected KEY=VALUE (e.g. --set grid.cells=40), got no '='");
       return;
     }
-    apply(trim(std::string_view(arg).substr(0, eq)),
-          std::string(trim(std::string_view(arg).substr(eq + 1))), origin);
+    apply(trim_blanks(std::string_view(arg).substr(0, eq)),
+          std::string(trim_blanks(std::string_view(arg).substr(eq + 1))), origin);
   }
 
   // One value from the command line or set(): `origin` stands in for FILE:LINE:COL.
@@ -975,7 +974,7 @@ void Config::set(std::string_view key, const std::string& value_text, const std:
   // Work on a copy so that a rejected value leaves *this unchanged.
   Config next = *this;
   ConfigBuilder b(next);
-  b.apply(trim(key), std::string(trim(value_text)), origin);
+  b.apply(trim_blanks(key), std::string(trim_blanks(value_text)), origin);
   b.finish(/*check_required=*/false);
   *this = std::move(next);
 }
