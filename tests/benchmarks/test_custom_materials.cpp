@@ -40,7 +40,7 @@ std::string block(const std::string& body, const std::string& more = "") {
                                   "[initial]\nvelocity = [\"2*y\", \"0\"]\n" + more);
 }
 
-constexpr const char* kCopy = test::kMohrCoulombCopy;
+const std::string kCopy = test::kMohrCoulombCopy;
 
 void expect_same_particles(const std::string& a_text, const std::string& b_text,
                            std::size_t materials) {

@@ -39,7 +39,7 @@ std::string problem(const std::string& body, const std::string& more = "",
   return test::mohr_coulomb_block(body, particles, more);
 }
 
-constexpr const char* kCopy = test::kMohrCoulombCopy;
+const std::string kCopy = test::kMohrCoulombCopy;
 
 Problem<2> problem_of(const std::string& text) {
   return std::get<Problem<2>>(make_problem(Config::parse(text, "bodies.toml")));

@@ -7,6 +7,14 @@
 
 namespace mpm::test {
 
+// The law of the block's material: Mohr-Coulomb of little cohesion.
+inline constexpr const char* kMohrCoulombLaw = R"toml(model = "mohr_coulomb"
+density = 2000.0
+youngs_modulus = 1e6
+poisson_ratio = 0.3
+cohesion = 50.0
+friction_angle = 30.0)toml";
+
 // The unit square (8 cells, quadratic B-splines, MUSL, dt = 1e-4 s to 1e-3 s) with a
 // Mohr-Coulomb material of little cohesion (2000 kg/m^3, E = 1 MPa, nu = 0.3, c = 50 Pa,
 // phi = 30 deg) under gravity on a fixed floor between free sides. `body`: the lines of the
@@ -32,12 +40,7 @@ scheme = "musl"
 basis = "bspline"
 degree = 2
 [material]
-model = "mohr_coulomb"
-density = 2000.0
-youngs_modulus = 1e6
-poisson_ratio = 0.3
-cohesion = 50.0
-friction_angle = 30.0
+{}
 [loading]
 body_force = ["0", "-10"]
 [boundary]
@@ -46,18 +49,11 @@ right = "free"
 bottom = "fixed"
 top = "free"
 {})toml",
-                     body, particles, more);
+                     body, particles, kMohrCoulombLaw, more);
 }
 
 // [material.copy]: a named material equal to mohr_coulomb_block's [material].
-inline constexpr const char* kMohrCoulombCopy = R"toml(
-[material.copy]
-model = "mohr_coulomb"
-density = 2000.0
-youngs_modulus = 1e6
-poisson_ratio = 0.3
-cohesion = 50.0
-friction_angle = 30.0
-)toml";
+inline const std::string kMohrCoulombCopy =
+    std::string("\n[material.copy]\n") + kMohrCoulombLaw + "\n";
 
 }  // namespace mpm::test
