@@ -64,6 +64,10 @@ PUBLISHED = {
     "column_cs_mass_DDMPM": ("D Table 5.7", 4.76e-7),
     "column_cs_mass_BSMPM": ("D Table 5.7", 1.51e-9),
     "column_cs_momentum_MPM": ("D Table 5.7", 3.5e-6),
+    "column_cs_momentum_DDMPM": ("D Table 5.7", 2.0403e-6),
+    "column_cs_momentum_BSMPM": ("D Table 5.7", 1.4039e-7),
+    # D Table 5.8 gives DDMPM with 2 subpoints, 3.4086e-2, and its ratio to DDMPM-TLS, 4.9518.
+    "column_ddmpm_tls_error": ("D Table 5.8", 3.4086e-2 / 4.9518),
     "tls2d_rms": ("D 6.2.1", 6.17e-3),
     "tls2d_integral": ("D 6.2.1", 6.66e-16),
     "tlstri_rms": ("D 6.2.2", 1.80e-3),

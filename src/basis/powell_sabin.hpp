@@ -151,6 +151,11 @@ class PowellSabinGridBasis {
                         kNodalSums = false, kTrackedCorners = false, kIterative = false,
                         kTriangleMesh = true;
   using StencilT = Stencil<Dim, 9>;
+  // With consistent mass, runs whose triangles hold fewer particles than this stop with a
+  // non-finite stress at a time a smaller step does not change, and partial lumping does not
+  // prevent it (docs/verification.md, "D Fig. 3.9 on unstructured meshes": 6 per triangle stop
+  // on every mesh, 12 on the finest, 24 run on all); set-up warns (driver/stepper_impl.hpp).
+  static constexpr int kConsistentMassPoints = 12;
 
   // The mesh is shared, so that copies of the basis (the run's state holds one by value) keep
   // the address the spline construction refers to.

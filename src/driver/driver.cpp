@@ -655,8 +655,14 @@ nlohmann::ordered_json make_summary(const RunResult& res, const RunSettings& set
       {"displacement_rms_interior", opt_json(res.errors.displacement_rms_interior)},
       {"velocity_rms_scheme_time_interior", opt_json(res.errors.velocity_rms_scheme_time_interior)},
       {"stress_rms_interior", opt_json(res.errors.stress_rms_interior)}};
+  // Two readings of "the error" of a run (D's tables do not say which they give): the largest
+  // over the steps, and that of the final step's mapping. The momentum error's denominator
+  // sum m_p |v_p| nears zero when the whole body turns round (the column near t = 0.2 s and
+  // 0.4 s), where the first reading is dominated by it.
   j["conservation"] = {{"max_rel_mass_error", res.diag.max_rel_mass_error},
-                       {"max_rel_momentum_error", res.diag.max_rel_momentum_error}};
+                       {"max_rel_momentum_error", res.diag.max_rel_momentum_error},
+                       {"final_rel_mass_error", res.diag.rel_mass_error},
+                       {"final_rel_momentum_error", res.diag.rel_momentum_error}};
   j["grid_crossings"] = res.diag.grid_crossings;
   return j;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <iostream>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -470,6 +471,7 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   };
   // OTM and the unified solver are one- and two-dimensional (run_settings refuses them in 3D).
   std::unique_ptr<Stepper<Dim>> stepper;
+  const std::size_t problem_warnings = pb.warnings.size();
   agreed([&] {
     if constexpr (Dim <= 2)
       if (otm || unified) {
@@ -479,6 +481,11 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
     stepper = make_stepper<Dim>(basis, {pb, method, !opt.restart, comm});
   });
   RunState<Dim>& sim = stepper->state();
+  // The stepper's own warnings (its checks of the basis against the particles), shown as the
+  // problem's were (driver/run.cpp).
+  if (!opt.quiet)
+    for (std::size_t w = problem_warnings; w < pb.warnings.size(); ++w)
+      std::cerr << "mpm: warning: " << pb.warnings[w] << "\n";
 
   // Outputs start once the input has passed every check above. Only rank 0 writes: when it
   // cannot (its directory), every rank stops with its message.

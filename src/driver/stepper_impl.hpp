@@ -4,10 +4,12 @@
 // mapping of that dimension.
 #include <fmt/format.h>
 #include <algorithm>
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <type_traits>
 #include <variant>
+#include <vector>
 
 #include "basis/basis.hpp"
 #include "driver/stepper.hpp"
@@ -65,6 +67,41 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
   }
 }
 
+// Before the first step: a basis that declares how many particles per element its consistent
+// mass needs (kConsistentMassPoints: Powell-Sabin) gets a warning when the median count over the
+// elements holding particles is below it. A warning, not a refusal: below it some runs finish
+// (docs/verification.md: the structured plate with 8 per triangle on 8 and 16 cells), and a
+// body's partly filled elements at its free surface hold fewer by nature. The counts are summed
+// over the processes, so that every process warns alike.
+template <int Dim, class Basis>
+void warn_sparse_consistent_mass(const MethodSettings& method, const Basis& basis,
+                                 const Particles<Dim>& P, const Comm* comm,
+                                 std::vector<std::string>& warnings) {
+  if constexpr (requires { Basis::kConsistentMassPoints; }) {
+    if (method.mass != MassType::Consistent) return;
+    const auto& mesh = basis.mesh();
+    std::vector<double> count(static_cast<std::size_t>(mesh.num_cells()), 0.0);
+    for (const Vec<Dim>& x : P.x)
+      if (const Index e = mesh.cell_index(x); e >= 0) count[static_cast<std::size_t>(e)] += 1.0;
+    if (comm) comm->sum(count);
+    std::vector<double> held;
+    for (const double c : count)
+      if (c > 0.0) held.push_back(c);
+    if (held.empty()) return;
+    const auto mid = held.begin() + static_cast<std::ptrdiff_t>(held.size() / 2);
+    std::nth_element(held.begin(), mid, held.end());
+    if (*mid < Basis::kConsistentMassPoints)
+      warnings.push_back(fmt::format(
+          "{}: method.mass = \"consistent\" with method.basis = \"{}\" and a median of {} "
+          "particles per triangle: below {} such runs stop with a non-finite stress at a time "
+          "that a smaller time step does not change, with or without method.partial_lumping "
+          "(docs/verification.md, \"D Fig. 3.9 on unstructured meshes\"); seed {} or more "
+          "(particles.per_triangle) or use method.mass = \"lumped\"",
+          method.where_mass, Basis::kName, *mid, Basis::kConsistentMassPoints,
+          Basis::kConsistentMassPoints));
+  }
+}
+
 // What a distributed run does not do yet, refused before the first step with the
 // key to change: the exchange shares the particle-to-grid sums of every mapping (the
 // reconstructions read the other processes' particles near a process's own: ghost particles,
@@ -112,8 +149,11 @@ class TypedStepper final : public Stepper<Dim> {
              /*whole_grid=*/in.comm == nullptr || !in.comm->distributed()) {
     const MethodSettings& method = in.method;
     const Problem<Dim>& pb = in.problem;
-    if (in.check_input)
+    if (in.check_input) {
       check_reconstruction_input<Dim>(method, sim_.grid, sim_.basis, sim_.particles, sim_.mapping);
+      warn_sparse_consistent_mass<Dim>(method, sim_.basis, sim_.particles, in.comm,
+                                       in.problem.warnings);
+    }
     sim_.mass_type = method.mass;
     sim_.mass_tolerance = method.mass_tolerance;
     sim_.consistent.configure(method.mass_solver);

@@ -19,6 +19,7 @@
 #include <variant>
 #include <vector>
 
+#include "basis/ddmpm_settings.hpp"
 #include "basis/maxent_settings.hpp"
 #include "core/types.hpp"
 #include "grid/triangle_mesh.hpp"
@@ -114,11 +115,13 @@ struct BSplineKind {
   using type = BSplineBasis<Dim, P>;
 };
 
+// The kind carries its settings (method.ddmpm_integrals, method.ddmpm_weight), which make_basis
+// passes to the basis.
 struct DdmpmKind {
   static constexpr std::string_view kName = "ddmpm";
   static constexpr std::string_view kDescription =
       "dual domain MPM: P1 values, smoothed gradients (D 2.6.4)";
-  // 1D as in D; 2D and 3D with the tensor-product weight alpha derived in basis/ddmpm.hpp.
+  // 1D as in D; 2D and 3D with the weights derived in basis/ddmpm.hpp (method.ddmpm_weight).
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;
   static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false;
@@ -130,6 +133,7 @@ struct DdmpmKind {
   int boundary_cells() const { return 1; }
   template <int Dim>
   using type = DdmpmBasis<Dim>;
+  DdmpmSettings settings;
 };
 
 // Domain-averaged bases (D 2.6.4): GIMP with the initial or F-diagonal particle size, and CPDI.
@@ -329,6 +333,11 @@ template <int Dim>
 MaxEntBasis<Dim> make_basis(const MaxEntKind& kind, const Grid<Dim>& g,
                             const std::shared_ptr<const TriangleMesh>&) {
   return MaxEntBasis<Dim>(g, kind.settings);
+}
+template <int Dim>
+DdmpmBasis<Dim> make_basis(const DdmpmKind& kind, const Grid<Dim>& g,
+                           const std::shared_ptr<const TriangleMesh>&) {
+  return DdmpmBasis<Dim>(g, kind.settings);
 }
 template <int Dim>
 TriangleP1Basis<Dim> make_basis(const TriangleP1Kind& kind, const Grid<Dim>& g,

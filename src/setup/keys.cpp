@@ -209,6 +209,14 @@ std::vector<KeySpec> declare() {
       integer("method.maxent_max_iterations", 50, closed(1, 1000),
               "Newton iterations of the max-ent basis before the point is reported as failed "
               "(exit code 10)"),
+      // D 2.6.4 gives neither how the integrals over Omega are evaluated nor alpha beyond 1D
+      // (basis/ddmpm.hpp).
+      choice("method.ddmpm_integrals", "particles", kDdmpmIntegrals,
+             "how DDMPM's integrals over the material (node volumes and int phi_j grad phi_i) "
+             "are evaluated (method.basis = \"ddmpm\")"),
+      choice("method.ddmpm_weight", "per_direction", kDdmpmWeights,
+             "DDMPM's blend of P1's gradient with the smoothed one in 2D and 3D (the same in 1D; "
+             "method.basis = \"ddmpm\")"),
       choice("method.mass", "lumped", kMassTypes, "mass matrix"),
       // At 1 or above even the heaviest DOF would be inactive: nothing could move.
       real("method.mass_tolerance", "", 1e-10, closed_open(0, 1),

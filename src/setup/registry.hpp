@@ -171,6 +171,18 @@ inline constexpr Entry kPmgSmoothers[] = {
     {"jacobi", "damped Jacobi, omega = 1 / lambda_max(D^-1 M) (parallel)"},
 };
 
+// method.ddmpm_integrals, method.ddmpm_weight: the DDMPM basis (basis/ddmpm.hpp).
+inline constexpr Entry kDdmpmIntegrals[] = {
+    {"particles", "the particles as quadrature points, sum_p V_p (...)(x_p)"},
+    {"quadrature", "exactly, by Gauss points over the grid cells holding particles"},
+};
+inline constexpr Entry kDdmpmWeights[] = {
+    {"per_direction",
+     "gradient component d blended by alpha_d = 2 xi_d (1 - xi_d): continuous, and a "
+     "y-uniform field gives the 1D run's gradients"},
+    {"product", "every component blended by alpha = prod_d 2 xi_d (1 - xi_d)"},
+};
+
 // output.vtk_format: how the .vtu frames hold their arrays (io/output.hpp).
 inline constexpr Entry kVtkFormats[] = {
     {"binary", "raw little-endian bytes in an appended block (VTK XML 1.0; compact, fast)"},

@@ -106,6 +106,22 @@ RunSettings run_settings(const Config& cfg, int dim) {
       k->settings.tolerance = cfg.get_real("method.maxent_tolerance");
       k->settings.max_iterations = static_cast<int>(cfg.get_int("method.maxent_max_iterations"));
     }
+    if (auto* k = std::get_if<DdmpmKind>(&m.basis)) {
+      k->settings.integrals = cfg.get_string("method.ddmpm_integrals") == "quadrature"
+                                  ? DdmpmIntegrals::quadrature
+                                  : DdmpmIntegrals::particles;
+      k->settings.weight = cfg.get_string("method.ddmpm_weight") == "product"
+                               ? DdmpmWeight::product
+                               : DdmpmWeight::per_direction;
+    } else {
+      for (const char* key : {"method.ddmpm_integrals", "method.ddmpm_weight"})
+        if (!cfg.at_default(key))
+          throw InputError(
+              fmt::format("{}: {} sets the DDMPM basis, and this run uses "
+                          "method.basis = \"{}\": remove it or set method.basis = "
+                          "\"ddmpm\"",
+                          cfg.where(key), key, name_of(m.basis)));
+    }
     m.mapping = with_key("method.mapping", [&] {
       return choose_alternative<MappingKind>(cfg.get_string("method.mapping"), "method.mapping");
     });

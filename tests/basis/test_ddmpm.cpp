@@ -10,7 +10,10 @@
 #include <vector>
 
 #include "basis/ddmpm.hpp"
+#include "methods/kinds.hpp"
 #include "model/problem.hpp"
+#include "setup/config.hpp"
+#include "setup/run_settings.hpp"
 
 namespace mpm {
 namespace MPM_UNITY_ID {
@@ -139,6 +142,76 @@ TEST(Ddmpm, ABodyInPartOfTheGridSmoothsOnlyNearItsParticles) {
   }
   // Cells 0-1 and 7-9 (x < 0.2, x >= 0.7): no particle reaches their nodes; half the points.
   EXPECT_GE(away, 95);
+}
+
+// method.ddmpm_integrals = "quadrature": the integrals are exact over the cells holding particles,
+// whatever the particles' positions inside them. Particles in cells 2-4 of a 10-cell grid, moved
+// unevenly within their cells: at node 2 (the body's edge, alpha = 0, phi_2 = 1) the smoothed
+// gradients are G_2[o] = (1/V_2) int_{cell 2} phi_2 phi_{2+o}', V_2 = h/2: -1/h for node 2,
+// +1/h for node 3, 0 for node 1; at node 3, V_3 = h: -1/(2h), 0, +1/(2h) (central differences).
+// The particles' sums give other values for these positions (at node 3: not 0).
+TEST(Ddmpm, QuadratureIntegralsAreExactOverTheParticlesCells) {
+  const Grid<1> g{Vec<1>(0.0), Vec<1>(1.0), IVec<1>{10}};
+  Particles<1> P = seed_particles<1>(g, Vec<1>(0.2), Vec<1>(0.5), 2, 1.0);
+  ASSERT_EQ(P.size(), 6);
+  const std::array<double, 6> shift = {0.013, -0.02, 0.007, 0.018, -0.011, 0.004};
+  for (std::size_t p = 0; p < 6; ++p) P.x[p][0] += shift[p];  // each stays in its cell
+  const double h = 0.1;
+  DdmpmBasis<1> exact(g, {DdmpmIntegrals::quadrature, DdmpmWeight::per_direction});
+  DdmpmBasis<1> sums(g, {DdmpmIntegrals::particles, DdmpmWeight::per_direction});
+  exact.prepare(P);
+  sums.prepare(P);
+  auto grad_at = [](const DdmpmBasis<1>& b, double x, Index dof) {
+    DdmpmBasis<1>::StencilT st;
+    b.evaluate_point(Vec<1>(x), st);
+    double gsum = 0.0;
+    for (int a = 0; a < st.kSize; ++a)
+      if (st.dof[a] == dof) gsum += st.grad[a][0];
+    return gsum;
+  };
+  EXPECT_NEAR(grad_at(exact, 0.2, 1), 0.0, 1e-12);
+  EXPECT_NEAR(grad_at(exact, 0.2, 2), -1.0 / h, 1e-12);
+  EXPECT_NEAR(grad_at(exact, 0.2, 3), 1.0 / h, 1e-12);
+  EXPECT_NEAR(grad_at(exact, 0.3, 2), -0.5 / h, 1e-12);
+  EXPECT_NEAR(grad_at(exact, 0.3, 3), 0.0, 1e-12);
+  EXPECT_NEAR(grad_at(exact, 0.3, 4), 0.5 / h, 1e-12);
+  EXPECT_GT(std::abs(grad_at(sums, 0.3, 3)), 1e-3 / h);
+  // Linear reproduction at the particles holds in both readings.
+  for (const DdmpmBasis<1>* b : {&exact, &sums}) {
+    DdmpmBasis<1>::StencilT st;
+    for (Index p = 0; p < P.size(); ++p) {
+      b->evaluate(P, p, st);
+      double xg = 0.0;
+      for (int a = 0; a < st.kSize; ++a) xg += b->dof_position(st.dof[a])[0] * st.grad[a][0];
+      EXPECT_NEAR(xg, 1.0, 1e-12) << "particle " << p;
+    }
+  }
+}
+
+// The keys reach the kind (and so make_basis); with another basis they are refused, naming the
+// key and the basis, rather than ignored.
+TEST(Ddmpm, SettingsFromTheKeysAndRefusedWithAnotherBasis) {
+  const std::string base = std::string(MPM_SOURCE_DIR) + "/examples/vibrating_bar_small.toml";
+  const MethodSettings m =
+      run_settings(Config::load(base, {"method.basis=ddmpm", "method.ddmpm_integrals=quadrature",
+                                       "method.ddmpm_weight=product"}),
+                   1)
+          .method;
+  const auto& kind = std::get<DdmpmKind>(m.basis);
+  EXPECT_EQ(kind.settings.integrals, DdmpmIntegrals::quadrature);
+  EXPECT_EQ(kind.settings.weight, DdmpmWeight::product);
+  EXPECT_EQ(
+      std::get<DdmpmKind>(run_settings(Config::load(base, {"method.basis=ddmpm"}), 1).method.basis)
+          .settings.weight,
+      DdmpmWeight::per_direction);
+  try {
+    (void)run_settings(Config::load(base, {"method.ddmpm_integrals=quadrature"}), 1);
+    FAIL() << "no input error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("method.ddmpm_integrals"), std::string::npos) << what;
+    EXPECT_NE(what.find("method.basis = \"linear\""), std::string::npos) << what;
+  }
 }
 
 }  // namespace

@@ -175,6 +175,26 @@ TEST(PartialLumping, ABodyThatFillsItsCellsLumpsNothing) {
   EXPECT_EQ(with.summary["errors"], without.summary["errors"]);
 }
 
+// Powell-Sabin splines with consistent mass stop below about 12 particles per triangle, partial
+// lumping or not (docs/verification.md, "D Fig. 3.9 on unstructured meshes"): set-up warns, with
+// the median count, in the run's warnings (summary.json), and not at 24 per triangle.
+TEST(PartialLumping, PowellSabinWithFewParticlesPerTriangleIsWarnedOf) {
+  const auto plate = [](const std::string& per_triangle, const std::string& lump) {
+    return run_example("plate_ps_unstructured_2d.toml",
+                       {"time.end=2e-5", "particles.per_triangle=" + per_triangle}, lump);
+  };
+  for (const std::string lump : {"0", "0.5"}) {
+    const RunResult few = plate("6", lump);
+    ASSERT_EQ(few.exit_code, exit_code::kOk) << few.failure;
+    ASSERT_EQ(few.warnings.size(), 1u);
+    EXPECT_NE(few.warnings[0].find("median of 6 particles per triangle"), std::string::npos)
+        << few.warnings[0];
+    EXPECT_NE(few.warnings[0].find("particles.per_triangle"), std::string::npos);
+    EXPECT_EQ(few.summary["warnings"][0].get<std::string>(), few.warnings[0]);
+  }
+  EXPECT_TRUE(plate("24", "0").warnings.empty());
+}
+
 // Lumped mass has no matrix to lump: refused, naming the key and what to change.
 TEST(PartialLumping, RefusedWithLumpedMass) {
   try {
