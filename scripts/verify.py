@@ -34,7 +34,7 @@ if HERE not in sys.path:
     sys.path.insert(0, HERE)  # the package beside this file, however the script is started
 
 from verification import (bases, chapter5, column_collapse, cube, ddmpm_readings,  # noqa: E402
-                          element_block, footing, item3, large_bar, massmatrix, mesh_boundaries,
+                          dimensions, element_block, footing, item3, large_bar, massmatrix, mesh_boundaries,
                           mms, otm, plate, plate_001, ps_mpm, ps_partial, reconstruction,
                           small_bar, static, tls_robust, vertical_cut, vortex)
 from verification.common import ROOT  # noqa: E402
@@ -55,6 +55,7 @@ SECTIONS = [
     ("chapter 5 tables", chapter5.sec_chapter5),
     ("against the published figures", chapter5.sec_against_published),
     ("DDMPM's integrals and D's conservation measure", ddmpm_readings.sec_ddmpm_readings),
+    ("consistency across dimensions", dimensions.sec_dimensions),
     ("lumped BSMPM on the large bar", large_bar.sec_large_bar_lumping),
     ("the conservative constant of TLS", large_bar.sec_tls_constant),
     ("mms_1d", mms.sec_mms),
