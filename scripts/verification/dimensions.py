@@ -15,10 +15,17 @@ EXAMPLE = "bar_uniaxial_strain"
 ROUNDOFF = 1e-11  # the largest difference of a tensor-product method is round-off below this
 
 
-def dim_sets(dim):
-    """The --set of the bar in `dim` dimensions (the example is the 1D bar)."""
+def dim_sets(dim, traction=False):
+    """The --set of the bar in `dim` dimensions (the example is the 1D bar); `traction`: at
+    rest, loaded by a ramped traction on its free end."""
+    load = []
+    if traction:
+        load = ["initial.velocity=0" if dim == 1 else
+                "initial.velocity=[" + ", ".join(['"0"'] * dim) + "]",
+                "traction.right=-40*t" if dim == 1 else
+                'traction.right=["-40*t"' + ', "0"' * (dim - 1) + "]"]
     if dim == 1:
-        return []
+        return load
     z = ", 0.0" if dim == 3 else ""
     zt = ", 0.3" if dim == 3 else ""
     v = ', "0"' * (dim - 1)
@@ -28,7 +35,7 @@ def dim_sets(dim):
             "boundary.top=roller"]
     if dim == 3:
         sets += ["boundary.back=roller", "boundary.front=roller"]
-    return sets
+    return sets + load
 
 
 def final_particles(run):
@@ -77,12 +84,23 @@ def sec_dimensions(R, ctx):
         ("cubic B-splines, direct, nu = 0.3", ["method.basis=bspline", "method.degree=3"], False),
         ("cubic B-splines, direct, nu = 0", ["method.basis=bspline", "method.degree=3",
                                              "material.poisson_ratio=0"], False),
+        ("end traction, quadratic B-spline TLS (linear terms), nu = 0",
+         ["method.basis=bspline", "method.degree=2", "method.mapping=tls",
+          "material.poisson_ratio=0", "traction"] + tls_same, True),
+        ("end traction, quartic B-spline MLS, nu = 0 (2 Gauss points)",
+         ["method.basis=bspline", "method.degree=4", "method.mapping=mls",
+          "material.poisson_ratio=0", "traction"], False),
+        ("end traction, quartic B-spline MLS, nu = 0 (3 Gauss points)",
+         ["method.basis=bspline", "method.degree=4", "method.mapping=mls",
+          "method.gauss_points=3", "material.poisson_ratio=0", "traction"], False),
     ]
     specs = []
     for _, sets, linear in cases:
+        loaded = "traction" in sets
+        sets = [x for x in sets if x != "traction"]
         for dim in (1, 2, 3):
             extra = [f"method.tls_terms={dim + 1}"] if linear else []
-            specs.append((EXAMPLE, dim_sets(dim) + sets + extra, 1))
+            specs.append((EXAMPLE, dim_sets(dim, loaded) + sets + extra, 1))
     res = R.many(specs)
     rows, measured = [], {}
     for i, (label, _, _) in enumerate(cases):

@@ -121,6 +121,10 @@ Traction<Dim> body_face_traction(const Grid<Dim>& g, const Vec<Dim>& lo, const V
   Traction<Dim> tr;
   tr.direction = direction;
   tr.side = side;
+  if constexpr (Dim > 1) {
+    tr.patch = spacing;
+    tr.patch[direction] = 0.0;
+  }
   tr.value = std::move(value);
   // The outer layer lies half a spacing inside the face, the next one and a half spacings.
   const double face = side > 0 ? hi[direction] : lo[direction];

@@ -159,7 +159,7 @@ class CubicSplineMapping {
   static constexpr bool supports_dimension(int dim) { return dim == 1; }
   // Capabilities (mapping/mapping.hpp).
   static constexpr bool kFusedScatter = false, kRunTotals = false, kGhostParticles = true,
-                        kStrainRates = false;
+                        kStrainRates = false, kCellQuadrature = true;
 
   // The spline is one fit through all the particles: in a distributed run every process reads
   // all of them (every cell layer), fits the same spline and integrates its own elements. A
@@ -175,6 +175,8 @@ class CubicSplineMapping {
 
   const Settings& settings() const { return settings_; }
   int gauss_points_per_half() const { return static_cast<int>(rule_.xi.size()); }
+  // Gauss points per element (MappingFor's kCellQuadrature; 1D, where no face has a patch).
+  int gauss_points() const { return 2 * gauss_points_per_half(); }
   // The spline of the last fitted field (for diagnostics and tests).
   const NaturalCubicSpline& spline() const { return spline_; }
   // Quadrature points of the current step; nullptr before the first map_mass for this Sim.

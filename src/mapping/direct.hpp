@@ -14,7 +14,7 @@ struct DirectMapping {
       "standard MPM mapping: particles are the quadrature points (D 3.2, 004 4.4)";
   // Capabilities (mapping/mapping.hpp).
   static constexpr bool kFusedScatter = true, kRunTotals = false, kGhostParticles = false,
-                        kStrainRates = false;
+                        kStrainRates = false, kCellQuadrature = false;
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
 
   // m_i = sum_p phi_i(x_p) m_p (lumped, D eq. 2.24); with consistent mass also

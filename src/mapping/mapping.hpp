@@ -16,6 +16,11 @@
 //   kStrainRates   strain_rates(sim): the mapping may define the particles' velocity
 //                  gradients for the stress update (TLS's adjoint rate), which it writes to
 //                  RunState::mapped_gradient (stages::mapped_strain_rates)
+//   kCellQuadrature gauss_points(): the grid sums are integrals by that many Gauss points per
+//                  direction of each cell (the reconstructions), not sums over the particles:
+//                  face tractions are then integrated over each loaded point's patch by as
+//                  many Gauss points (stages::after_forces), so that a uniform load meets a
+//                  quadrature as exact as the masses' one
 // Mappings hold no per-particle state, so re-sorting the particles (state/sort.hpp) needs
 // nothing from them.
 #include <concepts>
@@ -33,6 +38,7 @@ concept MappingFor = requires(M& m, Sim& sim, int dim) {
   { M::kRunTotals } -> std::convertible_to<bool>;
   { M::kGhostParticles } -> std::convertible_to<bool>;
   { M::kStrainRates } -> std::convertible_to<bool>;
+  { M::kCellQuadrature } -> std::convertible_to<bool>;
   { M::supports_dimension(dim) } -> std::convertible_to<bool>;
   m.map_mass(sim);      // nodal masses (and the consistent matrix), D eq. 2.31 / 2.44
   m.map_momentum(sim);  // nodal momenta, 2.32 / 2.48
@@ -48,6 +54,10 @@ concept MappingFor = requires(M& m, Sim& sim, int dim) {
        { cm.ghost_reach(sim) } -> std::convertible_to<double>;
      }) &&
     (!M::kStrainRates || requires(M & m, Sim& sim) { m.strain_rates(sim); }) &&
+    (!M::kCellQuadrature ||
+     requires(const M& cm) {
+       { cm.gauss_points() } -> std::convertible_to<int>;
+     }) &&
     (!M::kRunTotals ||
      requires(M & m, const M& cm, std::string_view bytes, const std::string& what) {
        { cm.save_totals() } -> std::same_as<std::string>;

@@ -349,7 +349,7 @@ class MlsFamilyMapping {
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
   static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true,
-                        kStrainRates = false;
+                        kStrainRates = false, kCellQuadrature = true;
 
   // The cell layers of the other processes' particles this mapping reads in a distributed run
   // (MappingFor's kGhostParticles): the quadratic-spline weight's support, 1.5 a cells (a the
@@ -374,6 +374,8 @@ class MlsFamilyMapping {
   }
 
   const Settings& settings() const { return settings_; }
+  // Gauss points per direction of an element (MappingFor's kCellQuadrature).
+  int gauss_points() const { return settings_.gauss_points_used(); }
   template <int Dim = 1>
   const MovingLeastSquares<Dim>& reconstruction() const {
     return std::get<Dim - 1>(work_).mls;

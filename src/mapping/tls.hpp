@@ -584,7 +584,7 @@ class TlsMapping {
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   // Capabilities (mapping/mapping.hpp).
   static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true,
-                        kStrainRates = true;
+                        kStrainRates = true, kCellQuadrature = true;
 
   TlsMapping() : TlsMapping(TlsSettings{}) {}
   // Validates s for dimension dim (throws InputError).
@@ -599,6 +599,8 @@ class TlsMapping {
   }
 
   const TlsSettings& settings() const { return settings_; }
+  // Gauss points per direction of an element (MappingFor's kCellQuadrature).
+  int gauss_points() const { return settings_.gauss_points_used(); }
   // The reconstruction of the last step (before the first step: of the constructor's dimension).
   template <int Dim = 1>
   const BasicTlsReconstruction<Dim>& reconstruction() const {

@@ -39,6 +39,12 @@ struct Traction {
   std::vector<double> area;      // A_k [m^(Dim-1)] per loaded point (1D: 1)
   std::vector<Vec<Dim>> offset;  // X_k - X_p [m] per loaded point (unused in 1D)
   std::vector<Vec<Dim>> normal;  // n_k per loaded point; only read when `pressure` is set
+  // The extent of each point's patch of the face [m], the same for every point: a box face's
+  // particle spacing along each direction in the face, 0 along its normal (so A_k is the
+  // product of the non-zero entries). Zero (1D, mesh edges): the point alone. Mappings that
+  // integrate by Gauss points over the cells integrate the load over the patches by Gauss points
+  // too (stages::after_forces).
+  Vec<Dim> patch = Vec<Dim>::Zero();
   std::function<Vec<Dim>(double t)> value;   // tau(t) [Pa], evaluated once per step
   std::function<double(double t)> pressure;  // p(t) [Pa] along -n_k; empty: in `value` or none
 };

@@ -266,6 +266,7 @@ void localize_tractions(RunState<Dim>& sim) {
     t.side = all.side;
     t.value = all.value;
     t.pressure = all.pressure;
+    t.patch = all.patch;
     for (std::size_t k = 0; k < all.particles.size(); ++k) {
       const auto it = std::lower_bound(at.begin(), at.end(),
                                        std::pair<Index, Index>{all.particles[k], Index{-1}});

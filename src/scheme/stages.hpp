@@ -16,6 +16,7 @@
 #include <variant>
 #include <vector>
 
+#include "basis/gauss_legendre.hpp"
 #include "core/parallel.hpp"
 #include "parallel/distribution.hpp"
 #include "state/simulation.hpp"
@@ -194,36 +195,69 @@ template <int Dim>
 void after_momentum(RunState<Dim>& sim);
 
 // Tractions through the particles next to the loaded faces (Traction: one face point per loaded
-// particle, tau evaluated once per face), added to the forces of the mapping.
-template <int Dim, class B>
-void after_forces(BasisState<Dim, B>& sim) {
+// particle, tau evaluated once per face), added to the forces of the mapping. kPatches (the
+// mapping's kCellQuadrature): the load of a point with a patch (Traction::patch, a box face) is
+// integrated over the patch by `gauss` Gauss-Legendre points per direction in the face, the
+// mapping's count per direction of a cell, so that the load is integrated as exactly as the
+// masses are (degree 2 gauss - 1 while the patch lies in one cell); at the face point alone a
+// B-spline of degree >= 2 gets the midpoint sum of its integral across the face, and the rows of
+// a uniform load would accelerate differently. Without it, the point alone: the particles' own
+// quadrature, that of the direct mapping's masses.
+template <bool kPatches, int Dim, class B>
+void after_forces(BasisState<Dim, B>& sim, int gauss = 1) {
   const auto& P = sim.particles;
+  const GaussRule rule = kPatches ? gauss_legendre(gauss) : GaussRule{};
+  const int n = std::max(1, static_cast<int>(rule.xi.size()));
   for (const auto& tr : sim.tractions) {
     const Vec<Dim> tau = tr.value(sim.time);
     const double p = tr.pressure ? tr.pressure(sim.time) : 0.0;
+    // The directions in the face that the patch spans, and its Gauss points.
+    std::array<int, 2> along{};
+    int spans = 0;
+    if constexpr (kPatches && Dim > 1)
+      for (int d = 0; d < Dim; ++d)
+        if (tr.patch[d] > 0.0) along[static_cast<std::size_t>(spans++)] = d;
+    int points = 1;
+    for (int t = 0; t < spans; ++t) points *= n;
     for (std::size_t k = 0; k < tr.particles.size(); ++k) {
       const auto i = static_cast<std::size_t>(tr.particles[k]);
-      Vec<Dim> x_face = P.x[i];
+      Vec<Dim> centre = P.x[i];
       if constexpr (Dim == 1)
-        x_face[0] += 0.5 * tr.side * P.volume[i];  // V_p: the current length
+        centre[0] += 0.5 * tr.side * P.volume[i];  // V_p: the current length
       else
-        x_face += P.F[i] * tr.offset[k];
-      if (!sim.grid.inside(x_face)) throw_face_left_grid(sim, i, x_face);
-      typename BasisState<Dim, B>::StencilT s;
-      if constexpr (B::kTriangleMesh) {
-        // A mesh need not fill its box: a point outside the triangles would lose its load.
-        if (!sim.basis.evaluate_point(x_face, s)) throw_face_left_grid(sim, i, x_face, true);
-      } else {
-        sim.basis.evaluate_point(x_face, s);
-      }
+        centre += P.F[i] * tr.offset[k];
       // A_p = 1 in 1D: tau * 1.0 is exact, so the 1D forces are those of the end traction.
-      const Vec<Dim> f = (tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k];
-      if (sim.comm) {  // a DOF maybe beyond this process's sums: share_grid_sums places them
-        for (int a = 0; a < s.kSize; ++a) sim.face_forces.emplace_back(s.dof[a], s.w[a] * f);
-        continue;
+      const Vec<Dim> load = (tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k];
+      for (int q = 0; q < points; ++q) {
+        Vec<Dim> x_face = centre;
+        Vec<Dim> f = load;
+        if (spans > 0) {
+          Vec<Dim> local = Vec<Dim>::Zero();  // from the face point, in the reference patch
+          double share = 1.0;
+          for (int t = 0, r = q; t < spans; ++t, r /= n) {
+            const auto j = static_cast<std::size_t>(r % n);
+            const int d = along[static_cast<std::size_t>(t)];
+            local[d] = 0.5 * rule.xi[j] * tr.patch[d];
+            share *= 0.5 * rule.w[j];
+          }
+          x_face += P.F[i] * local;
+          f *= share;
+        }
+        if (!sim.grid.inside(x_face)) throw_face_left_grid(sim, i, x_face);
+        typename BasisState<Dim, B>::StencilT s;
+        if constexpr (B::kTriangleMesh) {
+          // A mesh need not fill its box: a point outside the triangles would lose its load.
+          if (!sim.basis.evaluate_point(x_face, s)) throw_face_left_grid(sim, i, x_face, true);
+        } else {
+          sim.basis.evaluate_point(x_face, s);
+        }
+        if (sim.comm) {  // a DOF maybe beyond this process's sums: share_grid_sums places them
+          for (int a = 0; a < s.kSize; ++a) sim.face_forces.emplace_back(s.dof[a], s.w[a] * f);
+          continue;
+        }
+        for (int a = 0; a < s.kSize; ++a)
+          sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
       }
-      for (int a = 0; a < s.kSize; ++a)
-        sim.nodes.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
     }
   }
   if constexpr (B::kIterative)
@@ -268,7 +302,12 @@ void map_to_grid(Sim& sim) {
     if constexpr ((What & kForces) != 0) sim.mapping.map_forces(sim);
   }
   // The tractions first, so that a distributed run shares the whole forces.
-  if constexpr ((What & kForces) != 0) after_forces(sim);
+  if constexpr ((What & kForces) != 0) {
+    if constexpr (Sim::MappingT::kCellQuadrature)
+      after_forces<true>(sim, sim.mapping.gauss_points());
+    else
+      after_forces<false>(sim);
+  }
   if (sim.comm) share_grid_sums(sim, What & (kMass | kMomentum | kForces));
   if constexpr ((What & kMass) != 0) after_mass(sim);
   if constexpr ((What & kMomentum) != 0) after_momentum(sim);
