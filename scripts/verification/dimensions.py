@@ -1,6 +1,6 @@
 """Consistency across dimensions: where a method is a tensor product, the y-uniform 2D run of
 examples/bar_uniaxial_strain.toml is the 1D run row by row and the z-uniform 3D run the 2D run
-layer by layer. The rows of round 3's questions (DDMPM's weight, quadratic TLS, B-splines of
+layer by layer. The rows of the questions this raises (DDMPM's weight, quadratic TLS, B-splines of
 high degree), from the final particle CSVs of `mpm run`. The same checks over every basis,
 mapping and mass are in CI (tests/methods/test_dimension_consistency.cpp). Prose:
 templates/dimensions.md."""
@@ -70,7 +70,7 @@ def difference(lo, hi, dim_lo):
 
 
 def sec_dimensions(R, ctx):
-    """The rows of round 3's dimension-consistency questions."""
+    """The rows of the dimension-consistency questions, and consistent mass at a moving surface."""
     tls_same = ["method.tls_completion=reduce", "method.tls_max_condition=10",
                 "method.tls_positivity=on", "method.tls_cell_integrals=domains",
                 "method.tls_surface_stress=volume"]
