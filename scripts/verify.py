@@ -34,9 +34,9 @@ if HERE not in sys.path:
     sys.path.insert(0, HERE)  # the package beside this file, however the script is started
 
 from verification import (bases, chapter5, column_collapse, cube, ddmpm_readings,  # noqa: E402
-                          dimensions, element_block, footing, item3, large_bar, massmatrix, mesh_boundaries,
-                          mms, otm, plate, plate_001, ps_mpm, ps_partial, reconstruction,
-                          small_bar, static, tls_robust, vertical_cut, vortex)
+                          dimensions, element_block, footing, item3, large_bar, massmatrix,
+                          mesh_boundaries, mms, otm, plate, plate_001, ps_mpm, ps_partial,
+                          reconstruction, small_bar, static, tls_robust, vertical_cut, vortex)
 from verification.common import ROOT  # noqa: E402
 from verification.quick import quick  # noqa: E402
 from verification.report import full  # noqa: E402

@@ -126,7 +126,8 @@ def sec_ddmpm_readings(R, ctx):
                   nearer=nearer, subpoints=(
                       " D's Table 5.8 lowers that figure by adding subpoints to the particles "
                       "(Dhakal and Zhang), which suggests particle sums in D's plain DDMPM and a "
-                      "finer quadrature where D reconstructs." if nearer == "particles" else ""), col_direct_particles=e(col_direct["particles"], 3),
+                      "finer quadrature where D reconstructs." if nearer == "particles" else ""),
+                  col_direct_particles=e(col_direct["particles"], 3),
                   col_direct_quadrature=e(col_direct["quadrature"], 3),
                   col_direct_pub=e(pub("column_ddmpm_error"), 3),
                   final_only=", ".join(final_only) or "none",
