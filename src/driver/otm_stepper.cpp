@@ -36,9 +36,10 @@ class OtmStepper final : public Stepper<Dim> {
     const OtmSettings& s = otm_.settings();
     summary["otm"] = {{"algorithm", s.unified ? "unified (D Algorithm 4)" : "OTM (D Algorithm 3)"},
                       {"nodes", x.size() / Dim},
-                      {"basis", s.basis == OtmBasis::Linear   ? "linear"
-                                : s.basis == OtmBasis::MaxEnt ? "maxent"
-                                                              : "bspline"},
+                      {"basis", s.basis == OtmBasis::Linear        ? "linear"
+                                : s.basis == OtmBasis::MaxEnt      ? "maxent"
+                                : s.basis == OtmBasis::PowellSabin ? "powell_sabin"
+                                                                   : "bspline"},
                       {"first_node", std::vector<double>(x.begin(), x.begin() + Dim)},
                       {"last_node", std::vector<double>(x.end() - Dim, x.end())}};
     if (s.basis == OtmBasis::BSpline) summary["otm"]["degree"] = s.degree;
@@ -61,10 +62,17 @@ std::unique_ptr<Stepper<Dim>> make_otm_stepper(const StepperInput<Dim>& in) {
       s.basis = OtmBasis::MaxEnt;
       s.maxent = k->settings;
     }
+    if (const auto* k = std::get_if<PowellSabinKind>(&m.basis)) {
+      s.basis = OtmBasis::PowellSabin;
+      s.triangles = k->pattern;
+      s.mesh = in.problem.mesh;
+    }
     if (m.solver == Solver::Unified) {
       s.unified = true;
-      s.basis = OtmBasis::BSpline;
-      s.degree = basis_degree(m.basis);
+      if (s.basis != OtmBasis::PowellSabin) {
+        s.basis = OtmBasis::BSpline;
+        s.degree = basis_degree(m.basis);
+      }
     }
     s.mass = m.mass;
     s.mass_tolerance = m.mass_tolerance;

@@ -70,7 +70,9 @@ double maxent_stability_factor(const MaxEntSettings& s);
 // - kOnTriangles: it lives on triangles (method.triangles, grid.mesh, particles.per_triangle),
 //   kVertexDofs: its DOFs are the vertices of those triangles (a bent roller: a normal per
 //   vertex), kOtmNodes: partition of unity and linear completeness on advected nodes
-//   (method.solver = "otm", D eq. 4.15-4.16);
+//   (method.solver = "otm", D eq. 4.15-4.16), kUnified: an isoparametric map of the material
+//   configuration whose control points reproduce x(X) = X (method.solver = "unified", D 4.5:
+//   B-splines; Powell-Sabin splines, D 7.3);
 // - stability_factor(): dt_crit = factor h / c with lumped mass on the grid's smallest cell
 //   size h (1D bar; the domain-averaged bases take the P1 bound, their gradients being
 //   averages of P1's), and boundary_cells(): the cells at each end of the body left out of the
@@ -83,7 +85,8 @@ struct LinearKind {
       "piecewise-linear (P1) nodal basis, tensor product (D 2.5)";
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = true;
+  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = true,
+                        kUnified = false;
   template <class Mapping>
   static constexpr bool runs_with() {
     return true;
@@ -104,7 +107,8 @@ struct BSplineKind {
       "B-splines of degree method.degree (1-5) from one open uniform knot vector (D 3.1)";
   static constexpr int kDegree = P;
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
-  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false;
+  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false,
+                        kUnified = true;
   template <class Mapping>
   static constexpr bool runs_with() {
     return true;
@@ -124,7 +128,8 @@ struct DdmpmKind {
   // 1D as in D; 2D and 3D with the weights derived in basis/ddmpm.hpp (method.ddmpm_weight).
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false;
+  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false,
+                        kUnified = false;
   template <class Mapping>
   static constexpr bool runs_with() {
     return true;
@@ -143,7 +148,8 @@ struct UGimpKind {
       "uniform GIMP: P1 averaged over the initial particle domain (D 2.6.4, eq. 2.61)";
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false;
+  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false,
+                        kUnified = false;
   template <class Mapping>
   static constexpr bool runs_with() {
     return true;
@@ -160,7 +166,8 @@ struct CpGimpKind {
       "contiguous-particle GIMP: particle domain sized by the diagonal of F (D 2.6.4)";
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false;
+  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false,
+                        kUnified = false;
   template <class Mapping>
   static constexpr bool runs_with() {
     return true;
@@ -177,7 +184,8 @@ struct CpdiKind {
       "CPDI: domain convected by F, P1 interpolated at its corners (D 2.6.4, eq. 2.64)";
   static constexpr bool supports_dimension(int dim) { return dim >= 1 && dim <= 3; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false;
+  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false,
+                        kUnified = false;
   template <class Mapping>
   static constexpr bool runs_with() {
     return true;
@@ -195,7 +203,8 @@ struct Cpdi2Kind {
       "CPDI2: quadrilateral domains, corners moved with the grid velocity (D 2.6.4; 2D)";
   static constexpr bool supports_dimension(int dim) { return dim == 2; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false;
+  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = false,
+                        kUnified = false;
   template <class Mapping>
   static constexpr bool runs_with() {
     return true;
@@ -215,7 +224,8 @@ struct MaxEntKind {
       "method.maxent_dmax cells, Newton for the multipliers (D 4.3)";
   static constexpr bool supports_dimension(int dim) { return dim == 1 || dim == 2; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = true;
+  static constexpr bool kOnTriangles = false, kVertexDofs = false, kOtmNodes = true,
+                        kUnified = false;
   // The direct mapping only: with the reconstructions (TLS, MLS, IMLS, cubic spline), whose
   // Gauss points integrate polynomials on each cell while the max-ent functions are not
   // polynomial and span up to six cells, the plate of plate_mms_2d became unstable (TLS:
@@ -243,7 +253,8 @@ struct PowellSabinKind {
       "triangles by method.triangles (D 3.3, PS-MPM; 2D, direct mapping)";
   static constexpr bool supports_dimension(int dim) { return dim == 2; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = true, kVertexDofs = false, kOtmNodes = false;
+  static constexpr bool kOnTriangles = true, kVertexDofs = false, kOtmNodes = false,
+                        kUnified = true;
   // TLS fits and integrates per triangle (D 6.1.2, 6.3); the other reconstructions (MLS, IMLS,
   // cubic spline) integrate over the grid's rectangular cells.
   template <class Mapping>
@@ -269,7 +280,8 @@ struct TriangleP1Kind {
       "(\"criss_cross\") triangles (D 3.3; 2D, direct mapping)";
   static constexpr bool supports_dimension(int dim) { return dim == 2; }
   static constexpr int kDegree = 0;
-  static constexpr bool kOnTriangles = true, kVertexDofs = true, kOtmNodes = false;
+  static constexpr bool kOnTriangles = true, kVertexDofs = true, kOtmNodes = false,
+                        kUnified = false;
   template <class Mapping>
   static constexpr bool runs_with() {
     return std::is_same_v<Mapping, DirectMapping> || std::is_same_v<Mapping, TlsMapping>;
@@ -302,6 +314,7 @@ concept BasisKindTraits = requires(const K& k, int dim) {
   { K::kOnTriangles } -> std::convertible_to<bool>;
   { K::kVertexDofs } -> std::convertible_to<bool>;
   { K::kOtmNodes } -> std::convertible_to<bool>;
+  { K::kUnified } -> std::convertible_to<bool>;
   { K::template runs_with<DirectMapping>() } -> std::convertible_to<bool>;
   { k.stability_factor() } -> std::convertible_to<double>;
   { k.boundary_cells() } -> std::convertible_to<int>;
@@ -371,6 +384,9 @@ inline bool on_triangles(const BasisKind& basis) {
 }
 inline bool otm_nodes(const BasisKind& basis) {
   return std::visit([](const auto& k) { return k.kOtmNodes; }, basis);
+}
+inline bool unified_dofs(const BasisKind& basis) {
+  return std::visit([](const auto& k) { return k.kUnified; }, basis);
 }
 // dt_crit = factor h / c on the grid's smallest cell size (lumped mass).
 inline double stability_factor(const BasisKind& basis) {

@@ -13,6 +13,7 @@
 
 #include "basis/bspline.hpp"
 #include "basis/maxent.hpp"
+#include "basis/powell_sabin.hpp"
 #include "scheme/stages.hpp"
 
 namespace mpm {
@@ -47,15 +48,28 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   // approach's isoparametric map with degree 1 (a particle keeps its material coordinate, as
   // OTM-P1 keeps its local coordinate in 1D), with OTM's particle velocity. OTM-maxent in 2D:
   // max-ent on the advected lattice of nodes, found through bins of the current positions.
+  const bool ps = s.basis == OtmBasis::PowellSabin;
   iso_ = s.unified || (Dim > 1 && s.basis == OtmBasis::Linear);
-  degree_ = s.unified ? s.degree : 1;
+  degree_ = s.unified && !ps ? s.degree : 1;
+  if (ps && !(s.unified && Dim == 2))
+    throw InputError(
+        "Powell-Sabin splines on advected degrees of freedom: method.solver = "
+        "\"unified\", 2D");
+  if (s.mesh && !ps)
+    throw InputError(
+        fmt::format("method.solver = \"{}\": grid.mesh needs method.basis = "
+                    "\"powell_sabin\" (the mesh is the body's triangulation)",
+                    solver));
   // The nodes discretise the body only (D 4.4: OTM has no empty elements): the grid's nodes
-  // from the body's first to its last per direction, which must be nodes of the grid.
+  // from the body's first to its last per direction, which must be nodes of the grid. A mesh
+  // file (grid.mesh) is the body itself, so every grid side is a side of it.
   const Grid<Dim>& g = st_.grid;
-  IVec<Dim> cells;
-  Vec<Dim> lo, hi;
+  IVec<Dim> cells = g.cells;
+  Vec<Dim> lo = g.origin, hi = g.upper();
   std::array<std::array<bool, 2>, Dim> touches{};
-  for (int d = 0; d < Dim; ++d) {
+  if (s.mesh)
+    for (auto& t : touches) t = {true, true};
+  for (int d = 0; d < Dim && !s.mesh; ++d) {
     const double h = g.h[d], b0 = pb.body_min[d], b1 = pb.body_max[d];
     const double i0 = (b0 - g.origin[d]) / h, i1 = (b1 - g.origin[d]) / h;
     if (std::abs(i0 - std::round(i0)) > 1e-9 || std::abs(i1 - std::round(i1)) > 1e-9)
@@ -73,8 +87,10 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   body_ = Grid<Dim>(lo, hi, cells);
   if (s.basis == OtmBasis::MaxEnt && !(s.maxent.dmax > 1.0 && s.maxent.dmax <= 3.0))
     throw InputError(fmt::format("method.maxent_dmax = {}: must be in (1, 3]", s.maxent.dmax));
-  if (s.unified && !(s.basis == OtmBasis::BSpline && s.degree >= 1 && s.degree <= 5))
-    throw InputError("method.solver = \"unified\": B-splines of degree 1 to 5");
+  if (s.unified && !ps && !(s.basis == OtmBasis::BSpline && s.degree >= 1 && s.degree <= 5))
+    throw InputError(
+        "method.solver = \"unified\": B-splines of degree 1 to 5 or Powell-Sabin "
+        "splines");
   if (Dim != 1 && !pb.tractions.empty())
     throw InputError(
         fmt::format("method.solver = \"{}\": tractions in 2D are not implemented "
@@ -85,7 +101,21 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   // condition on a side the body does not touch constrains no material node.
   std::vector<std::vector<Index>> side_nodes(2 * Dim);
   Index n = 0;
-  if (iso_ || Dim > 1) {  // (2D max-ent: the nodes of degree 1, the lattice x fastest)
+  if (ps) {
+    if constexpr (Dim == 2) {
+      ps_ = std::make_shared<const PowellSabinGridBasis<2>>(
+          s.mesh ? PowellSabinGridBasis<2>(s.mesh) : PowellSabinGridBasis<2>(body_, s.triangles));
+      n = ps_->num_dofs();
+      x_.resize(static_cast<std::size_t>(n * Dim));
+      for (Index i = 0; i < n; ++i)  // Q_ij: x(X) = X
+        for (int d = 0; d < Dim; ++d)
+          x_[static_cast<std::size_t>(i * Dim + d)] = ps_->dof_position(i)[d];
+      for (int d = 0; d < Dim; ++d)
+        for (int side = 0; side < 2; ++side)
+          if (touches[static_cast<std::size_t>(d)][static_cast<std::size_t>(side)])
+            side_nodes[static_cast<std::size_t>(2 * d + side)] = ps_->boundary_dofs(d, side);
+    }
+  } else if (iso_ || Dim > 1) {  // (2D max-ent: the nodes of degree 1, the lattice x fastest)
     with_bspline_degree(degree_, [&](auto degree) {
       const BSplineBasis<Dim, decltype(degree)::value> basis(body_);
       n = basis.num_dofs();
@@ -107,8 +137,19 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   }
   st_.nodes.resize(n);
   for (const auto& f : pb.fixed_sides) {
-    if (!touches[static_cast<std::size_t>(f.direction)][static_cast<std::size_t>(f.side)]) continue;
+    if (f.normal != std::array<double, 3>{} || !f.vertex_normals.empty())
+      throw InputError(fmt::format(
+          "method.solver = \"{}\": a roller on an inclined or bent boundary (\"{}\") is not "
+          "implemented; the conditions fix velocity components on straight axis-aligned sides",
+          solver, f.boundary));
     const auto mask = static_cast<std::uint8_t>(f.components & ((1u << Dim) - 1u));
+    if (!f.boundary.empty()) {  // a named boundary of the mesh (unified PS, grid.mesh)
+      if constexpr (Dim == 2)
+        for (Index i : ps_->boundary_dofs(f.boundary))
+          st_.nodes.fixed[static_cast<std::size_t>(i)] |= mask;
+      continue;
+    }
+    if (!touches[static_cast<std::size_t>(f.direction)][static_cast<std::size_t>(f.side)]) continue;
     for (Index i : side_nodes[static_cast<std::size_t>(2 * f.direction + f.side)])
       st_.nodes.fixed[static_cast<std::size_t>(i)] |= mask;
   }
@@ -127,6 +168,15 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   if (!iso_ && Dim == 1)
     for (std::size_t p = 0; p < element_.size(); ++p)
       element_[p] = std::clamp<Index>(body_.cell_of(P.x[p][0], 0), 0, cells[0] - 1);
+  if constexpr (Dim == 2)
+    for (std::size_t p = 0; ps && p < element_.size(); ++p) {
+      element_[p] = ps_->mesh().cell_index(P.x0[p]);
+      if (element_[p] < 0)
+        throw InputError(fmt::format(
+            "method.solver = \"unified\": particle {} at X = ({:.9g}, {:.9g}) lies outside the "
+            "body's triangles; the body must be the mesh",
+            P.id[p], P.x0[p][0], P.x0[p][1]));
+    }
 }
 
 template <int Dim>
@@ -235,33 +285,55 @@ void Otm<Dim>::add_tractions() {
 }
 
 template <int Dim>
+template <class Stencil>
+void Otm<Dim>::append_isoparametric_row(Index p, const Stencil& s) {
+  const auto i = static_cast<std::size_t>(p);
+  // dx/dX at X_p: sum_i c_i grad_X B_i^T; grad_x phi_i = (dx/dX)^-T grad_X B_i.
+  Mat<Dim> J = Mat<Dim>::Zero();
+  for (int a = 0; a < s.kSize; ++a)
+    J += Eigen::Map<const Vec<Dim>>(&x_[static_cast<std::size_t>(s.dof[a] * Dim)]) *
+         s.grad[a].transpose();
+  const double det = J.determinant();
+  if (!(det > 0.0)) {
+    const auto& Pt = st_.particles;
+    throw RunError(exit_code::kInvertedDeformation,
+                   fmt::format("step {}, t = {:.9g} s: the advected {} map is inverted at "
+                               "particle {} (X_1 = {:.9g}, det dx/dX = {:.3g})",
+                               st_.step, st_.time, ps_ ? "Powell-Sabin" : "B-spline", Pt.id[i],
+                               Pt.x0[i][0], det));
+  }
+  const Mat<Dim> JinvT = J.inverse().transpose();
+  for (int a = 0; a < s.kSize; ++a) {
+    node_.push_back(s.dof[a]);
+    w_.push_back(s.w[a]);
+    const Vec<Dim> gx = JinvT * s.grad[a];
+    g_.insert(g_.end(), gx.data(), gx.data() + Dim);
+  }
+  row_.push_back(static_cast<Index>(node_.size()));
+}
+
+template <int Dim>
 template <int P>
 void Otm<Dim>::bspline_rows() {
   const BSplineBasis<Dim, P> basis(body_);  // B_i(X) on the material (initial) body grid
   typename BSplineBasis<Dim, P>::StencilT s;
   const auto& Pt = st_.particles;
   for (Index p = 0; p < Pt.size(); ++p) {
-    const auto i = static_cast<std::size_t>(p);
-    basis.evaluate_point(Pt.x0[i], s);
-    // dx/dX at X_p: sum_i c_i grad_X B_i^T; grad_x phi_i = (dx/dX)^-T grad_X B_i.
-    Mat<Dim> J = Mat<Dim>::Zero();
-    for (int a = 0; a < s.kSize; ++a)
-      J += Eigen::Map<const Vec<Dim>>(&x_[static_cast<std::size_t>(s.dof[a] * Dim)]) *
-           s.grad[a].transpose();
-    const double det = J.determinant();
-    if (!(det > 0.0))
-      throw RunError(exit_code::kInvertedDeformation,
-                     fmt::format("step {}, t = {:.9g} s: the advected B-spline map is inverted at "
-                                 "particle {} (X_1 = {:.9g}, det dx/dX = {:.3g})",
-                                 st_.step, st_.time, Pt.id[i], Pt.x0[i][0], det));
-    const Mat<Dim> JinvT = J.inverse().transpose();
-    for (int a = 0; a < s.kSize; ++a) {
-      node_.push_back(s.dof[a]);
-      w_.push_back(s.w[a]);
-      const Vec<Dim> gx = JinvT * s.grad[a];
-      g_.insert(g_.end(), gx.data(), gx.data() + Dim);
+    basis.evaluate_point(Pt.x0[static_cast<std::size_t>(p)], s);
+    append_isoparametric_row(p, s);
+  }
+}
+
+template <int Dim>
+void Otm<Dim>::powell_sabin_rows() {
+  if constexpr (Dim == 2) {
+    PowellSabinBasis::StencilT s;
+    const auto& Pt = st_.particles;
+    for (Index p = 0; p < Pt.size(); ++p) {
+      const auto i = static_cast<std::size_t>(p);
+      ps_->splines().evaluate_in(element_[i], Pt.x0[i], s);  // N_ij(X_p) on its material triangle
+      append_isoparametric_row(p, s);
     }
-    row_.push_back(static_cast<Index>(node_.size()));
   }
 }
 
@@ -424,6 +496,7 @@ void Otm<Dim>::evaluate_basis() {
   node_.clear();
   w_.clear();
   g_.clear();
+  if (ps_) return powell_sabin_rows();
   if (iso_)
     return with_bspline_degree(degree_,
                                [&](auto degree) { bspline_rows<decltype(degree)::value>(); });

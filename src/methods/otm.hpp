@@ -26,29 +26,46 @@
 // x_p = x(X_p) (4.87 by induction), phi_i(x_p) = B_i(X_p) and grad phi_i = B_i'(X_p) / x'(X_p).
 // With p = 1 this is P1 on the advected nodes, OTM-P1's basis. D does not say how the basis
 // follows the advected degrees of freedom; this isoparametric reading is ours.
+//
+// Powell-Sabin splines in the unified approach (D 7.3: "an alternative to partial lumping"): the
+// same map with the quadratic PS splines N_ij of the body's triangulation (2D): the control
+// points start at the PS-triangle vertices Q_ij, so x(X) = sum N_ij(X) Q_ij = X (PS splines
+// reproduce quadratics), and move with the material. The material points keep X, so the
+// functions and the mass matrix are those of the initial, full triangles for the whole run: no
+// element is ever partially filled, which is what makes consistent PS mass fail in PS-MPM.
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "basis/maxent_settings.hpp"
+#include "grid/triangle_mesh.hpp"
 #include "model/problem.hpp"
 #include "state/simulation.hpp"
 
 namespace mpm {
 
-enum class OtmBasis { Linear, MaxEnt, BSpline };
+enum class OtmBasis { Linear, MaxEnt, BSpline, PowellSabin };
+
+template <int Dim>
+class PowellSabinGridBasis;  // basis/powell_sabin.hpp
 
 struct OtmSettings {
   bool unified = false;  // D Algorithm 4 (B-splines, USL particle velocity) instead of OTM
   OtmBasis basis = OtmBasis::Linear;
   int degree = 0;         // OtmBasis::BSpline: 1-5
   MaxEntSettings maxent;  // with OtmBasis::MaxEnt: d_i = d_max times node i's nearest distance
+  // OtmBasis::PowellSabin: the body's triangles, a structured triangulation of the body's part
+  // of the grid (method.triangles), or `mesh` (grid.mesh: the mesh is the body).
+  TrianglePattern triangles = TrianglePattern::right;
+  std::shared_ptr<const TriangleMesh> mesh;
   MassType mass = MassType::Consistent;
   double mass_tolerance = 1e-10;
   MassSolverSettings mass_solver;  // direct or cg (pmg needs a B-spline basis on the grid)
   double conservation_limit = 0.5;
 };
 
-// OTM (1D and 2D: P1, max-ent) and the unified approach (1D and 2D, tensor-product B-splines).
+// OTM (1D and 2D: P1, max-ent) and the unified approach (1D and 2D, tensor-product B-splines;
+// 2D, Powell-Sabin splines).
 template <int Dim>
 class Otm {
  public:
@@ -81,14 +98,22 @@ class Otm {
   // Unified: B_i(X_p) and (dx/dX)^-T grad_X B_i(X_p) of every particle.
   template <int P>
   void bspline_rows();
+  // Unified with Powell-Sabin splines: the same on the material triangles (2D).
+  void powell_sabin_rows();
+  // grad_x phi_i = (dx/dX)^-T grad_X N_i at material point p from its stencil's functions of X;
+  // RunError when the map is inverted there.
+  template <class Stencil>
+  void append_isoparametric_row(Index p, const Stencil& s);
 
   RunState<Dim> st_;
   Grid<Dim> body_;  // the body's part of the initial grid: the initial nodes (unified: the knots)
   OtmSettings s_;
-  bool iso_ = false;  // the isoparametric B-spline map (unified; OTM-P1 in 2D), of degree degree_
+  bool iso_ = false;  // the isoparametric map (unified: B-splines of degree degree_ or PS; OTM-P1)
   int degree_ = 1;
-  std::vector<double> x_;        // advected node coordinates [m], Dim per node
-  std::vector<Index> element_;   // OTM: element of each particle (x_e <= x_p <= x_{e+1})
+  std::vector<double> x_;       // advected node coordinates [m], Dim per node
+  std::vector<Index> element_;  // OTM: element of each particle (x_e <= x_p <= x_{e+1});
+                                // unified PS: its material triangle (X_p never changes)
+  std::shared_ptr<const PowellSabinGridBasis<2>> ps_;  // unified PS: the splines of X
   std::vector<double> support_;  // OTM max-ent: the support radius d_i of each node this step
   // Per-particle stencils of variable size (max-ent), compressed rows: nodes, values, gradients
   // (Dim per entry).

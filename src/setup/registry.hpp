@@ -104,7 +104,9 @@ inline constexpr Entry kSolvers[] = {
     {"otm",
      "optimal transportation meshfree method on nodes advected with the material: P1 (1D, 2D) "
      "or max-ent (1D, 2D) (D Algorithm 3)"},
-    {"unified", "B-splines on advected degrees of freedom, USL updates (D Algorithm 4; 1D, 2D)"},
+    {"unified",
+     "B-splines (1D, 2D) or Powell-Sabin splines (2D) on advected degrees of freedom, USL "
+     "updates (D Algorithm 4, D 7.3)"},
 };
 
 inline constexpr Entry kTlsCompletions[] = {

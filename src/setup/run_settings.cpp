@@ -251,11 +251,12 @@ RunSettings run_settings(const Config& cfg, int dim) {
           m.where_basis, basis_names_where([](const auto& k) { return k.kOtmNodes; }),
           name_of(m.basis)));
   }
-  if (m.solver == Solver::Unified && basis_degree(m.basis) == 0)
+  if (m.solver == Solver::Unified && !unified_dofs(m.basis))
     throw InputError(fmt::format(
-        "{}: method.solver = \"unified\" runs B-splines on advected degrees of freedom (D "
-        "Algorithm 4): method.basis = \"bspline\" (method.degree 1-5), not \"{}\"",
-        m.where_basis, name_of(m.basis)));
+        "{}: method.solver = \"unified\" carries the control points of an isoparametric map "
+        "of the body with the material (D Algorithm 4, D 7.3): method.basis = {}, not \"{}\"",
+        m.where_basis, basis_names_where([](const auto& k) { return k.kUnified; }),
+        name_of(m.basis)));
   if ((m.solver == Solver::Otm || m.solver == Solver::Unified) &&
       !std::holds_alternative<DirectMapping>(m.mapping))
     throw InputError(fmt::format(

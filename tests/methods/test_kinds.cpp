@@ -21,6 +21,10 @@ TEST(BasisKinds, AnswerFromTheirTraits) {
   EXPECT_EQ(basis_names_where([](const auto& k) { return k.kOtmNodes; }),
             "\"linear\" or \"maxent\"");
   EXPECT_EQ(basis_names_where([](const auto& k) { return k.kVertexDofs; }), "\"p1_triangles\"");
+  EXPECT_EQ(basis_names_where([](const auto& k) { return k.kUnified; }),
+            "\"bspline\" or \"powell_sabin\"");
+  EXPECT_TRUE(unified_dofs(PowellSabinKind{}));
+  EXPECT_FALSE(unified_dofs(TriangleP1Kind{}));
   // The five B-spline kinds are one name.
   EXPECT_EQ(basis_names_where([](const auto& k) { return k.kDegree > 0; }), "\"bspline\"");
   EXPECT_TRUE(basis_named_has("powell_sabin", [](const auto& k) { return k.kOnTriangles; }));
