@@ -19,6 +19,7 @@
 #include "app/reconstruct.hpp"
 #include "app/stiffness.hpp"
 #include "app/study.hpp"
+#include "app/work_precision.hpp"
 #include "core/comm.hpp"
 #include "core/interrupt.hpp"
 #include "core/memory.hpp"
@@ -118,33 +119,54 @@ std::string shell_quote(const std::string& s) {
   return q + "'";
 }
 
-int cmd_study(const std::string& config, const std::string& refine, const std::string& methods,
-              const std::vector<std::string>& sets, std::string out, int jobs, bool plot,
-              bool overwrite) {
+// Runs a plotting script of scripts/ on a CSV file the command wrote; false when it failed.
+bool plot_csv(const std::string& script_name, const std::string& csv) {
+  const std::string script = std::string(MPM_SCRIPTS_DIR) + "/" + script_name;
+  // Debian's interpreter, which sees Debian's python3-matplotlib (a python3 earlier on PATH,
+  // e.g. pyenv's, would not).
+  const std::string python =
+      std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string cmd = python + " " + shell_quote(script) + " " + shell_quote(csv);
+  std::cout << std::flush;
+  if (std::system(cmd.c_str()) == 0) return true;
+  std::cerr << fmt::format("mpm: the study finished, but plotting failed ({})\n", cmd);
+  return false;
+}
+
+// `mpm study --work-precision`: the runs one at a time, timed in alternated rounds.
+int cmd_work_precision(const mpm::Config& cfg, const mpm::StudyOptions& opt,
+                       const mpm::WorkPrecisionOptions& wp, bool plot) {
+  if (opt.jobs > 1)
+    throw mpm::InputError(
+        fmt::format("--work-precision times each run alone, so --jobs {} is refused; the runs' own "
+                    "threads are --threads",
+                    opt.jobs));
+  const auto r = mpm::run_work_precision(cfg, opt, wp);
+  std::cout << mpm::work_precision_table(opt, wp, r);
+  std::cout << fmt::format("work_precision.csv and work_precision.txt in {}/\n", opt.out_dir);
+  if (plot && !plot_csv("plot_work_precision.py", opt.out_dir + "/work_precision.csv"))
+    return mpm::exit_code::kInternal;
+  for (const auto& run : r.runs)
+    if (run.result.exit_code == mpm::exit_code::kInterrupted) return run.result.exit_code;
+  return 0;
+}
+
+int cmd_study(const std::string& config, const std::vector<std::string>& refine,
+              const std::string& methods, const std::vector<std::string>& sets, std::string out,
+              int jobs, bool plot, bool overwrite, const mpm::WorkPrecisionOptions* wp) {
   const auto cfg = mpm::Config::load(config, sets);
   auto opt = mpm::parse_refine(refine);
   if (!methods.empty()) opt.methods = mpm::parse_methods(methods);
   opt.out_dir = out.empty() ? default_out("studies", config) : out;
   opt.jobs = jobs;
   opt.overwrite = overwrite;
+  if (wp) return cmd_work_precision(cfg, opt, *wp, plot);
   const auto r = mpm::run_study(cfg, opt);
   std::cout << mpm::study_table(opt, r);
   std::cout << fmt::format("study.csv and each run's outputs in {}/\n", opt.out_dir);
-  if (plot) {
-    // Convergence plots (PNG and SVG) by the repository's matplotlib script.
-    const std::string script = std::string(MPM_SCRIPTS_DIR) + "/plot_study.py";
-    // Debian's interpreter, which sees Debian's python3-matplotlib (a python3 earlier on PATH,
-    // e.g. pyenv's, would not).
-    const std::string python =
-        std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-    const std::string cmd =
-        python + " " + shell_quote(script) + " " + shell_quote(opt.out_dir + "/study.csv");
-    std::cout << std::flush;
-    if (std::system(cmd.c_str()) != 0) {
-      std::cerr << fmt::format("mpm: the study finished, but plotting failed ({})\n", cmd);
-      return mpm::exit_code::kInternal;
-    }
-  }
+  // Convergence plots (PNG and SVG) by the repository's matplotlib script.
+  if (plot && !plot_csv("plot_study.py", opt.out_dir + "/study.csv"))
+    return mpm::exit_code::kInternal;
   for (const auto& run : r.runs)
     if (run.exit_code != 0) return run.exit_code;
   return 0;
@@ -330,7 +352,7 @@ int run_main(int argc, char** argv) {
   app.set_version_flag("--version", fmt::format("mpm (mpmlab) {}", mpm::kVersion));
   app.require_subcommand(1);
 
-  std::string config, out, refine, methods;
+  std::string config, out, methods;
   std::vector<std::string> sets;
   bool quiet = false, overwrite = false;
   int jobs = 0;
@@ -361,7 +383,13 @@ int run_main(int argc, char** argv) {
 
   auto* study = app.add_subcommand("study", "run a refinement series and print observed orders");
   study->add_option("config", config, "TOML configuration file")->required();
-  study->add_option("--refine", refine, "key and values, e.g. grid.cells=5,10,20,40")->required();
+  std::vector<std::string> refine;
+  study
+      ->add_option("--refine", refine,
+                   "key and values, e.g. grid.cells=5,10,20,40; repeated, the further keys are "
+                   "refined in lockstep with the first (e.g. --refine time.dt=4e-4,2e-4,1e-4,5e-5)")
+      ->required()
+      ->allow_extra_args(false);  // one value per --refine, so CONFIG may follow it
   study->add_option("--methods", methods,
                     "method matrix: [solver:]basis[degree]/mapping[/mass],... e.g. "
                     "\"linear/direct, bspline2/tls/consistent, otm:maxent/direct/consistent\"");
@@ -373,7 +401,25 @@ int run_main(int argc, char** argv) {
   bool plot = false;
   study->add_flag("--plot", plot,
                   "write convergence plots (PNG, SVG) of every error against h, one line per "
-                  "method with its fitted order (scripts/plot_study.py; needs python3-matplotlib)");
+                  "method with its fitted order (scripts/plot_study.py; needs python3-matplotlib); "
+                  "with --work-precision the error against wall time and particle-steps "
+                  "(scripts/plot_work_precision.py)");
+  bool work_precision = false;
+  mpm::WorkPrecisionOptions wp;
+  std::string targets;
+  study->add_flag("--work-precision", work_precision,
+                  "time every run alone, alternated over --repeats rounds, and set its error "
+                  "against its cost (wall time, particle-steps, memory): per target error the "
+                  "cheapest run of each method (work_precision.csv, work_precision.txt)");
+  study->add_option("--error", wp.error, "the error column of --work-precision")
+      ->capture_default_str();
+  study->add_option("--targets", targets,
+                    "target errors of --work-precision, e.g. 1e-2,1e-3 (default: the decades the "
+                    "errors span)");
+  study->add_option("--repeats", wp.repeats, "timed rounds of --work-precision")
+      ->capture_default_str();
+  study->add_option("--threads", wp.threads, "OpenMP threads of each --work-precision run")
+      ->capture_default_str();
 
   mpm::BenchOptions bopt;
   auto* bench = app.add_subcommand("bench", "time the explicit step (ns per particle-step)");
@@ -403,8 +449,9 @@ int run_main(int argc, char** argv) {
   bench->add_option("--degree", bopt.degree, "B-spline degree")->capture_default_str();
   bench->add_option("--mapping", bopt.mapping, "particle-to-grid mapping")->capture_default_str();
   bench
-      ->add_option("--solver", bopt.solver,
-                   "mpm; otm (1D, basis linear or maxent); unified (1D, bspline)")
+      ->add_option(
+          "--solver", bopt.solver,
+          "mpm; otm (1D, 2D: basis linear or maxent); unified (1D, 2D: bspline; 2D: powell_sabin)")
       ->capture_default_str();
   bench->add_option("--mass", bopt.mass, "lumped or consistent")->capture_default_str();
   bench
@@ -597,7 +644,16 @@ int run_main(int argc, char** argv) {
       return cmd_batch(batch, quiet, overwrite, threads);
     }
     if (*run) return cmd_run(config, sets, out, quiet, restart, overwrite, threads);
-    if (*study) return cmd_study(config, refine, methods, sets, out, jobs, plot, overwrite);
+    if (*study) {
+      // The options of --work-precision mean nothing without it: refused rather than ignored.
+      for (const char* flag : {"--error", "--targets", "--repeats", "--threads"})
+        if (!work_precision && study->count(flag) > 0)
+          throw mpm::InputError(
+              fmt::format("mpm study {} belongs to --work-precision; add --work-precision", flag));
+      if (!targets.empty()) wp.targets = mpm::parse_targets(targets);
+      return cmd_study(config, refine, methods, sets, out, jobs, plot, overwrite,
+                       work_precision ? &wp : nullptr);
+    }
     if (*bench) return cmd_bench(bopt);
     if (*verify) return cmd_verify(verify_quick, verify_long, out, jobs, argv[0]);
     if (*mass) {

@@ -72,6 +72,24 @@ StudyOptions parse_refine(const std::string& text) {
   return o;
 }
 
+StudyOptions parse_refine(const std::vector<std::string>& texts) {
+  if (texts.empty()) throw InputError("--refine KEY=V1,V2,... is required");
+  StudyOptions o = parse_refine(texts.front());
+  for (std::size_t i = 1; i < texts.size(); ++i) {
+    StudyOptions more = parse_refine(texts[i]);
+    if (more.values.size() != o.values.size())
+      throw InputError(fmt::format(
+          "--refine '{}' gives {} value(s) and --refine '{}' {}: keys refined together need one "
+          "value per run",
+          texts.front(), o.values.size(), texts[i], more.values.size()));
+    if (more.key == o.key || std::any_of(o.lockstep.begin(), o.lockstep.end(),
+                                         [&](const auto& l) { return l.first == more.key; }))
+      throw InputError(fmt::format("--refine names {} twice", more.key));
+    o.lockstep.emplace_back(more.key, std::move(more.values));
+  }
+  return o;
+}
+
 std::vector<MethodSpec> parse_methods(const std::string& text) {
   auto names = [](const auto& entries) {
     std::string out;
@@ -156,7 +174,15 @@ double observed_order(double e_coarse, double e_fine, double h_coarse, double h_
   return std::log(e_coarse / e_fine) / std::log(h_coarse / h_fine);
 }
 
-StudyResult run_study(const Config& base, const StudyOptions& opt) {
+std::optional<double> error_named(const ErrorNorms& e, std::string_view name) {
+  for (const auto& c : kColumns)
+    if (name == c.name) return e.*(c.member);
+  std::string names;
+  for (const auto& c : kColumns) names += fmt::format("{}{}", names.empty() ? "" : ", ", c.name);
+  throw InputError(fmt::format("error '{}' is not one of: {}", name, names));
+}
+
+StudyRuns study_runs(const Config& base, const StudyOptions& opt) {
   // The configuration's own method when no matrix is given, labelled by its keys.
   std::vector<MethodSpec> methods = opt.methods;
   if (methods.empty()) {
@@ -165,26 +191,36 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
     label += "/" + base.get_string("method.mapping") + "/" + base.get_string("method.mass");
     methods.push_back({label, {}});
   }
-  // Validate every configuration before running any (bad input fails fast).
-  std::vector<Config> configs;
-  std::vector<std::string> dirs;
-  StudyResult res;
+  StudyRuns r;
   for (const auto& m : methods) {
-    res.labels.push_back(m.label);
+    r.labels.push_back(m.label);
     for (const auto& v : opt.values) {
       Config c = base;
       for (const auto& [key, value] : m.keys)
         c.set(key, value, fmt::format("--methods {}", m.label));
       c.set(opt.key, v, fmt::format("--refine {}={}", opt.key, v));
-      configs.push_back(std::move(c));
+      const std::size_t k = r.configs.size() % opt.values.size();
+      for (const auto& [key, values] : opt.lockstep)
+        c.set(key, values[k], fmt::format("--refine {}={}", key, values[k]));
+      r.configs.push_back(std::move(c));
       std::string method_dir = m.label;
       std::replace(method_dir.begin(), method_dir.end(), '/', '_');
       std::replace(method_dir.begin(), method_dir.end(), ':', '_');
-      dirs.push_back((std::filesystem::path(opt.out_dir) / (opt.methods.empty() ? "" : method_dir) /
-                      fmt::format("{}_{}", opt.key, v))
-                         .string());
+      r.dirs.push_back((std::filesystem::path(opt.out_dir) /
+                        (opt.methods.empty() ? "" : method_dir) / fmt::format("{}_{}", opt.key, v))
+                           .string());
     }
   }
+  return r;
+}
+
+StudyResult run_study(const Config& base, const StudyOptions& opt) {
+  // Validate every configuration before running any (bad input fails fast).
+  StudyRuns expanded = study_runs(base, opt);
+  const std::vector<Config>& configs = expanded.configs;
+  const std::vector<std::string>& dirs = expanded.dirs;
+  StudyResult res;
+  res.labels = expanded.labels;
   if (!opt.out_dir.empty()) {
     std::filesystem::create_directories(opt.out_dir);
     // --overwrite: the earlier study's table goes before the first run, so that a study that

@@ -54,6 +54,35 @@ TEST(StudyMethods, ASolverPrefixSetsMethodSolver) {
   }
 }
 
+// Further --refine keys move with the first (time.dt with the cells), one value per run.
+TEST(StudyRefine, FurtherKeysAreRefinedInLockstep) {
+  StudyOptions opt = parse_refine(std::vector<std::string>{"grid.cells=8,16", "time.dt=1e-3,5e-4"});
+  opt.methods = parse_methods("linear/direct, bspline2/direct");
+  ASSERT_EQ(opt.lockstep.size(), 1u);
+  const Config base =
+      Config::load(std::string(MPM_SOURCE_DIR) + "/examples/vibrating_bar_small.toml", {});
+  const StudyRuns r = study_runs(base, opt);
+  ASSERT_EQ(r.configs.size(), 4u);
+  for (std::size_t m = 0; m < 2; ++m) {
+    EXPECT_EQ(r.configs[2 * m].get_int("grid.cells"), 8);
+    EXPECT_EQ(r.configs[2 * m].get_real("time.dt"), 1e-3);
+    EXPECT_EQ(r.configs[2 * m + 1].get_int("grid.cells"), 16);
+    EXPECT_EQ(r.configs[2 * m + 1].get_real("time.dt"), 5e-4);
+  }
+  for (const auto& bad : {std::vector<std::string>{"grid.cells=8,16", "time.dt=1e-3"},
+                          std::vector<std::string>{"grid.cells=8,16", "grid.cells=4,5"}}) {
+    try {
+      parse_refine(bad);
+      ADD_FAILURE() << "accepted " << bad[1];
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_TRUE(what.find("one value per run") != std::string::npos ||
+                  what.find("names grid.cells twice") != std::string::npos)
+          << what;
+    }
+  }
+}
+
 TEST(StudyMethods, OnlyBSplinesTakeADegree) {
   for (const char* item : {"linear2/direct", "cpdi3/direct", "ugimp1/tls"}) {
     try {
