@@ -36,7 +36,8 @@ if HERE not in sys.path:
 from verification import (bases, chapter5, column_collapse, cube, ddmpm_readings,  # noqa: E402
                           dimensions, element_block, footing, item3, large_bar, massmatrix,
                           mesh_boundaries, mms, otm, plate, plate_001, ps_mpm, ps_partial,
-                          reconstruction, small_bar, static, tls_robust, vertical_cut, vortex)
+                          reconstruction, small_bar, static, tls_robust, unified_ps,
+                          vertical_cut, vortex, work_precision)
 from verification.common import ROOT  # noqa: E402
 from verification.quick import quick  # noqa: E402
 from verification.report import full  # noqa: E402
@@ -70,6 +71,7 @@ SECTIONS = [
     ("PS-MPM on unstructured meshes (D Fig. 3.9)", ps_mpm.sec_ps_unstructured),
     ("PS-MPM's stress plateau under refinement", ps_mpm.sec_ps_plateau),
     ("PS-MPM with partially filled elements", ps_partial.sec_ps_partial),
+    ("Powell-Sabin splines in the unified approach", unified_ps.sec_unified_ps),
     ("conditions and loads on mesh boundaries", mesh_boundaries.sec_mesh_boundaries),
     ("generalized vortex", vortex.sec_vortex),
     ("robust TLS on the grid's cells", tls_robust.sec_tls_robust),
@@ -77,6 +79,7 @@ SECTIONS = [
     ("001 long study", plate_001.sec_001),
     ("2D traction and custom", static.sec_traction_2d),
     ("3D cube", cube.sec_cube),
+    ("accuracy per unit of cost", work_precision.sec_work_precision),
     ("plane-strain compression of a soil block", element_block.sec_element_block),
     ("strip footing", footing.sec_footing),
     ("vertical cut", vertical_cut.sec_vertical_cut),
