@@ -42,6 +42,15 @@ def outcome(r, key="stress_rms"):
     return f"stops at t = {fail_time(r.get('failure'))} s"
 
 
+def error_row(label, r):
+    """A table row: the run's status, displacement RMS, stress RMS and relative L2 stress error."""
+    ok = r.get("status") == "ok"
+    er = r["errors"] if ok else {}
+    status = "ok" if ok else f"stops at t = {fail_time(r.get('failure'))} s"
+    return (f"| {label} | {status} | {e(er.get('displacement_rms'))} | "
+            f"{e(er.get('stress_rms'))} | {e(er.get('stress_rel_l2'))} |")
+
+
 def sec_unified_ps(R, ctx):
     """The plate and the column, PS-MPM against unified PS."""
     plate_methods = METHODS + [("unified (B-splines, p = 2), consistent",
@@ -98,23 +107,14 @@ def sec_unified_ps(R, ctx):
             cells.append(e(r["errors"].get("stress_rel_l2")) if r.get("status") == "ok" else
                          f"stops at t = {fail_time(r.get('failure'))} s")
         trow.append(f"| {label} | " + " | ".join(cells) + " |")
-    mrow = []
-    for (label, _), r in zip(mesh_methods, runs[-len(mesh_methods):]):
-        er = r["errors"] if r.get("status") == "ok" else {}
-        status = "ok" if r.get("status") == "ok" else f"stops at t = {fail_time(r.get('failure'))} s"
-        mrow.append(f"| {label} | {status} | {e(er.get('displacement_rms'))} | "
-                    f"{e(er.get('stress_rms'))} | {e(er.get('stress_rel_l2'))} |")
+    mrow = [error_row(label, r) for (label, _), r in zip(mesh_methods,
+                                                          runs[-len(mesh_methods):])]
     drow = []
     for mi, (label, _) in enumerate(dense_methods):
         drow.append(f"| {label} | " + " | ".join(
             outcome(dense_runs[ti * len(dense_methods) + mi]) for ti in range(len(dense_tops)))
             + " |")
-    prow = []
-    for (label, _), r in zip(plate_methods, plate_runs):
-        er = r["errors"] if r.get("status") == "ok" else {}
-        status = "ok" if r.get("status") == "ok" else f"stops at t = {fail_time(r.get('failure'))} s"
-        prow.append(f"| {label} | {status} | {e(er.get('displacement_rms'))} | "
-                    f"{e(er.get('stress_rms'))} | {e(er.get('stress_rel_l2'))} |")
+    prow = [error_row(label, r) for (label, _), r in zip(plate_methods, plate_runs)]
     crow, table = [], {}
     for mi, (label, _) in enumerate(METHODS):
         cells = []

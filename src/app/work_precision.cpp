@@ -17,17 +17,17 @@ namespace mpm {
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// The cheapest run (least minimum wall time) of method m that reaches `target`; -1 if none.
-long cheapest_reaching(const WorkPrecisionResult& r, std::size_t m, double target) {
+// Where method m reaches `target`: its coarsest refinement from which on every run succeeded
+// with an error at or below the target (a method refined until its error stays below it, so
+// that a lucky coarse run on a non-monotone error does not count); -1 if none.
+long reaching(const WorkPrecisionResult& r, std::size_t m, double target) {
   const std::size_t nv = r.values.size();
-  long best = -1;
-  for (std::size_t k = 0; k < nv; ++k) {
-    const auto& run = r.runs[m * nv + k];
-    if (!(run.error() <= target)) continue;
-    if (best < 0 || run.wall_min() < r.runs[m * nv + static_cast<std::size_t>(best)].wall_min())
-      best = static_cast<long>(k);
+  long first = -1;
+  for (std::size_t k = nv; k-- > 0;) {
+    if (!(r.runs[m * nv + k].error() <= target)) break;
+    first = static_cast<long>(k);
   }
-  return best;
+  return first;
 }
 
 // Default targets: the decades between the smallest and the largest error of the runs, the
@@ -188,10 +188,10 @@ std::string work_precision_table(const StudyOptions& opt, const WorkPrecisionOpt
     s += fmt::format("\ntarget {} <= {:.3g}:\n", wp.error, target);
     double best = std::numeric_limits<double>::infinity();
     for (std::size_t m = 0; m < nm; ++m)
-      if (const long k = cheapest_reaching(r, m, target); k >= 0)
+      if (const long k = reaching(r, m, target); k >= 0)
         best = std::min(best, r.runs[m * nv + static_cast<std::size_t>(k)].wall_min());
     for (std::size_t m = 0; m < nm; ++m) {
-      const long k = cheapest_reaching(r, m, target);
+      const long k = reaching(r, m, target);
       if (k < 0) {
         s += fmt::format("  {:<36} not reached\n", r.labels[m]);
         continue;

@@ -1,8 +1,8 @@
 #pragma once
 // Work-precision studies (`mpm study --work-precision`): the runs of a refinement study over a
 // method matrix, timed one at a time and alternated, so that each method's error can be set
-// against what it cost: wall time, particle-steps and peak memory. Per target error, the
-// cheapest run of each method that reaches it, and the cheapest method (D 7.3 asks whether
+// against what it cost: wall time, particle-steps and peak memory. Per target error, the run
+// from which on each method stays below it, and the cheapest method (D 7.3 asks whether
 // higher-order BSMPM with a reconstruction outperforms the simpler variants per unit of cost).
 #include <optional>
 #include <string>
@@ -49,8 +49,9 @@ WorkPrecisionResult run_work_precision(const Config& base, const StudyOptions& o
 // and median over the rounds), particle-steps, peak memory, reproducible.
 std::string work_precision_csv(const StudyOptions& opt, const WorkPrecisionOptions& wp,
                                const WorkPrecisionResult& r);
-// The runs, then per target error each method's cheapest run that reaches it (by minimum wall
-// time) and its cost relative to the cheapest method's.
+// The runs, then per target error where each method reaches it (its coarsest refinement from
+// which on every run's error is at or below the target), that run's cost, and the cost
+// relative to the cheapest method's (minimum wall time).
 std::string work_precision_table(const StudyOptions& opt, const WorkPrecisionOptions& wp,
                                  const WorkPrecisionResult& r);
 
