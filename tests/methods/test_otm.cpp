@@ -434,6 +434,24 @@ TEST(Otm, TwoDimensionalMaxEntFreePlateConservesMomentum) {
   }
 }
 
+// A velocity that varies across the plate in both directions, so that the nodes' velocities
+// differ and the momentum test has something to conserve.
+void set_sheared_velocity(Particles<2>& P) {
+  for (std::size_t i = 0; i < P.x.size(); ++i)
+    P.v[i] << 0.3 + 0.5 * std::sin(4.0 * P.x[i][1]), -0.1 + 0.4 * std::cos(3.0 * P.x[i][0]);
+}
+
+// The total momentum [kg m/s] and sum m_p |v_p|, its scale.
+std::pair<Vec<2>, double> momentum(const Particles<2>& P) {
+  Vec<2> m = Vec<2>::Zero();
+  double s = 0.0;
+  for (std::size_t i = 0; i < P.x.size(); ++i) {
+    m += P.mass[i] * P.v[i];
+    s += P.mass[i] * P.v[i].norm();
+  }
+  return {m, s};
+}
+
 // A free 2D plate (no rollers; a zero amplitude switches the manufactured body force off) with a
 // non-uniform velocity: the total momentum is conserved to round-off, and the particles stay on
 // the map x = sum B_i(X) c_i.
@@ -442,17 +460,8 @@ TEST(Unified, TwoDimensionalFreePlateConservesMomentum) {
                    "method.degree=2", "method.mass=consistent", "mms.amplitude=0"},
                   /*free_edges=*/true);
   auto& P = b->stepper->state().particles;
-  for (std::size_t i = 0; i < P.x.size(); ++i)
-    P.v[i] << 0.3 + 0.5 * std::sin(4.0 * P.x[i][1]), -0.1 + 0.4 * std::cos(3.0 * P.x[i][0]);
-  auto total = [&] {
-    Vec<2> m = Vec<2>::Zero();
-    double s = 0.0;
-    for (std::size_t i = 0; i < P.x.size(); ++i) {
-      m += P.mass[i] * P.v[i];
-      s += P.mass[i] * P.v[i].norm();
-    }
-    return std::pair{m, s};
-  };
+  set_sheared_velocity(P);
+  auto total = [&] { return momentum(P); };
   const auto [m0, s0] = total();
   RunState<2>& st = b->stepper->state();
   for (int k = 0; k < 30; ++k) {
@@ -564,17 +573,8 @@ TEST(Unified, PowellSabinFreePlateConservesMomentumAndFollowsItsMap) {
     EXPECT_LT(worst, 1e-14) << when;
   };
   on_map("at the start (x(X) = X)");
-  for (std::size_t i = 0; i < P.x.size(); ++i)
-    P.v[i] << 0.3 + 0.5 * std::sin(4.0 * P.x[i][1]), -0.1 + 0.4 * std::cos(3.0 * P.x[i][0]);
-  auto total = [&] {
-    Vec<2> m = Vec<2>::Zero();
-    double s = 0.0;
-    for (std::size_t i = 0; i < P.x.size(); ++i) {
-      m += P.mass[i] * P.v[i];
-      s += P.mass[i] * P.v[i].norm();
-    }
-    return std::pair{m, s};
-  };
+  set_sheared_velocity(P);
+  auto total = [&] { return momentum(P); };
   const auto [m0, s0] = total();
   RunState<2>& st = b->stepper->state();
   b->stepper->step(1e-5);
