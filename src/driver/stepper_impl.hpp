@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "basis/basis.hpp"
+#include "driver/sparse_mass.hpp"
 #include "driver/stepper.hpp"
 #include "io/checkpoint.hpp"
 #include "mapping/mapping.hpp"
@@ -64,41 +65,6 @@ void check_reconstruction_input(const MethodSettings& method, const Grid<Dim>& g
           method.where_tls_completion, s.terms_used(Dim), rep.failed,
           recon.describe(rep.failed_element), rep.failed_points, rep.failed_condition,
           s.max_condition));
-  }
-}
-
-// Before the first step: a basis that declares how many particles per element its consistent
-// mass needs (kConsistentMassPoints: Powell-Sabin) gets a warning when the median count over the
-// elements holding particles is below it. A warning, not a refusal: below it some runs finish
-// (docs/verification.md: the structured plate with 8 per triangle on 8 and 16 cells), and a
-// body's partly filled elements at its free surface hold fewer by nature. The counts are summed
-// over the processes, so that every process warns alike.
-template <int Dim, class Basis>
-void warn_sparse_consistent_mass(const MethodSettings& method, const Basis& basis,
-                                 const Particles<Dim>& P, const Comm* comm,
-                                 std::vector<std::string>& warnings) {
-  if constexpr (requires { Basis::kConsistentMassPoints; }) {
-    if (method.mass != MassType::Consistent) return;
-    const auto& mesh = basis.mesh();
-    std::vector<double> count(static_cast<std::size_t>(mesh.num_cells()), 0.0);
-    for (const Vec<Dim>& x : P.x)
-      if (const Index e = mesh.cell_index(x); e >= 0) count[static_cast<std::size_t>(e)] += 1.0;
-    if (comm) comm->sum(count);
-    std::vector<double> held;
-    for (const double c : count)
-      if (c > 0.0) held.push_back(c);
-    if (held.empty()) return;
-    const auto mid = held.begin() + static_cast<std::ptrdiff_t>(held.size() / 2);
-    std::nth_element(held.begin(), mid, held.end());
-    if (*mid < Basis::kConsistentMassPoints)
-      warnings.push_back(fmt::format(
-          "{}: method.mass = \"consistent\" with method.basis = \"{}\" and a median of {} "
-          "particles per triangle: below {} such runs stop with a non-finite stress at a time "
-          "that a smaller time step does not change, with or without method.partial_lumping "
-          "(docs/verification.md, \"D Fig. 3.9 on unstructured meshes\"); seed {} or more "
-          "(particles.per_triangle) or use method.mass = \"lumped\"",
-          method.where_mass, Basis::kName, *mid, Basis::kConsistentMassPoints,
-          Basis::kConsistentMassPoints));
   }
 }
 

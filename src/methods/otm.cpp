@@ -91,11 +91,18 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
     throw InputError(
         "method.solver = \"unified\": B-splines of degree 1 to 5 or Powell-Sabin "
         "splines");
-  if (Dim != 1 && !pb.tractions.empty())
-    throw InputError(
-        fmt::format("method.solver = \"{}\": tractions in 2D are not implemented "
-                    "yet",
-                    solver));
+  // In 2D the face points need the functions at material points: the isoparametric maps only.
+  if (Dim != 1 && !pb.tractions.empty() && !iso_)
+    throw InputError(fmt::format(
+        "method.solver = \"{}\": tractions in 2D act through the isoparametric map of the "
+        "unified approach and of OTM-P1; OTM-maxent in 2D has none",
+        solver));
+  for (const auto& tr : pb.tractions)
+    if (Dim != 1 && tr.offset.size() != tr.particles.size())
+      throw InputError(
+          fmt::format("method.solver = \"{}\": a traction without face points "
+                      "(a mesh boundary's load) is not implemented",
+                      solver));
   // The nodes (unified: the B-spline control points at their Greville abscissae, so that
   // x(X) = X at the start) and, per grid side the body touches, the Dirichlet conditions: a
   // condition on a side the body does not touch constrains no material node.
@@ -271,15 +278,50 @@ bool Otm<Dim>::maxent_at(double x, Index e, Index p) {
 // max-ent interpolate there, weak Kronecker-delta property) and the end control point of the
 // unified approach (the open knot vector's B_i interpolate at its ends). So the force tau A acts
 // on that node alone, where the MPM stage evaluates the basis at the end particle's face.
+// In 2D (the isoparametric maps: unified, OTM-P1) a face point k of particle p sits at the
+// material point X_p + offset_k, where the functions are N_i(X), and takes tau A_k with A_k its
+// share of the face before deformation, as the MPM stage's face points (stages::after_forces,
+// the point alone: the particles' own quadrature, that of the masses here): f_i += N_i(X_k) tau
+// A_k, so sum_i f_i = tau sum_k A_k by the partition of unity.
 template <int Dim>
 void Otm<Dim>::add_tractions() {
-  if constexpr (Dim == 1) {  // (2D tractions are refused by the constructor)
-    auto& nd = st_.nodes;
+  auto& nd = st_.nodes;
+  if constexpr (Dim == 1) {
     for (const auto& tr : st_.tractions) {
       const Vec<1> tau = tr.value(st_.time);
       double area = 0.0;
       for (double a : tr.area) area += a;
       nd.force[tr.side > 0 ? x_.size() - 1 : 0] += tau * area;
+    }
+  } else {
+    const auto& P = st_.particles;
+    auto load = [&](const auto& s, const Vec<Dim>& f) {
+      for (int a = 0; a < s.kSize; ++a) nd.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
+    };
+    for (const auto& tr : st_.tractions) {
+      const Vec<Dim> tau = tr.value(st_.time);
+      const double p = tr.pressure ? tr.pressure(st_.time) : 0.0;
+      for (std::size_t k = 0; k < tr.particles.size(); ++k) {
+        const auto i = static_cast<std::size_t>(tr.particles[k]);
+        const Vec<Dim> X = P.x0[i] + tr.offset[k];
+        const Vec<Dim> f = (tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k];
+        if (ps_) {
+          if constexpr (Dim == 2) {
+            PowellSabinBasis::StencilT s;
+            // On the body's boundary; a point the triangle search misses by round-off is
+            // evaluated in its particle's triangle (the piece extrapolated, C1 across edges).
+            if (!ps_->splines().evaluate_point(X, s)) ps_->splines().evaluate_in(element_[i], X, s);
+            load(s, f);
+          }
+        } else {
+          with_bspline_degree(degree_, [&](auto degree) {
+            const BSplineBasis<Dim, decltype(degree)::value> basis(body_);
+            typename BSplineBasis<Dim, decltype(degree)::value>::StencilT s;
+            basis.evaluate_point(X, s);
+            load(s, f);
+          });
+        }
+      }
     }
   }
 }

@@ -14,7 +14,8 @@
 // The nodes are the grid's nodes from the body's first to its last at the start (the body's ends
 // must be grid nodes; OTM has no empty elements); a grid side's Dirichlet condition fixes the
 // body's end node where the body touches that side; a traction acts on the body's end node
-// (unified: its end control point), where the basis interpolates. The nodal sums, the
+// (unified: its end control point), where the basis interpolates, and in 2D through the
+// functions of the isoparametric map at the face points' material positions. The nodal sums, the
 // conservation checks and the mass solves are the MPM stages' (RunState's nodes hold the
 // advected nodes' sums), lumped or consistent mass by method.mass (D: consistent).
 //
@@ -69,8 +70,8 @@ struct OtmSettings {
 template <int Dim>
 class Otm {
  public:
-  // Takes the problem's particles. InputError when the body's ends are not grid nodes or
-  // tractions in 2D.
+  // Takes the problem's particles. InputError when the body's ends are not grid nodes, or for
+  // tractions on OTM-maxent in 2D.
   Otm(Problem<Dim>& pb, const OtmSettings& s);
 
   // One step of D Algorithm 3 or 4 (the driver sets the step counter and time afterwards).
@@ -86,6 +87,8 @@ class Otm {
   const std::vector<double>& nodes() const { return x_; }
   void set_nodes(const std::vector<double>& x, const std::string& what);
   const OtmSettings& settings() const { return s_; }
+  // Unified PS: the splines of the material triangles; null otherwise.
+  const PowellSabinGridBasis<2>* powell_sabin() const { return ps_.get(); }
 
  private:
   void evaluate_basis();
