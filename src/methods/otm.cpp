@@ -100,8 +100,8 @@ Otm<Dim>::Otm(Problem<Dim>& pb, const OtmSettings& s)
   for (const auto& tr : pb.tractions)
     if (Dim != 1 && tr.offset.size() != tr.particles.size())
       throw InputError(
-          fmt::format("method.solver = \"{}\": a traction without face points "
-                      "(a mesh boundary's load) is not implemented",
+          fmt::format("method.solver = \"{}\": a traction whose points have no place on "
+                      "the face (offsets) cannot act through the map in 2D",
                       solver));
   // The nodes (unified: the B-spline control points at their Greville abscissae, so that
   // x(X) = X at the start) and, per grid side the body touches, the Dirichlet conditions: a
