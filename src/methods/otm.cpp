@@ -295,33 +295,39 @@ void Otm<Dim>::add_tractions() {
     }
   } else {
     const auto& P = st_.particles;
+    // fn(X_k, particle, f_k) for every face point: its material position and its load.
+    auto each_point = [&](auto&& fn) {
+      for (const auto& tr : st_.tractions) {
+        const Vec<Dim> tau = tr.value(st_.time);
+        const double p = tr.pressure ? tr.pressure(st_.time) : 0.0;
+        for (std::size_t k = 0; k < tr.particles.size(); ++k) {
+          const auto i = static_cast<std::size_t>(tr.particles[k]);
+          fn(Vec<Dim>(P.x0[i] + tr.offset[k]), i,
+             Vec<Dim>((tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k]));
+        }
+      }
+    };
     auto load = [&](const auto& s, const Vec<Dim>& f) {
       for (int a = 0; a < s.kSize; ++a) nd.force[static_cast<std::size_t>(s.dof[a])] += s.w[a] * f;
     };
-    for (const auto& tr : st_.tractions) {
-      const Vec<Dim> tau = tr.value(st_.time);
-      const double p = tr.pressure ? tr.pressure(st_.time) : 0.0;
-      for (std::size_t k = 0; k < tr.particles.size(); ++k) {
-        const auto i = static_cast<std::size_t>(tr.particles[k]);
-        const Vec<Dim> X = P.x0[i] + tr.offset[k];
-        const Vec<Dim> f = (tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k];
-        if (ps_) {
-          if constexpr (Dim == 2) {
-            PowellSabinBasis::StencilT s;
-            // On the body's boundary; a point the triangle search misses by round-off is
-            // evaluated in its particle's triangle (the piece extrapolated, C1 across edges).
-            if (!ps_->splines().evaluate_point(X, s)) ps_->splines().evaluate_in(element_[i], X, s);
-            load(s, f);
-          }
-        } else {
-          with_bspline_degree(degree_, [&](auto degree) {
-            const BSplineBasis<Dim, decltype(degree)::value> basis(body_);
-            typename BSplineBasis<Dim, decltype(degree)::value>::StencilT s;
-            basis.evaluate_point(X, s);
-            load(s, f);
-          });
-        }
-      }
+    if (ps_) {
+      if constexpr (Dim == 2)
+        each_point([&](const Vec<2>& X, std::size_t i, const Vec<2>& f) {
+          PowellSabinBasis::StencilT s;
+          // On the body's boundary; a point the triangle search misses by round-off is
+          // evaluated in its particle's triangle (the piece extrapolated, C1 across edges).
+          if (!ps_->splines().evaluate_point(X, s)) ps_->splines().evaluate_in(element_[i], X, s);
+          load(s, f);
+        });
+    } else {
+      with_bspline_degree(degree_, [&](auto degree) {
+        const BSplineBasis<Dim, decltype(degree)::value> basis(body_);  // B_i(X), once a step
+        each_point([&](const Vec<Dim>& X, std::size_t, const Vec<Dim>& f) {
+          typename BSplineBasis<Dim, decltype(degree)::value>::StencilT s;
+          basis.evaluate_point(X, s);
+          load(s, f);
+        });
+      });
     }
   }
 }
