@@ -100,11 +100,37 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
     comm_ = opt.comm;
     writer_ = comm_->root();
   }
+  mapping_errors_ = s.method.solver == Solver::Mpm;
+  history_header_ = "time,kinetic_energy,strain_energy,total_energy,mass";
+  for (int d = 0; d < Dim; ++d) history_header_ += fmt::format(",momentum_{}", d + 1);
+  // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
+  // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
+  // report their maxima, which summary.json has).
+  if (mapping_errors_) history_header_ += ",mass_error,momentum_error";
+  // output.reactions: the reaction [N; N/m in 2D] on each constrained boundary, per component
+  // (0 in the first row, before any step).
+  if (pb.reactions)
+    for (const std::string& name : reaction_names(pb))
+      for (int d = 0; d < Dim; ++d) {
+        history_header_ += fmt::format(",reaction_{}_{}", name, "xyz"[d]);
+        ++reaction_columns_;
+      }
+  // The columns, for the rows kept in memory (RunOptions::keep_history).
+  if (opt.keep_history) {
+    keep_history_ = true;
+    std::string_view rest = history_header_;
+    for (std::size_t at = 0; at != std::string_view::npos;) {
+      const std::size_t comma = rest.find(',', at);
+      history_columns_.emplace_back(
+          rest.substr(at, comma == std::string_view::npos ? comma : comma - at));
+      at = comma == std::string_view::npos ? comma : comma + 1;
+    }
+  }
+  history_header_ += "\n";
   if (dir_.empty()) return;
   csv_ = s.output.csv;
   vtk_ = s.output.vtk;
   vtk_binary_ = s.output.vtk_binary;
-  mapping_errors_ = s.method.solver == Solver::Mpm;
   if (!writer_) return;
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
@@ -149,21 +175,6 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
     }
     io::write_file_atomic(dir_ / "grid.vtu", grid);
   }
-  history_header_ = "time,kinetic_energy,strain_energy,total_energy,mass";
-  for (int d = 0; d < Dim; ++d) history_header_ += fmt::format(",momentum_{}", d + 1);
-  // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
-  // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
-  // report their maxima, which summary.json has).
-  if (mapping_errors_) history_header_ += ",mass_error,momentum_error";
-  // output.reactions: the reaction [N; N/m in 2D] on each constrained boundary, per component
-  // (0 in the first row, before any step).
-  if (pb.reactions)
-    for (const std::string& name : reaction_names(pb))
-      for (int d = 0; d < Dim; ++d) {
-        history_header_ += fmt::format(",reaction_{}_{}", name, "xyz"[d]);
-        ++reaction_columns_;
-      }
-  history_header_ += "\n";
 }
 
 template <int Dim>
@@ -188,7 +199,7 @@ void OutputSession<Dim>::agreed(Write&& write) const {
 
 template <int Dim>
 void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
-  if (!enabled()) return;
+  if (!enabled() && !keep_history_) return;
   const auto& P = sim.particles;
   double kin = 0.0, strain = 0.0, mass = 0.0;
   Vec<Dim> mom = Vec<Dim>::Zero();
@@ -227,6 +238,17 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
     for (std::size_t k = 0; k < reaction_columns_; ++k)
       row += r != nullptr && !r->empty() ? fmt::format(",{:.17g}", (*r)[k]) : std::string(",0");
   }
+  if (keep_history_) {
+    // The row's values, parsed back from their shortest round-trip text: the bits of the file.
+    std::string_view rest = row;
+    for (std::size_t at = 0; at < rest.size();) {
+      std::size_t comma = rest.find(',', at);
+      if (comma == std::string_view::npos) comma = rest.size();
+      history_values_.push_back(std::stod(std::string(rest.substr(at, comma - at))));
+      at = comma + 1;
+    }
+  }
+  if (!enabled()) return;
   row += "\n";
   // Appended as the run goes (io::AppendFile): constant memory, and a killed run keeps every row
   // written so far. A fresh run starts the file with the header at its first row.
@@ -699,6 +721,141 @@ void reference_errors(const Particles<1>& P, const Ulfem1D& ref, ErrorNorms& e) 
   if (den > 0.0) e.stress_rel_l2 = std::sqrt(num / den);
 }
 
+template <int Dim>
+TimeLoop<Dim>::TimeLoop(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim>& out,
+                        Index start, Hooks hooks, RunResult& res)
+    : settings_(settings),
+      out_(out),
+      hooks_(std::move(hooks)),
+      res_(res),
+      progress_(!opt.quiet, settings.time.steps, res.particles, start),
+      start_(start),
+      step_(start) {
+  const TimeSettings& ts = settings.time;
+  if (start > ts.steps)
+    throw InputError(
+        fmt::format("{}: the checkpoint is at step {}, beyond time.end = {} ({} steps of time.dt)",
+                    ts.where_end, start, ts.end, ts.steps));
+  while (next_frame_ <= settings.output.frames && start >= frame_step(next_frame_)) ++next_frame_;
+  try {
+    if (start == 0 || !out.history_continues()) out.history_row(hooks_.view());
+    if (start == 0) out.frame(hooks_.view());
+  } catch (const RunError& e) {
+    fail(e);
+  }
+}
+
+template <int Dim>
+Index TimeLoop<Dim>::frame_step(Index k) const {
+  const Index steps = settings_.time.steps;
+  const int frames = settings_.output.frames;
+  return frames > 0 ? (k * steps + frames - 1) / frames : steps;
+}
+
+template <int Dim>
+bool TimeLoop<Dim>::advance_to(Index to) {
+  const Index steps = settings_.time.steps;
+  const int frames = settings_.output.frames;
+  const Index history_every = settings_.output.history_every;
+  const Index checkpoint_every = settings_.output.checkpoint_every;
+  to = std::min(to, steps);
+  try {
+    while (!stopped_ && step_ < to) {
+      const auto t0 = Clock::now();
+      hooks_.advance(step_);
+      const double seconds = seconds_since(t0);
+      step_seconds_ += seconds;
+      if (step_ == start_) res_.first_step_seconds = seconds;
+      ++step_;
+      hooks_.after();
+      const bool last = step_ == steps;
+      wrote_row_ = step_ % history_every == 0 || last;
+      wrote_frame_ = last || (frames > 0 && step_ >= frame_step(next_frame_));
+      wrote_checkpoint_ = checkpoint_every > 0 && step_ % checkpoint_every == 0;
+      if (wrote_row_) out_.history_row(hooks_.view());
+      if (wrote_frame_) {
+        while (next_frame_ <= frames && step_ >= frame_step(next_frame_)) ++next_frame_;
+        out_.frame(hooks_.view());
+      }
+      if (wrote_checkpoint_) hooks_.save(step_);
+      progress_.update(step_, hooks_.view().time);
+      int sig = interrupt_signal();
+      if (const Comm* comm = out_.comm()) {
+        // Every rank ends after the same step: a signal that reached any of them ends them all,
+        // each recording the signal it was (the highest number if several came).
+        comm->check();
+        sig = static_cast<int>(comm->max(static_cast<double>(sig)));
+      }
+      if (sig != 0 && !last) {
+        // A signal (core/interrupt.hpp): the state after this step, complete, ends the run.
+        res_.exit_code = exit_code::kInterrupted;
+        res_.failure = fmt::format("interrupted by {} after step {} of {} (t = {:.6g} s)",
+                                   signal_name(sig), step_, steps, hooks_.view().time);
+        stopped_ = true;
+        write_final_state();
+      }
+    }
+  } catch (const RunError& e) {
+    fail(e);
+  }
+  return running();
+}
+
+template <int Dim>
+void TimeLoop<Dim>::write_final_state() {
+  if (!wrote_row_) out_.history_row(hooks_.view());
+  if (!wrote_frame_) out_.frame(hooks_.view());
+  if (settings_.output.checkpoint_every > 0 && !wrote_checkpoint_) hooks_.save(step_);
+}
+
+template <int Dim>
+void TimeLoop<Dim>::stop(const std::string& why) {
+  if (!running()) return;
+  res_.exit_code = exit_code::kInterrupted;
+  res_.failure = why;
+  stopped_ = true;
+  try {
+    write_final_state();
+  } catch (const RunError& e) {
+    fail(e);
+  }
+}
+
+template <int Dim>
+void TimeLoop<Dim>::fail(const RunError& e) {
+  stopped_ = true;
+  res_.exit_code = e.exit_code();
+  res_.failure = e.what();
+  // A distributed run: a failure met on this rank is told to the others, which wait for it at
+  // their next collective operation (Comm::check); every rank reports the lowest failing one.
+  if (const Comm* comm = out_.comm(); comm && !dynamic_cast<const RemoteRunError*>(&e)) {
+    const Comm::Failure mine{comm->rank(), e.exit_code(), e.what()};
+    const Comm::Failure first = *comm->agree(&mine);
+    res_.exit_code = first.exit_code;
+    res_.failure = fmt::format("rank {} of {}: {}", first.rank, comm->size(), first.message);
+  }
+  try {
+    out_.history_row(hooks_.view());
+    out_.frame(hooks_.view());  // the state the failure was detected in, for diagnosis
+  } catch (const RunError&) {
+    // An output failing again (a full disk): the failure above is what the summary reports.
+  }
+}
+
+template <int Dim>
+void TimeLoop<Dim>::finish() {
+  progress_.finish();
+  res_.steps = step_;
+  const Index taken = step_ - start_;
+  res_.ns_per_particle_step =
+      taken > 0
+          ? 1e9 * step_seconds_ / (static_cast<double>(taken) * static_cast<double>(res_.particles))
+          : 0.0;
+}
+
+template class TimeLoop<1>;
+template class TimeLoop<2>;
+template class TimeLoop<3>;
 template ErrorNorms error_norms<1>(const Particles<1>&, const Grid<1>&, const ExactSolution<1>&,
                                    double, double, double, int, const Comm*);
 template ErrorNorms error_norms<2>(const Particles<2>&, const Grid<2>&, const ExactSolution<2>&,

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -115,8 +116,15 @@ class OutputSession {
   // The processes of a distributed run, or null.
   const Comm* comm() const { return comm_; }
   void history_row(const StateView<Dim>& s);
+  // The history rows kept in memory (RunOptions::keep_history), with or without an output
+  // directory: history.csv's columns, and its values row after row.
+  const std::vector<std::string>& history_columns() const { return history_columns_; }
+  const std::vector<double>& history_values() const { return history_values_; }
   void frame(const StateView<Dim>& s);
   void summary(const nlohmann::ordered_json& j);
+  // Ends the session's hold on the directory (its lock), once the summary is written: the
+  // process may start another run into it (a Python session's next run).
+  void close() { lock_ = io::DirectoryLock(); }
 
   // Checkpoints: the frames written so far, and continuing after a restart (numbering goes on;
   // particles.pvd lists the earlier frames again, history.csv keeps its rows before the
@@ -144,6 +152,9 @@ class OutputSession {
   bool mapping_errors_ = false;       // history.csv has mass_error, momentum_error
   std::size_t reaction_columns_ = 0;  // history.csv's reaction_* columns (output.reactions)
   bool history_continues_ = false;
+  bool keep_history_ = false;
+  std::vector<std::string> history_columns_;
+  std::vector<double> history_values_;
   io::PvdSeries pvd_;
   // A distributed run's CSV frame: every process writes rows of it into the one file, in
   // rounds over the ids (collective; driver.cpp).
@@ -168,99 +179,57 @@ class OutputSession {
 void check_stability(const TimeSettings& time, double h, const Materials& materials, double factor,
                      int dim, std::string_view what);
 
-// The time loop shared by every solver: `advance(s)` takes step s to s + 1 (timed; may throw
-// RunError), `after()` runs untimed companions (the FEM reference), `view()` exposes the state.
-// Writes history rows and frames, shows progress, and on a RunError keeps the failing state as
-// the last frame and records the failure in `res`. `start`: the step the state is at (non-zero
-// after a restart: no initial frame then). `save(step)` writes a checkpoint every
-// output.checkpoint_every steps.
-template <int Dim, class Advance, class After, class View, class Save>
-void drive(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim>& out, Index start,
-           Advance&& advance, After&& after, View&& view, Save&& save, RunResult& res) {
-  const TimeSettings& ts = settings.time;
-  const int frames = settings.output.frames;
-  const Index history_every = settings.output.history_every;
-  const Index checkpoint_every = settings.output.checkpoint_every;
-  if (start > ts.steps)
-    throw InputError(
-        fmt::format("{}: the checkpoint is at step {}, beyond time.end = {} ({} steps of time.dt)",
-                    ts.where_end, start, ts.end, ts.steps));
-  Index next_frame = 1;
-  auto frame_step = [&](Index k) {
-    return frames > 0 ? (k * ts.steps + frames - 1) / frames : ts.steps;
+// The time loop shared by every solver, resumable: the caller takes it to a step, looks at the
+// state, and goes on (driver/session.hpp; run() takes it to the end at once). Its hooks:
+// `advance(s)` takes step s to s + 1 (timed; may throw RunError), `after()` runs untimed
+// companions (the FEM reference), `view()` exposes the state, `save(step)` writes a checkpoint
+// (every output.checkpoint_every steps). It writes history rows and frames, shows progress, and
+// on a RunError keeps the failing state as the last frame and records the failure in `res`.
+// `start`: the step the state is at (non-zero after a restart: no initial frame then).
+template <int Dim>
+class TimeLoop {
+ public:
+  struct Hooks {
+    std::function<void(Index)> advance;
+    std::function<void()> after;
+    std::function<StateView<Dim>()> view;
+    std::function<void(Index)> save;
   };
-  while (next_frame <= frames && start >= frame_step(next_frame)) ++next_frame;
-  Progress progress(!opt.quiet, ts.steps, res.particles, start);
-  double step_seconds = 0.0;
-  Index step = start;
-  try {
-    if (start == 0 || !out.history_continues()) out.history_row(view());
-    if (start == 0) out.frame(view());
-    while (step < ts.steps) {
-      const auto t0 = Clock::now();
-      advance(step);
-      const double seconds = seconds_since(t0);
-      step_seconds += seconds;
-      if (step == start) res.first_step_seconds = seconds;
-      ++step;
-      after();
-      const bool last = step == ts.steps;
-      const bool row = step % history_every == 0 || last;
-      const bool frame = last || (frames > 0 && step >= frame_step(next_frame));
-      const bool checkpoint = checkpoint_every > 0 && step % checkpoint_every == 0;
-      if (row) out.history_row(view());
-      if (frame) {
-        while (next_frame <= frames && step >= frame_step(next_frame)) ++next_frame;
-        out.frame(view());
-      }
-      if (checkpoint) save(step);
-      progress.update(step, view().time);
-      int sig = interrupt_signal();
-      if (const Comm* comm = out.comm()) {
-        // Every rank ends after the same step: a signal that reached any of them ends them all,
-        // each recording the signal it was (the highest number if several came).
-        comm->check();
-        sig = static_cast<int>(comm->max(static_cast<double>(sig)));
-      }
-      if (sig != 0 && !last) {
-        // A signal (core/interrupt.hpp): the state after this step, complete, ends the run: its
-        // history row, a frame and, when checkpoints are on, a checkpoint to restart from,
-        // each unless this step has written it already.
-        res.exit_code = exit_code::kInterrupted;
-        res.failure = fmt::format("interrupted by {} after step {} of {} (t = {:.6g} s)",
-                                  signal_name(sig), step, ts.steps, view().time);
-        if (!row) out.history_row(view());
-        if (!frame) out.frame(view());
-        if (checkpoint_every > 0 && !checkpoint) save(step);
-        break;
-      }
-    }
-  } catch (const RunError& e) {
-    res.exit_code = e.exit_code();
-    res.failure = e.what();
-    // A distributed run: a failure met on this rank is told to the others, which wait for it at
-    // their next collective operation (Comm::check); every rank reports the lowest failing one.
-    if (const Comm* comm = out.comm(); comm && !dynamic_cast<const RemoteRunError*>(&e)) {
-      const Comm::Failure mine{comm->rank(), e.exit_code(), e.what()};
-      const Comm::Failure first = *comm->agree(&mine);
-      res.exit_code = first.exit_code;
-      res.failure = fmt::format("rank {} of {}: {}", first.rank, comm->size(), first.message);
-    }
-    try {
-      out.history_row(view());
-      out.frame(view());  // the state the failure was detected in, for diagnosis
-    } catch (const RunError&) {
-      // An output failing again (a full disk): the failure above is what the summary reports.
-    }
-  }
-  progress.finish();
-  res.steps = step;
-  const Index taken = step - start;
-  res.ns_per_particle_step =
-      taken > 0
-          ? 1e9 * step_seconds / (static_cast<double>(taken) * static_cast<double>(res.particles))
-          : 0.0;
-}
+  // Writes the initial history row and frame.
+  TimeLoop(const RunSettings& settings, const RunOptions& opt, OutputSession<Dim>& out, Index start,
+           Hooks hooks, RunResult& res);
+  // Takes steps until step `to` (at most the last), a failure or a signal; returns running().
+  bool advance_to(Index to);
+  // Not at the last step, not failed, not interrupted.
+  bool running() const { return !stopped_ && step_ < settings_.time.steps; }
+  Index step() const { return step_; }
+  Index start() const { return start_; }
+  // Ends a run before its last step, at the caller's request: as a signal does (the state after
+  // the step is complete: its history row, a frame and, with checkpoints on, a checkpoint, each
+  // unless this step has written it), with exit code kInterrupted and `why` as the failure.
+  void stop(const std::string& why);
+  // The step counts and timing into `res` (steps, ns_per_particle_step); the progress line ends.
+  void finish();
+  // A checkpoint of the state now (the caller's; needs an output directory and
+  // output.checkpoint_every or not).
+  void checkpoint() { hooks_.save(step_); }
+
+ private:
+  Index frame_step(Index k) const;
+  void fail(const RunError& e);
+  // A row, frame and checkpoint of the step just taken, unless written (the end of a stop).
+  void write_final_state();
+  const RunSettings& settings_;
+  OutputSession<Dim>& out_;
+  Hooks hooks_;
+  RunResult& res_;
+  Progress progress_;
+  Index start_ = 0, step_ = 0, next_frame_ = 1;
+  double step_seconds_ = 0.0;
+  bool stopped_ = false;
+  // What the last step wrote (the end of a stop writes what is missing).
+  bool wrote_row_ = true, wrote_frame_ = true, wrote_checkpoint_ = true;
+};
 
 // A run whose error norms against the exact solution are not finite (the exact solution is
 // not finite at some particle, e.g. exact.displacement = "0/0") has no result to report: its

@@ -5,6 +5,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <vector>
 
 #include "basis/powell_sabin.hpp"
 #include "driver/sparse_mass.hpp"
@@ -34,6 +35,13 @@ class OtmStepper final : public Stepper<Dim> {
   // between processes.
   void export_carried() override {}
   void resize_particle_caches() override {}
+  std::vector<Vec<Dim>> dof_positions() const override {
+    const std::vector<double>& flat = otm_.nodes();
+    std::vector<Vec<Dim>> x(flat.size() / Dim);
+    for (std::size_t i = 0; i < x.size(); ++i)
+      for (int d = 0; d < Dim; ++d) x[i][d] = flat[Dim * i + static_cast<std::size_t>(d)];
+    return x;
+  }
   void report(nlohmann::ordered_json& summary) const override {
     const auto& x = otm_.nodes();
     const OtmSettings& s = otm_.settings();

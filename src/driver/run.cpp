@@ -16,6 +16,7 @@
 #include "core/parallel.hpp"
 #include "driver/driver.hpp"
 #include "driver/run_mpm.hpp"
+#include "driver/session.hpp"
 #include "io/checkpoint.hpp"
 #include "parallel/distribution.hpp"
 #include "setup/config.hpp"
@@ -42,65 +43,104 @@ std::string toml_string(const std::string& s) {
 
 // method.solver = "ulfem": the updated-Lagrangian FEM on the problem's body, one linear element
 // per grid cell covered by the body; outputs and errors at the element midpoints.
-RunResult run_ulfem(Problem<1>& pb, const RunSettings& settings, const std::string& config_text,
-                    const RunOptions& opt) {
-  const auto t_start = Clock::now();
-  const TimeSettings& ts = settings.time;
-  OutputSession<1> out(opt, settings, config_text, pb);
-  const auto elements =
-      std::max<Index>(1, std::llround((pb.body_max[0] - pb.body_min[0]) / pb.grid.h[0]));
-  check_stability(ts, (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements),
-                  pb.materials, 1.0, 1, "linear elements");
-  Ulfem1D fem(pb, elements);
-  RunResult res;
-  res.benchmark = pb.benchmark;
-  res.warnings = pb.warnings;
-  res.dim = 1;
-  res.cells = elements;
-  res.h = (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements);
-  res.particles = elements;
-  Index start = 0;
-  if (opt.restart) {
-    const io::Checkpoint& c = *opt.restart;
-    const std::string what = fmt::format("checkpoint '{}'", opt.restart_name);
-    if (c.solver != "ulfem" || !c.fem)
-      throw InputError(fmt::format("{} holds a {} run, not a ulfem run", what, c.solver));
-    fem.restore(io::unpack_fem(*c.fem, what));
-    out.resume(c);
-    start = c.step;
+class UlfemRun final : public SolverRun {
+ public:
+  UlfemRun(Problem<1>& pb, const RunSettings& settings, const std::string& config_text,
+           const RunOptions& opt)
+      : pb_(pb),
+        settings_(settings),
+        config_text_(config_text),
+        out_(opt, settings, config_text, pb),
+        elements_(
+            std::max<Index>(1, std::llround((pb.body_max[0] - pb.body_min[0]) / pb.grid.h[0]))) {
+    const TimeSettings& ts = settings.time;
+    const double h = (pb.body_max[0] - pb.body_min[0]) / static_cast<double>(elements_);
+    check_stability(ts, h, pb.materials, 1.0, 1, "linear elements");
+    fem_.emplace(pb, elements_);
+    res_.benchmark = pb.benchmark;
+    res_.warnings = pb.warnings;
+    res_.dim = 1;
+    res_.cells = elements_;
+    res_.h = h;
+    res_.particles = elements_;
+    Index start = 0;
+    if (opt.restart) {
+      const io::Checkpoint& c = *opt.restart;
+      const std::string what = fmt::format("checkpoint '{}'", opt.restart_name);
+      if (c.solver != "ulfem" || !c.fem)
+        throw InputError(fmt::format("{} holds a {} run, not a ulfem run", what, c.solver));
+      fem_->restore(io::unpack_fem(*c.fem, what));
+      out_.resume(c);
+      start = c.step;
+    }
+    loop_.emplace(
+        settings, opt, out_, start,
+        TimeLoop<1>::Hooks{[this](Index) { fem_->step(settings_.time.dt); }, [] {},
+                           [this] {
+                             return StateView<1>{fem_->elements(), fem_->time(), pb_.materials};
+                           },
+                           [this](Index step) { save(step); }},
+        res_);
   }
-  drive<1>(
-      settings, opt, out, start, [&](Index) { fem.step(ts.dt); }, [] {},
-      [&] {
-        return StateView<1>{fem.elements(), fem.time(), pb.materials};
-      },
-      [&](Index step) {
-        io::Checkpoint c;
-        c.config = config_text;
-        c.solver = "ulfem";
-        c.dim = 1;
-        c.step = step;
-        c.time = fem.time();
-        c.fem = io::pack_fem(fem.save());
-        c.frames = out.frames();
-        c.frame_times = out.frame_times();
-        out.checkpoint(c);
-      },
-      res);
-  if (res.exit_code == exit_code::kOk) {
-    // Element midpoints of equal length: no cell of the body is special, so no interior cut.
-    Grid<1> element_grid(pb.body_min, pb.body_max, IVec<1>{elements});
-    res.errors = error_norms<1>(fem.elements(), element_grid, pb.exact, fem.time(), ts.dt,
-                                /*velocity_time=*/-0.5, /*boundary_cells=*/1);
-    check_error_norms(res);
+  bool advance_to(Index to) override { return loop_->advance_to(to); }
+  bool running() const override { return loop_->running(); }
+  Index step() const override { return loop_->step(); }
+  double time() const override { return fem_->time(); }
+  void stop(const std::string& why) override { loop_->stop(why); }
+  void checkpoint() override { loop_->checkpoint(); }
+  const RunResult& result() const override { return res_; }
+  ParticlesRef particles() const override { return &fem_->elements(); }
+  const Materials& materials() const override { return pb_.materials; }
+  RunStateRef run_state() override { return static_cast<RunState<1>*>(nullptr); }
+  std::vector<double> dof_positions() const override { return {}; }
+  const std::vector<std::string>& history_columns() const override {
+    return out_.history_columns();
   }
-  res.wall_seconds = seconds_since(t_start);
-  res.summary =
-      make_summary(res, settings, pb.materials, fem.time(),
-                   {{"solver", "ulfem"}, {"elements", elements}, {"mass", "lumped"}}, -0.5);
-  out.summary(res.summary);
-  return res;
-}
+  const std::vector<double>& history_values() const override { return out_.history_values(); }
+
+  RunResult finish() override {
+    loop_->finish();
+    if (res_.exit_code == exit_code::kOk) {
+      // Element midpoints of equal length: no cell of the body is special, so no interior cut.
+      Grid<1> element_grid(pb_.body_min, pb_.body_max, IVec<1>{elements_});
+      res_.errors = error_norms<1>(fem_->elements(), element_grid, pb_.exact, fem_->time(),
+                                   settings_.time.dt, /*velocity_time=*/-0.5,
+                                   /*boundary_cells=*/1);
+      check_error_norms(res_);
+    }
+    res_.wall_seconds = seconds_since(t_start_);
+    res_.summary =
+        make_summary(res_, settings_, pb_.materials, fem_->time(),
+                     {{"solver", "ulfem"}, {"elements", elements_}, {"mass", "lumped"}}, -0.5);
+    out_.summary(res_.summary);
+    out_.close();
+    return res_;
+  }
+
+ private:
+  void save(Index step) {
+    io::Checkpoint c;
+    c.config = config_text_;
+    c.solver = "ulfem";
+    c.dim = 1;
+    c.step = step;
+    c.time = fem_->time();
+    c.fem = io::pack_fem(fem_->save());
+    c.frames = out_.frames();
+    c.frame_times = out_.frame_times();
+    out_.checkpoint(c);
+  }
+
+  Problem<1>& pb_;
+  const RunSettings& settings_;
+  const std::string& config_text_;
+  const Clock::time_point t_start_ = Clock::now();
+  OutputSession<1> out_;
+  Index elements_;
+  std::optional<Ulfem1D> fem_;
+  RunResult res_;
+  std::optional<TimeLoop<1>> loop_;
+};
 
 // A distributed run's problem: each process stores only the particles of its slab,
 // so that no process holds the whole body, not even while the problem is set up. A counting pass
@@ -160,8 +200,9 @@ int run_threads(int requested, Index particles, int dim, int available) {
   return static_cast<int>(std::clamp<Index>(particles / per, 1, std::max(1, available)));
 }
 
-RunResult run(const Config& given, const RunOptions& given_options) {
-  RunOptions opt = given_options;
+driver::Session::Session(const Config& given, const RunOptions& given_options)
+    : opt_(given_options) {
+  RunOptions& opt = opt_;
   // The stored configuration (config.toml, checkpoints) names the files a run reads (the mesh
   // of grid.mesh, the body of body.mesh or body.particles) by their absolute paths, so that
   // `mpm run DIR/config.toml` and a restart from the checkpoint alone read the same files
@@ -209,8 +250,8 @@ RunResult run(const Config& given, const RunOptions& given_options) {
   reset_peak_memory();
   const bool distributed = opt.comm != nullptr && opt.comm->distributed();
   Index particles = 0;  // the body's, on all processes
-  AnyProblem problem =
-      distributed ? make_distributed_problem(cfg, *opt.comm, particles) : make_problem(cfg);
+  problem_ = distributed ? make_distributed_problem(cfg, *opt.comm, particles) : make_problem(cfg);
+  AnyProblem& problem = problem_;
   const int dim =
       std::visit([](const auto& pb) { return std::decay_t<decltype(pb)>::kDim; }, problem);
   if (!distributed)
@@ -247,23 +288,65 @@ RunResult run(const Config& given, const RunOptions& given_options) {
   const int ranks = opt.comm ? opt.comm->size() : 1;
   const int available =
       std::max(1, omp_get_max_threads() / (opt.comm ? opt.comm->local_size() : 1));
-  const ScopedThreads threads(run_threads(opt.threads, particles / ranks, dim, available));
-  const RunSettings settings = run_settings(cfg, dim);
-  const std::string config_text = cfg.to_toml();
+  threads_ = run_threads(opt.threads, particles / ranks, dim, available);
+  dim_ = dim;
+  const ScopedThreads threads(threads_);
+  settings_ = run_settings(cfg, dim);
+  config_text_ = cfg.to_toml();
   // MPM and OTM (which shares the driver through its Stepper; driver/otm_stepper.cpp).
-  if (settings.method.solver == Solver::Ulfem) {
+  if (settings_.method.solver == Solver::Ulfem) {
     if (ranks > 1)
       throw InputError(
           fmt::format("{}: method.solver = \"ulfem\" runs on one process; start it without mpirun",
-                      settings.method.where_solver));
-    return run_ulfem(std::get<Problem<1>>(problem), settings, config_text, opt);
+                      settings_.method.where_solver));
+    solver_ =
+        std::make_unique<UlfemRun>(std::get<Problem<1>>(problem), settings_, config_text_, opt);
+    return;
   }
-  return std::visit(
+  solver_ = std::visit(
       [&](auto& pb) {
         constexpr int Dim = std::decay_t<decltype(pb)>::kDim;
-        return run_mpm<Dim>(pb, settings, config_text, opt);
+        return start_mpm<Dim>(pb, settings_, config_text_, opt);
       },
       problem);
+}
+
+driver::Session::~Session() = default;
+
+bool driver::Session::advance_to(Index to) {
+  if (finished_) return false;
+  const ScopedThreads threads(threads_);
+  return solver_->advance_to(to);
+}
+
+void driver::Session::stop(const std::string& why) {
+  if (finished_) return;
+  const ScopedThreads threads(threads_);
+  solver_->stop(why);
+}
+
+void driver::Session::checkpoint() {
+  if (finished_) throw std::logic_error("Session::checkpoint: the run is finished");
+  if (opt_.out_dir.empty())
+    throw InputError("a checkpoint is written into the run's output directory; the run has none");
+  const ScopedThreads threads(threads_);
+  solver_->checkpoint();
+}
+
+RunResult driver::Session::finish() {
+  if (finished_) throw std::logic_error("Session::finish: the run is finished already");
+  const ScopedThreads threads(threads_);
+  if (solver_->running())
+    solver_->stop(fmt::format("finished by the caller after step {} of {} (t = {:.6g} s)",
+                              solver_->step(), steps(), solver_->time()));
+  finished_ = true;
+  return solver_->finish();
+}
+
+RunResult run(const Config& cfg, const RunOptions& opt) {
+  driver::Session session(cfg, opt);
+  session.advance_to(session.steps());
+  return session.finish();
 }
 
 }  // namespace mpm

@@ -21,6 +21,8 @@ struct Checkpoint;
 struct RunOptions {
   std::string out_dir;  // empty: write nothing
   bool quiet = false;   // no progress line
+  // Keep history.csv's rows in memory too, with or without out_dir (driver/session.hpp).
+  bool keep_history = false;
   // out_dir holds an earlier run's files (io::run_files): false refuses the run (InputError),
   // true removes them before the first write. A restart keeps what it continues.
   bool overwrite = false;

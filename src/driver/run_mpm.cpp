@@ -377,29 +377,106 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
   return c.step;
 }
 
-}  // namespace
+// The MPM run of one problem (also OTM and the unified solver, through their stepper): set up in
+// the constructor, stepped by the time loop, finished into its result.
+template <int Dim>
+class MpmRun final : public SolverRun {
+ public:
+  MpmRun(Problem<Dim>& pb, const RunSettings& settings, const std::string& config_text,
+         const RunOptions& opt);
+  bool advance_to(Index to) override { return loop_->advance_to(to); }
+  bool running() const override { return loop_->running(); }
+  Index step() const override { return loop_->step(); }
+  double time() const override { return stepper_->state().time; }
+  void stop(const std::string& why) override { loop_->stop(why); }
+  void checkpoint() override { loop_->checkpoint(); }
+  RunResult finish() override;
+  const RunResult& result() const override { return res_; }
+  ParticlesRef particles() const override { return &stepper_->state().particles; }
+  const Materials& materials() const override { return stepper_->state().materials; }
+  RunStateRef run_state() override { return &stepper_->state(); }
+  std::vector<double> dof_positions() const override {
+    std::vector<double> flat;
+    for (const Vec<Dim>& x : stepper_->dof_positions()) flat.insert(flat.end(), x.begin(), x.end());
+    return flat;
+  }
+  const std::vector<std::string>& history_columns() const override {
+    return out_->history_columns();
+  }
+  const std::vector<double>& history_values() const override { return out_->history_values(); }
+
+ private:
+  // An input error that only some processes meet (the stepper's checks of their own particles,
+  // rank 0's output directory), or a write that fails on one (config.toml, grid.vtu), stops
+  // every process with the message and exit code of the lowest.
+  template <class Build>
+  void agreed(Build&& build);
+  void advance(Index s);
+  void save();
+
+  Problem<Dim>& pb_;
+  const RunSettings& settings_;
+  const std::string& config_text_;
+  RunOptions opt_;
+  std::string_view mapping_name_;
+  bool otm_ = false, unified_ = false;
+  double scheme_velocity_time_ = 0.0;
+  Clock::time_point t_start_ = Clock::now();
+  // The FEM reference of benchmarks without an exact solution, stepped alongside (untimed).
+  std::optional<Ulfem1D> reference_;
+  const Comm* comm_ = nullptr;
+  SlabPartition<Dim> part_;
+  std::unique_ptr<Stepper<Dim>> stepper_;
+  std::optional<OutputSession<Dim>> out_;
+  RunResult res_;
+  Index migrated_ = 0;  // particles this rank sent to another
+  Index rebalances_ = 0;
+  double worst_imbalance_ = 0.0;
+  std::optional<TimeLoop<Dim>> loop_;
+};
 
 template <int Dim>
-RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::string& config_text,
-                  const RunOptions& opt) {
+template <class Build>
+void MpmRun<Dim>::agreed(Build&& build) {
+  std::optional<Comm::Failure> failed;
+  try {
+    build();
+  } catch (const InputError& e) {
+    if (!comm_) throw;
+    failed = Comm::Failure{comm_->rank(), exit_code::kInput, e.what()};
+  } catch (const RemoteRunError&) {
+    throw;  // (agreed already: every process has it)
+  } catch (const RunError& e) {
+    if (!comm_) throw;
+    failed = Comm::Failure{comm_->rank(), e.exit_code(), e.what()};
+  }
+  if (comm_)
+    if (const auto f = comm_->agree(failed ? &*failed : nullptr)) {
+      if (f->exit_code == exit_code::kInput) throw InputError(f->message);
+      throw RemoteRunError(f->exit_code,
+                           fmt::format("rank {} of {}: {}", f->rank, comm_->size(), f->message));
+    }
+}
+
+template <int Dim>
+MpmRun<Dim>::MpmRun(Problem<Dim>& pb, const RunSettings& settings, const std::string& config_text,
+                    const RunOptions& opt)
+    : pb_(pb), settings_(settings), config_text_(config_text), opt_(opt) {
   // run_settings() has checked that the basis and mapping exist in Dim, and the time step.
   const MethodSettings& method = settings.method;
   const BasisKind& basis = method.basis;
-  const std::string_view mapping_name = name_of(method.mapping);
-  const bool otm = method.solver == Solver::Otm, unified = method.solver == Solver::Unified;
+  mapping_name_ = name_of(method.mapping);
+  otm_ = method.solver == Solver::Otm;
+  unified_ = method.solver == Solver::Unified;
   // OTM's particle velocity is (x_p^{s+1} - x_p^s) / dt, a velocity at t - dt / 2; the unified
   // approach updates it as USL does (Usl::kVelocityTime, also t - dt / 2).
-  const double scheme_velocity_time = otm       ? -0.5
-                                      : unified ? Usl::kVelocityTime
-                                                : velocity_time(method.scheme);
-
-  const auto t_start = Clock::now();
+  scheme_velocity_time_ = otm_       ? -0.5
+                          : unified_ ? Usl::kVelocityTime
+                                     : velocity_time(method.scheme);
   const TimeSettings& ts = settings.time;
 
-  // The FEM reference of benchmarks without an exact solution, stepped alongside (untimed).
-  std::optional<Ulfem1D> reference;
   if constexpr (Dim == 1)
-    if (pb.fem_reference) reference.emplace(pb, settings.reference_dofs - 1);
+    if (pb.fem_reference) reference_.emplace(pb, settings.reference_dofs - 1);
 
   if constexpr (Dim == 2) {
     if (pb.mesh)  // h: the smallest altitude of the mesh's triangles
@@ -415,20 +492,20 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 
   // A distributed run: each process has set up only the particles of its slab
   // (parallel/distribution.hpp), cut so that each holds about as many (driver/run.cpp).
-  const Comm* comm = opt.comm != nullptr && opt.comm->distributed() ? opt.comm : nullptr;
+  comm_ = opt.comm != nullptr && opt.comm->distributed() ? opt.comm : nullptr;
   if (opt.shuffle_seed != 0 && !opt.restart) {
     // (The one process's random order cannot be had from a slab's particles.)
-    if (comm) throw InputError("shuffling the particles (mpm bench --shuffle) runs on one process");
+    if (comm_)
+      throw InputError("shuffling the particles (mpm bench --shuffle) runs on one process");
     shuffle_particles(pb.particles, pb.tractions, opt.shuffle_seed);
   }
-  SlabPartition<Dim> part;
-  if (comm) {
+  if (comm_) {
     constexpr std::string_view kHow = "run it on one process (without mpirun)";
-    if (otm || unified)
+    if (otm_ || unified_)
       throw InputError(
           fmt::format("{}: method.solver = \"{}\" does not run on several "
                       "processes yet; {}",
-                      method.where_solver, otm ? "otm" : "unified", kHow));
+                      method.where_solver, otm_ ? "otm" : "unified", kHow));
     if constexpr (Dim == 2)
       if (pb.mesh) {
         std::vector<Index> old_to_new;
@@ -438,49 +515,25 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
       }
     // The cuts the set-up seeded by, from the same counts (each layer's particles are on one
     // process). The traction points name their particles by id (RunState::all_tractions).
-    part = SlabPartition<Dim>::balanced(
-        SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm, /*replicated=*/false),
-        comm->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
-    const int me = comm->rank();
+    part_ = SlabPartition<Dim>::balanced(
+        SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm_, /*replicated=*/false),
+        comm_->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
+    const int me = comm_->rank();
     for (const auto& x : pb.particles.x)
-      if (part.owner(pb.grid, x, 0) != me)
+      if (part_.owner(pb.grid, x, 0) != me)
         throw std::logic_error("run_mpm: a process set up a particle of another's slab");
   }
-  // An input error that only some processes meet (the stepper's checks of their own particles,
-  // rank 0's output directory), or a write that fails on one (config.toml, grid.vtu), stops
-  // every process with the message and exit code of the lowest.
-  const auto agreed = [&](auto&& build) {
-    std::optional<Comm::Failure> failed;
-    try {
-      build();
-    } catch (const InputError& e) {
-      if (!comm) throw;
-      failed = Comm::Failure{comm->rank(), exit_code::kInput, e.what()};
-    } catch (const RemoteRunError&) {
-      throw;  // (agreed already: every process has it)
-    } catch (const RunError& e) {
-      if (!comm) throw;
-      failed = Comm::Failure{comm->rank(), e.exit_code(), e.what()};
-    }
-    if (comm)
-      if (const auto f = comm->agree(failed ? &*failed : nullptr)) {
-        if (f->exit_code == exit_code::kInput) throw InputError(f->message);
-        throw RemoteRunError(f->exit_code,
-                             fmt::format("rank {} of {}: {}", f->rank, comm->size(), f->message));
-      }
-  };
   // OTM and the unified solver are one- and two-dimensional (run_settings refuses them in 3D).
-  std::unique_ptr<Stepper<Dim>> stepper;
   const std::size_t problem_warnings = pb.warnings.size();
   agreed([&] {
     if constexpr (Dim <= 2)
-      if (otm || unified) {
-        stepper = make_otm_stepper<Dim>({pb, method, !opt.restart});
+      if (otm_ || unified_) {
+        stepper_ = make_otm_stepper<Dim>({pb, method, !opt.restart});
         return;
       }
-    stepper = make_stepper<Dim>(basis, {pb, method, !opt.restart, comm});
+    stepper_ = make_stepper<Dim>(basis, {pb, method, !opt.restart, comm_});
   });
-  RunState<Dim>& sim = stepper->state();
+  RunState<Dim>& sim = stepper_->state();
   // The stepper's own warnings (its checks of the basis against the particles), shown as the
   // problem's were (driver/run.cpp).
   if (!opt.quiet)
@@ -489,10 +542,8 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
 
   // Outputs start once the input has passed every check above. Only rank 0 writes: when it
   // cannot (its directory), every rank stops with its message.
-  std::optional<OutputSession<Dim>> out_session;
-  agreed([&] { out_session.emplace(opt, settings, config_text, pb); });
-  OutputSession<Dim>& out = *out_session;
-  RunResult res;
+  agreed([&] { out_.emplace(opt, settings, config_text, pb); });
+  RunResult& res = res_;
   res.benchmark = pb.benchmark;
   res.warnings = pb.warnings;
   res.bodies = pb.bodies;
@@ -512,65 +563,80 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
       }
     }
   res.cell_size.assign(sim.grid.h.data(), sim.grid.h.data() + Dim);
-  res.particles = comm ? comm->sum(sim.particles.size()) : sim.particles.size();
-  Index migrated = 0;  // particles this rank sent to another
-  Index rebalances = 0;
-  double worst_imbalance = comm ? imbalance(sim, *comm) : 0.0;
+  res.particles = comm_ ? comm_->sum(sim.particles.size()) : sim.particles.size();
+  worst_imbalance_ = comm_ ? imbalance(sim, *comm_) : 0.0;
   // (A distributed restart reads only some pieces on each process: a damaged one stops all.)
   Index start = 0;
   if (opt.restart)
     agreed([&] {
-      start =
-          restore<Dim>(opt, ts.dt, *stepper, mapping_name, reference, comm, part, res.particles);
+      start = restore<Dim>(opt, ts.dt, *stepper_, mapping_name_, reference_, comm_, part_,
+                           res.particles);
     });
-  if (opt.restart) out.resume(*opt.restart);  // (collective)
-  drive<Dim>(
-      settings, opt, out, start,
-      [&](Index s) {
-        stepper->step(ts.dt);
-        sim.step = s + 1;
-        sim.time = static_cast<double>(sim.step) * ts.dt;
-        if (comm) {
-          stepper->export_carried();
-          migrated += migrate(sim, part, *comm);
-          if (settings.parallel.rebalance > 0.0) {
-            // (The imbalance the run has reached before any re-cut, for the summary.)
-            double measured = 0.0;
-            rebalances +=
-                rebalance_if_due(sim, part, *comm, settings.parallel.rebalance, migrated, measured);
-            worst_imbalance = std::max(worst_imbalance, measured);
-          }
-          stepper->resize_particle_caches();
-        }
-        // Re-sorting for the next step, timed with this one. Here rather than before the step:
-        // the decision reads this step's chunk ranges, and a checkpoint written after the step
-        // (also the last one of a shortened run) holds the sorted state, so a restart repeats it.
-        const Index sorts = sim.sorting.sorts;
-        const auto t0 = Clock::now();
-        if (stepper->sort_if_due()) {
-          res.sort_seconds += seconds_since(t0);
-          res.sorts += sim.sorting.sorts - sorts;
-        }
-      },
-      [&] {
-        if (reference) reference->step(ts.dt);
-      },
-      [&] {
-        return StateView<Dim>{sim.particles, sim.time, sim.materials, &sim.diag};
-      },
-      [&](Index) {
-        Captured<Dim> cap =
-            capture<Dim>(*stepper, mapping_name, reference, out, config_text, comm, part);
-        cap.manifest.mesh_hash = opt.mesh_hash;
-        out.checkpoint(cap.manifest, cap.piece ? &*cap.piece : nullptr);
-      },
-      res);
+  if (opt.restart) out_->resume(*opt.restart);  // (collective)
+  loop_.emplace(settings, opt, *out_, start,
+                typename TimeLoop<Dim>::Hooks{
+                    [this](Index s) { advance(s); },
+                    [this] {
+                      if (reference_) reference_->step(settings_.time.dt);
+                    },
+                    [this] {
+                      RunState<Dim>& st = stepper_->state();
+                      return StateView<Dim>{st.particles, st.time, st.materials, &st.diag};
+                    },
+                    [this](Index) { save(); }},
+                res);
+}
 
+template <int Dim>
+void MpmRun<Dim>::advance(Index s) {
+  RunState<Dim>& sim = stepper_->state();
+  const TimeSettings& ts = settings_.time;
+  stepper_->step(ts.dt);
+  sim.step = s + 1;
+  sim.time = static_cast<double>(sim.step) * ts.dt;
+  if (comm_) {
+    stepper_->export_carried();
+    migrated_ += migrate(sim, part_, *comm_);
+    if (settings_.parallel.rebalance > 0.0) {
+      // (The imbalance the run has reached before any re-cut, for the summary.)
+      double measured = 0.0;
+      rebalances_ +=
+          rebalance_if_due(sim, part_, *comm_, settings_.parallel.rebalance, migrated_, measured);
+      worst_imbalance_ = std::max(worst_imbalance_, measured);
+    }
+    stepper_->resize_particle_caches();
+  }
+  // Re-sorting for the next step, timed with this one. Here rather than before the step:
+  // the decision reads this step's chunk ranges, and a checkpoint written after the step
+  // (also the last one of a shortened run) holds the sorted state, so a restart repeats it.
+  const Index sorts = sim.sorting.sorts;
+  const auto t0 = Clock::now();
+  if (stepper_->sort_if_due()) {
+    res_.sort_seconds += seconds_since(t0);
+    res_.sorts += sim.sorting.sorts - sorts;
+  }
+}
+
+template <int Dim>
+void MpmRun<Dim>::save() {
+  Captured<Dim> cap =
+      capture<Dim>(*stepper_, mapping_name_, reference_, *out_, config_text_, comm_, part_);
+  cap.manifest.mesh_hash = opt_.mesh_hash;
+  out_->checkpoint(cap.manifest, cap.piece ? &*cap.piece : nullptr);
+}
+
+template <int Dim>
+RunResult MpmRun<Dim>::finish() {
+  loop_->finish();
+  RunState<Dim>& sim = stepper_->state();
+  const MethodSettings& method = settings_.method;
+  const BasisKind& basis = method.basis;
+  RunResult& res = res_;
   if (res.exit_code == exit_code::kOk) {
-    res.errors = error_norms<Dim>(sim.particles, sim.grid, pb.exact, sim.time, ts.dt,
-                                  scheme_velocity_time, boundary_cells(basis), comm);
+    res.errors = error_norms<Dim>(sim.particles, sim.grid, pb_.exact, sim.time, settings_.time.dt,
+                                  scheme_velocity_time_, boundary_cells(basis), comm_);
     if constexpr (Dim == 1)
-      if (reference) reference_errors(sim.particles, *reference, res.errors);
+      if (reference_) reference_errors(sim.particles, *reference_, res.errors);
     check_error_norms(res);
   }
   res.diag = sim.diag;
@@ -578,11 +644,11 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
   // Resident memory at its peak [bytes] (-1: not known on this system): the process's on one,
   // the most of one process on several (each process's in "mpi").
   double peak_memory = peak_memory_bytes();
-  if (comm) {
-    res.diag.grid_crossings = comm->sum(res.diag.grid_crossings);
+  if (comm_) {
+    res.diag.grid_crossings = comm_->sum(res.diag.grid_crossings);
     const auto [window_first, window_end] = sim.nodes.window();
-    const std::vector<Index> counts = comm->allgather(std::span<const Index>(
-        std::array<Index, 4>{sim.particles.size(), migrated, window_end - window_first,
+    const std::vector<Index> counts = comm_->allgather(std::span<const Index>(
+        std::array<Index, 4>{sim.particles.size(), migrated_, window_end - window_first,
                              static_cast<Index>(peak_memory)}));
     std::vector<Index> per_rank, sent, window, memory;
     for (std::size_t r = 0; r < counts.size(); r += 4) {
@@ -592,33 +658,33 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
       memory.push_back(counts[r + 3]);
     }
     peak_memory = static_cast<double>(*std::max_element(memory.begin(), memory.end()));
-    mpi_json = {{"processes", comm->size()},
+    mpi_json = {{"processes", comm_->size()},
                 {"decomposition", fmt::format("slabs of whole cell layers along {}, cut to "
                                               "balance the initial particles",
                                               SlabPartition<Dim>::axis_name())},
-                {"cuts", part.cuts},
+                {"cuts", part_.cuts},
                 {"particles_per_process", per_rank},
                 {"particles_sent_per_process", sent},
-                {"rebalance_threshold", settings.parallel.rebalance},
-                {"rebalances", rebalances},
-                {"largest_imbalance", worst_imbalance},
+                {"rebalance_threshold", settings_.parallel.rebalance},
+                {"rebalances", rebalances_},
+                {"largest_imbalance", worst_imbalance_},
                 // The grid arrays each process holds at the end (GridState's window) against
                 // the basis's DOFs.
                 {"grid_dofs", sim.nodes.size()},
                 {"grid_window_dofs_per_process", window},
                 {"peak_memory_bytes_per_process", memory}};
   }
-  res.wall_seconds = seconds_since(t_start);
+  res.wall_seconds = seconds_since(t_start_);
 
   nlohmann::ordered_json method_json = {
-      {"solver", otm       ? "otm"
-                 : unified ? "unified"
-                           : "mpm"},
+      {"solver", otm_       ? "otm"
+                 : unified_ ? "unified"
+                            : "mpm"},
       {"basis", std::string(basis_name(basis))},
-      {"mapping", std::string(mapping_name)},
-      {"scheme", otm       ? std::string("otm (D Algorithm 3)")
-                 : unified ? std::string("unified (D Algorithm 4)")
-                           : std::string(name_of(method.scheme))},
+      {"mapping", std::string(mapping_name_)},
+      {"scheme", otm_       ? std::string("otm (D Algorithm 3)")
+                 : unified_ ? std::string("unified (D Algorithm 4)")
+                            : std::string(name_of(method.scheme))},
       {"mass", method.mass == MassType::Consistent ? "consistent" : "lumped"}};
   if (basis_degree(basis) > 0) method_json["degree"] = basis_degree(basis);
   if (method.mass == MassType::Consistent) {
@@ -639,24 +705,33 @@ RunResult run_mpm(Problem<Dim>& pb, const RunSettings& settings, const std::stri
       method_json["mass_solver_max_iterations_per_solve"] = res.diag.max_mass_solver_iterations;
     }
   }
-  res.summary = make_summary(res, settings, sim.materials, sim.time, std::move(method_json),
-                             scheme_velocity_time);
-  stepper->report(res.summary);
+  res.summary = make_summary(res, settings_, sim.materials, sim.time, std::move(method_json),
+                             scheme_velocity_time_);
+  stepper_->report(res.summary);
   res.summary["peak_memory_bytes"] = peak_memory;
-  if (comm) res.summary["mpi"] = std::move(mpi_json);
-  if (reference)
+  if (comm_) res.summary["mpi"] = std::move(mpi_json);
+  if (reference_)
     res.summary["reference"] = {{"solver", "ulfem"},
-                                {"dofs", settings.reference_dofs},
+                                {"dofs", settings_.reference_dofs},
                                 {"compared", "stress at the particles' material positions"}};
-  out.summary(res.summary);
+  out_->summary(res.summary);
+  out_->close();
   return res;
 }
 
-template RunResult run_mpm<1>(Problem<1>&, const RunSettings&, const std::string&,
-                              const RunOptions&);
-template RunResult run_mpm<2>(Problem<2>&, const RunSettings&, const std::string&,
-                              const RunOptions&);
-template RunResult run_mpm<3>(Problem<3>&, const RunSettings&, const std::string&,
-                              const RunOptions&);
+}  // namespace
+
+template <int Dim>
+std::unique_ptr<SolverRun> start_mpm(Problem<Dim>& pb, const RunSettings& settings,
+                                     const std::string& config_text, const RunOptions& opt) {
+  return std::make_unique<MpmRun<Dim>>(pb, settings, config_text, opt);
+}
+
+template std::unique_ptr<SolverRun> start_mpm<1>(Problem<1>&, const RunSettings&,
+                                                 const std::string&, const RunOptions&);
+template std::unique_ptr<SolverRun> start_mpm<2>(Problem<2>&, const RunSettings&,
+                                                 const std::string&, const RunOptions&);
+template std::unique_ptr<SolverRun> start_mpm<3>(Problem<3>&, const RunSettings&,
+                                                 const std::string&, const RunOptions&);
 
 }  // namespace mpm::driver

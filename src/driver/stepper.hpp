@@ -17,6 +17,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "methods/kinds.hpp"
 #include "model/problem.hpp"
@@ -57,6 +58,10 @@ class Stepper {
   // parallel/distribution.hpp): sizes the per-particle caches to the particles (the next step's
   // evaluate_basis fills them) and gives the basis its carried state back.
   virtual void resize_particle_caches() = 0;
+  // The positions of the basis's degrees of freedom now [m], in the order of the grid arrays
+  // (RunState::nodes): the grid nodes, a B-spline's Greville abscissae, a mesh's vertices, the
+  // Powell-Sabin control points; OTM's and the unified solver's moving nodes.
+  virtual std::vector<Vec<Dim>> dof_positions() const = 0;
 };
 
 // What a stepper is built from: the problem (its particles are moved into the stepper) and the

@@ -230,6 +230,12 @@ class TypedStepper final : public Stepper<Dim> {
     }
   }
 
+  std::vector<Vec<Dim>> dof_positions() const override {
+    std::vector<Vec<Dim>> x(static_cast<std::size_t>(sim_.basis.num_dofs()));
+    for (std::size_t i = 0; i < x.size(); ++i)
+      x[i] = sim_.basis.dof_position(static_cast<Index>(i));
+    return x;
+  }
   void resize_particle_caches() override {
     sim_.stencils.resize(static_cast<std::size_t>(sim_.particles.size()));
     if (sim_.comm && !sim_.all_tractions.empty()) localize_tractions(sim_);
