@@ -34,6 +34,7 @@ LAYERS = [
     ("io", "output writers and checkpoints"),
     ("driver", "the run: time loop, outputs, steppers"),
     ("app", "the commands"),
+    ("python", "the Python module's native part (pybind11)"),
 ]
 LEVEL = {folder: i for i, (folder, _) in enumerate(LAYERS)}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')

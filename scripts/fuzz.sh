@@ -21,7 +21,7 @@ checkpoint_seconds="${FUZZ_CHECKPOINT_SECONDS:-30}"
 build="${FUZZ_BUILD:-build-fuzz}"
 if [ "$build" = build-fuzz ] && [ ! -f build-fuzz/CMakeCache.txt ]; then
   cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DCMAKE_CXX_COMPILER=clang++ -DMPM_FUZZ=ON -DMPM_BUILD_TESTS=OFF >/dev/null
+    -DCMAKE_CXX_COMPILER=clang++ -DMPM_FUZZ=ON -DMPM_BUILD_TESTS=OFF -DMPM_PYTHON=OFF >/dev/null
 fi
 cmake --build "$build" --target fuzz_config fuzz_checkpoint -j "$(nproc)"
 

@@ -79,12 +79,14 @@ fi
 # Without MPI (MPM_MPI=OFF): Open MPI's run-time keeps allocations to its exit that
 # LeakSanitizer would report, and the distributed runs are checked in the Release suite
 # (Mpi.SameAnswersAsOneProcess); the one-process paths of core/comm.cpp are compiled here.
+# The Python module is not built (MPM_PYTHON=OFF): an instrumented extension needs the sanitizer
+# run-time preloaded into the interpreter; the module is tested in the Release suite.
 fuzz=OFF
 [ "${FUZZ_ALONGSIDE:-0}" = 1 ] && fuzz=ON
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
   -DCMAKE_CXX_FLAGS_DEBUG="$debug_flags" -DCMAKE_EXE_LINKER_FLAGS=-fuse-ld=lld \
   -DCMAKE_CXX_COMPILER=clang++ -DMPM_SANITIZE=ON -DMPM_MPI=ON -DMPM_FUZZ=$fuzz \
-  "${units[@]}" >/dev/null
+  -DMPM_PYTHON=OFF "${units[@]}" >/dev/null
 cmake --build build-asan -j "$(nproc)"
 # Tests that take more than about 4 s under the sanitizers at -O0 (refinement studies, bitwise
 # restart series, whole-grid runs, the column compaction: 5,000 steps of 1,000 particles, 300 s

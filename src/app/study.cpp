@@ -291,6 +291,12 @@ StudyResult run_study(const Config& base, const StudyOptions& opt) {
   return res;
 }
 
+std::vector<std::string_view> study_error_columns() {
+  std::vector<std::string_view> names;
+  for (const auto& c : kColumns) names.push_back(c.name);
+  return names;
+}
+
 std::string study_csv(const StudyOptions& opt, const StudyResult& r) {
   std::string s = fmt::format("method,{},cells,h,particles,steps,status", opt.key);
   for (const auto& c : kColumns) s += fmt::format(",{}", c.name);

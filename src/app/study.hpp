@@ -61,6 +61,9 @@ StudyResult run_study(const Config& base, const StudyOptions& opt);
 // naming the columns for another name.
 std::optional<double> error_named(const ErrorNorms& e, std::string_view name);
 
+// The error columns of study.csv, in their order (the names error_named() reads).
+std::vector<std::string_view> study_error_columns();
+
 // Observed order between two runs for one error; NaN when not defined.
 double observed_order(double e_coarse, double e_fine, double h_coarse, double h_fine);
 

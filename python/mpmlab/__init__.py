@@ -1,0 +1,388 @@
+"""mpmlab from Python: configurations, runs stepped under your control, studies, the schema.
+
+    import mpmlab
+    cfg = mpmlab.Config.from_file("examples/plate_mms_2d.toml")
+    cfg.set("grid.cells", 32)
+    run = mpmlab.Run(cfg)                 # set up; nothing is stepped yet
+    run.advance(0.5 * run.end_time)       # steps until t >= 0.5 T
+    p = run.particles()                   # NumPy copies: x, v, stress, F, id, internal, ...
+    summary = run.run()                   # to time.end; summary.json as a dict
+
+The configuration is checked as `mpm run` checks it (an invalid key or value raises
+mpmlab.InputError with the command line's message); a run given ``out=`` writes the files
+`mpm run --out` writes, byte for byte. Errors are the classes of mpmlab.errors, one per exit code
+of `mpm`. Stepping releases the GIL and uses OpenMP threads as `mpm run` does.
+"""
+
+import math as _math
+import os as _os
+
+
+
+def _prefer_passive_waiting():
+    """OMP_WAIT_POLICY=passive unless set, as `mpm` does (app/main.cpp: spinning idle threads
+    slow a run on a busy machine many times over). libgomp reads it when it is loaded, which
+    the native module below does; if it is loaded already, its policy stands and nothing is
+    set (summary.json records the variable)."""
+    if "OMP_WAIT_POLICY" in _os.environ:
+        return
+    try:
+        with open("/proc/self/maps") as maps:
+            if "libgomp" in maps.read():
+                return
+    except OSError:
+        return
+    _os.environ["OMP_WAIT_POLICY"] = "passive"
+
+
+_prefer_passive_waiting()
+
+from . import errors  # noqa: E402
+from .errors import *  # noqa: F401,F403,E402
+from ._mpmlab import __version__, keys, methods  # noqa: E402
+from ._mpmlab import _Config, _Run, _restart_config, _study  # noqa: E402
+
+__all__ = ["Config", "Run", "study", "keys", "methods", "errors", "__version__"
+           ] + errors.__all__
+
+
+def _toml_string(s):
+    out = ['"']
+    for ch in s:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append("\\u%04x" % ord(ch))
+        else:
+            out.append(ch)
+    out.append('"')
+    return "".join(out)
+
+
+def _toml_value(value):
+    """The TOML text of a Python value (what `mpm run --set key=TEXT` takes)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if _math.isnan(value):
+            return "nan"
+        if _math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)  # the shortest text that reads back to the same double
+    if isinstance(value, str):
+        return _toml_string(value)
+    if hasattr(value, "tolist"):  # NumPy arrays and scalars
+        return _toml_value(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise InputError(f"{value!r} ({type(value).__name__}) is no configuration value: give a "
+                     "number, a boolean, a string or a list of them")
+
+
+def _toml_document(d):
+    """A TOML document of nested dicts (tables) of values."""
+    lines, tables = [], []
+
+    def emit(table, prefix):
+        for key, value in table.items():
+            if isinstance(value, dict):
+                tables.append((prefix + [str(key)], value))
+            else:
+                lines.append(f"{key} = {_toml_value(value)}")
+
+    emit(d, [])
+    while tables:
+        path, table = tables.pop(0)
+        lines.append("")
+        lines.append("[" + ".".join(path) + "]")
+        emit(table, path)
+    return "\n".join(lines) + "\n"
+
+
+class Config:
+    """A run's configuration, checked against the schema (mpmlab.keys()) as `mpm run` checks it.
+
+    Made by :meth:`from_file`, :meth:`from_dict` or :meth:`from_string`; changed with
+    :meth:`set` (or ``cfg[key] = value``), which takes what ``mpm run --set`` takes and refuses
+    what it refuses, with its message (mpmlab.InputError), leaving the configuration unchanged.
+    """
+
+    def __init__(self, native):
+        if not isinstance(native, _Config):
+            raise TypeError("make a Config with Config.from_file, from_dict or from_string")
+        self._native = native
+
+    @classmethod
+    def from_file(cls, path, overrides=()):
+        """Reads a TOML file; ``overrides`` are ``"key=value"`` texts as ``--set`` takes."""
+        return cls(_Config.load(_os.fspath(path), list(overrides)))
+
+    @classmethod
+    def from_string(cls, text, source="string", overrides=()):
+        """Parses TOML text; messages name ``source`` with the line and column."""
+        return cls(_Config.parse(text, source, list(overrides)))
+
+    @classmethod
+    def from_dict(cls, d, source="dict"):
+        """Nested dicts as TOML tables: ``{"grid": {"cells": 16}, "benchmark": "mms_1d"}``."""
+        return cls.from_string(_toml_document(d), source)
+
+    def set(self, key, value):
+        """Sets ``key`` (dotted: ``"grid.cells"``) to ``value``; returns the configuration."""
+        self._native.set(key, _toml_value(value), f"Config.set({key!r}, {value!r})")
+        return self
+
+    def get(self, key):
+        """The value of ``key`` in effect (its default when not set)."""
+        return self._native.get(key)
+
+    def __getitem__(self, key):
+        return self.get(key)
+
+    def __setitem__(self, key, value):
+        self.set(key, value)
+
+    def is_set(self, key):
+        return self._native.is_set(key)
+
+    def where(self, key):
+        """Where ``key`` was given: ``file:line:column``, the set() call, or ``default``."""
+        return self._native.where(key)
+
+    def copy(self):
+        return Config(self._native.copy())
+
+    def to_toml(self):
+        """Every key with its value in effect, as the run's config.toml holds it."""
+        return self._native.to_toml()
+
+    @property
+    def source(self):
+        return self._native.source
+
+    def __repr__(self):
+        return f"<mpmlab.Config from {self.source or 'nothing'}>"
+
+
+def _config(config):
+    if isinstance(config, Config):
+        return config
+    if isinstance(config, dict):
+        return Config.from_dict(config)
+    if isinstance(config, (str, _os.PathLike)):
+        return Config.from_file(config)
+    raise TypeError("config: a mpmlab.Config, a dict or the path of a TOML file")
+
+
+class Run:
+    """One run, stepped under your control.
+
+    ``Run(config, out=None, overwrite=False, threads=0, progress=False)`` sets the run up (the
+    input checks of `mpm run`; nothing is stepped) and, with ``out``, writes its initial
+    outputs there. ``threads=0`` chooses as `mpm run` does (OpenMP's count, capped by the problem
+    size); the results do not depend on it.
+
+    :meth:`step`, :meth:`advance` and :meth:`run` take steps with the GIL released; Ctrl-C
+    raises KeyboardInterrupt between two steps, leaving the run intact. A numerical failure
+    finishes the run (its summary says "failed") and raises its error class
+    (mpmlab.errors.RunFailed and subclasses). :meth:`finish` (which :meth:`run` calls) writes
+    summary.json; a run finished before time.end says "interrupted", never "ok".
+
+    Every field (:meth:`particles`, :meth:`grid`, :meth:`history`) is a copy: the particles are
+    re-ordered by re-sorting, so a view would not stay the same particles; ``id`` names them.
+    """
+
+    def __init__(self, config, out=None, overwrite=False, threads=0, progress=False,
+                 _restart=""):
+        cfg = _config(config)
+        self.config = cfg
+        self.out = _os.fspath(out) if out is not None else None
+        self._native = _Run(cfg._native, self.out or "", bool(overwrite), int(threads),
+                            bool(progress), _restart)
+        self._summary = None
+
+    @classmethod
+    def restart(cls, checkpoint, config=None, overrides=(), out=None, overwrite=False,
+                threads=0, progress=False):
+        """Continues from ``checkpoint`` (a checkpoint.bin), as ``mpm run --restart`` does:
+        with its stored configuration, which ``config`` (if given) and ``overrides`` may change
+        in output.* and time.end only; the outputs go next to the checkpoint unless ``out``."""
+        checkpoint = _os.fspath(checkpoint)
+        given = _config(config)._native if config is not None else None
+        cfg = Config(_restart_config(checkpoint, given, list(overrides)))
+        if out is None:
+            out = _os.path.dirname(checkpoint) or "."
+        return cls(cfg, out=out, overwrite=overwrite, threads=threads, progress=progress,
+                   _restart=checkpoint)
+
+    # --- where the run is
+    @property
+    def dim(self):
+        return self._native.dim
+
+    @property
+    def dt(self):
+        return self._native.dt
+
+    @property
+    def total_steps(self):
+        """The step of time.end."""
+        return self._native.steps
+
+    @property
+    def end_time(self):
+        return self._native.steps * self._native.dt
+
+    @property
+    def current_step(self):
+        return self._native.step
+
+    @property
+    def time(self):
+        return self._native.time
+
+    @property
+    def running(self):
+        """Can take another step: not at time.end, not failed, not finished."""
+        return self._native.running
+
+    @property
+    def finished(self):
+        return self._native.finished
+
+    @property
+    def warnings(self):
+        return list(self._native.warnings)
+
+    # --- stepping
+    def step(self, n=1):
+        """Takes ``n`` steps (fewer at time.end)."""
+        self._native.advance_to(self._native.step + int(n))
+        return self
+
+    def advance(self, to_time):
+        """Takes steps until the time reaches ``to_time`` (the first step at or after it; at
+        most time.end)."""
+        target = _math.ceil(to_time / self._native.dt - 1e-9)
+        self._native.advance_to(max(target, self._native.step))
+        return self
+
+    def run(self):
+        """Takes the run to time.end and finishes it; returns summary.json as a dict."""
+        if not self.finished:
+            self._native.advance_to(self._native.steps)
+        return self.finish() if not self.finished else self.summary
+
+    def finish(self):
+        """Error norms and summary.json; returns the summary as a dict. Once."""
+        if self.finished:
+            return self.summary
+        self._summary = self._native.finish()
+        return self._summary
+
+    @property
+    def summary(self):
+        """summary.json as a dict (after finish())."""
+        if self._summary is None:
+            self._summary = self._native.summary()
+        return self._summary
+
+    def checkpoint(self):
+        """Writes checkpoint.bin of the state now into the output directory."""
+        self._native.checkpoint()
+
+    # --- the state
+    def particles(self):
+        """The particles' fields as NumPy copies: x, x0, v (n, dim); stress, F (n, dim, dim);
+        mass, volume, volume0 (n); id, material (n, integers); internal: the material's internal
+        variables by name (n each)."""
+        return self._native.particles()
+
+    @property
+    def positions(self):
+        return self.particles()["x"]
+
+    @property
+    def velocities(self):
+        return self.particles()["v"]
+
+    @property
+    def stress(self):
+        return self.particles()["stress"]
+
+    @property
+    def F(self):
+        return self.particles()["F"]
+
+    @property
+    def ids(self):
+        return self.particles()["id"]
+
+    def grid(self):
+        """The grid's nodal fields of the last step as NumPy copies, one row per degree of
+        freedom: x (its position), mass, momentum, velocity, force, acceleration, active (the
+        DOFs solved for), fixed (bit d: component d prescribed)."""
+        return self._native.grid()
+
+    def history(self):
+        """history.csv's columns as NumPy arrays (kept with or without an output directory)."""
+        columns, values = self._native.history()
+        return {name: values[:, k].copy() for k, name in enumerate(columns)}
+
+    def reactions(self):
+        """The reaction force on each constrained boundary in the last step, by history.csv's
+        column name (``reaction_prescribed_y``, ...; output.reactions = true): N, or N/m in 2D."""
+        return dict(self._native.reactions())
+
+    def set_prescribed_velocity(self, velocity):
+        """Sets the velocity [m/s] of the box of prescribed velocities ([prescribed]) from the
+        next step on, in its prescribed components."""
+        self._native.set_prescribed_velocity([float(v) for v in velocity])
+
+    def __repr__(self):
+        return (f"<mpmlab.Run {self.dim}D step {self.current_step}/{self.total_steps} "
+                f"t = {self.time:.6g} s{' finished' if self.finished else ''}>")
+
+
+def study(config, refine, methods=None, out=None, jobs=1, overwrite=False, frame=None):
+    """The refinement study of `mpm study`: ``refine`` maps the refined key to its values,
+    coarse to fine (``{"grid.cells": [8, 16, 32]}``); further keys are refined in lockstep
+    (``"time.dt"`` with the cells). ``methods``: labels as ``mpm study --methods`` takes
+    (``"bspline2/tls/consistent"``); none: the configuration's method. With ``out``, study.csv,
+    study.txt and every run's files are written there.
+
+    Returns one row per run, method after method: study.csv's columns, ``failure``, and
+    ``order_<error>`` for each error against the method's previous value (as study.txt prints
+    them). A pandas DataFrame when pandas is installed (``frame=None`` or True), else a list of
+    dicts."""
+    cfg = _config(config)
+    if not isinstance(refine, dict) or not refine:
+        raise InputError("refine: a dict of the refined key to its values, "
+                         "e.g. {'grid.cells': [8, 16, 32]}")
+    texts = [f"{key}=" + ",".join(_refine_value(v) for v in values)
+             for key, values in refine.items()]
+    if methods is None:
+        methods_text = ""
+    elif isinstance(methods, str):
+        methods_text = methods
+    else:
+        methods_text = ",".join(methods)
+    rows = _study(cfg._native, texts, methods_text, _os.fspath(out) if out else "", int(jobs),
+                  bool(overwrite))
+    if frame is False:
+        return rows
+    try:
+        import pandas
+    except ImportError:
+        if frame:
+            raise
+        return rows
+    return pandas.DataFrame(rows)
+
+
+def _refine_value(v):
+    if isinstance(v, float):
+        return repr(v)
+    return str(v)

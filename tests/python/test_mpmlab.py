@@ -1,0 +1,267 @@
+"""The Python module against the command line: the same bytes, the same messages, the same
+orders; fields, errors, checkpoints and a changed boundary condition.
+
+Run by ctest (Python.Module) with PYTHONPATH=build and MPM_BINARY=build/mpm:
+    PYTHONPATH=build MPM_BINARY=build/mpm /usr/bin/python3 -m pytest -q tests/python
+"""
+import csv
+import json
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+import mpmlab
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+MPM = os.environ.get("MPM_BINARY", str(ROOT / "build" / "mpm"))
+EXAMPLES = ROOT / "examples"
+# summary.json's fields that measure the machine, not the run.
+TIMING = {"wall_seconds", "ns_per_particle_step", "first_step_seconds", "sort_seconds",
+          "peak_memory_bytes", "steps_per_second"}
+
+
+def mpm(*args, check=True):
+    r = subprocess.run([MPM, *map(str, args)], capture_output=True, text=True)
+    if check and r.returncode != 0:
+        raise AssertionError(f"mpm {' '.join(map(str, args))}: {r.returncode}\n{r.stderr}")
+    return r
+
+
+def without_timing(obj):
+    if isinstance(obj, dict):
+        return {k: without_timing(v) for k, v in obj.items() if k not in TIMING}
+    if isinstance(obj, list):
+        return [without_timing(v) for v in obj]
+    return obj
+
+
+def assert_same_outputs(a, b):
+    # (.mpm.lock holds the pid of the process that ran.)
+    names_a = sorted(p.name for p in a.iterdir() if p.name != ".mpm.lock")
+    names_b = sorted(p.name for p in b.iterdir() if p.name != ".mpm.lock")
+    assert names_a == names_b
+    for name in names_a:
+        if name == "summary.json":
+            sa = json.loads((a / name).read_text())
+            sb = json.loads((b / name).read_text())
+            assert without_timing(sa) == without_timing(sb)
+        else:
+            assert (a / name).read_bytes() == (b / name).read_bytes(), name
+
+
+# A short vibrating bar (1D) and a coarse 2D plate: each runs in well under a second.
+CASES = {
+    "mms_1d": (EXAMPLES / "mms_1d.toml", ["time.end=0.004"]),
+    "plate_mms_2d": (EXAMPLES / "plate_mms_2d.toml", ["grid.cells=8"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_run_writes_the_bytes_of_mpm_run(case, tmp_path):
+    config, sets = CASES[case]
+    cli = tmp_path / "cli"
+    mpm("run", config, "--out", cli, "--quiet", *[a for s in sets for a in ("--set", s)])
+    cfg = mpmlab.Config.from_file(config, sets)
+    whole = mpmlab.Run(cfg, out=tmp_path / "py").run()
+    assert whole["status"] == "ok"
+    assert_same_outputs(cli, tmp_path / "py")
+    # Taken in pieces, looked at between them: the same bytes again.
+    run = mpmlab.Run(cfg, out=tmp_path / "pieces")
+    run.step()
+    run.particles()
+    run.advance(0.5 * run.end_time)
+    assert run.time >= 0.5 * run.end_time - 1e-12 and run.current_step < run.total_steps
+    run.grid()
+    run.step(3)
+    run.run()
+    assert_same_outputs(cli, tmp_path / "pieces")
+    # A finished run lets go of its directory: the next run into it (overwrite) is not refused,
+    # while a running one holds it.
+    again = mpmlab.Run(cfg, out=tmp_path / "pieces", overwrite=True)
+    with pytest.raises(mpmlab.InputError, match="pid"):
+        mpmlab.Run(cfg, out=tmp_path / "pieces", overwrite=True)
+    again.run()
+
+
+def test_set_validates_as_the_command_line(tmp_path):
+    cfg = mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml")
+    with pytest.raises(mpmlab.InputError) as py_error:
+        cfg.set("grid.cells", 0)
+    assert py_error.value.exit_code == 2
+    cli = mpm("run", EXAMPLES / "mms_1d.toml", "--set", "grid.cells=0", "--out", tmp_path / "x",
+              check=False)
+    assert cli.returncode == 2
+    # The same message after the origin (the command line's "--set grid.cells=0", the call here).
+    py_message = str(py_error.value)
+    assert py_message.startswith("Config.set('grid.cells', 0)")
+    tail = py_message[len("Config.set('grid.cells', 0)"):]
+    assert tail.strip() and tail in cli.stderr
+    # Unchanged after the refusal; an unknown key names the right one.
+    assert cfg.get("grid.cells") == 16
+    with pytest.raises(mpmlab.InputError, match="grid.cells"):
+        cfg.set("grid.cellz", 3)
+    with pytest.raises(mpmlab.InputError, match="method.basis"):
+        cfg.set("method.basis", "cubic")
+    cfg["grid.cells"] = 32
+    assert cfg["grid.cells"] == 32 and cfg.where("grid.cells") == "Config.set('grid.cells', 32)"
+    with pytest.raises(mpmlab.InputError):
+        mpmlab.Config.from_file(tmp_path / "missing.toml")
+
+
+def test_from_dict_equals_the_file():
+    text = (EXAMPLES / "mms_1d.toml").read_text()
+    import tomllib
+    d = tomllib.loads(text)
+    a = mpmlab.Config.from_dict(d)
+    b = mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml")
+    for key in ("grid.cells", "time.dt", "time.end", "material.youngs_modulus", "method.basis"):
+        assert a[key] == b[key]
+
+
+def test_keys_and_methods_are_the_command_lines():
+    keys = {k["name"]: k for k in mpmlab.keys()}
+    assert keys["grid.cells"]["type"] == "integer" or keys["grid.cells"]["type"].startswith("int")
+    cli_keys = mpm("keys").stdout
+    for name in keys:
+        assert name in cli_keys
+    methods = mpmlab.methods()
+    listed = mpm("list").stdout
+    for section, entries in methods.items():
+        assert entries, section
+        for e in entries:
+            assert e["name"] in listed
+    assert "linear" in [b["name"] for b in methods["bases"]]
+
+
+def test_fields_are_copies_and_match_the_frame(tmp_path):
+    cfg = mpmlab.Config.from_file(EXAMPLES / "plate_mms_2d.toml", ["grid.cells=8",
+                                                                    "output.vtk=false"])
+    run = mpmlab.Run(cfg, out=tmp_path / "r")
+    run.run()
+    p = run.particles()
+    n = len(p["id"])
+    assert p["x"].shape == (n, 2) and p["stress"].shape == (n, 2, 2) and p["F"].shape == (n, 2, 2)
+    # The last CSV frame holds the same values (17 significant digits: the same doubles).
+    frames = sorted((tmp_path / "r").glob("particles_*.csv"))
+    with open(frames[-1]) as f:
+        rows = {int(r["id"]): r for r in csv.DictReader(f)}
+    for i in range(n):
+        r = rows[int(p["id"][i])]
+        assert float(r["x_1"]) == p["x"][i, 0] and float(r["x_2"]) == p["x"][i, 1]
+        assert float(r["stress_12"]) == p["stress"][i, 0, 1]
+    # A copy: changing it changes nothing in the run.
+    p["x"][:] = 0.0
+    assert np.array_equal(run.particles()["id"], p["id"])
+    assert not np.any(run.positions == 0.0)
+    # The grid's mass is the particles' (lumped sums conserve it to round-off).
+    g = run.grid()
+    assert g["x"].shape == (len(g["mass"]), 2)
+    assert g["mass"].sum() == pytest.approx(p["mass"].sum(), rel=1e-12)
+    # history() is history.csv, value for value.
+    h = run.history()
+    with open(tmp_path / "r" / "history.csv") as f:
+        table = list(csv.DictReader(f))
+    assert len(h["time"]) == len(table)
+    for name in h:
+        assert [float(r[name]) for r in table] == list(h[name])
+
+
+def test_history_without_an_output_directory():
+    cfg = mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml", ["time.end=0.002"])
+    run = mpmlab.Run(cfg)
+    summary = run.run()
+    h = run.history()
+    assert h["time"][0] == 0.0 and h["time"][-1] == pytest.approx(0.002)
+    assert summary["status"] == "ok" and summary["errors"]["stress_rel_l2"] > 0
+    with pytest.raises(mpmlab.InputError, match="output directory"):
+        mpmlab.Run(cfg).checkpoint()
+
+
+def test_a_failure_raises_its_class_and_keeps_the_outputs(tmp_path):
+    # A plate thrown upwards out of its grid: exit code 4 (a particle left the grid).
+    config = EXAMPLES / "custom_plate_2d.toml"
+    sets = ['initial.velocity=["0", "5"]', "time.end=0.05"]
+    cli = mpm("run", config, "--out", tmp_path / "cli", "--quiet",
+              *[a for s in sets for a in ("--set", s)], check=False)
+    assert cli.returncode == 4
+    run = mpmlab.Run(mpmlab.Config.from_file(config, sets), out=tmp_path / "py")
+    with pytest.raises(mpmlab.LeftGridError) as e:
+        run.run()
+    assert isinstance(e.value, mpmlab.RunFailed) and e.value.exit_code == 4
+    assert "left the grid" in str(e.value) and str(e.value) in cli.stderr
+    # Finished: summary.json says failed, the failing state is the last frame, as on the CLI.
+    assert run.finished and run.summary["status"] == "failed"
+    assert run.current_step < run.total_steps
+    assert_same_outputs(tmp_path / "cli", tmp_path / "py")
+
+
+def test_checkpoint_and_restart_continue_bit_for_bit(tmp_path):
+    cfg = mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml", ["time.end=0.004"])
+    whole = mpmlab.Run(cfg, out=tmp_path / "whole")
+    whole.run()
+    first = mpmlab.Run(cfg, out=tmp_path / "first")
+    first.step(150)
+    first.checkpoint()
+    stopped = first.finish()
+    assert stopped["status"] == "interrupted"
+    again = mpmlab.Run.restart(tmp_path / "first" / "checkpoint.bin")
+    assert again.current_step == 150
+    again.run()
+    a, b = whole.particles(), again.particles()
+    order_a, order_b = np.argsort(a["id"]), np.argsort(b["id"])
+    for name in ("x", "v", "stress", "F"):
+        assert np.array_equal(a[name][order_a], b[name][order_b]), name
+    with pytest.raises(mpmlab.InputError, match="time.end"):
+        mpmlab.Run.restart(tmp_path / "first" / "checkpoint.bin", overrides=["grid.cells=8"])
+
+
+def test_study_orders_are_the_command_lines(tmp_path):
+    refine = "grid.cells=8,16,32"
+    mpm("study", EXAMPLES / "mms_1d.toml", "--refine", refine, "--set", "time.end=0.004",
+        "--methods", "linear/direct,bspline2/direct", "--out", tmp_path / "cli")
+    cfg = mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml", ["time.end=0.004"])
+    rows = mpmlab.study(cfg, {"grid.cells": [8, 16, 32]},
+                        methods=["linear/direct", "bspline2/direct"], frame=False)
+    with open(tmp_path / "cli" / "study.csv") as f:
+        cli_rows = list(csv.DictReader(f))
+    assert len(rows) == len(cli_rows) == 6
+    for r, c in zip(rows, cli_rows):
+        assert r["method"] == c["method"] and r["status"] == c["status"] == "ok"
+        assert r["stress_rel_l2"] == float(c["stress_rel_l2"])
+    # The orders study.txt prints, to its two decimals.
+    table = (tmp_path / "cli" / "study.txt").read_text()
+    for r in rows:
+        if r["order_stress_rms"] is not None:
+            assert f"{r['order_stress_rms']:.2f}" in table
+    assert rows[1]["order_stress_rms"] == pytest.approx(
+        np.log(rows[0]["stress_rms"] / rows[1]["stress_rms"]) / np.log(rows[0]["h"] / rows[1]["h"]))
+
+
+def test_finishing_early_is_not_ok(tmp_path):
+    cfg = mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml", ["time.end=0.004"])
+    run = mpmlab.Run(cfg, out=tmp_path / "r")
+    run.step(10)
+    summary = run.finish()
+    assert summary["status"] == "interrupted" and run.finished
+    with pytest.raises(mpmlab.InputError, match="finished"):
+        run.step()
+
+
+def test_changing_the_prescribed_velocity_between_steps(tmp_path):
+    cfg = mpmlab.Config.from_file(EXAMPLES / "element_block_2d.toml", ["time.end=0.05"])
+    run = mpmlab.Run(cfg)
+    run.step(10)
+    g = run.grid()
+    top = np.isclose(g["x"][:, 1], 1.0) & (g["x"][:, 0] <= 1.0 + 1e-12)
+    assert np.all(g["velocity"][top, 1] == -5e-3)
+    run.set_prescribed_velocity([0.0, 2e-3])
+    run.step()
+    g = run.grid()
+    assert np.all(g["velocity"][top, 1] == 2e-3)
+    with pytest.raises(mpmlab.InputError, match="components"):
+        run.set_prescribed_velocity([1.0])
+    with pytest.raises(mpmlab.InputError, match="prescribed"):
+        mpmlab.Run(mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml")).set_prescribed_velocity([0])
