@@ -6,7 +6,7 @@ set -euo pipefail
 PACKAGES=(g++ cmake make ninja-build pkg-config libeigen3-dev libtomlplusplus-dev libcli11-dev
   libfmt-dev libmuparser-dev nlohmann-json3-dev libgtest-dev libgmsh-dev python3-matplotlib python3-meshio
   python3-sympy python3-vtk9 libopenmpi-dev openmpi-bin python3-dev python3-numpy pybind11-dev
-  python3-pybind11 python3-pytest
+  python3-pybind11 python3-pytest python3-scipy
   "$@")
 missing=()
 for p in "${PACKAGES[@]}"; do

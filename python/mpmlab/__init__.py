@@ -40,10 +40,11 @@ _prefer_passive_waiting()
 from . import errors  # noqa: E402
 from .errors import *  # noqa: F401,F403,E402
 from ._mpmlab import __version__, keys, methods  # noqa: E402
-from ._mpmlab import _Config, _Run, _restart_config, _study  # noqa: E402
+from ._mpmlab import (_Config, _massmatrix, _reconstruct, _restart_config,  # noqa: E402
+                      _Run, _spline_matrix, _study)
 
-__all__ = ["Config", "Run", "study", "keys", "methods", "errors", "__version__"
-           ] + errors.__all__
+__all__ = ["Config", "Run", "study", "reconstruct", "spline_values", "spline_mass",
+           "massmatrix", "keys", "methods", "errors", "__version__"] + errors.__all__
 
 
 def _toml_string(s):
@@ -386,3 +387,82 @@ def _refine_value(v):
     if isinstance(v, float):
         return repr(v)
     return str(v)
+
+
+def reconstruct(x, f, lower, upper, cells, at, mapping="tls", terms=3, completion="virtual",
+                max_condition=1e8, mls_degree=1, element_integrals=None, share_faces=False,
+                details=False):
+    """The reconstruction of `mpm reconstruct` on arrays (1D): values ``f`` at points ``x`` on
+    ``cells`` equal elements of [lower, upper], reconstructed by ``mapping`` ("tls",
+    "cubic_spline", "mls", "imls"; D 5.2.3, 003) and evaluated at the points ``at`` (a point on
+    an interior face in the element to its right, the last face in the last element).
+
+    TLS: ``terms`` Taylor terms (1-3), ``completion`` for elements with too few points
+    ("reduce", "virtual", "neighbour", "none": raises), ``element_integrals`` (one per element)
+    kept exactly by the conservative fit (D eq. 5.9; None: the plain fit). MLS/IMLS: the
+    polynomial degree ``mls_degree`` (1 or 2), the quadratic-spline weight of support three
+    cells. Returns the values at ``at`` (NumPy), with ``details=True`` also the per-element
+    report `mpm reconstruct --details` prints."""
+    import numpy
+
+    values, text = _reconstruct(
+        [float(v) for v in numpy.ravel(x)], [float(v) for v in numpy.ravel(f)], float(lower),
+        float(upper), int(cells), [float(v) for v in numpy.ravel(at)], mapping, int(terms),
+        completion, float(max_condition), int(mls_degree),
+        [] if element_integrals is None else [float(v) for v in numpy.ravel(element_integrals)],
+        bool(share_faces))
+    return (values, text) if details else values
+
+
+def _sparse(parts):
+    data, indices, indptr, shape = parts
+    try:
+        import scipy.sparse
+    except ImportError:
+        return data, indices, indptr, shape
+    return scipy.sparse.csr_matrix((data, indices, indptr), shape=shape)
+
+
+def _box(points, lower, upper, cells):
+    import numpy
+
+    pts = numpy.asarray(points, dtype=float)
+    if pts.ndim == 1:
+        pts = pts[:, None]
+    dim = pts.shape[1]
+
+    def per_dim(v, cast):
+        v = numpy.ravel(numpy.asarray(v))
+        return [cast(v[0])] * dim if v.size == 1 else [cast(e) for e in v]
+
+    return pts, per_dim(lower, float), per_dim(upper, float), per_dim(cells, int)
+
+
+def spline_values(points, lower, upper, cells, degree):
+    """phi_j(x_k) of the B-splines of ``degree`` (1-5, open knot vectors) on ``cells`` cells of
+    the box [lower, upper] (per direction, or one value for all), at the points (n, dim): a
+    sparse matrix, points by functions (scipy.sparse.csr_matrix when SciPy is installed, else
+    its CSR arrays (data, indices, indptr, shape))."""
+    pts, lo, hi, nc = _box(points, lower, upper, cells)
+    return _sparse(_spline_matrix(pts, [], lo, hi, nc, int(degree), False))
+
+
+def spline_mass(points, weights, lower, upper, cells, degree):
+    """The mass matrix sum_k w_k phi_i(x_k) phi_j(x_k) of the B-splines of ``degree`` on the box
+    (as spline_values), from points (n, dim) with weights (particle masses, or quadrature weights
+    times density): MPM's consistent mass matrix (D eq. 2.34), sparse as spline_values."""
+    import numpy
+
+    pts, lo, hi, nc = _box(points, lower, upper, cells)
+    w = [float(v) for v in numpy.ravel(weights)]
+    return _sparse(_spline_matrix(pts, w, lo, hi, nc, int(degree), True))
+
+
+def massmatrix(dim=2, degrees=(1, 2, 3, 4, 5), cells=(8, 16, 32, 64, 128),
+               boundary="dirichlet", particles=0, tolerance=1e-8, matrix_free=False):
+    """`mpm massmatrix`: the condition numbers, CG iterations and p-multigrid V-cycles of the
+    B-spline mass matrices of 004's test problem (Tables 4.2-4.4), one dict per (degree, cells)
+    with 004's values beside (``*_published``; None where it has none). ``particles=N``: the MPM
+    matrix of N regular particles per cell and direction instead of exact quadrature."""
+    return _massmatrix(int(dim), [int(p) for p in degrees], [int(n) for n in cells], boundary,
+                       int(particles), float(tolerance), bool(matrix_free))

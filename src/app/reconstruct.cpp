@@ -379,6 +379,85 @@ ReconstructResult reconstruct_triangles(const ReconstructOptions& opt, double a,
 
 }  // namespace
 
+Reconstruction1D::Reconstruction1D(const ReconstructOptions& opt, const Grid<1>& g,
+                                   const std::vector<double>& x, const std::vector<double>& f,
+                                   const std::vector<double>& element_integrals)
+    : mapping_(opt.mapping),
+      mls_degree_(opt.mls_degree),
+      points_(x.size()),
+      f_(f),
+      mls_(opt.mapping == "imls",
+           opt.mapping == "mls" || opt.mapping == "imls" ? opt.mls_degree : 1) {
+  if (x.size() != f.size())
+    throw InputError(fmt::format("{} points and {} values", x.size(), f.size()));
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (!g.inside(Vec<1>(x[k])))
+      throw InputError(fmt::format("point {} (x = {}) lies outside [{}, {}]", k, x[k], g.origin[0],
+                                   g.upper()[0]));
+    if (!std::isfinite(f[k]))
+      throw InputError(
+          fmt::format("the value at point {} (x = {}) is not finite: {}", k, x[k], f[k]));
+  }
+  if (!element_integrals.empty() && static_cast<Index>(element_integrals.size()) != g.cells[0])
+    throw InputError(
+        fmt::format("{} element integrals for {} elements", element_integrals.size(), g.cells[0]));
+  if (opt.mapping == "tls") {
+    TlsSettings s;
+    s.terms = opt.terms;
+    s.completion = parse_tls_completion(opt.completion);
+    s.max_condition = opt.max_condition;
+    validate(s);
+    tls_ = TlsReconstruction(s);
+    tls_.set_points(g, x, opt.share_faces);
+    if (!element_integrals.empty())
+      tls_.fit_conservative(f, element_integrals, coeffs_);
+    else
+      tls_.fit_plain(f, coeffs_);
+    if (tls_.report().failed > 0)
+      throw InputError(fmt::format(
+          "TLS cannot fit element {} ({} points, condition number {:.3g}) without completion; "
+          "use --completion reduce, virtual or neighbour",
+          tls_.report().failed_element, tls_.report().failed_points,
+          tls_.report().failed_condition));
+    details_ += fmt::format("{:>8} {:>7} {:>8} {:>8} {:>6} {:>12}\n", "element", "points",
+                            "virtual", "borrowed", "terms", "cond(D)");
+    for (Index e = 0; e < g.cells[0]; ++e) {
+      const auto& info = tls_.element(e);
+      details_ += fmt::format("{:>8} {:>7} {:>8} {:>8} {:>6} {:>12.4g}\n", e, info.points,
+                              info.virtual_points, info.borrowed, info.terms, info.condition);
+    }
+  } else if (opt.mapping == "cubic_spline") {
+    spline_.set_abscissae(x);
+    spline_.fit(f);
+    details_ =
+        fmt::format("natural cubic spline through {} distinct points\n", spline_.num_knots());
+  } else if (opt.mapping == "mls" || opt.mapping == "imls") {
+    // Quadratic-spline weight of support 3 l (001 eq. 17, 003 eq. 27), l the cell size.
+    mls_.set_points(g, x);
+  } else {
+    throw InputError(
+        fmt::format("--mapping {}: choose tls, cubic_spline, mls or imls", opt.mapping));
+  }
+}
+
+double Reconstruction1D::value(Index e, double x) {
+  if (mapping_ == "tls") return tls_.evaluate(coeffs_, e, x);
+  if (mapping_ == "cubic_spline") return spline_.value(x);
+  return mls_.evaluate(x, MlsWeight::QuadraticSpline, f_);
+}
+
+std::string Reconstruction1D::details() const {
+  if (mapping_ != "mls" && mapping_ != "imls") return details_;
+  const MlsReport& r = mls_.report();
+  return fmt::format(
+      "{} degree {} through {} points: {} evaluations, {} without data, {} {}\n", mapping_,
+      mls_degree_, points_, r.points, r.empty,
+      mapping_ == "mls" ? r.ill_conditioned + r.singular : r.reduced,
+      mapping_ == "mls"
+          ? fmt::format("ill-conditioned or singular (max cond(A) {:.4g})", r.max_condition)
+          : std::string("with dropped terms"));
+}
+
 ReconstructResult reconstruct(const ReconstructOptions& opt) {
   const double a = constant_expression(opt.lower, "--lower");
   const double b = constant_expression(opt.upper, "--upper");
@@ -419,52 +498,10 @@ ReconstructResult reconstruct(const ReconstructOptions& opt) {
           half * exact_rule.w[k] * f(centre(e) + half * exact_rule.xi[k]);
   for (double c : element_integral) res.integral_exact += c;
 
-  std::function<double(Index, double)> value;  // reconstruction in element e at x
-  TlsReconstruction tls;
-  TlsCoefficients coeffs;
-  NaturalCubicSpline spline;
-  MovingLeastSquares mls(opt.mapping == "imls",
-                         opt.mapping == "mls" || opt.mapping == "imls" ? opt.mls_degree : 1);
-  if (opt.mapping == "tls") {
-    TlsSettings s;
-    s.terms = opt.terms;
-    s.completion = parse_tls_completion(opt.completion);
-    s.max_condition = opt.max_condition;
-    validate(s);
-    tls = TlsReconstruction(s);
-    tls.set_points(g, res.x, opt.share_faces);
-    if (opt.conservative)
-      tls.fit_conservative(fx, element_integral, coeffs);
-    else
-      tls.fit_plain(fx, coeffs);
-    if (tls.report().failed > 0)
-      throw InputError(fmt::format(
-          "TLS cannot fit element {} ({} points, condition number {:.3g}) without completion; "
-          "use --completion reduce, virtual or neighbour",
-          tls.report().failed_element, tls.report().failed_points, tls.report().failed_condition));
-    value = [&](Index e, double x) { return tls.evaluate(coeffs, e, x); };
-    res.details += fmt::format("{:>8} {:>7} {:>8} {:>8} {:>6} {:>12}\n", "element", "points",
-                               "virtual", "borrowed", "terms", "cond(D)");
-    for (Index e = 0; e < opt.cells; ++e) {
-      const auto& info = tls.element(e);
-      res.details += fmt::format("{:>8} {:>7} {:>8} {:>8} {:>6} {:>12.4g}\n", e, info.points,
-                                 info.virtual_points, info.borrowed, info.terms, info.condition);
-    }
-  } else if (opt.mapping == "cubic_spline") {
-    spline.set_abscissae(res.x);
-    spline.fit(fx);
-    value = [&](Index, double x) { return spline.value(x); };
-    res.details =
-        fmt::format("natural cubic spline through {} distinct points\n", spline.num_knots());
-  } else if (opt.mapping == "mls" || opt.mapping == "imls") {
-    // Quadratic-spline weight of support 3 l (001 eq. 17, 003 eq. 27), l the cell size.
-    mls.set_points(g, res.x);
-    value = [&](Index, double x) { return mls.evaluate(x, MlsWeight::QuadraticSpline, fx); };
-    // The report covers the RMS and integration points evaluated below; filled in afterwards.
-  } else {
-    throw InputError(
-        fmt::format("--mapping {}: choose tls, cubic_spline, mls or imls", opt.mapping));
-  }
+  Reconstruction1D rec(opt, g, res.x, fx,
+                       opt.conservative ? element_integral : std::vector<double>{});
+  const auto value = [&](Index e, double x) { return rec.value(e, x); };
+  res.details = rec.details();
 
   const GaussRule err_rule = gauss_legendre(opt.error_points);
   const GaussRule int_rule = gauss_legendre(opt.integration_points);
@@ -479,16 +516,8 @@ ReconstructResult reconstruct(const ReconstructOptions& opt) {
       res.integral_reconstructed +=
           half * int_rule.w[k] * value(e, centre(e) + half * int_rule.xi[k]);
   }
-  if (opt.mapping == "mls" || opt.mapping == "imls") {
-    const MlsReport& r = mls.report();
-    res.details = fmt::format(
-        "{} degree {} through {} points: {} evaluations, {} without data, {} {}\n", opt.mapping,
-        opt.mls_degree, res.x.size(), r.points, r.empty,
-        opt.mapping == "mls" ? r.ill_conditioned + r.singular : r.reduced,
-        opt.mapping == "mls"
-            ? fmt::format("ill-conditioned or singular (max cond(A) {:.4g})", r.max_condition)
-            : std::string("with dropped terms"));
-  }
+  // (MLS reports the evaluations above.)
+  if (opt.mapping == "mls" || opt.mapping == "imls") res.details = rec.details();
   res.rms_error = std::sqrt(sq / static_cast<double>(opt.cells * opt.error_points));
   res.relative_integral_error =
       std::abs(res.integral_reconstructed - res.integral_exact) / std::abs(res.integral_exact);

@@ -9,6 +9,10 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "grid/grid.hpp"
+#include "mapping/cubic_spline.hpp"
+#include "mapping/mls.hpp"
+#include "mapping/tls.hpp"
 
 namespace mpm {
 
@@ -55,6 +59,33 @@ struct ReconstructResult {
   double integral_reconstructed = 0.0;
   double relative_integral_error = 0.0;
   std::string details;  // per-element report (points, terms, completion, condition)
+};
+
+// The 1D reconstruction of values f_k at points x_k on the elements of g by opt.mapping (tls,
+// cubic_spline, mls or imls, with opt's settings): what `mpm reconstruct` fits, and what
+// mpmlab.reconstruct evaluates at the caller's points. element_integrals: TLS's conservative
+// fit keeps them (D eq. 5.9); empty: the plain fit. InputError for bad options or data (a point
+// outside g, a value that is not finite, a TLS element that cannot be fitted).
+class Reconstruction1D {
+ public:
+  Reconstruction1D(const ReconstructOptions& opt, const Grid<1>& g, const std::vector<double>& x,
+                   const std::vector<double>& f, const std::vector<double>& element_integrals);
+  // The reconstruction at x in element e (TLS: element e's polynomial; the cubic spline and MLS
+  // are one function over the elements).
+  double value(Index e, double x);
+  // Per element (TLS: points, virtual and borrowed points, terms, condition), or a line.
+  std::string details() const;
+
+ private:
+  std::string mapping_;
+  int mls_degree_ = 1;
+  std::size_t points_ = 0;
+  std::vector<double> f_;
+  std::string details_;
+  TlsReconstruction tls_;
+  TlsCoefficients coeffs_;
+  NaturalCubicSpline spline_;
+  MovingLeastSquares<1> mls_;
 };
 
 // Throws InputError for bad options (unknown mapping, bad point list, expression errors).

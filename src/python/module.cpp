@@ -19,6 +19,8 @@
 #include <variant>
 #include <vector>
 
+#include "app/massmatrix.hpp"
+#include "app/reconstruct.hpp"
 #include "app/study.hpp"
 #include "core/types.hpp"
 #include "driver/run.hpp"
@@ -27,6 +29,7 @@
 #include "mpm/version.hpp"
 #include "setup/config.hpp"
 #include "setup/registry.hpp"
+#include "solver/spline_matrices.hpp"
 
 namespace py = pybind11;
 
@@ -415,6 +418,149 @@ py::list study(const Config& base, const std::vector<std::string>& refine,
   return rows;
 }
 
+// mpmlab.reconstruct: the 1D reconstruction of `mpm reconstruct` (Reconstruction1D) of values f
+// at points x on `cells` elements of [lower, upper], evaluated at `at` (each point in the element
+// Grid::cell_of gives it). Returns (values, details).
+py::tuple reconstruct_at(const std::vector<double>& x, const std::vector<double>& f,
+                         double lower, double upper, Index cells, const std::vector<double>& at,
+                         const std::string& mapping, int terms, const std::string& completion,
+                         double max_condition, int mls_degree,
+                         const std::vector<double>& element_integrals, bool share_faces) {
+  if (!(upper > lower))
+    raise_error(exit_code::kInput, fmt::format("upper ({}) must exceed lower ({})", upper, lower));
+  if (cells < 1) raise_error(exit_code::kInput, "cells must be at least 1");
+  ReconstructOptions opt;
+  opt.mapping = mapping;
+  opt.terms = terms;
+  opt.completion = completion;
+  opt.max_condition = max_condition;
+  opt.mls_degree = mls_degree;
+  opt.share_faces = share_faces;
+  const Grid<1> g(Vec<1>(lower), Vec<1>(upper), IVec<1>{cells});
+  Reconstruction1D rec(opt, g, x, f, element_integrals);
+  auto values = array<double>({static_cast<py::ssize_t>(at.size())});
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    if (!g.inside(Vec<1>(at[k])))
+      raise_error(exit_code::kInput, fmt::format("at[{}] = {} lies outside [{}, {}]", k, at[k],
+                                                 lower, upper));
+    values.mutable_at(static_cast<py::ssize_t>(k)) = rec.value(g.cell_of(at[k], 0), at[k]);
+  }
+  return py::make_tuple(values, rec.details());
+}
+
+// A sparse matrix as CSR arrays (data, indices, indptr, shape), for scipy.sparse.csr_matrix.
+py::tuple csr(SparseMatrixD m) {
+  Eigen::SparseMatrix<double, Eigen::RowMajor> r(m);
+  r.makeCompressed();
+  auto data = array<double>({static_cast<py::ssize_t>(r.nonZeros())});
+  auto indices = array<std::int64_t>({static_cast<py::ssize_t>(r.nonZeros())});
+  auto indptr = array<std::int64_t>({static_cast<py::ssize_t>(r.rows()) + 1});
+  std::copy(r.valuePtr(), r.valuePtr() + r.nonZeros(), data.mutable_data());
+  std::copy(r.innerIndexPtr(), r.innerIndexPtr() + r.nonZeros(), indices.mutable_data());
+  std::copy(r.outerIndexPtr(), r.outerIndexPtr() + r.rows() + 1, indptr.mutable_data());
+  return py::make_tuple(data, indices, indptr, py::make_tuple(r.rows(), r.cols()));
+}
+
+// The B-splines of degree p on the grid of `cells` over [lower, upper]: their values at the
+// points x (rows: points, columns: functions) and, with weights w, the mass matrix
+// sum_k w_k phi_i(x_k) phi_j(x_k) (solver/spline_matrices.hpp).
+template <int Dim>
+py::tuple spline_matrix(const py::array_t<double, py::array::c_style | py::array::forcecast>& x,
+                        const std::vector<double>& w, const std::vector<double>& lower,
+                        const std::vector<double>& upper, const std::vector<Index>& cells, int p,
+                        bool mass) {
+  if (lower.size() != Dim || upper.size() != Dim || cells.size() != Dim)
+    raise_error(exit_code::kInput,
+                fmt::format("lower, upper and cells need {} values each (the points' columns)",
+                            Dim));
+  if (p < 1 || p > 5) raise_error(exit_code::kInput, fmt::format("degree {}: choose 1-5", p));
+  Vec<Dim> lo, hi;
+  IVec<Dim> nc;
+  for (int d = 0; d < Dim; ++d) {
+    lo[d] = lower[static_cast<std::size_t>(d)];
+    hi[d] = upper[static_cast<std::size_t>(d)];
+    nc[d] = cells[static_cast<std::size_t>(d)];
+    if (!(hi[d] > lo[d]) || nc[d] < 1)
+      raise_error(exit_code::kInput, "upper must exceed lower and cells be at least 1");
+  }
+  const Grid<Dim> g(lo, hi, nc);
+  PointSet<Dim> pts;
+  const auto n = static_cast<std::size_t>(x.shape(0));
+  pts.x.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+    for (int d = 0; d < Dim; ++d) pts.x[k][d] = x.at(static_cast<py::ssize_t>(k), d);
+  if (!mass) return csr(spline_values(g, p, pts.x));
+  if (w.size() != n)
+    raise_error(exit_code::kInput, fmt::format("{} points and {} weights", n, w.size()));
+  pts.w = w;
+  return csr(spline_mass(g, p, p, pts));
+}
+
+py::tuple spline_matrix_any(const py::array_t<double, py::array::c_style | py::array::forcecast>& x,
+                            const std::vector<double>& w, const std::vector<double>& lower,
+                            const std::vector<double>& upper, const std::vector<Index>& cells,
+                            int p, bool mass) {
+  if (x.ndim() != 2 || x.shape(1) < 1 || x.shape(1) > 3)
+    raise_error(exit_code::kInput, "points: an array of shape (n, dim), dim 1, 2 or 3");
+  switch (x.shape(1)) {
+    case 1:
+      return spline_matrix<1>(x, w, lower, upper, cells, p, mass);
+    case 2:
+      return spline_matrix<2>(x, w, lower, upper, cells, p, mass);
+    default:
+      return spline_matrix<3>(x, w, lower, upper, cells, p, mass);
+  }
+}
+
+// mpmlab.massmatrix: `mpm massmatrix`'s rows (004 Tables 4.2-4.4), as dicts.
+py::list massmatrix(int dim, const std::vector<int>& degrees, const std::vector<Index>& cells,
+                    const std::string& boundary, int particles, double tolerance,
+                    bool matrix_free) {
+  MassMatrixOptions opt;
+  opt.dim = dim;
+  opt.degrees = degrees;
+  opt.cells = cells;
+  opt.boundary = boundary;
+  opt.particles = particles;
+  opt.tolerance = tolerance;
+  opt.matrix_free = matrix_free;
+  std::vector<MassMatrixRow> rows;
+  {
+    py::gil_scoped_release release;
+    rows = massmatrix_study(opt);
+  }
+  const auto num = [](double v) { return std::isnan(v) ? py::object(py::none()) : py::float_(v); };
+  py::list out;
+  for (const MassMatrixRow& r : rows) {
+    py::dict d;
+    d["degree"] = r.degree;
+    d["cells"] = r.cells;
+    d["unknowns"] = r.unknowns;
+    d["kappa"] = r.kappa;
+    d["kappa_published"] = num(r.kappa_published);
+    d["singular"] = r.singular;
+    d["cg_iterations"] = r.cg_iterations;
+    d["cg_converged"] = r.cg_converged;
+    d["cg_published"] = num(r.cg_published);
+    d["cg_bound"] = num(r.cg_bound);
+    d["cg_error"] = num(r.cg_error);
+    d["pmg_cycles"] = r.pmg_cycles;
+    d["pmg_converged"] = r.pmg_converged;
+    d["pmg_published"] = num(r.pmg_published);
+    d["pmg_error"] = num(r.pmg_error);
+    if (matrix_free) {
+      d["cg_free_iterations"] = r.cg_free_iterations;
+      d["cg_free_converged"] = r.cg_free_converged;
+      d["cg_free_difference"] = r.cg_free_difference;
+    }
+    d["direct_seconds"] = r.direct_seconds;
+    d["cg_seconds"] = r.cg_seconds;
+    d["pmg_seconds"] = r.pmg_seconds;
+    out.append(d);
+  }
+  return out;
+}
+
 }  // namespace
 }  // namespace mpm::python
 
@@ -481,4 +627,7 @@ PYBIND11_MODULE(_mpmlab, m) {
   m.def("keys", &mpm::python::keys);
   m.def("methods", &mpm::python::methods);
   m.def("_study", &mpm::python::study);
+  m.def("_reconstruct", &mpm::python::reconstruct_at);
+  m.def("_spline_matrix", &mpm::python::spline_matrix_any);
+  m.def("_massmatrix", &mpm::python::massmatrix);
 }

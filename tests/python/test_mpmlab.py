@@ -265,3 +265,69 @@ def test_changing_the_prescribed_velocity_between_steps(tmp_path):
         run.set_prescribed_velocity([1.0])
     with pytest.raises(mpmlab.InputError, match="prescribed"):
         mpmlab.Run(mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml")).set_prescribed_velocity([0])
+
+
+def test_reconstruct_on_arrays_is_the_command_lines():
+    # D 5.2.3's playground: sin(x) + 2 on 4 elements of [0, 4 pi], 3 uniform points a element.
+    a, b, cells = 0.0, 4 * np.pi, 4
+    h = (b - a) / cells
+    x = np.array([a + (e + (k + 0.5) / 3) * h for e in range(cells) for k in range(3)])
+    f = np.sin(x) + 2
+    # The RMS error over 100 Gauss points per element, as `mpm reconstruct` prints it.
+    xi, _ = np.polynomial.legendre.leggauss(100)
+    at = np.concatenate([a + (e + 0.5) * h + 0.5 * h * xi for e in range(cells)])
+    for mapping in ("tls", "cubic_spline", "mls", "imls"):
+        kw = {}
+        if mapping == "tls":
+            # The conservative fit keeps the exact element integrals (D eq. 5.9).
+            kw["element_integrals"] = [np.cos(a + e * h) - np.cos(a + (e + 1) * h) + 2 * h
+                                       for e in range(cells)]
+        values = mpmlab.reconstruct(x, f, a, b, cells, at, mapping=mapping, **kw)
+        rms = np.sqrt(np.mean((values - (np.sin(at) + 2)) ** 2))
+        cli = mpm("reconstruct", "--function", "sin(x)+2", "--upper", "4*pi", "--cells", cells,
+                  "--mapping", mapping, "--points", "uniform:3", "--error-points", 100).stdout
+        line = next(ln for ln in cli.splitlines() if ln.startswith("RMS error"))
+        assert f"{rms:.6e}" == line.split()[-1], mapping
+    # TLS with three terms reproduces a quadratic to round-off, and refuses a point outside.
+    q = 1 + x - 0.3 * x**2
+    values = mpmlab.reconstruct(x, q, a, b, cells, at)
+    assert np.max(np.abs(values - (1 + at - 0.3 * at**2))) < 1e-10
+    with pytest.raises(mpmlab.InputError, match="outside"):
+        mpmlab.reconstruct(x, f, a, b, cells, [b + 1])
+
+
+def test_spline_mass_on_arrays():
+    import scipy.sparse
+
+    # The 1D matrix of exact Gauss quadrature has the condition number `mpm massmatrix` prints.
+    p, cells = 2, 8
+    g, w = np.polynomial.legendre.leggauss(p + 1)
+    h = 1.0 / cells
+    x = np.concatenate([(e + 0.5) * h + 0.5 * h * g for e in range(cells)])
+    wts = np.tile(0.5 * h * w, cells)
+    M = mpmlab.spline_mass(x[:, None], wts, 0.0, 1.0, cells, p)
+    assert scipy.sparse.issparse(M) and M.shape == (cells + p, cells + p)
+    # Partition of unity: the entries sum to the weights' sum, and each row to int phi_i.
+    assert M.sum() == pytest.approx(1.0, rel=1e-14)
+    eig = np.linalg.eigvalsh(M.toarray())
+    row = mpmlab.massmatrix(dim=1, degrees=[p], cells=[cells], boundary="free")[0]
+    assert eig.max() / eig.min() == pytest.approx(row["kappa"], rel=1e-9)
+    # The values: points by functions, rows summing to one (2D, tensor product).
+    pts = np.random.default_rng(1).uniform(0.0, 1.0, size=(50, 2))
+    V = mpmlab.spline_values(pts, [0, 0], [1, 1], [4, 4], 3)
+    assert V.shape == (50, 7 * 7)
+    assert np.allclose(np.asarray(V.sum(axis=1)).ravel(), 1.0, rtol=0, atol=1e-14)
+
+
+def test_massmatrix_is_the_command_lines(tmp_path):
+    mpm("massmatrix", "--dim", 2, "--degrees", 1, 2, "--cells", 8, 16, "--csv", tmp_path / "m.csv")
+    with open(tmp_path / "m.csv") as f:
+        cli = list(csv.DictReader(f))
+    rows = mpmlab.massmatrix(dim=2, degrees=[1, 2], cells=[8, 16])
+    assert len(rows) == len(cli) == 4
+    for r, c in zip(rows, cli):
+        assert (r["degree"], r["cells"]) == (int(c["degree"]), int(c["cells"]))
+        assert r["kappa"] == float(c["kappa"])
+        assert r["cg_iterations"] == int(c["cg_iterations"])
+        assert r["pmg_cycles"] == int(c["pmg_cycles"])
+    assert rows[2]["kappa_published"] == 52.1  # 004 Table 4.2, p = 2, h^-1 = 8
