@@ -180,10 +180,11 @@ def _config(config):
 class Run:
     """One run, stepped under your control.
 
-    ``Run(config, out=None, overwrite=False, threads=0, progress=False)`` sets the run up (the
+    ``Run(config, out=None, overwrite=False, threads=None, progress=False)`` sets the run up (the
     input checks of `mpm run`; nothing is stepped) and, with ``out``, writes its initial
-    outputs there. ``threads=0`` chooses as `mpm run` does (OpenMP's count, capped by the problem
-    size); the results do not depend on it.
+    outputs there. ``threads``: None chooses as `mpm run` does (OMP_NUM_THREADS when set, else
+    OpenMP's count capped by the problem size), a number runs that many; the results do not
+    depend on it.
 
     :meth:`step`, :meth:`advance` and :meth:`run` take steps with the GIL released; Ctrl-C
     raises KeyboardInterrupt between two steps, leaving the run intact. A numerical failure
@@ -195,18 +196,22 @@ class Run:
     re-ordered by re-sorting, so a view would not stay the same particles; ``id`` names them.
     """
 
-    def __init__(self, config, out=None, overwrite=False, threads=0, progress=False,
+    def __init__(self, config, out=None, overwrite=False, threads=None, progress=False,
                  _restart=""):
         cfg = _config(config)
         self.config = cfg
         self.out = _os.fspath(out) if out is not None else None
+        if threads is None:
+            # As `mpm run` without --threads: OMP_NUM_THREADS when set, else OpenMP's count
+            # capped by the problem size (0).
+            threads = -1 if "OMP_NUM_THREADS" in _os.environ else 0
         self._native = _Run(cfg._native, self.out or "", bool(overwrite), int(threads),
                             bool(progress), _restart)
         self._summary = None
 
     @classmethod
     def restart(cls, checkpoint, config=None, overrides=(), out=None, overwrite=False,
-                threads=0, progress=False):
+                threads=None, progress=False):
         """Continues from ``checkpoint`` (a checkpoint.bin), as ``mpm run --restart`` does:
         with its stored configuration, which ``config`` (if given) and ``overrides`` may change
         in output.* and time.end only; the outputs go next to the checkpoint unless ``out``."""

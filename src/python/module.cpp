@@ -421,8 +421,8 @@ py::list study(const Config& base, const std::vector<std::string>& refine,
 // mpmlab.reconstruct: the 1D reconstruction of `mpm reconstruct` (Reconstruction1D) of values f
 // at points x on `cells` elements of [lower, upper], evaluated at `at` (each point in the element
 // Grid::cell_of gives it). Returns (values, details).
-py::tuple reconstruct_at(const std::vector<double>& x, const std::vector<double>& f,
-                         double lower, double upper, Index cells, const std::vector<double>& at,
+py::tuple reconstruct_at(const std::vector<double>& x, const std::vector<double>& f, double lower,
+                         double upper, Index cells, const std::vector<double>& at,
                          const std::string& mapping, int terms, const std::string& completion,
                          double max_condition, int mls_degree,
                          const std::vector<double>& element_integrals, bool share_faces) {
@@ -441,8 +441,8 @@ py::tuple reconstruct_at(const std::vector<double>& x, const std::vector<double>
   auto values = array<double>({static_cast<py::ssize_t>(at.size())});
   for (std::size_t k = 0; k < at.size(); ++k) {
     if (!g.inside(Vec<1>(at[k])))
-      raise_error(exit_code::kInput, fmt::format("at[{}] = {} lies outside [{}, {}]", k, at[k],
-                                                 lower, upper));
+      raise_error(exit_code::kInput,
+                  fmt::format("at[{}] = {} lies outside [{}, {}]", k, at[k], lower, upper));
     values.mutable_at(static_cast<py::ssize_t>(k)) = rec.value(g.cell_of(at[k], 0), at[k]);
   }
   return py::make_tuple(values, rec.details());
@@ -470,9 +470,9 @@ py::tuple spline_matrix(const py::array_t<double, py::array::c_style | py::array
                         const std::vector<double>& upper, const std::vector<Index>& cells, int p,
                         bool mass) {
   if (lower.size() != Dim || upper.size() != Dim || cells.size() != Dim)
-    raise_error(exit_code::kInput,
-                fmt::format("lower, upper and cells need {} values each (the points' columns)",
-                            Dim));
+    raise_error(
+        exit_code::kInput,
+        fmt::format("lower, upper and cells need {} values each (the points' columns)", Dim));
   if (p < 1 || p > 5) raise_error(exit_code::kInput, fmt::format("degree {}: choose 1-5", p));
   Vec<Dim> lo, hi;
   IVec<Dim> nc;

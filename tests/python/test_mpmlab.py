@@ -250,6 +250,23 @@ def test_finishing_early_is_not_ok(tmp_path):
         run.step()
 
 
+def test_internal_variables_are_the_frames(tmp_path):
+    # Mohr-Coulomb carries its plastic strain, yield mode and out-of-plane stress; the CSV frame
+    # holds the same columns.
+    cfg = mpmlab.Config.from_file(EXAMPLES / "element_block_2d.toml",
+                                  ["output.vtk=false", "time.end=2.0"])
+    run = mpmlab.Run(cfg, out=tmp_path / "r", threads=2)
+    run.run()
+    p = run.particles()
+    assert set(p["internal"]) == {"plastic_strain", "yield_mode", "stress_zz"}
+    assert p["internal"]["plastic_strain"].max() > 0
+    frames = sorted((tmp_path / "r").glob("particles_*.csv"))
+    with open(frames[-1]) as f:
+        rows = {int(r["id"]): r for r in csv.DictReader(f)}
+    for name, values in p["internal"].items():
+        assert [float(rows[int(i)][name]) for i in p["id"]] == list(values)
+
+
 def test_changing_the_prescribed_velocity_between_steps(tmp_path):
     cfg = mpmlab.Config.from_file(EXAMPLES / "element_block_2d.toml", ["time.end=0.05"])
     run = mpmlab.Run(cfg)
