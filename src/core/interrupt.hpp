@@ -1,7 +1,7 @@
 #pragma once
 // Ending a run cleanly on SIGINT, SIGTERM, SIGHUP, SIGUSR1 or SIGUSR2 (README, "Exit codes"): the
 // first signal only sets a flag, which the time loop reads after each step (driver/driver.hpp,
-// drive()): it then writes the state of that step (history row, frame, checkpoint if checkpoints
+// TimeLoop): it then writes the state of that step (history row, frame, checkpoint if checkpoints
 // are on) and summary.json with "status": "interrupted", and the run exits with
 // exit_code::kInterrupted. A second signal ends the process at once with the default action.
 namespace mpm {

@@ -31,7 +31,7 @@ class OtmStepper final : public Stepper<Dim> {
   void load(const io::Checkpoint& c, const std::string& what) override {
     otm_.set_nodes(c.basis_state, what);
   }
-  // OTM runs on one process (run_mpm refuses it on several), and its particles never move
+  // OTM runs on one process (MpmRun refuses it on several), and its particles never move
   // between processes.
   void export_carried() override {}
   void resize_particle_caches() override {}

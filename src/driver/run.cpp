@@ -145,7 +145,7 @@ class UlfemRun final : public SolverRun {
 // A distributed run's problem: each process stores only the particles of its slab,
 // so that no process holds the whole body, not even while the problem is set up. A counting pass
 // (the same on every process, storing no particle) gives the particles in each cell layer along
-// the grid's last axis; the slabs are cut from them (SlabPartition::balanced, as run_mpm cuts
+// the grid's last axis; the slabs are cut from them (SlabPartition::balanced, as MpmRun cuts
 // them again from the stored particles' layers, summed over the processes) and every process
 // seeds again, keeping its slab's particles (SeedScope). Both passes generate every particle, so
 // the set-up takes twice one process's generation; what a process stores is its share.
@@ -326,7 +326,7 @@ void driver::Session::stop(const std::string& why) {
 }
 
 void driver::Session::checkpoint() {
-  if (finished_) throw std::logic_error("Session::checkpoint: the run is finished");
+  if (finished_) throw InputError("a finished run writes no checkpoint");
   if (opt_.out_dir.empty())
     throw InputError("a checkpoint is written into the run's output directory; the run has none");
   const ScopedThreads threads(threads_);

@@ -248,6 +248,8 @@ def test_finishing_early_is_not_ok(tmp_path):
     assert summary["status"] == "interrupted" and run.finished
     with pytest.raises(mpmlab.InputError, match="finished"):
         run.step()
+    with pytest.raises(mpmlab.InputError, match="finished"):
+        run.checkpoint()
 
 
 def test_internal_variables_are_the_frames(tmp_path):
