@@ -83,23 +83,71 @@ def _toml_value(value):
 
 
 def _toml_document(d):
-    """A TOML document of nested dicts (tables) of values."""
-    lines, tables = [], []
+    """A TOML document of nested dicts (tables) of values, and for each of its lines the key
+    path it comes from (``['grid', 'cells']``), for messages."""
+    lines, paths, tables = [], [], []
 
     def emit(table, prefix):
         for key, value in table.items():
             if isinstance(value, dict):
                 tables.append((prefix + [str(key)], value))
             else:
-                lines.append(f"{key} = {_toml_value(value)}")
+                lines.append(f"{_toml_key(key)} = {_toml_value(value)}")
+                paths.append(prefix + [str(key)])
 
     emit(d, [])
     while tables:
         path, table = tables.pop(0)
         lines.append("")
-        lines.append("[" + ".".join(path) + "]")
+        paths.append(path)
+        lines.append("[" + ".".join(_toml_key(k) for k in path) + "]")
+        paths.append(path)
         emit(table, path)
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n", paths
+
+
+def _toml_key(key):
+    key = str(key)
+    bare = key and all(c.isalnum() or c in "_-" for c in key) and key.isascii()
+    return key if bare else _toml_string(key)
+
+
+class _Located:
+    """Turns ``SOURCE:LINE:COLUMN`` of a TOML text made from a dict into the entry it came from
+    (``dict['grid']['cells']``) in the messages of the InputErrors raised inside it."""
+
+    def __init__(self, source, paths):
+        self.source, self.paths = source, paths
+
+    def text(self, message):
+        import re
+
+        def entry(m):
+            line = int(m.group(1))
+            if 1 <= line <= len(self.paths):
+                return self.source + "".join(f"[{k!r}]" for k in self.paths[line - 1])
+            return m.group(0)
+
+        return re.sub(re.escape(self.source) + r":(\d+):\d+", entry, message)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, error, traceback):
+        if isinstance(error, Error) and kind is not None:
+            raise kind(self.text(str(error))) from None
+        return False
+
+
+class _Nowhere:
+    def text(self, message):
+        return message
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, error, traceback):
+        return False
 
 
 class Config:
@@ -114,6 +162,7 @@ class Config:
         if not isinstance(native, _Config):
             raise TypeError("make a Config with Config.from_file, from_dict or from_string")
         self._native = native
+        self._located = _Nowhere()
 
     @classmethod
     def from_file(cls, path, overrides=()):
@@ -127,8 +176,17 @@ class Config:
 
     @classmethod
     def from_dict(cls, d, source="dict"):
-        """Nested dicts as TOML tables: ``{"grid": {"cells": 16}, "benchmark": "mms_1d"}``."""
-        return cls.from_string(_toml_document(d), source)
+        """Nested dicts as TOML tables: ``{"grid": {"cells": 16}, "benchmark": "mms_1d"}``.
+        Messages (here and of the runs made from it) name the entry, ``dict['grid']['cells']``,
+        where a file's name its line."""
+        if not isinstance(d, dict):
+            raise InputError(f"from_dict: a dict of keys and tables, not {type(d).__name__}")
+        text, paths = _toml_document(d)
+        located = _Located(source, paths)
+        with located:
+            cfg = cls.from_string(text, source)
+        cfg._located = located
+        return cfg
 
     def set(self, key, value):
         """Sets ``key`` (dotted: ``"grid.cells"``) to ``value``; returns the configuration."""
@@ -149,11 +207,14 @@ class Config:
         return self._native.is_set(key)
 
     def where(self, key):
-        """Where ``key`` was given: ``file:line:column``, the set() call, or ``default``."""
-        return self._native.where(key)
+        """Where ``key`` was given: ``file:line:column``, the dict entry, the set() call, or
+        ``default``."""
+        return self._located.text(self._native.where(key))
 
     def copy(self):
-        return Config(self._native.copy())
+        c = Config(self._native.copy())
+        c._located = self._located
+        return c
 
     def to_toml(self):
         """Every key with its value in effect, as the run's config.toml holds it."""
@@ -205,8 +266,9 @@ class Run:
             # As `mpm run` without --threads: OMP_NUM_THREADS when set, else OpenMP's count
             # capped by the problem size (0).
             threads = -1 if "OMP_NUM_THREADS" in _os.environ else 0
-        self._native = _Run(cfg._native, self.out or "", bool(overwrite), int(threads),
-                            bool(progress), _restart)
+        with cfg._located:
+            self._native = _Run(cfg._native, self.out or "", bool(overwrite), int(threads),
+                                bool(progress), _restart)
         self._summary = None
 
     @classmethod
@@ -375,8 +437,9 @@ def study(config, refine, methods=None, out=None, jobs=1, overwrite=False, frame
         methods_text = methods
     else:
         methods_text = ",".join(methods)
-    rows = _study(cfg._native, texts, methods_text, _os.fspath(out) if out else "", int(jobs),
-                  bool(overwrite))
+    with cfg._located:
+        rows = _study(cfg._native, texts, methods_text, _os.fspath(out) if out else "",
+                      int(jobs), bool(overwrite))
     if frame is False:
         return rows
     try:

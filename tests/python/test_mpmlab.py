@@ -119,6 +119,14 @@ def test_from_dict_equals_the_file():
     b = mpmlab.Config.from_file(EXAMPLES / "mms_1d.toml")
     for key in ("grid.cells", "time.dt", "time.end", "material.youngs_modulus", "method.basis"):
         assert a[key] == b[key]
+    # Messages name the dict's entry, also those of a run made from it.
+    d["grid"]["cells"] = 0
+    with pytest.raises(mpmlab.InputError, match=r"^dict\['grid'\]\['cells'\]: .*out of range"):
+        mpmlab.Config.from_dict(d)
+    d["grid"]["cells"] = 16
+    d["time"]["dt"] = 1e-2
+    with pytest.raises(mpmlab.InputError, match=r"^dict\['time'\]\['dt'\]: .*stability limit"):
+        mpmlab.Run(mpmlab.Config.from_dict(d))
 
 
 def test_keys_and_methods_are_the_command_lines():
