@@ -40,8 +40,8 @@ _prefer_passive_waiting()
 from . import errors  # noqa: E402
 from .errors import *  # noqa: F401,F403,E402
 from ._mpmlab import __version__, keys, methods  # noqa: E402
-from ._mpmlab import (_Config, _massmatrix, _reconstruct, _restart_config,  # noqa: E402
-                      _Run, _spline_matrix, _study)
+from ._mpmlab import (_Config, _massmatrix, _reconstruct, _reconstruct_2d,  # noqa: E402
+                      _restart_config, _Run, _spline_matrix, _study)
 
 __all__ = ["Config", "Run", "study", "reconstruct", "spline_values", "spline_mass",
            "massmatrix", "keys", "methods", "errors", "__version__"] + errors.__all__
@@ -460,25 +460,42 @@ def _refine_value(v):
 def reconstruct(x, f, lower, upper, cells, at, mapping="tls", terms=3, completion="virtual",
                 max_condition=1e8, mls_degree=1, element_integrals=None, share_faces=False,
                 details=False):
-    """The reconstruction of `mpm reconstruct` on arrays (1D): values ``f`` at points ``x`` on
-    ``cells`` equal elements of [lower, upper], reconstructed by ``mapping`` ("tls",
-    "cubic_spline", "mls", "imls"; D 5.2.3, 003) and evaluated at the points ``at`` (a point on
-    an interior face in the element to its right, the last face in the last element).
+    """The reconstructions of `mpm reconstruct` on arrays: values ``f`` at points ``x``,
+    reconstructed on ``cells`` equal elements of [lower, upper] and evaluated at the points
+    ``at`` (a point on an interior face in the element above it, the last face in the last).
 
-    TLS: ``terms`` Taylor terms (1-3), ``completion`` for elements with too few points
-    ("reduce", "virtual", "neighbour", "none": raises), ``element_integrals`` (one per element)
-    kept exactly by the conservative fit (D eq. 5.9; None: the plain fit). MLS/IMLS: the
-    polynomial degree ``mls_degree`` (1 or 2), the quadratic-spline weight of support three
+    1D (``x`` of shape (n,) or (n, 1)): ``mapping`` "tls", "cubic_spline", "mls" or "imls"
+    (D 5.2.3, 003). 2D (``x`` and ``at`` of shape (n, 2); ``lower``, ``upper``, ``cells`` one
+    value or one per direction): TLS on the rectangles (D 6.2.1), ``terms`` 1, 3 or 6.
+
+    TLS: ``terms`` Taylor terms (1D 1-3), ``completion`` for elements with too few points
+    ("reduce", "virtual", "neighbour", "none": raises), ``element_integrals`` (one per element,
+    x fastest) kept exactly by the conservative fit (D eq. 5.9; None: the plain fit). MLS/IMLS:
+    the polynomial degree ``mls_degree`` (1 or 2), the quadratic-spline weight of support three
     cells. Returns the values at ``at`` (NumPy), with ``details=True`` also the per-element
-    report `mpm reconstruct --details` prints."""
+    report `mpm reconstruct` prints."""
     import numpy
 
-    values, text = _reconstruct(
-        [float(v) for v in numpy.ravel(x)], [float(v) for v in numpy.ravel(f)], float(lower),
-        float(upper), int(cells), [float(v) for v in numpy.ravel(at)], mapping, int(terms),
-        completion, float(max_condition), int(mls_degree),
-        [] if element_integrals is None else [float(v) for v in numpy.ravel(element_integrals)],
-        bool(share_faces))
+    pts = numpy.asarray(x, dtype=float)
+    values_f = [float(v) for v in numpy.ravel(f)]
+    integrals = [] if element_integrals is None else [float(v)
+                                                      for v in numpy.ravel(element_integrals)]
+    if pts.ndim == 2 and pts.shape[1] == 2:
+        if mapping != "tls":
+            raise InputError(f"mapping {mapping!r} is one-dimensional; 2D reconstructs with tls "
+                             "(D 6.2)")
+        _, lo, hi, nc = _box(pts, lower, upper, cells)
+        values, text = _reconstruct_2d(pts, values_f, lo, hi, nc,
+                                       numpy.asarray(at, dtype=float).reshape(-1, 2), int(terms),
+                                       completion, float(max_condition), integrals,
+                                       bool(share_faces))
+    elif pts.ndim == 1 or (pts.ndim == 2 and pts.shape[1] == 1):
+        values, text = _reconstruct(
+            [float(v) for v in numpy.ravel(pts)], values_f, float(lower), float(upper),
+            int(cells), [float(v) for v in numpy.ravel(at)], mapping, int(terms), completion,
+            float(max_condition), int(mls_degree), integrals, bool(share_faces))
+    else:
+        raise InputError("x: points of shape (n,) or (n, 1) in 1D, (n, 2) in 2D")
     return (values, text) if details else values
 
 

@@ -168,6 +168,64 @@ void for_each_gauss_point(const Grid<2>& g, Index e, const GaussRule& rule, Fn&&
          hw[0] * rule.w[kx] * hw[1] * rule.w[ky]);
 }
 
+}  // namespace
+
+Reconstruction2D::Reconstruction2D(const ReconstructOptions& opt, const Grid<2>& g,
+                                   const std::vector<Vec<2>>& x, const std::vector<double>& f,
+                                   const std::vector<double>& element_integrals) {
+  if (opt.mapping != "tls")
+    throw InputError(fmt::format(
+        "--mapping {} is one-dimensional; --dim 2 reconstructs with tls (D 6.2)", opt.mapping));
+  if (x.size() != f.size())
+    throw InputError(fmt::format("{} points and {} values", x.size(), f.size()));
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (!g.inside(x[k]))
+      throw InputError(fmt::format("point {} ({}, {}) lies outside [{}, {}] x [{}, {}]", k, x[k][0],
+                                   x[k][1], g.origin[0], g.upper()[0], g.origin[1], g.upper()[1]));
+    if (!std::isfinite(f[k]))
+      throw InputError(fmt::format("the value at point {} ({}, {}) is not finite: {}", k, x[k][0],
+                                   x[k][1], f[k]));
+  }
+  if (!element_integrals.empty() && static_cast<Index>(element_integrals.size()) != g.num_cells())
+    throw InputError(fmt::format("{} element integrals for {} elements", element_integrals.size(),
+                                 g.num_cells()));
+  TlsSettings s;
+  s.terms = opt.terms;
+  s.completion = parse_tls_completion(opt.completion);
+  s.max_condition = opt.max_condition;
+  // Conservative fits only fit psi_2..psi_nb: judge the data on those (D 6.2.1's points make
+  // the full normal matrix singular, see TlsSettings::conservative_only).
+  s.conservative_only = !element_integrals.empty();
+  validate(s, 2);
+  tls_ = TlsReconstruction2D(s);
+  tls_.set_points(g, x, opt.share_faces);
+  if (tls_.report().failed > 0)
+    throw InputError(fmt::format(
+        "TLS cannot fit element {} ({} points, condition number {:.3g}) without completion; "
+        "use --completion reduce, virtual or neighbour",
+        tls_.describe(tls_.report().failed_element), tls_.report().failed_points,
+        tls_.report().failed_condition));
+  if (!element_integrals.empty())
+    tls_.fit_conservative(f, element_integrals, coeffs_);
+  else
+    tls_.fit_plain(f, coeffs_);
+  details_ += fmt::format("{:>8} {:>5} {:>5} {:>7} {:>8} {:>8} {:>6} {:>12}\n", "element", "i", "j",
+                          "points", "virtual", "borrowed", "terms", "cond(D)");
+  for (Index e = 0; e < g.num_cells(); ++e) {
+    const auto& info = tls_.element(e);
+    const IVec<2> c = tls_.cell(e);
+    details_ +=
+        fmt::format("{:>8} {:>5} {:>5} {:>7} {:>8} {:>8} {:>6} {:>12.4g}\n", e, c[0], c[1],
+                    info.points, info.virtual_points, info.borrowed, info.terms, info.condition);
+  }
+}
+
+double Reconstruction2D::value(Index e, const Vec<2>& x) const {
+  return tls_.evaluate(coeffs_, e, x);
+}
+
+namespace {
+
 // D 6.2.1: f(x, y) on the square [a, b]^2 with cells x cells rectangular elements, TLS only.
 // The RMS error is taken over error_points x error_points Gauss points per element (D 6.2.1: 2 x
 // 2, "four Gauss points per element"), the integral with integration_points x integration_points.
@@ -195,47 +253,20 @@ ReconstructResult reconstruct_2d(const ReconstructOptions& opt, double a, double
     });
   for (double c : element_integral) res.integral_exact += c;
 
-  TlsSettings s;
-  s.terms = opt.terms;
-  s.completion = parse_tls_completion(opt.completion);
-  s.max_condition = opt.max_condition;
-  // Conservative fits only fit psi_2..psi_nb: judge the data on those (D 6.2.1's points make
-  // the full normal matrix singular, see TlsSettings::conservative_only).
-  s.conservative_only = opt.conservative;
-  validate(s, 2);
-  TlsReconstruction2D tls(s);
-  tls.set_points(g, res.xy, opt.share_faces);
-  TlsCoefficients2D coeffs;
-  if (tls.report().failed > 0)
-    throw InputError(fmt::format(
-        "TLS cannot fit element {} ({} points, condition number {:.3g}) without completion; "
-        "use --completion reduce, virtual or neighbour",
-        tls.describe(tls.report().failed_element), tls.report().failed_points,
-        tls.report().failed_condition));
-  if (opt.conservative)
-    tls.fit_conservative(fx, element_integral, coeffs);
-  else
-    tls.fit_plain(fx, coeffs);
-  res.details += fmt::format("{:>8} {:>5} {:>5} {:>7} {:>8} {:>8} {:>6} {:>12}\n", "element", "i",
-                             "j", "points", "virtual", "borrowed", "terms", "cond(D)");
-  for (Index e = 0; e < ne; ++e) {
-    const auto& info = tls.element(e);
-    const IVec<2> c = tls.cell(e);
-    res.details +=
-        fmt::format("{:>8} {:>5} {:>5} {:>7} {:>8} {:>8} {:>6} {:>12.4g}\n", e, c[0], c[1],
-                    info.points, info.virtual_points, info.borrowed, info.terms, info.condition);
-  }
+  Reconstruction2D tls(opt, g, res.xy, fx,
+                       opt.conservative ? element_integral : std::vector<double>{});
+  res.details = tls.details();
 
   const GaussRule err_rule = gauss_legendre(opt.error_points);
   const GaussRule int_rule = gauss_legendre(opt.integration_points);
   double sq = 0.0;
   for (Index e = 0; e < ne; ++e) {
     for_each_gauss_point(g, e, err_rule, [&](const Vec<2>& x, double) {
-      const double d = tls.evaluate(coeffs, e, x) - f(x[0], x[1]);
+      const double d = tls.value(e, x) - f(x[0], x[1]);
       sq += d * d;
     });
     for_each_gauss_point(g, e, int_rule, [&](const Vec<2>& x, double w) {
-      res.integral_reconstructed += w * tls.evaluate(coeffs, e, x);
+      res.integral_reconstructed += w * tls.value(e, x);
     });
   }
   res.rms_error = std::sqrt(sq / static_cast<double>(ne * opt.error_points * opt.error_points));

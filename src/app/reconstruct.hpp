@@ -88,6 +88,23 @@ class Reconstruction1D {
   MovingLeastSquares<1> mls_;
 };
 
+// The 2D TLS reconstruction on the rectangles of g (D 6.2.1; opt.mapping must be tls), as
+// Reconstruction1D: what `mpm reconstruct --dim 2` fits and mpmlab.reconstruct evaluates.
+class Reconstruction2D {
+ public:
+  Reconstruction2D(const ReconstructOptions& opt, const Grid<2>& g, const std::vector<Vec<2>>& x,
+                   const std::vector<double>& f, const std::vector<double>& element_integrals);
+  // Element e's polynomial at x.
+  double value(Index e, const Vec<2>& x) const;
+  // Per element: cell, points, virtual and borrowed points, terms, condition.
+  const std::string& details() const { return details_; }
+
+ private:
+  TlsReconstruction2D tls_;
+  TlsCoefficients2D coeffs_;
+  std::string details_;
+};
+
 // Throws InputError for bad options (unknown mapping, bad point list, expression errors).
 ReconstructResult reconstruct(const ReconstructOptions& opt);
 

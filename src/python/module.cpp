@@ -448,6 +448,45 @@ py::tuple reconstruct_at(const std::vector<double>& x, const std::vector<double>
   return py::make_tuple(values, rec.details());
 }
 
+// The same in 2D: TLS on cells[0] x cells[1] rectangles of [lower, upper] (Reconstruction2D, D
+// 6.2.1), points x and `at` as (n, 2) arrays.
+py::tuple reconstruct_at_2d(
+    const py::array_t<double, py::array::c_style | py::array::forcecast>& x,
+    const std::vector<double>& f, const std::vector<double>& lower,
+    const std::vector<double>& upper, const std::vector<Index>& cells,
+    const py::array_t<double, py::array::c_style | py::array::forcecast>& at, int terms,
+    const std::string& completion, double max_condition,
+    const std::vector<double>& element_integrals, bool share_faces) {
+  if (x.ndim() != 2 || x.shape(1) != 2 || at.ndim() != 2 || at.shape(1) != 2)
+    raise_error(exit_code::kInput, "x and at: arrays of shape (n, 2)");
+  if (lower.size() != 2 || upper.size() != 2 || cells.size() != 2 || !(upper[0] > lower[0]) ||
+      !(upper[1] > lower[1]) || cells[0] < 1 || cells[1] < 1)
+    raise_error(exit_code::kInput,
+                "lower, upper and cells: two values each, upper above lower, cells at least 1");
+  ReconstructOptions opt;
+  opt.dim = 2;
+  opt.mapping = "tls";
+  opt.terms = terms;
+  opt.completion = completion;
+  opt.max_condition = max_condition;
+  opt.share_faces = share_faces;
+  const Grid<2> g(Vec<2>(lower[0], lower[1]), Vec<2>(upper[0], upper[1]),
+                  IVec<2>{cells[0], cells[1]});
+  std::vector<Vec<2>> points(static_cast<std::size_t>(x.shape(0)));
+  for (std::size_t k = 0; k < points.size(); ++k)
+    points[k] = Vec<2>(x.at(static_cast<py::ssize_t>(k), 0), x.at(static_cast<py::ssize_t>(k), 1));
+  Reconstruction2D rec(opt, g, points, f, element_integrals);
+  auto values = array<double>({at.shape(0)});
+  for (py::ssize_t k = 0; k < at.shape(0); ++k) {
+    const Vec<2> p(at.at(k, 0), at.at(k, 1));
+    if (!g.inside(p))
+      raise_error(exit_code::kInput,
+                  fmt::format("at[{}] = ({}, {}) lies outside the rectangle", k, p[0], p[1]));
+    values.mutable_at(k) = rec.value(g.cell_index(p), p);
+  }
+  return py::make_tuple(values, rec.details());
+}
+
 // A sparse matrix as CSR arrays (data, indices, indptr, shape), for scipy.sparse.csr_matrix.
 py::tuple csr(SparseMatrixD m) {
   Eigen::SparseMatrix<double, Eigen::RowMajor> r(m);
@@ -628,6 +667,7 @@ PYBIND11_MODULE(_mpmlab, m) {
   m.def("methods", &mpm::python::methods);
   m.def("_study", &mpm::python::study);
   m.def("_reconstruct", &mpm::python::reconstruct_at);
+  m.def("_reconstruct_2d", &mpm::python::reconstruct_at_2d);
   m.def("_spline_matrix", &mpm::python::spline_matrix_any);
   m.def("_massmatrix", &mpm::python::massmatrix);
 }

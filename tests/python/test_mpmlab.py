@@ -323,6 +323,30 @@ def test_reconstruct_on_arrays_is_the_command_lines():
         mpmlab.reconstruct(x, f, a, b, cells, [b + 1])
 
 
+def test_reconstruct_in_2d_is_the_command_lines():
+    # D 6.2.1: sin(x) cos(y) on 5 x 5 elements of [0, 5]^2, 2 x 3 inner points a element, six
+    # Taylor terms; the RMS error over 2 x 2 Gauss points a element is 6.17e-3 (the README's).
+    cells, h = 5, 1.0
+    pts = np.array([((i + kx / 3) * h, (j + ky / 4) * h) for j in range(cells)
+                    for i in range(cells) for ky in (1, 2, 3) for kx in (1, 2)])
+    f = np.sin(pts[:, 0]) * np.cos(pts[:, 1])
+    g = np.polynomial.legendre.leggauss(2)[0]
+    at = np.array([((i + 0.5 + 0.5 * gx) * h, (j + 0.5 + 0.5 * gy) * h) for j in range(cells)
+                   for i in range(cells) for gy in g for gx in g])
+    # The exact element integrals (separable): int sin x dx * int cos y dy per element.
+    integrals = [(np.cos(i * h) - np.cos((i + 1) * h)) * (np.sin((j + 1) * h) - np.sin(j * h))
+                 for j in range(cells) for i in range(cells)]
+    values = mpmlab.reconstruct(pts, f, 0.0, 5.0, cells, at, terms=6,
+                                element_integrals=integrals)
+    rms = np.sqrt(np.mean((values - np.sin(at[:, 0]) * np.cos(at[:, 1])) ** 2))
+    cli = mpm("reconstruct", "--dim", 2, "--function", "sin(x)*cos(y)", "--upper", 5, "--cells",
+              cells, "--terms", 6, "--points", "inner:2x3", "--error-points", 2).stdout
+    line = next(ln for ln in cli.splitlines() if ln.startswith("RMS error"))
+    assert f"{rms:.6e}" == line.split()[-1] == "6.170989e-03"
+    with pytest.raises(mpmlab.InputError, match="one-dimensional"):
+        mpmlab.reconstruct(pts, f, 0.0, 5.0, cells, at, mapping="mls")
+
+
 def test_spline_mass_on_arrays():
     import scipy.sparse
 
