@@ -116,11 +116,14 @@ class _Located:
     """Turns ``SOURCE:LINE:COLUMN`` of a TOML text made from a dict into the entry it came from
     (``dict['grid']['cells']``) in the messages of the InputErrors raised inside it."""
 
-    def __init__(self, source, paths):
+    def __init__(self, source=None, paths=()):
         self.source, self.paths = source, paths
 
     def text(self, message):
         import re
+
+        if not self.paths:  # (not from a dict: the messages name file lines or calls)
+            return message
 
         def entry(m):
             line = int(m.group(1))
@@ -139,17 +142,6 @@ class _Located:
         return False
 
 
-class _Nowhere:
-    def text(self, message):
-        return message
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, kind, error, traceback):
-        return False
-
-
 class Config:
     """A run's configuration, checked against the schema (mpmlab.keys()) as `mpm run` checks it.
 
@@ -162,7 +154,7 @@ class Config:
         if not isinstance(native, _Config):
             raise TypeError("make a Config with Config.from_file, from_dict or from_string")
         self._native = native
-        self._located = _Nowhere()
+        self._located = _Located()
 
     @classmethod
     def from_file(cls, path, overrides=()):

@@ -101,32 +101,24 @@ OutputSession<Dim>::OutputSession(const RunOptions& opt, const RunSettings& s,
     writer_ = comm_->root();
   }
   mapping_errors_ = s.method.solver == Solver::Mpm;
-  history_header_ = "time,kinetic_energy,strain_energy,total_energy,mass";
-  for (int d = 0; d < Dim; ++d) history_header_ += fmt::format(",momentum_{}", d + 1);
+  // history.csv's columns, also those of the rows kept in memory (RunOptions::keep_history).
+  keep_history_ = opt.keep_history;
+  auto& cols = history_columns_;
+  cols = {"time", "kinetic_energy", "strain_energy", "total_energy", "mass"};
+  for (int d = 0; d < Dim; ++d) cols.push_back(fmt::format("momentum_{}", d + 1));
   // MPM: the relative mass and momentum errors of the step's latest mapping, grid sums
   // against particle sums (0 in the first row, before any mapping; D Tables 5.3, 5.5, 5.7
   // report their maxima, which summary.json has).
-  if (mapping_errors_) history_header_ += ",mass_error,momentum_error";
+  if (mapping_errors_) cols.insert(cols.end(), {"mass_error", "momentum_error"});
   // output.reactions: the reaction [N; N/m in 2D] on each constrained boundary, per component
   // (0 in the first row, before any step).
   if (pb.reactions)
     for (const std::string& name : reaction_names(pb))
       for (int d = 0; d < Dim; ++d) {
-        history_header_ += fmt::format(",reaction_{}_{}", name, "xyz"[d]);
+        cols.push_back(fmt::format("reaction_{}_{}", name, "xyz"[d]));
         ++reaction_columns_;
       }
-  // The columns, for the rows kept in memory (RunOptions::keep_history).
-  if (opt.keep_history) {
-    keep_history_ = true;
-    std::string_view rest = history_header_;
-    for (std::size_t at = 0; at != std::string_view::npos;) {
-      const std::size_t comma = rest.find(',', at);
-      history_columns_.emplace_back(
-          rest.substr(at, comma == std::string_view::npos ? comma : comma - at));
-      at = comma == std::string_view::npos ? comma : comma + 1;
-    }
-  }
-  history_header_ += "\n";
+  history_header_ = fmt::format("{}\n", fmt::join(cols, ","));
   if (dir_.empty()) return;
   csv_ = s.output.csv;
   vtk_ = s.output.vtk;
@@ -224,32 +216,22 @@ void OutputSession<Dim>::history_row(const StateView<Dim>& sim) {
     mass = v[2];
     for (int d = 0; d < Dim; ++d) mom[d] = v[3 + static_cast<std::size_t>(d)];
   }
-  std::string row = fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", sim.time, kin, strain,
-                                kin + strain, mass);
-  for (int d = 0; d < Dim; ++d) row += fmt::format(",{:.17g}", mom[d]);
-  if (mapping_errors_)
-    row += sim.diag ? fmt::format(",{:.17g},{:.17g}", sim.diag->rel_mass_error,
-                                  sim.diag->rel_momentum_error)
-                    : ",0,0";
+  std::vector<double> values{sim.time, kin, strain, kin + strain, mass};
+  for (int d = 0; d < Dim; ++d) values.push_back(mom[d]);
+  if (mapping_errors_) {
+    values.push_back(sim.diag ? sim.diag->rel_mass_error : 0.0);
+    values.push_back(sim.diag ? sim.diag->rel_momentum_error : 0.0);
+  }
   if (reaction_columns_ > 0) {
     const std::vector<double>* r = sim.diag ? &sim.diag->reactions : nullptr;
     if (r != nullptr && !r->empty() && r->size() != reaction_columns_)
       throw std::logic_error("history_row: reactions of another set of boundaries");
     for (std::size_t k = 0; k < reaction_columns_; ++k)
-      row += r != nullptr && !r->empty() ? fmt::format(",{:.17g}", (*r)[k]) : std::string(",0");
+      values.push_back(r != nullptr && !r->empty() ? (*r)[k] : 0.0);
   }
-  if (keep_history_) {
-    // The row's values, parsed back from their shortest round-trip text: the bits of the file.
-    std::string_view rest = row;
-    for (std::size_t at = 0; at < rest.size();) {
-      std::size_t comma = rest.find(',', at);
-      if (comma == std::string_view::npos) comma = rest.size();
-      history_values_.push_back(std::stod(std::string(rest.substr(at, comma - at))));
-      at = comma + 1;
-    }
-  }
+  if (keep_history_) history_values_.insert(history_values_.end(), values.begin(), values.end());
   if (!enabled()) return;
-  row += "\n";
+  const std::string row = fmt::format("{:.17g}\n", fmt::join(values, ","));
   // Appended as the run goes (io::AppendFile): constant memory, and a killed run keeps every row
   // written so far. A fresh run starts the file with the header at its first row.
   agreed([&] {

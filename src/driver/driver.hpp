@@ -116,8 +116,8 @@ class OutputSession {
   // The processes of a distributed run, or null.
   const Comm* comm() const { return comm_; }
   void history_row(const StateView<Dim>& s);
-  // The history rows kept in memory (RunOptions::keep_history), with or without an output
-  // directory: history.csv's columns, and its values row after row.
+  // history.csv's columns, and the rows kept in memory (RunOptions::keep_history), with or
+  // without an output directory: its values row after row.
   const std::vector<std::string>& history_columns() const { return history_columns_; }
   const std::vector<double>& history_values() const { return history_values_; }
   void frame(const StateView<Dim>& s);

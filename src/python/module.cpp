@@ -225,12 +225,11 @@ class Run {
     ro.threads = threads;
     ro.quiet = !progress;
     ro.keep_history = true;
-    Config run_cfg = cfg;
     if (!restart.empty()) {
       ro.restart = std::make_shared<const io::Checkpoint>(io::read_checkpoint(restart));
       ro.restart_name = restart;
     }
-    session_ = std::make_unique<driver::Session>(run_cfg, ro);
+    session_ = std::make_unique<driver::Session>(cfg, ro);
   }
 
   // Takes steps until step `to` (at most the last). A failure finishes the run (summary.json)
