@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Distributed runs against the run on one process (issue 21), for the test suite.
+"""Distributed runs against the run on one process, for the test suite.
 
 For each case, runs `mpm run` on one process and under `mpirun -n N` for every N of --ranks, and
 checks:
@@ -16,6 +16,8 @@ checks:
   * the cases of THREE also on 3 processes (a count that is not a power of two), twice, the
     same bytes both times;
   * under mpirun -n 1 (the quick cases) the answers of the run without mpirun;
+  * the cases of BLOCKS also on a Cartesian grid of processes (parallel.blocks: 2 x 2 and 2 x 3
+    in 2D, 2 x 2 x 2 in 3D, or shaped from the particles), with the process grid asked for;
   * particles moved between processes (summary.json "mpi"), in both directions where the case
     says so, and the slabs were cut anew where it says so (parallel.rebalance).
 The runs of each process count are made in one start of mpm (`mpm run --batch`, one mpirun),
@@ -23,7 +25,9 @@ the repeats in another; the restart and failure checks start mpm for each run.
 Each frame of a distributed run is a .pvtu over one VTU piece per process, whose particles are
 those of the CSV frame. A run on 2 processes shortened and restarted from its checkpoint on 2
 processes ends in the same bytes as the whole run, and restarted on 4 or 1 in the same answers to
-1e-12; one on 4 restarted on 4 in the same bytes, on 3 to 1e-12. Each distributed checkpoint is a
+1e-12; one on 4 restarted on 4 in the same bytes, on 3 to 1e-12; one on 2 x 2 blocks restarted
+on 2 x 2 in the same bytes, on 2 x 3 blocks, 4 slabs and one process to 1e-12, and one of 4 slabs
+on 2 x 2 blocks to 1e-12. Each distributed checkpoint is a
 manifest and one piece per process of its step; a damaged or missing piece stops the restart on
 every process with one message naming it.
 Then a failing distributed run (a body thrown out of the grid; a NaN that one process meets) must
@@ -328,6 +332,29 @@ AGAIN = {"2d_vortex_bspline2_musl", "2d_vortex_tls_neighbour_domains_usl",
 # over the processes).
 THREE = {"2d_vortex_bspline2_musl", "1d_thrown_bar_bspline2"}
 
+# Blocks (parallel.blocks): cases also run on a Cartesian grid of processes, 2 x 2 and 2 x 3 in
+# 2D, 2 x 2 x 2 in 3D, or the shape chosen from the particles ("auto"), each of a kind of
+# exchange: the grid sums and migrations to the 8 or 26 blocks around one (the vortex, the
+# thrown bodies, whose block boundaries move: parallel.rebalance, the ball on the floor), ghost
+# particles (TLS on triangles), carried corners (CPDI2), DDMPM's lent layer, distributed CG,
+# tractions, frictional walls. (TLS on the grid's cells, MLS and IMLS run on slabs only.)
+# With --all-blocks every other 2D and 3D case but those of the reconstruction mappings also runs
+# on 2 x 2 or 2 x 2 x 2 (not in CI).
+BLOCKS = {
+    "2d_vortex_bspline2_musl": [(4, "2x2"), (6, "2x3")],
+    "2d_vortex_tls_powell_sabin_criss_cross_usl": [(4, "auto")],
+    "2d_vortex_cpdi2_usl": [(4, "2x2")],
+    "2d_vortex_ddmpm_musl": [(6, "2x3")],
+    "2d_plate_consistent_cg": [(4, "2x2")],
+    "2d_custom_plate_tractions_bspline2": [(4, "2x2")],
+    "2d_column_frictional_walls": [(4, "2x2")],
+    "2d_three_bodies_thrown": [(6, "2x3")],
+    "3d_cube_bspline2": [(8, "2x2x2")],
+    "3d_sphere_body_mesh_friction": [(8, "2x2x2")],
+}
+# The block runs made a second time for the same bytes.
+BLOCKS_AGAIN = {("2d_vortex_bspline2_musl", 4)}
+
 # The processes of a check share one machine: shared memory (vader) and the ob1 layer over it,
 # named so that Open MPI does not probe its network transports (openib, OFI, UCX) at every start:
 # a run of 4 processes took 0.30 s instead of 0.48 s, most of it start-up (2026-11-28, this
@@ -363,9 +390,33 @@ def counts(name, ranks):
     return [n for n in ns if n > 1 or name in QUICK]
 
 
+def layouts(name, ranks, all_blocks=False):
+    # (processes, parallel.blocks or None for the default slabs) of every distributed run of a
+    # case.
+    out = [(n, None) for n in counts(name, ranks)]
+    blocks = BLOCKS.get(name, [])
+    if all_blocks and not blocks and name[:2] in ("2d", "3d") and not any(
+            m in name for m in ("_tls", "_mls", "_imls")):
+        blocks = [(4, "2x2")] if name.startswith("2d") else [(8, "2x2x2")]
+    return out + list(blocks)
+
+
+def layout_dir(tmp, name, n, shape):
+    return os.path.join(tmp, f"{name}_n{n}" + (f"_{shape}" if shape else ""))
+
+
+def layout_sets(sets, shape):
+    return sets + ([f'parallel.blocks="{shape}"'] if shape else [])
+
+
 def repeated(name, n, ranks):
     # Whether the run on n processes is made a second time, for the same bytes.
     return n > 1 and ((n == max(ranks) and name in AGAIN) or (n == 3 and name in THREE))
+
+
+def again(name, n, shape, ranks):
+    # Whether the run of this layout is made a second time, for the same bytes.
+    return (name, n) in BLOCKS_AGAIN if shape else repeated(name, n, ranks)
 
 
 class Made:
@@ -406,18 +457,19 @@ def make_batch(mpm, n, runs, path):
         MADE[d] = Made(codes.get(k, -1), err)
 
 
-def make_runs(mpm, cases, ranks, tmp):
+def make_runs(mpm, cases, ranks, tmp, all_blocks=False):
     batches = {}
     for name, config, sets, _ in cases:
         batches.setdefault((None, ""), []).append((config, sets, os.path.join(tmp, name + "_serial")))
         for k, extra in enumerate(ULP_INPUTS.get(name, [])):
             batches[(None, "")].append((config, sets + extra,
                                         os.path.join(tmp, f"{name}_serial_ulp{k}")))
-        for n in counts(name, ranks):
-            d = os.path.join(tmp, f"{name}_n{n}")
-            batches.setdefault((n, ""), []).append((config, sets, d))
-            if repeated(name, n, ranks):
-                batches.setdefault((n, "again"), []).append((config, sets, d + "_again"))
+        for n, shape in layouts(name, ranks, all_blocks):
+            d = layout_dir(tmp, name, n, shape)
+            batches.setdefault((n, ""), []).append((config, layout_sets(sets, shape), d))
+            if again(name, n, shape, ranks):
+                batches.setdefault((n, "again"), []).append((config, layout_sets(sets, shape),
+                                                             d + "_again"))
     for k, ((n, tag), runs) in enumerate(batches.items()):
         make_batch(mpm, n, runs, os.path.join(tmp, f"batch{k}_{n}{tag}.toml"))
 
@@ -580,7 +632,7 @@ def error_differences(serial, ref, other):
     return diffs
 
 
-def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
+def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures, all_blocks=False):
     serial = os.path.join(tmp, name + "_serial")
     r = made(mpm, None, config, sets, serial)
     if r.returncode != 0:
@@ -606,21 +658,22 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
             for c, x in diffs.items():
                 allowed.setdefault(f, {})[c] = max(allowed.get(f, {}).get(c, 0.0), x)
     report = []
-    for n in counts(name, ranks):
-        d = os.path.join(tmp, f"{name}_n{n}")
-        r = made(mpm, n, config, sets, d)
+    for n, shape in layouts(name, ranks, all_blocks):
+        d = layout_dir(tmp, name, n, shape)
+        label = f"-n {n}" + (f" {shape}" if shape else "")
+        r = made(mpm, n, config, layout_sets(sets, shape), d)
         if r.returncode != 0:
-            failures.append(f"{name}: mpirun -n {n} failed ({r.returncode}): {r.stderr.strip()}")
+            failures.append(f"{name}: mpirun {label} failed ({r.returncode}): {r.stderr.strip()}")
             continue
         s = json.load(open(os.path.join(d, "summary.json")))
         if s["status"] != "ok" or s["particles"] != ref_summary["particles"]:
-            failures.append(f"{name} -n {n}: status {s['status']}, {s['particles']} particles")
+            failures.append(f"{name} {label}: status {s['status']}, {s['particles']} particles")
         worst, share = 0.0, 0.0
         if outputs(d) != frames:
-            failures.append(f"{name} -n {n}: frames {outputs(d)} against {frames}")
+            failures.append(f"{name} {label}: frames {outputs(d)} against {frames}")
             continue
         for f in frames + ["history.csv"]:
-            x, y = compare_tables(f"{name} -n {n} {f}", read_csv(os.path.join(serial, f)),
+            x, y = compare_tables(f"{name} {label} {f}", read_csv(os.path.join(serial, f)),
                                   read_csv(os.path.join(d, f)), failures, allowed.get(f))
             worst, share = max(worst, x), max(share, y)
         errors = error_differences(serial, ref_summary, s)
@@ -628,7 +681,7 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
             ulp = allowed.get("errors", {}).get(k, 0.0)
             share = max(share, errors[k] / max(TOL, ULP_FACTOR * ulp))
             if errors[k] > max(TOL, ULP_FACTOR * ulp):
-                failures.append(f"{name} -n {n}: errors.{k} {s['errors'].get(k)} against {v}" +
+                failures.append(f"{name} {label}: errors.{k} {s['errors'].get(k)} against {v}" +
                                 (f" (one ulp of an input: {ulp:.3g} of its scale)" if ulp else ""))
             else:
                 worst = max(worst, errors[k])
@@ -640,19 +693,19 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
             for k, v in ref_summary[block].items():
                 w = s.get(block, {}).get(k)
                 if w is None or (w != v if isinstance(v, (int, str)) else abs(w - v) > TOL * abs(v)):
-                    failures.append(f"{name} -n {n}: {block}.{k} {w} against {v}")
+                    failures.append(f"{name} {label}: {block}.{k} {w} against {v}")
         moved = ""
         if n > 1 and frames:
-            pieces = check_pieces(f"{name} -n {n}", d, frames[-1], failures)
+            pieces = check_pieces(f"{name} {label}", d, frames[-1], failures)
             if pieces != n:
-                failures.append(f"{name} -n {n}: {pieces} VTU pieces in the last frame")
+                failures.append(f"{name} {label}: {pieces} VTU pieces in the last frame")
         if n > 1:
             mpi = s.get("mpi", {})
             sent = mpi.get("particles_sent_per_process", [])
             if both_ways != "none" and sum(sent) == 0:
-                failures.append(f"{name} -n {n}: no particle moved between processes")
+                failures.append(f"{name} {label}: no particle moved between processes")
             if both_ways == "rebalance" and mpi.get("rebalances", 0) == 0:
-                failures.append(f"{name} -n {n}: the slabs were never cut anew "
+                failures.append(f"{name} {label}: the slabs were never cut anew "
                                 f"(largest imbalance {mpi.get('largest_imbalance')})")
             if both_ways == "both" and n == 2 and not all(x > 0 for x in sent):
                 failures.append(f"{name} -n 2: particles moved one way only ({sent})")
@@ -660,24 +713,32 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures):
             # in the cases of WHOLE_WINDOW).
             memory = mpi.get("peak_memory_bytes_per_process", [])
             if len(memory) != n or max(memory) != s.get("peak_memory_bytes"):
-                failures.append(f"{name} -n {n}: peak memory per process {memory}, "
+                failures.append(f"{name} {label}: peak memory per process {memory}, "
                                 f"summary's {s.get('peak_memory_bytes')}")
             window, dofs = mpi.get("grid_window_dofs_per_process", []), mpi.get("grid_dofs", 0)
             if len(window) != n or (name not in WHOLE_WINDOW and not all(w < dofs for w in window)):
-                failures.append(f"{name} -n {n}: grid windows {window} of {dofs} DOFs")
-            moved = (f", particles sent per process {sent}, final cuts {mpi.get('cuts')}, "
+                failures.append(f"{name} {label}: grid windows {window} of {dofs} DOFs")
+            # The process grid asked for: slabs by default, else the given shape.
+            blocks = mpi.get("blocks")
+            want = ([int(x) for x in shape.split("x")] if shape and shape != "auto" else
+                    None if shape else [1] * (int(name[0]) - 1) + [n])
+            if blocks is None or (want is not None and blocks != want) or (
+                    shape == "auto" and len(blocks) != int(name[0])):
+                failures.append(f"{name} {label}: process grid {blocks}, expected {want}")
+            moved = (f", blocks {blocks}, particles sent per process {sent}, "
+                     f"final cuts {mpi.get('cuts')}, "
                      f"{mpi.get('rebalances')} re-cuts, grid windows {window} of {dofs} DOFs")
-        if repeated(name, n, ranks):
+        if again(name, n, shape, ranks):
             # The same rank count again (another start of the program): the same bytes.
             d2 = d + "_again"
-            r = made(mpm, n, config, sets, d2)
+            r = made(mpm, n, config, layout_sets(sets, shape), d2)
             for f in frames + ["history.csv"]:
                 if r.returncode != 0 or open(os.path.join(d, f), "rb").read() != open(
                         os.path.join(d2, f), "rb").read():
-                    failures.append(f"{name} -n {n}: a second run differs in {f}")
+                    failures.append(f"{name} {label}: a second run differs in {f}")
                     break
         held = f" ({share:.2f} of its tolerance, one ulp of an input's)" if allowed else ""
-        report.append(f"-n {n}: largest relative difference {worst:.2e}{held}{moved}")
+        report.append(f"{label}: largest relative difference {worst:.2e}{held}{moved}")
     print(f"{name}: " + "; ".join(report))
 
 
@@ -774,6 +835,53 @@ def check_restart(mpm, tmp, failures, label, config, sets, t_short, t_end):
             x, _ = compare_tables(f"restart ({label}) on {n} from {of}", a, b, failures)
             results.append(f"{of} -> {n}: largest relative difference {x:.2e}")
     print(f"restart ({label}): " + "; ".join(results))
+
+
+def check_block_restart(mpm, tmp, failures):
+    # Checkpoints of a run on 2 x 2 blocks and of one on 4 slabs, against the whole runs: the 2 x
+    # 2 checkpoint restarted on 2 x 2 ends in the same bytes; on 2 x 3 blocks, on 4 slabs and on
+    # one process, and the slabs' checkpoint on 2 x 2 blocks, in the same answers to 1e-12 (each
+    # process cuts its block from the manifest's particles per layer along each axis and reads
+    # the pieces whose blocks overlap it).
+    config = "examples/vortex_2d.toml"
+    sets = ["grid.cells=16", "time.dt=2e-3", "output.frames=2", "output.checkpoint_every=50"]
+    t_short, t_end = "0.2", "0.3"
+    whole, short = {}, {}
+    for key in ("2x2", "slabs"):
+        whole[key] = os.path.join(tmp, f"block_restart_whole_{key}")
+        short[key] = os.path.join(tmp, f"block_restart_short_{key}")
+        blocks = [f'parallel.blocks="{key}"']
+        runs = [run(mpm_cmd(mpm, 4, config, sets + blocks + [f"time.end={t_end}"], whole[key])),
+                run(mpm_cmd(mpm, 4, config, sets + blocks + [f"time.end={t_short}"], short[key]))]
+        if any(r.returncode for r in runs):
+            failures.append(f"restart (blocks): the runs on 4 {key} failed: "
+                            + " ".join(r.stderr for r in runs))
+            return
+        check_pieces_of_checkpoint(f"restart (blocks), the run on 4 {key}", short[key], 4, failures)
+    results = []
+    # (processes, parallel.blocks, the checkpoint's)
+    for n, shape, of in [(4, "2x2", "2x2"), (6, "2x3", "2x2"), (4, "slabs", "2x2"),
+                         (1, "slabs", "2x2"), (4, "2x2", "slabs")]:
+        d = short[of] + f"_n{n}_{shape}"
+        shutil.copytree(short[of], d)
+        r = run(restart_cmd(n, mpm, d, t_end, ["output.checkpoint_every=10",
+                                               f'parallel.blocks="{shape}"']))
+        what = f"restart (blocks) on {n} {shape} from 4 {of}"
+        if r.returncode:
+            failures.append(f"{what}: exit {r.returncode}: {r.stderr.strip()}")
+            continue
+        check_pieces_of_checkpoint(what, d, n, failures)
+        w = whole[of]
+        a, b = read_csv(os.path.join(w, last_frame(w))), read_csv(os.path.join(d, last_frame(d)))
+        if (n, shape) == (4, of):
+            if not (same_table(a, b) and open(os.path.join(w, "history.csv"), "rb").read() ==
+                    open(os.path.join(d, "history.csv"), "rb").read()):
+                failures.append(f"{what}: not the same bytes")
+            results.append(f"4 {of} -> {n} {shape}: the same bytes")
+        else:
+            x, _ = compare_tables(what, a, b, failures)
+            results.append(f"4 {of} -> {n} {shape}: largest relative difference {x:.2e}")
+    print("restart (blocks): " + "; ".join(results))
 
 
 def check_damaged_pieces(mpm, tmp, failures):
@@ -889,13 +997,22 @@ def check_failure(mpm, tmp, failures):
     if r.returncode != 2 or len(lines) != 1 or "only `mpm run`" not in lines[0]:
         failures.append(f"mpm bench under mpirun: exit {r.returncode}, stderr {r.stderr!r}")
     # Not distributable (Gauss-Seidel sweeps through the whole grid; the direct factorisation of
-    # the whole consistent matrix): refused before the first step, naming the key.
+    # the whole consistent matrix; TLS on cells in blocks), or no decomposition of 2 processes:
+    # refused before the first step, naming the key.
     for k, (config, sets, expect) in enumerate([
             ("examples/plate_mms_2d.toml",
              ["time.end=1e-4", "method.mass=consistent", "method.mass_solver=pmg"],
              "method.pmg_smoother"),
             ("examples/plate_ps_unstructured_2d.toml", ["time.end=1e-4"],
-             "method.mass_solver")]):
+             "method.mass_solver"),
+            # TLS on the grid's cells integrates the cells of a process's layers: slabs only.
+            ("examples/vortex_2d.toml", ["grid.cells=16", "time.end=4e-3", "method.mapping=tls",
+                                         'parallel.blocks="2x1"'], "parallel.blocks"),
+            # A process grid of another count, and no decomposition at all.
+            ("examples/vortex_2d.toml", ["grid.cells=16", "time.end=4e-3",
+                                         'parallel.blocks="2x2"'], "names 4 processes"),
+            ("examples/vortex_2d.toml", ["grid.cells=16", "time.end=4e-3",
+                                         'parallel.blocks="cubes"'], "is not a decomposition")]):
         d = os.path.join(tmp, f"refused{k}")
         r = run(mpm_cmd(mpm, 2, config, sets, d))
         lines = [l for l in r.stderr.splitlines() if "error" in l]
@@ -1006,10 +1123,14 @@ def main():
                     "failure, write-failure and signal checks, or both (ctest runs the two "
                     "parts as two tests, side by side)")
     ap.add_argument("--shard", default="1/1", help="K/N: the K-th of every N cases (from 1)")
+    ap.add_argument("--all-blocks", action="store_true",
+                    help="every 2D case also on 2 x 2 blocks, every 3D case on 2 x 2 x 2")
     a = ap.parse_args()
-    unknown = (AGAIN | QUICK | THREE | set(ULP_INPUTS)) - {c[0] for c in CASES}
+    unknown = (AGAIN | QUICK | THREE | set(ULP_INPUTS) | set(BLOCKS) |
+               {name for name, _ in BLOCKS_AGAIN}) - {c[0] for c in CASES}
     if unknown:
-        print(f"mpi_check.py: AGAIN, QUICK, THREE or ULP_INPUTS names no case: {sorted(unknown)}")
+        print(f"mpi_check.py: AGAIN, QUICK, THREE, ULP_INPUTS or BLOCKS names no case: "
+              f"{sorted(unknown)}")
         return 1
     if shutil.which("mpirun") is None:
         print("mpirun not found: install openmpi-bin (scripts/deps.sh)")
@@ -1022,12 +1143,14 @@ def main():
     if a.part == "restarts":
         cases = []
     with tempfile.TemporaryDirectory() as tmp:
-        make_runs(os.path.abspath(a.mpm), cases, ranks, tmp)
+        make_runs(os.path.abspath(a.mpm), cases, ranks, tmp, a.all_blocks)
         for name, config, sets, both in cases:
-            check_case(os.path.abspath(a.mpm), name, config, sets, both, ranks, tmp, failures)
+            check_case(os.path.abspath(a.mpm), name, config, sets, both, ranks, tmp, failures,
+                       a.all_blocks)
         if not a.case and a.part != "cases":
             for case in RESTARTS:
                 check_restart(os.path.abspath(a.mpm), tmp, failures, *case)
+            check_block_restart(os.path.abspath(a.mpm), tmp, failures)
             check_damaged_pieces(os.path.abspath(a.mpm), tmp, failures)
             check_failure(os.path.abspath(a.mpm), tmp, failures)
             check_write_failures(os.path.abspath(a.mpm), tmp, failures)

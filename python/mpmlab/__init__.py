@@ -268,7 +268,8 @@ class Run:
                 threads=None, progress=False):
         """Continues from ``checkpoint`` (a checkpoint.bin), as ``mpm run --restart`` does:
         with its stored configuration, which ``config`` (if given) and ``overrides`` may change
-        in output.* and time.end only; the outputs go next to the checkpoint unless ``out``."""
+        in output.*, parallel.* and time.end only; the outputs go next to the checkpoint unless
+        ``out``."""
         checkpoint = _os.fspath(checkpoint)
         given = _config(config)._native if config is not None else None
         cfg = Config(_restart_config(checkpoint, given, list(overrides)))

@@ -68,7 +68,7 @@ int cmd_run(const std::string& config, const std::vector<std::string>& sets, std
     if (!cfg) throw mpm::InputError("mpm run needs a CONFIG file (or --restart FILE)");
   } else {
     // Continue from a checkpoint: its stored configuration, which CONFIG (if given) must match
-    // except for output.* and time.end; outputs go next to the checkpoint by default.
+    // except for output.*, parallel.* and time.end; outputs go next to the checkpoint by default.
     ro.restart = std::make_shared<const mpm::io::Checkpoint>(mpm::io::read_checkpoint(restart));
     ro.restart_name = restart;
     cfg = mpm::io::restart_config(*ro.restart, restart, cfg ? &*cfg : nullptr, sets);

@@ -142,16 +142,17 @@ class UlfemRun final : public SolverRun {
   std::optional<TimeLoop<1>> loop_;
 };
 
-// A distributed run's problem: each process stores only the particles of its slab,
+// A distributed run's problem: each process stores only the particles of its block,
 // so that no process holds the whole body, not even while the problem is set up. A counting pass
 // (the same on every process, storing no particle) gives the particles in each cell layer along
-// the grid's last axis; the slabs are cut from them (SlabPartition::balanced, as MpmRun cuts
-// them again from the stored particles' layers, summed over the processes) and every process
-// seeds again, keeping its slab's particles (SeedScope). Both passes generate every particle, so
-// the set-up takes twice one process's generation; what a process stores is its share.
+// each axis of the grid; the process grid is shaped (parallel.blocks) and the blocks cut from
+// them (BlockPartition::choose_shape and balanced, as MpmRun cuts them again from the stored
+// particles' layers, summed over the processes) and every process seeds again, keeping its
+// block's particles (SeedScope). Both passes generate every particle, so the set-up takes twice
+// one process's generation; what a process stores is its share.
 // `seeded`: the body's particles on all processes.
 AnyProblem make_distributed_problem(const Config& cfg, const Comm& comm, Index& seeded) {
-  std::vector<double> per_layer;
+  std::vector<std::vector<double>> per_layer;
   SeedScope counting;
   counting.layer_counts = &per_layer;
   counting.machine_share = static_cast<double>(comm.local_size()) / comm.size();
@@ -164,18 +165,34 @@ AnyProblem make_distributed_problem(const Config& cfg, const Comm& comm, Index& 
   std::visit(
       [&](const auto& pb) {
         constexpr int Dim = std::decay_t<decltype(pb)>::kDim;
-        // (The error names the key to change; every process meets it alike.)
-        const SlabPartition<Dim> part = SlabPartition<Dim>::balanced(
-            per_layer, comm.size(),
-            fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
-        // A particle outside the grid goes to process 0, as SlabPartition::owner sends it.
+        using Part = BlockPartition<Dim>;
+        typename Part::LayerCounts counts;
+        for (std::size_t d = 0; d < Dim; ++d) counts[d] = per_layer.at(d);
+        // (The errors name the key to change; every process meets them alike.)
+        const Part part = Part::balanced(
+            counts, Part::choose_shape(counts, comm.size(), blocks_request(cfg)), "grid.cells");
+        // A particle outside the grid goes to process 0, as BlockPartition::owner sends it.
         const int me = comm.rank();
-        scope.keep = [part, me](Index layer) {
-          return (layer < 0 ? 0 : part.owner_of_layer(layer)) == me;
+        scope.keep = [part, me](std::span<const Index> cell) {
+          if (cell.empty()) return me == 0;
+          IVec<Dim> c{};
+          std::copy(cell.begin(), cell.end(), c.begin());
+          return part.owner_of_cell(c) == me;
         };
-        for (Index l = part.cuts[static_cast<std::size_t>(me)];
-             l < part.cuts[static_cast<std::size_t>(me) + 1]; ++l)
-          scope.expected += static_cast<Index>(per_layer[static_cast<std::size_t>(l)]);
+        // The particles this process will hold, for the seeders' reserve: its share of the
+        // particles along each axis, as if they were spread evenly over the others (exact for
+        // slabs, whose span along the other axes is the whole grid).
+        double total = 0.0;
+        for (double c : counts[0]) total += c;
+        double expected = total;
+        for (int d = 0; d < Dim; ++d) {
+          const auto [lo, hi] = part.span(me, d);
+          double mine = 0.0;
+          for (Index l = lo; l < hi; ++l)
+            mine += counts[static_cast<std::size_t>(d)][static_cast<std::size_t>(l)];
+          expected = total > 0.0 ? expected * (mine / total) : 0.0;
+        }
+        scope.expected = static_cast<Index>(std::ceil(expected));
       },
       counted);
   // A check of the particles a process stores (a custom problem's initial fields) may fail on

@@ -80,9 +80,11 @@ std::shared_ptr<const TriangleMesh> numbered_along_y(const TriangleMesh& m,
 // step reads that an earlier step wrote (the grid quantities and stencils are rebuilt per step).
 // A distributed run (comm, part) puts each process's particles, in its order, with their cells
 // and carried basis state into that process's piece; the checkpoint itself (the manifest) holds
-// the cuts, each rank's count, re-sorting state and grid crossings (Checkpoint::distribution) and
-// the particles per cell layer: a restart on as many processes continues bit for bit, on another
-// number it cuts the slabs from those counts and reads only the pieces its slab overlaps.
+// the process grid and its cuts, each rank's count, re-sorting state and grid crossings
+// (Checkpoint::distribution) and the particles per cell layer along each axis: a restart on as
+// many processes (in a process grid parallel.blocks accepts) continues bit for bit, on another
+// number or grid it cuts the blocks from those counts and reads only the pieces its block
+// overlaps.
 template <int Dim>
 struct Captured {
   io::Checkpoint manifest;
@@ -92,7 +94,8 @@ struct Captured {
 template <int Dim>
 Captured<Dim> capture(Stepper<Dim>& stepper, std::string_view mapping,
                       const std::optional<Ulfem1D>& reference, const OutputSession<Dim>& out,
-                      const std::string& config, const Comm* comm, const SlabPartition<Dim>& part) {
+                      const std::string& config, const Comm* comm,
+                      const BlockPartition<Dim>& part) {
   const RunState<Dim>& sim = stepper.state();
   Captured<Dim> cap;
   io::Checkpoint& c = cap.manifest;
@@ -108,17 +111,23 @@ Captured<Dim> capture(Stepper<Dim>& stepper, std::string_view mapping,
     const std::array<Index, 4> mine{P.size(), sim.sorting.reference, sim.sorting.sorts,
                                     sim.diag.grid_crossings};
     const std::vector<Index> info = comm->allgather(std::span<const Index>(mine));
-    const std::vector<double> per_layer =
-        SlabPartition<Dim>::layer_counts(sim.grid, P, *comm, /*replicated=*/false);
+    const auto per_layer =
+        BlockPartition<Dim>::layer_counts(sim.grid, P, *comm, /*replicated=*/false);
     stepper.export_carried();  // the basis's per-particle state (CPDI2's corners)
     cap.piece =
         io::encode_piece<Dim>(sim.step, comm->rank(), comm->size(), P, sim.cell, sim.carried);
     stepper.resize_particle_caches();  // the basis takes it back
     c.particles.dim = Dim;
+    // io::Checkpoint::distribution: ranks, processes per axis, the cuts along each axis, then
+    // per rank (count, re-sorting reference, sorts, grid crossings); layer_counts: the particles
+    // per cell layer along each axis, one axis after the other (whole numbers).
     c.distribution.push_back(comm->size());
-    c.distribution.insert(c.distribution.end(), part.cuts.begin(), part.cuts.end());
+    c.distribution.insert(c.distribution.end(), part.procs.begin(), part.procs.end());
+    for (const auto& cuts : part.cuts)
+      c.distribution.insert(c.distribution.end(), cuts.begin(), cuts.end());
     c.distribution.insert(c.distribution.end(), info.begin(), info.end());
-    c.layer_counts.assign(per_layer.begin(), per_layer.end());  // (whole numbers)
+    for (const auto& counts : per_layer)
+      c.layer_counts.insert(c.layer_counts.end(), counts.begin(), counts.end());
     c.diag.grid_crossings = 0;
     c.sorts = 0;
     for (std::size_t r = 0; r < static_cast<std::size_t>(comm->size()); ++r) {
@@ -141,43 +150,73 @@ Captured<Dim> capture(Stepper<Dim>& stepper, std::string_view mapping,
   return cap;
 }
 
-// The checkpoint's distribution (Checkpoint::distribution) read back and checked: ranks, cuts
-// and per rank (count, re-sorting reference, sorts, grid crossings), with the pieces and the
-// particles per layer that the manifest of a distributed run holds.
+// The checkpoint's distribution (Checkpoint::distribution) read back and checked: ranks, the
+// process grid and its cuts along each axis, and per rank (count, re-sorting reference, sorts,
+// grid crossings), with the pieces and the particles per layer along each axis that the
+// manifest of a distributed run holds.
+template <int Dim>
 struct StoredDistribution {
   Index ranks = 0;
-  std::vector<Index> cuts, info;
+  BlockPartition<Dim> part;
+  typename BlockPartition<Dim>::LayerCounts per_layer;
+  std::vector<Index> info;
 };
-StoredDistribution stored_distribution(const io::Checkpoint& c, Index particles, Index layers,
-                                       const std::string& what) {
-  StoredDistribution d;
+template <int Dim>
+StoredDistribution<Dim> stored_distribution(const io::Checkpoint& c, Index particles,
+                                            const IVec<Dim>& cells, const std::string& what) {
+  StoredDistribution<Dim> d;
   const auto& v = c.distribution;
   if (v.empty() && c.pieces.empty() && c.layer_counts.empty()) return d;
+  const auto size = static_cast<Index>(v.size());
   const Index r = v.empty() ? 0 : v[0];
-  bool ok = r >= 1 && r <= (1 << 24) && static_cast<Index>(v.size()) == 1 + (r + 1) + 4 * r &&
-            v[1] == 0 && v[static_cast<std::size_t>(r) + 1] == layers &&
+  Index layers = 0;
+  for (const Index n : cells) layers += n;
+  bool ok = r >= 1 && r <= (1 << 24) && size >= 1 + Dim &&
             static_cast<Index>(c.pieces.size()) == r &&
             static_cast<Index>(c.layer_counts.size()) == layers;
-  Index total = 0, counted = 0;
+  std::size_t at = 1;
+  Index product = 1, cut_entries = 0;
+  for (std::size_t k = 0; ok && k < Dim; ++k) {
+    d.part.procs[k] = v[at++];
+    ok = d.part.procs[k] >= 1 && d.part.procs[k] <= cells[k];
+    product *= ok ? d.part.procs[k] : 1;
+    cut_entries += d.part.procs[k] + 1;
+  }
+  ok = ok && product == r && size == 1 + Dim + cut_entries + 4 * r;
+  for (std::size_t k = 0; ok && k < Dim; ++k) {
+    auto& cuts = d.part.cuts[k];
+    cuts.assign(v.begin() + static_cast<std::ptrdiff_t>(at),
+                v.begin() + static_cast<std::ptrdiff_t>(
+                                at + static_cast<std::size_t>(d.part.procs[k]) + 1));
+    at += cuts.size();
+    ok = cuts.front() == 0 && cuts.back() == cells[k];
+    for (std::size_t j = 1; ok && j < cuts.size(); ++j) ok = cuts[j] > cuts[j - 1];
+  }
+  Index total = 0;
   for (Index k = 0; ok && k < r; ++k) {
-    const auto at = static_cast<std::size_t>(1 + (r + 1) + 4 * k);
-    ok = v[static_cast<std::size_t>(k) + 2] > v[static_cast<std::size_t>(k) + 1] && v[at] >= 0 &&
-         v[at + 1] >= -1 && v[at + 2] >= 0 && v[at + 3] >= 0;
-    total += v[at];
+    const std::size_t i = at + 4 * static_cast<std::size_t>(k);
+    ok = v[i] >= 0 && v[i + 1] >= -1 && v[i + 2] >= 0 && v[i + 3] >= 0;
+    total += v[i];
   }
-  for (std::size_t l = 0; ok && l < c.layer_counts.size(); ++l) {
-    ok = c.layer_counts[l] >= 0 && c.layer_counts[l] <= particles;
-    counted += c.layer_counts[l];
+  std::size_t l = 0;
+  for (std::size_t k = 0; ok && k < Dim; ++k) {
+    Index counted = 0;
+    for (Index j = 0; ok && j < cells[k]; ++j, ++l) {
+      ok = c.layer_counts[l] >= 0 && c.layer_counts[l] <= particles;
+      counted += c.layer_counts[l];
+      d.per_layer[k].push_back(static_cast<double>(c.layer_counts[l]));
+    }
+    // (Every particle lies in a layer along every axis: one outside the grid has stopped the
+    // run.)
+    ok = ok && counted == particles;
   }
-  // (Every particle lies in a layer: one outside the grid has stopped the run.)
-  if (!ok || total != particles || counted != particles)
+  if (!ok || total != particles)
     throw InputError(
         fmt::format("{} is not a state of this run: its distribution over "
                     "processes does not fit {} particles and {} cell layers",
                     what, particles, layers));
   d.ranks = r;
-  d.cuts.assign(v.begin() + 1, v.begin() + 2 + r);
-  d.info.assign(v.begin() + 2 + r, v.end());
+  d.info.assign(v.begin() + static_cast<std::ptrdiff_t>(at), v.end());
   return d;
 }
 
@@ -190,8 +229,8 @@ StoredDistribution stored_distribution(const io::Checkpoint& c, Index particles,
 // nothing: an InputError met on one process is agreed by the caller. (The outputs resume after.)
 template <int Dim>
 Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::string_view mapping,
-              std::optional<Ulfem1D>& reference, const Comm* comm, SlabPartition<Dim>& part,
-              Index particles) {
+              std::optional<Ulfem1D>& reference, const Comm* comm, BlockPartition<Dim>& part,
+              const BlockShapeRequest& blocks, Index particles) {
   const io::Checkpoint& stored = *opt.restart;
   RunState<Dim>& sim = stepper.state();
   const std::string what = fmt::format("checkpoint '{}'", opt.restart_name);
@@ -200,28 +239,39 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
         fmt::format("{} holds a {} run ({}D, mapping {}), not this {}D mpm run with "
                     "mapping {}",
                     what, stored.solver, stored.dim, stored.mapping, Dim, mapping));
-  const Index layers = sim.grid.cells[SlabPartition<Dim>::kAxis];
   const bool pieces = !stored.pieces.empty();
-  const StoredDistribution dist = stored_distribution(
-      stored, pieces ? particles : static_cast<Index>(stored.particles.count), layers, what);
+  const StoredDistribution<Dim> dist = stored_distribution<Dim>(
+      stored, pieces ? particles : static_cast<Index>(stored.particles.count), sim.grid.cells,
+      what);
   // A distributed checkpoint: its manifest with the particles of the pieces this process reads.
   io::Checkpoint joined;
   std::vector<std::int64_t> piece_counts;  // the particles of each piece read
   std::vector<int> piece_ranks;            // and its rank
-  const auto same_count = [&] { return comm && dist.ranks == comm->size(); };
+  // As many processes in a process grid parallel.blocks accepts: each takes its piece as it
+  // was; otherwise the blocks are cut anew.
+  const auto same_count = [&] {
+    using Kind = BlockShapeRequest::Kind;
+    if (!comm || dist.ranks != comm->size()) return false;
+    if (blocks.kind == Kind::Slabs) return dist.part.slabs();
+    if (blocks.kind == Kind::Given)
+      return std::equal(blocks.procs.begin(), blocks.procs.end(), dist.part.procs.begin(),
+                        dist.part.procs.end());
+    return true;
+  };
+  const auto cut = [&](const typename BlockPartition<Dim>::LayerCounts& counts) {
+    return BlockPartition<Dim>::balanced(
+        counts, BlockPartition<Dim>::choose_shape(counts, comm->size(), blocks), "grid.cells");
+  };
   if (pieces) {
     std::vector<bool> take(static_cast<std::size_t>(dist.ranks), !comm);
     if (same_count()) {
       take[static_cast<std::size_t>(comm->rank())] = true;
     } else if (comm) {
-      // The new slabs from the particles per layer (those a gathering of every piece would
-      // count); the pieces whose slabs overlap this process's.
-      part = SlabPartition<Dim>::balanced(
-          std::vector<double>(stored.layer_counts.begin(), stored.layer_counts.end()), comm->size(),
-          fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
-      const auto me = static_cast<std::size_t>(comm->rank());
+      // The new blocks from the particles per layer (those a gathering of every piece would
+      // count); the pieces whose blocks overlap this process's.
+      part = cut(dist.per_layer);
       for (std::size_t r = 0; r < take.size(); ++r)
-        take[r] = dist.cuts[r] < part.cuts[me + 1] && part.cuts[me] < dist.cuts[r + 1];
+        take[r] = part.overlaps(comm->rank(), dist.part, static_cast<int>(r));
     }
     joined = stored;
     piece_counts = io::join_pieces(joined, opt.restart_name, take);
@@ -274,20 +324,17 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
         c.cells.empty() ? 0 : *std::max_element(c.cells.begin(), c.cells.end()),
         sim.grid.num_cells()));
   // Reading only the overlapping pieces keeps every particle once: each piece's particles lie in
-  // the slab of the process that wrote it (migrated there after every step).
+  // the block of the process that wrote it (migrated there after every step).
   if (pieces && comm && !same_count()) {
     std::size_t i = 0;
     for (std::size_t k = 0; k < piece_ranks.size(); ++k) {
-      const auto r = static_cast<std::size_t>(piece_ranks[k]);
-      for (std::int64_t j = 0; j < piece_counts[k]; ++j, ++i) {
-        const Index layer = sim.grid.last_layer(p.x[i]);
-        if (layer < dist.cuts[r] || layer >= dist.cuts[r + 1])
+      const int r = piece_ranks[k];
+      for (std::int64_t j = 0; j < piece_counts[k]; ++j, ++i)
+        if (dist.part.owner(sim.grid, p.x[i], -1) != r)
           throw InputError(fmt::format(
-              "{} is not a state of this run: particle {} of the piece of process {} lies in "
-              "cell layer {} along {}, outside that process's slab [{}, {})",
-              what, p.id[i], r, layer, SlabPartition<Dim>::axis_name(), dist.cuts[r],
-              dist.cuts[r + 1]));
-      }
+              "{} is not a state of this run: particle {} of the piece of process {} lies "
+              "outside that process's block ({})",
+              what, p.id[i], r, dist.part.describe()));
     }
   }
   // The traction lists name their particles by position in the freshly set-up order; the
@@ -336,7 +383,7 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
     const auto me = static_cast<std::size_t>(comm->rank());
     keep_carried([](std::size_t) { return true; });
     release_the_rest(p);
-    part.cuts = dist.cuts;
+    part = dist.part;
     sim.sorting.reference = dist.info[4 * me + 1];
     sim.sorting.sorts = dist.info[4 * me + 2];
     sim.diag.grid_crossings = dist.info[4 * me + 3];
@@ -344,9 +391,7 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
     // Another number of processes: new slabs (cut above from a distributed checkpoint's counts);
     // the counters go to rank 0, the re-sorting starts afresh.
     if (!pieces)
-      part = SlabPartition<Dim>::balanced(
-          SlabPartition<Dim>::layer_counts(sim.grid, p, *comm, /*replicated=*/true), comm->size(),
-          fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
+      part = cut(BlockPartition<Dim>::layer_counts(sim.grid, p, *comm, /*replicated=*/true));
     const int me = comm->rank();
     std::vector<CompactIndex> kept;
     for (std::size_t i = 0; i < cell.size(); ++i)
@@ -425,7 +470,7 @@ class MpmRun final : public SolverRun {
   // The FEM reference of benchmarks without an exact solution, stepped alongside (untimed).
   std::optional<Ulfem1D> reference_;
   const Comm* comm_ = nullptr;
-  SlabPartition<Dim> part_;
+  BlockPartition<Dim> part_;
   std::unique_ptr<Stepper<Dim>> stepper_;
   std::optional<OutputSession<Dim>> out_;
   RunResult res_;
@@ -490,7 +535,7 @@ MpmRun<Dim>::MpmRun(Problem<Dim>& pb, const RunSettings& settings, const std::st
     check_stability(ts, pb.grid.h.minCoeff(), pb.materials, stability_factor(basis), Dim,
                     fmt::format("{} basis, lumped-mass bound", basis_name(basis)));
 
-  // A distributed run: each process has set up only the particles of its slab
+  // A distributed run: each process has set up only the particles of its block
   // (parallel/distribution.hpp), cut so that each holds about as many (driver/run.cpp).
   comm_ = opt.comm != nullptr && opt.comm->distributed() ? opt.comm : nullptr;
   if (opt.shuffle_seed != 0 && !opt.restart) {
@@ -515,13 +560,28 @@ MpmRun<Dim>::MpmRun(Problem<Dim>& pb, const RunSettings& settings, const std::st
       }
     // The cuts the set-up seeded by, from the same counts (each layer's particles are on one
     // process). The traction points name their particles by id (RunState::all_tractions).
-    part_ = SlabPartition<Dim>::balanced(
-        SlabPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm_, /*replicated=*/false),
-        comm_->size(), fmt::format("grid.cells (along {})", SlabPartition<Dim>::axis_name()));
+    const auto counts =
+        BlockPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm_, /*replicated=*/false);
+    part_ = BlockPartition<Dim>::balanced(
+        counts, BlockPartition<Dim>::choose_shape(counts, comm_->size(), settings.parallel.blocks),
+        "grid.cells");
+    // The mappings that integrate cells (TLS on the grid's cells, MLS, IMLS: kCellQuadrature)
+    // integrate those of the layers along the last axis that a process's particles occupy
+    // (RunState::own_cells), which only slabs keep apart; TLS on triangles integrates a triangle
+    // on the process of its lowest particle id, whatever the shape.
+    const bool cell_quadrature = std::visit(
+        [](const auto& m) { return std::decay_t<decltype(m)>::kCellQuadrature; }, method.mapping);
+    if (!part_.slabs() && cell_quadrature && !on_triangles(method.basis))
+      throw InputError(fmt::format(
+          "{}: parallel.blocks = \"{}\" cuts {}, and method.mapping = \"{}\" integrates the "
+          "cells of the layers a process's particles occupy, which blocks side by side share; "
+          "use parallel.blocks = \"slabs\" with it (or the direct mapping)",
+          settings.parallel.blocks.where, settings.parallel.blocks.text, part_.describe(),
+          name_of(method.mapping)));
     const int me = comm_->rank();
     for (const auto& x : pb.particles.x)
       if (part_.owner(pb.grid, x, 0) != me)
-        throw std::logic_error("run_mpm: a process set up a particle of another's slab");
+        throw std::logic_error("run_mpm: a process set up a particle of another's block");
   }
   // OTM and the unified solver are one- and two-dimensional (run_settings refuses them in 3D).
   const std::size_t problem_warnings = pb.warnings.size();
@@ -570,7 +630,7 @@ MpmRun<Dim>::MpmRun(Problem<Dim>& pb, const RunSettings& settings, const std::st
   if (opt.restart)
     agreed([&] {
       start = restore<Dim>(opt, ts.dt, *stepper_, mapping_name_, reference_, comm_, part_,
-                           res.particles);
+                           settings.parallel.blocks, res.particles);
     });
   if (opt.restart) out_->resume(*opt.restart);  // (collective)
   loop_.emplace(settings, opt, *out_, start,
@@ -658,11 +718,13 @@ RunResult MpmRun<Dim>::finish() {
       memory.push_back(counts[r + 3]);
     }
     peak_memory = static_cast<double>(*std::max_element(memory.begin(), memory.end()));
+    nlohmann::ordered_json cuts_json = nlohmann::ordered_json::object();
+    for (int d = 0; d < Dim; ++d)
+      cuts_json[std::string(1, axis_name(d))] = part_.cuts[static_cast<std::size_t>(d)];
     mpi_json = {{"processes", comm_->size()},
-                {"decomposition", fmt::format("slabs of whole cell layers along {}, cut to "
-                                              "balance the initial particles",
-                                              SlabPartition<Dim>::axis_name())},
-                {"cuts", part_.cuts},
+                {"decomposition", part_.describe() + ", cut to balance the particles"},
+                {"blocks", part_.procs},
+                {"cuts", cuts_json},
                 {"particles_per_process", per_rank},
                 {"particles_sent_per_process", sent},
                 {"rebalance_threshold", settings_.parallel.rebalance},

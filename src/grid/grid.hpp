@@ -71,11 +71,6 @@ struct Grid {
     }
     return idx;
   }
-  // x's cell layer along the last axis, -1 outside the grid: what the slabs of a distributed run
-  // cut (parallel/distribution.hpp; SeedScope, model/problem.hpp, seeds by it).
-  Index last_layer(const Vec<Dim>& x) const {
-    return inside(x) ? cell_of(x[Dim - 1], Dim - 1) : Index{-1};
-  }
   bool has_cell(const IVec<Dim>& c) const {
     for (int d = 0; d < Dim; ++d)
       if (c[d] < 0 || c[d] >= cells[d]) return false;

@@ -615,7 +615,10 @@ Config restart_config(const Checkpoint& c, const std::string& name, const Config
   }
   const std::vector<std::string> hashed = hashed_input_keys(run);
   for (const KeySpec& k : keys) {
-    if (k.name.starts_with("output.") || k.name == "time.end") continue;
+    // The outputs, the end, and how the processes cut the grid (parallel.*: the answers are
+    // those of one process on any decomposition, to round-off, as on another process count).
+    if (k.name.starts_with("output.") || k.name.starts_with("parallel.") || k.name == "time.end")
+      continue;
     if (std::find(hashed.begin(), hashed.end(), k.name) != hashed.end()) {
       // The same file, named from another directory (the stored configuration holds its
       // absolute path, a configuration file one relative to itself), is the same file.
@@ -646,7 +649,7 @@ Config restart_config(const Checkpoint& c, const std::string& name, const Config
     for (const auto& d : diff) lines += "\n" + d;
     throw InputError(fmt::format(
         "the configuration differs from the one stored in checkpoint '{}' in {} key(s); a "
-        "restart may change only output.* and time.end:{}",
+        "restart may change only output.*, parallel.* and time.end:{}",
         name, diff.size(), lines));
   }
   return run;

@@ -33,12 +33,14 @@
 //   i64 frames written, f64[] frame times,
 //   f64[] basis state (version 2: the tracked corners of CPDI2, 2^Dim x Dim values per particle;
 //     empty for the other bases),
-//   i64[] distribution (version 5; empty for a run on one process): R processes, the R + 1 slab
-//     cuts, then per rank its particle count, re-sorting reference span, sorts and grid
-//     crossings (4 R values; the diagnostics above hold the total crossings and sorts),
-//   version 6: i64[] layer counts (a distributed run: the particles in each cell layer along
-//     the slabs' axis, over all processes; empty for one process), u64 pieces, then per piece
-//     (rank 0, 1, ...): str file name, u64 file size, u64 payload hash (its header's),
+//   i64[] distribution (version 10; empty for a run on one process): R processes, the
+//     processes along each axis (Dim values, x first; slabs: 1, ..., 1, R), the cuts along each
+//     axis (processes + 1 values per axis, axis after axis), then per rank its particle count,
+//     re-sorting reference span, sorts and grid crossings (4 R values; the diagnostics above
+//     hold the total crossings and sorts),
+//   version 10: i64[] layer counts (a distributed run: the particles in each cell layer along
+//     each axis, axis after axis, over all processes; empty for one process), u64 pieces, then
+//     per piece (rank 0, 1, ...): str file name, u64 file size, u64 payload hash (its header's),
 //   version 7: u64 the FNV-1a hash of the bytes of the mesh file (grid.mesh; 0 without one),
 //     so that a restart refuses a mesh file that changed.
 // A distributed run's manifest holds no particles, cells or basis state (counts 0): its pieces
@@ -62,10 +64,11 @@
 namespace mpm::io {
 
 inline constexpr std::string_view kCheckpointMagic = "MPMLABCK";
-// A file of another version is refused by its version: the layout above is version 9's (the
-// displacement and density derived, not stored; a distributed run's pieces and manifest; the
-// mesh file's hash; the materials' internal variables; each particle's material).
-inline constexpr std::uint32_t kCheckpointVersion = 9;
+// A file of another version is refused by its version: the layout above is version 10's (the
+// displacement and density derived, not stored; a distributed run's pieces and manifest, its
+// process grid of blocks; the mesh file's hash; the materials' internal variables; each
+// particle's material).
+inline constexpr std::uint32_t kCheckpointVersion = 10;
 inline constexpr std::string_view kPieceMagic = "MPMLABCP";
 inline constexpr std::size_t kCheckpointHeaderBytes = 28;
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
@@ -124,7 +127,7 @@ struct Checkpoint {
   std::vector<double> basis_state;  // state a basis carries between steps (CPDI2 corners)
   // A run on several processes (the layout above); empty for one process.
   std::vector<std::int64_t> distribution;
-  std::vector<std::int64_t> layer_counts;  // a distributed run: particles per cell layer
+  std::vector<std::int64_t> layer_counts;  // a distributed run: particles per layer, per axis
   // A distributed run's pieces, rank after rank (their particles are not in `particles`).
   struct Piece {
     std::string file;         // its name, in the manifest's directory
@@ -188,8 +191,8 @@ Checkpoint read_whole_checkpoint(const std::filesystem::path& path);
 // The configuration of a restarted run. The checkpoint's stored configuration is parsed (source
 // "<name> (stored configuration)"); `given` (CONFIG of `mpm run CONFIG --restart FILE`, --set
 // applied) or, when absent, the stored one with `overrides` applied must agree with it in every
-// key and constant except output.* and time.end, else InputError listing the differing keys
-// with both values. Returns the configuration to run with.
+// key and constant except output.*, parallel.* and time.end, else InputError listing the
+// differing keys with both values. Returns the configuration to run with.
 Config restart_config(const Checkpoint& c, const std::string& name, const Config* given,
                       const std::vector<std::string>& overrides = {});
 

@@ -6,6 +6,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -150,20 +151,22 @@ std::vector<std::string> reaction_names(const Problem<Dim>& pb) {
 using AnyProblem = std::variant<Problem<1>, Problem<2>, Problem<3>>;
 
 // Which of a problem's particles this process stores. On one process: every particle.
-// A process of a distributed run stores only those of its slab, so that no process holds the
+// A process of a distributed run stores only those of its block, so that no process holds the
 // whole body, not even while the problem is set up: every process generates every particle in
 // the one process's order and numbers them as one process does (Particles::id: the position in
 // that order), and keeps those `keep` accepts. A counting pass (`layer_counts` set) keeps none
-// and counts the particles in each cell layer, from which the slabs are cut (driver/run.cpp).
+// and counts the particles in each cell layer along each axis, from which the blocks are cut
+// (driver/run.cpp).
 // The seeders below take a scope; the problems' constructors (benchmarks/benchmarks.hpp) pass
 // theirs on.
 struct SeedScope {
-  // Keeps a particle whose cell layer along the grid's last axis is `layer` (Grid::last_layer;
-  // -1: outside the grid). Empty: every particle.
-  std::function<bool(Index layer)> keep;
-  // Not null: the counting pass. Each seeded particle inside the grid adds 1 to its layer's
-  // entry (resized to the grid's layers along its last axis); none is kept.
-  std::vector<double>* layer_counts = nullptr;
+  // Keeps a particle in the cell with coordinates `cell` (one per axis; empty: outside the
+  // grid). Empty: every particle.
+  std::function<bool(std::span<const Index> cell)> keep;
+  // Not null: the counting pass. Each seeded particle inside the grid adds 1 to the entry of its
+  // cell layer along every axis (one vector per axis, resized to the grid's layers along it);
+  // none is kept.
+  std::vector<std::vector<double>>* layer_counts = nullptr;
   // The share of the body the processes on this machine hold together (1 on one process;
   // processes here / processes in all for a distributed run): the memory checks of the seeders
   // compare that share of the body's state with the machine's memory.
@@ -191,9 +194,12 @@ class SeedSink {
     if ((scope.layer_counts || scope.keep) && g == nullptr)
       throw std::logic_error("SeedSink: a scope that keeps or counts by layer needs the grid");
     // (Several bodies are seeded one sink after the other: their counts add up.)
-    if (scope.layer_counts &&
-        scope.layer_counts->size() != static_cast<std::size_t>(g->cells[Dim - 1]))
-      scope.layer_counts->assign(static_cast<std::size_t>(g->cells[Dim - 1]), 0.0);
+    if (scope.layer_counts && scope.layer_counts->size() != static_cast<std::size_t>(Dim)) {
+      scope.layer_counts->resize(static_cast<std::size_t>(Dim));
+      for (int d = 0; d < Dim; ++d)
+        (*scope.layer_counts)[static_cast<std::size_t>(d)].assign(
+            static_cast<std::size_t>(g->cells[d]), 0.0);
+    }
   }
   // `total` points to come: room for every one when all are kept (one process), for the
   // scope's expected share and an eighth more when it keeps some (a distributed run), for none
@@ -204,12 +210,17 @@ class SeedSink {
   void add(const Vec<Dim>& x, double volume) {
     const auto id = static_cast<CompactIndex>(next_++);
     if (scope_.layer_counts || scope_.keep) {
-      const Index layer = grid_->last_layer(x);
+      const bool inside = grid_->inside(x);
+      std::array<Index, Dim> cell{};
+      if (inside)
+        for (int d = 0; d < Dim; ++d) cell[static_cast<std::size_t>(d)] = grid_->cell_of(x[d], d);
       if (scope_.layer_counts) {
-        if (layer >= 0) (*scope_.layer_counts)[static_cast<std::size_t>(layer)] += 1.0;
+        if (inside)
+          for (std::size_t d = 0; d < Dim; ++d)
+            (*scope_.layer_counts)[d][static_cast<std::size_t>(cell[d])] += 1.0;
         return;
       }
-      if (!scope_.keep(layer)) return;
+      if (!scope_.keep(inside ? std::span<const Index>(cell) : std::span<const Index>())) return;
     }
     particles_.append(x, volume, rho0_ * volume, id);
   }

@@ -12,60 +12,291 @@
 
 namespace mpm {
 
-template <int Dim>
-int SlabPartition<Dim>::owner_of_layer(Index layer) const {
-  // The last cut at or below the layer.
-  const auto it = std::upper_bound(cuts.begin(), cuts.end(), layer);
-  return std::clamp(static_cast<int>(it - cuts.begin()) - 1, 0, ranks() - 1);
-}
-
-template <int Dim>
-int SlabPartition<Dim>::owner(const Grid<Dim>& grid, const Vec<Dim>& x, int current) const {
-  const Index layer = grid.last_layer(x);
-  return layer < 0 ? current : owner_of_layer(layer);
-}
-
-template <int Dim>
-SlabPartition<Dim> SlabPartition<Dim>::balanced(const std::vector<double>& per_layer, int ranks,
-                                                const std::string& where) {
-  const auto layers = static_cast<Index>(per_layer.size());
-  if (layers < ranks)
+BlockShapeRequest BlockShapeRequest::parse(const std::string& text, const std::string& where) {
+  BlockShapeRequest r;
+  r.text = text;
+  r.where = where;
+  if (text == "slabs") return r;
+  if (text == "auto") {
+    r.kind = Kind::Auto;
+    return r;
+  }
+  r.kind = Kind::Given;
+  // "2x3", "2x2x2": whole numbers >= 1 joined by 'x'.
+  std::size_t at = 0;
+  bool ok = !text.empty();
+  while (ok && at <= text.size()) {
+    const std::size_t x = std::min(text.find('x', at), text.size());
+    const std::string part = text.substr(at, x - at);
+    ok = !part.empty() && part.size() <= 9 &&
+         std::all_of(part.begin(), part.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (ok) {
+      r.procs.push_back(std::stoll(part));
+      ok = r.procs.back() >= 1;
+    }
+    at = x + 1;
+  }
+  if (!ok || r.procs.size() > 3)
     throw InputError(fmt::format(
-        "{}: the grid has {} cell layer(s) along {} and this run {} processes; a process owns "
-        "whole layers (a slab), so use more cells along {} or fewer processes",
-        where, layers, axis_name(), ranks, axis_name()));
+        "{}: parallel.blocks = \"{}\" is not a decomposition; valid: \"slabs\" (cell layers along "
+        "the last "
+        "axis), \"auto\" (blocks shaped from the particles per layer) or the processes per "
+        "axis, x first, such as \"2x2\" or \"2x2x2\"",
+        where, text));
+  return r;
+}
+
+namespace {
+
+// Cuts of `layers` layers into `parts` ranges of about the same count, each at least one layer:
+// cut k after the layer where the running count first reaches k / parts of the particles.
+std::vector<Index> balanced_cuts(const std::vector<double>& per_layer, Index parts) {
+  const auto layers = static_cast<Index>(per_layer.size());
   double total = 0.0;
   for (double c : per_layer) total += c;
-  SlabPartition p;
-  p.cuts.assign(static_cast<std::size_t>(ranks) + 1, 0);
-  p.cuts.back() = layers;
-  // Cut r after the layer where the running count first reaches r / ranks of the particles,
-  // keeping at least one layer for each rank on either side.
+  std::vector<Index> cuts(static_cast<std::size_t>(parts) + 1, 0);
+  cuts.back() = layers;
   double running = 0.0;
   Index layer = 0;
-  for (int r = 1; r < ranks; ++r) {
-    const double target = total * static_cast<double>(r) / static_cast<double>(ranks);
+  for (Index r = 1; r < parts; ++r) {
+    const double target = total * static_cast<double>(r) / static_cast<double>(parts);
     while (layer < layers && running + per_layer[static_cast<std::size_t>(layer)] <= target) {
       running += per_layer[static_cast<std::size_t>(layer)];
       ++layer;
     }
-    const Index lowest = p.cuts[static_cast<std::size_t>(r) - 1] + 1;
-    const Index highest = layers - (ranks - r);
+    const Index lowest = cuts[static_cast<std::size_t>(r) - 1] + 1;
+    const Index highest = layers - (parts - r);
     const Index cut = std::clamp(layer, lowest, highest);
-    p.cuts[static_cast<std::size_t>(r)] = cut;
+    cuts[static_cast<std::size_t>(r)] = cut;
     while (layer < cut) running += per_layer[static_cast<std::size_t>(layer++)];
+  }
+  return cuts;
+}
+
+// The index k of the range [cuts[k], cuts[k + 1]) holding `layer`.
+int range_of(const std::vector<Index>& cuts, Index layer) {
+  const auto it = std::upper_bound(cuts.begin(), cuts.end(), layer);
+  return std::clamp(static_cast<int>(it - cuts.begin()) - 1, 0, static_cast<int>(cuts.size()) - 2);
+}
+
+}  // namespace
+
+template <int Dim>
+int BlockPartition<Dim>::ranks() const {
+  Index n = 1;
+  for (int d = 0; d < Dim; ++d) n *= procs[static_cast<std::size_t>(d)];
+  return static_cast<int>(n);
+}
+
+template <int Dim>
+IVec<Dim> BlockPartition<Dim>::coords(int rank) const {
+  IVec<Dim> c{};
+  Index r = rank;
+  for (std::size_t d = 0; d < Dim; ++d) {
+    c[d] = r % procs[d];
+    r /= procs[d];
+  }
+  return c;
+}
+
+template <int Dim>
+int BlockPartition<Dim>::rank_at(const IVec<Dim>& c) const {
+  Index r = 0;
+  for (int d = Dim - 1; d >= 0; --d)
+    r = r * procs[static_cast<std::size_t>(d)] + c[static_cast<std::size_t>(d)];
+  return static_cast<int>(r);
+}
+
+template <int Dim>
+bool BlockPartition<Dim>::slabs() const {
+  for (std::size_t d = 0; d + 1 < Dim; ++d)
+    if (procs[d] != 1) return false;
+  return true;
+}
+
+template <int Dim>
+std::array<Index, 2> BlockPartition<Dim>::span(int rank, int d) const {
+  const auto k = static_cast<std::size_t>(coords(rank)[static_cast<std::size_t>(d)]);
+  const auto& c = cuts[static_cast<std::size_t>(d)];
+  return {c[k], c[k + 1]};
+}
+
+template <int Dim>
+int BlockPartition<Dim>::owner_of_cell(const IVec<Dim>& cell) const {
+  IVec<Dim> k{};
+  for (std::size_t d = 0; d < Dim; ++d) k[d] = range_of(cuts[d], cell[d]);
+  return rank_at(k);
+}
+
+template <int Dim>
+int BlockPartition<Dim>::owner(const Grid<Dim>& grid, const Vec<Dim>& x, int current) const {
+  if (!grid.inside(x)) return current;
+  IVec<Dim> cell{};
+  for (int d = 0; d < Dim; ++d) cell[static_cast<std::size_t>(d)] = grid.cell_of(x[d], d);
+  return owner_of_cell(cell);
+}
+
+template <int Dim>
+std::vector<int> BlockPartition<Dim>::neighbours(int rank) const {
+  const IVec<Dim> c = coords(rank);
+  std::vector<int> out;
+  // Every offset in {-1, 0, 1}^Dim, x fastest: the ranks come out ascending.
+  int offsets = 1;
+  for (int d = 0; d < Dim; ++d) offsets *= 3;
+  for (int o = 0; o < offsets; ++o) {
+    IVec<Dim> n{};
+    bool inside = true;
+    int rest = o;
+    for (std::size_t d = 0; d < Dim; ++d, rest /= 3) {
+      n[d] = c[d] + rest % 3 - 1;
+      inside = inside && n[d] >= 0 && n[d] < procs[d];
+    }
+    if (inside && n != c) out.push_back(rank_at(n));
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+template <int Dim>
+bool BlockPartition<Dim>::overlaps(int a, const BlockPartition& other, int b) const {
+  for (int d = 0; d < Dim; ++d) {
+    const auto [lo, hi] = span(a, d);
+    const auto [olo, ohi] = other.span(b, d);
+    if (!(lo < ohi && olo < hi)) return false;
+  }
+  return true;
+}
+
+template <int Dim>
+BlockPartition<Dim> BlockPartition<Dim>::balanced(const LayerCounts& per_layer,
+                                                  const IVec<Dim>& procs,
+                                                  const std::string& where) {
+  BlockPartition p;
+  p.procs = procs;
+  for (std::size_t d = 0; d < Dim; ++d) {
+    const auto layers = static_cast<Index>(per_layer[d].size());
+    if (layers < procs[d])
+      throw InputError(fmt::format(
+          "{}: the grid has {} cell layer(s) along {} and this run {} processes along it; a "
+          "process owns whole layers, so use more cells along {} or fewer processes{}",
+          where, layers, axis_name(static_cast<int>(d)), procs[d], axis_name(static_cast<int>(d)),
+          Dim > 1 ? " (or other blocks: parallel.blocks)" : ""));
+    p.cuts[d] = balanced_cuts(per_layer[d], procs[d]);
   }
   return p;
 }
 
 template <int Dim>
-std::vector<double> SlabPartition<Dim>::layer_counts(const Grid<Dim>& grid, const Particles<Dim>& P,
-                                                     const Comm& comm, bool replicated) {
-  std::vector<double> count(static_cast<std::size_t>(grid.cells[kAxis]), 0.0);
-  for (const auto& x : P.x)
-    if (const Index c = grid.last_layer(x); c >= 0) count[static_cast<std::size_t>(c)] += 1.0;
-  if (!replicated) comm.sum(std::span<double>(count));
+IVec<Dim> BlockPartition<Dim>::choose_shape(const LayerCounts& per_layer, int ranks,
+                                            const BlockShapeRequest& request) {
+  using Kind = BlockShapeRequest::Kind;
+  IVec<Dim> shape{};
+  shape.fill(1);
+  if (request.kind == Kind::Slabs || Dim == 1) {
+    if (request.kind == Kind::Given && request.procs != std::vector<Index>{ranks})
+      throw InputError(
+          fmt::format("{}: parallel.blocks = \"{}\" does not fit this 1D run on {} "
+                      "processes",
+                      request.where, request.text, ranks));
+    shape[kAxis] = ranks;
+    return shape;
+  }
+  if (request.kind == Kind::Given) {
+    Index product = 1;
+    for (Index n : request.procs) product *= n;
+    if (static_cast<int>(request.procs.size()) != Dim || product != ranks)
+      throw InputError(fmt::format(
+          "{}: parallel.blocks = \"{}\" names {} processes along {} axes; this {}D run has {} "
+          "processes: give {} "
+          "counts whose product is {} (or \"auto\", or \"slabs\")",
+          request.where, request.text, product, request.procs.size(), Dim, ranks, Dim, ranks));
+    for (std::size_t d = 0; d < Dim; ++d) shape[d] = request.procs[d];
+    return shape;
+  }
+  // Auto: the body's box in layers along each axis (at least one layer).
+  std::array<double, Dim> extent{};
+  for (std::size_t d = 0; d < Dim; ++d) {
+    Index first = -1, last = -1;
+    for (std::size_t l = 0; l < per_layer[d].size(); ++l)
+      if (per_layer[d][l] > 0.0) {
+        if (first < 0) first = static_cast<Index>(l);
+        last = static_cast<Index>(l);
+      }
+    extent[d] = first < 0 ? 1.0 : static_cast<double>(last - first + 1);
+  }
+  double best = std::numeric_limits<double>::infinity();
+  bool found = false;
+  // Every factorisation (p_0, ..., p_{Dim-1}) of ranks, p_0 ascending, then p_1: of equal costs
+  // the first met, with the most processes along the later axes, is kept.
+  const auto consider = [&](const IVec<Dim>& p) {
+    for (std::size_t d = 0; d < Dim; ++d)
+      if (p[d] > static_cast<Index>(per_layer[d].size())) return;
+    double cost = 0.0;
+    for (std::size_t d = 0; d < Dim; ++d) {
+      double section = 1.0;
+      for (std::size_t e = 0; e < Dim; ++e)
+        if (e != d) section *= extent[e];
+      cost += static_cast<double>(p[d] - 1) * section;
+    }
+    if (cost < best) {
+      best = cost;
+      shape = p;
+      found = true;
+    }
+  };
+  for (Index a = 1; a <= ranks; ++a) {
+    if (ranks % a != 0) continue;
+    if constexpr (Dim == 2) {
+      consider(IVec<Dim>{a, ranks / a});
+    } else if constexpr (Dim == 3) {
+      for (Index b = 1; b <= ranks / a; ++b)
+        if ((ranks / a) % b == 0) consider(IVec<Dim>{a, b, ranks / a / b});
+    }
+  }
+  if (!found)
+    throw InputError(
+        fmt::format("{}: parallel.blocks = \"auto\": no blocks of {} processes fit this grid (at "
+                    "least one cell layer per process along "
+                    "every axis); use more cells or fewer processes",
+                    request.where, ranks));
+  return shape;
+}
+
+template <int Dim>
+typename BlockPartition<Dim>::LayerCounts BlockPartition<Dim>::layer_counts(const Grid<Dim>& grid,
+                                                                            const Particles<Dim>& P,
+                                                                            const Comm& comm,
+                                                                            bool replicated) {
+  LayerCounts count;
+  std::size_t total = 0;
+  for (std::size_t d = 0; d < Dim; ++d) {
+    count[d].assign(static_cast<std::size_t>(grid.cells[d]), 0.0);
+    total += count[d].size();
+  }
+  for (const auto& x : P.x) {
+    if (!grid.inside(x)) continue;
+    for (int d = 0; d < Dim; ++d)
+      count[static_cast<std::size_t>(d)][static_cast<std::size_t>(grid.cell_of(x[d], d))] += 1.0;
+  }
+  if (!replicated) {
+    // One sum over the processes for every axis.
+    std::vector<double> all;
+    all.reserve(total);
+    for (const auto& c : count) all.insert(all.end(), c.begin(), c.end());
+    comm.sum(std::span<double>(all));
+    std::size_t at = 0;
+    for (auto& c : count)
+      for (double& v : c) v = all[at++];
+  }
   return count;
+}
+
+template <int Dim>
+std::string BlockPartition<Dim>::describe() const {
+  if (slabs()) return fmt::format("slabs of whole cell layers along {}", axis_name(kAxis));
+  std::string s;
+  for (std::size_t d = 0; d < Dim; ++d) s += (d ? " x " : "") + std::to_string(procs[d]);
+  return s + " blocks";
 }
 
 template <int Dim>
@@ -100,7 +331,7 @@ void unpack_particles(std::span<const std::byte> in, Particles<Dim>& P,
 }
 
 template <int Dim>
-Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& comm) {
+Index migrate(RunState<Dim>& sim, const BlockPartition<Dim>& part, const Comm& comm) {
   comm.check();
   auto& P = sim.particles;
   const int me = comm.rank();
@@ -119,22 +350,23 @@ Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& co
     pack_particle(sim, i, send[static_cast<std::size_t>(owner[i])]);
   }
   // A particle moves less than a cell per step (the time-step limit), so it goes to a
-  // neighbouring slab: one message to each neighbour. After the slabs were cut anew, or should a
-  // particle jump further, every rank exchanges with every other (all ranks decide alike). The
-  // arrivals are in source-rank order either way, so the result is the same.
+  // neighbouring block: one message to each neighbour (2 for slabs, up to 8 in 2D and 26 in
+  // 3D). After the blocks were cut anew, or should a particle jump further, every rank exchanges
+  // with every other (all ranks decide alike). The arrivals are in source-rank order either way,
+  // so the result is the same.
+  const std::vector<int> peers = part.neighbours(me);
+  std::vector<unsigned char> near(static_cast<std::size_t>(comm.size()), 0);
+  near[static_cast<std::size_t>(me)] = 1;
+  for (const int r : peers) near[static_cast<std::size_t>(r)] = 1;
   bool far = false;
-  for (std::size_t i = 0; i < n; ++i) far = far || std::abs(owner[i] - me) > 1;
+  for (std::size_t i = 0; i < n; ++i) far = far || !near[static_cast<std::size_t>(owner[i])];
   std::vector<std::vector<std::byte>> recv;
   if (comm.any(far)) {
     recv = comm.alltoall(send);
   } else {
-    std::vector<int> peers;
     std::vector<std::vector<std::byte>> out;
-    for (const int r : {me - 1, me + 1})
-      if (r >= 0 && r < comm.size()) {
-        peers.push_back(r);
-        out.push_back(std::move(send[static_cast<std::size_t>(r)]));
-      }
+    out.reserve(peers.size());
+    for (const int r : peers) out.push_back(std::move(send[static_cast<std::size_t>(r)]));
     recv = comm.exchange(peers, out, 300);
   }
   if (leaving > 0) {
@@ -293,19 +525,21 @@ double imbalance(const RunState<Dim>& sim, const Comm& comm, Index* most) {
 }
 
 template <int Dim>
-bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& comm,
+bool rebalance_if_due(RunState<Dim>& sim, BlockPartition<Dim>& part, const Comm& comm,
                       double threshold, Index& sent, double& measured) {
   Index most = 0;
   measured = imbalance(sim, comm, &most);
   if (!(threshold > 0.0) || measured <= threshold) return false;
-  const std::vector<double> per_layer =
-      SlabPartition<Dim>::layer_counts(sim.grid, sim.particles, comm, /*replicated=*/false);
-  SlabPartition<Dim> next =
-      SlabPartition<Dim>::balanced(per_layer, comm.size(), "parallel.rebalance");
-  // The most particles of one process with the new cuts, against now.
+  BlockPartition<Dim> next = BlockPartition<Dim>::balanced(
+      BlockPartition<Dim>::layer_counts(sim.grid, sim.particles, comm, /*replicated=*/false),
+      part.procs, "parallel.rebalance");
+  // The most particles of one process with the new cuts (each process counts its own by their
+  // new owners; the sums are whole numbers, exact), against now.
   std::vector<double> predicted(static_cast<std::size_t>(comm.size()), 0.0);
-  for (std::size_t l = 0; l < per_layer.size(); ++l)
-    predicted[static_cast<std::size_t>(next.owner_of_layer(static_cast<Index>(l)))] += per_layer[l];
+  const auto& P = sim.particles;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(P.size()); ++i)
+    predicted[static_cast<std::size_t>(next.owner(sim.grid, P.x[i], comm.rank()))] += 1.0;
+  comm.sum(std::span<double>(predicted));
   const double now = static_cast<double>(most);
   if (!(*std::max_element(predicted.begin(), predicted.end()) < now)) return false;
   part = std::move(next);
@@ -313,18 +547,18 @@ bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& 
   return true;
 }
 
-template struct SlabPartition<1>;
-template struct SlabPartition<2>;
-template struct SlabPartition<3>;
-template Index migrate<1>(RunState<1>&, const SlabPartition<1>&, const Comm&);
+template struct BlockPartition<1>;
+template struct BlockPartition<2>;
+template struct BlockPartition<3>;
+template Index migrate<1>(RunState<1>&, const BlockPartition<1>&, const Comm&);
 template void pack_particle<1>(const RunState<1>&, std::size_t, std::vector<std::byte>&);
 template void unpack_particles<1>(std::span<const std::byte>, Particles<1>&,
                                   std::vector<CompactIndex>&, std::vector<double>&, int);
-template Index migrate<2>(RunState<2>&, const SlabPartition<2>&, const Comm&);
+template Index migrate<2>(RunState<2>&, const BlockPartition<2>&, const Comm&);
 template void pack_particle<2>(const RunState<2>&, std::size_t, std::vector<std::byte>&);
 template void unpack_particles<2>(std::span<const std::byte>, Particles<2>&,
                                   std::vector<CompactIndex>&, std::vector<double>&, int);
-template Index migrate<3>(RunState<3>&, const SlabPartition<3>&, const Comm&);
+template Index migrate<3>(RunState<3>&, const BlockPartition<3>&, const Comm&);
 template void pack_particle<3>(const RunState<3>&, std::size_t, std::vector<std::byte>&);
 template void unpack_particles<3>(std::span<const std::byte>, Particles<3>&,
                                   std::vector<CompactIndex>&, std::vector<double>&, int);
@@ -346,11 +580,11 @@ template void localize_tractions<3>(RunState<3>&);
 template double imbalance<1>(const RunState<1>&, const Comm&, Index*);
 template double imbalance<2>(const RunState<2>&, const Comm&, Index*);
 template double imbalance<3>(const RunState<3>&, const Comm&, Index*);
-template bool rebalance_if_due<1>(RunState<1>&, SlabPartition<1>&, const Comm&, double, Index&,
+template bool rebalance_if_due<1>(RunState<1>&, BlockPartition<1>&, const Comm&, double, Index&,
                                   double&);
-template bool rebalance_if_due<2>(RunState<2>&, SlabPartition<2>&, const Comm&, double, Index&,
+template bool rebalance_if_due<2>(RunState<2>&, BlockPartition<2>&, const Comm&, double, Index&,
                                   double&);
-template bool rebalance_if_due<3>(RunState<3>&, SlabPartition<3>&, const Comm&, double, Index&,
+template bool rebalance_if_due<3>(RunState<3>&, BlockPartition<3>&, const Comm&, double, Index&,
                                   double&);
 
 }  // namespace mpm

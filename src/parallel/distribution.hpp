@@ -1,16 +1,19 @@
 #pragma once
-// Distributed runs: the grid's cells are cut into slabs of whole cell layers along
-// its last axis (x in 1D, y in 2D, z in 3D), one slab per process; a process owns the particles
-// in its slab. Slabs, not a Cartesian grid of blocks or a graph partition: with the DOFs
-// numbered x fastest, a slab's particles touch one contiguous DOF range, so the DOFs two
-// neighbouring processes share are one contiguous segment (the layers their stencils reach
-// across the cut), and the exchange after each particle-to-grid sum is one message per
-// neighbour (stages::share_grid_sums); the cuts are chosen to give each process the same
-// number of particles. BENCHMARKS.md ("Processes") has the communication model and where
-// slabs stop scaling.
+// Distributed runs: the grid's cells are cut into blocks, one per process, by a Cartesian grid
+// of processes: procs[d] processes along axis d, the cuts along each axis chosen to give each
+// process about the same number of particles (from the particles per cell layer along that axis),
+// and a process owns the particles in its block. Slabs of whole cell layers along the last axis
+// (x in 1D, y in 2D, z in 3D) are the shape (1, ..., 1, N): with the DOFs numbered x fastest, a
+// slab's particles touch one contiguous DOF range, so the DOFs two neighbouring slabs share are
+// one contiguous segment (stages::share_grid_sums). Blocks (parallel.blocks) let a run use more
+// processes than the grid has layers along one axis, and a block's halo is its faces, not a
+// whole cross-section; particles move to the up to 3^Dim - 1 neighbouring blocks. BENCHMARKS.md
+// ("Processes") has the communication model.
+#include <array>
 #include <cstddef>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/comm.hpp"
@@ -18,33 +21,74 @@
 
 namespace mpm {
 
-template <int Dim>
-struct SlabPartition {
-  static constexpr int kAxis = Dim - 1;
-  // Rank r owns the cell layers [cuts[r], cuts[r + 1]) along kAxis; cuts[0] = 0 and
-  // cuts[ranks] = the grid's layers.
-  std::vector<Index> cuts;
-
-  int ranks() const { return static_cast<int>(cuts.size()) - 1; }
-  // The rank owning cell layer `layer` (in [0, layers)).
-  int owner_of_layer(Index layer) const;
-  // The rank owning a particle at x: that of its cell's layer; `current` for a point outside the
-  // grid (its process then stops the run, naming it: stages::evaluate_basis).
-  int owner(const Grid<Dim>& grid, const Vec<Dim>& x, int current) const;
-
-  // Cuts that give every rank about the same number of particles, each rank at least one layer.
-  // `per_layer`: the particles in each cell layer (of all ranks). InputError when the grid has
-  // fewer layers than ranks (`where`: the key to change).
-  static SlabPartition balanced(const std::vector<double>& per_layer, int ranks,
-                                const std::string& where);
-  // The particles in each cell layer along kAxis (those inside the grid: Grid::last_layer, the
-  // layer that decides the owner), over all ranks (collective when comm is
-  // distributed; `replicated`: every rank holds every particle, as at set-up, so no sum).
-  static std::vector<double> layer_counts(const Grid<Dim>& grid, const Particles<Dim>& P,
-                                          const Comm& comm, bool replicated);
-  // "y" etc.: the axis of the cuts.
-  static char axis_name() { return "xyz"[kAxis]; }
+// parallel.blocks: "slabs" (processes along the last axis only), "auto" (the shape chosen from
+// the particles per cell layer along each axis: BlockPartition::choose_shape) or processes per
+// axis, x first ("2x2", "2x2x2"), whose product is the number of processes.
+struct BlockShapeRequest {
+  enum class Kind { Slabs, Auto, Given } kind = Kind::Slabs;
+  std::vector<Index> procs;                       // Given: per axis
+  std::string text = "slabs", where = "default";  // the value and Config::where of the key
+  // InputError at `where` when `text` is none of those.
+  static BlockShapeRequest parse(const std::string& text, const std::string& where);
 };
+
+template <int Dim>
+struct BlockPartition {
+  static constexpr int kAxis = Dim - 1;                      // the slabs' axis
+  using LayerCounts = std::array<std::vector<double>, Dim>;  // particles per cell layer, per axis
+
+  // Processes along each axis (their product: the processes of the run); rank r sits at
+  // coords(r), x fastest: r = c_0 + procs_0 (c_1 + procs_1 c_2).
+  IVec<Dim> procs{};
+  // Along axis d, process coordinate k owns the cell layers [cuts[d][k], cuts[d][k + 1]);
+  // cuts[d][0] = 0 and cuts[d][procs[d]] = the grid's layers along d.
+  std::array<std::vector<Index>, Dim> cuts;
+
+  int ranks() const;
+  IVec<Dim> coords(int rank) const;
+  int rank_at(const IVec<Dim>& c) const;
+  // Whether the shape is slabs (1, ..., 1, N).
+  bool slabs() const;
+  // The layers [first, end) of rank's block along axis d.
+  std::array<Index, 2> span(int rank, int d) const;
+  // The rank owning the cell with coordinates `cell` (each in [0, cells[d])).
+  int owner_of_cell(const IVec<Dim>& cell) const;
+  // The rank owning a particle at x: that of its cell; `current` for a point outside the grid
+  // (its process then stops the run, naming it: stages::evaluate_basis).
+  int owner(const Grid<Dim>& grid, const Vec<Dim>& x, int current) const;
+  // The ranks whose blocks touch rank's (coordinates at most one apart along every axis),
+  // ascending, rank itself left out: where a particle that moved less than a cell can go.
+  std::vector<int> neighbours(int rank) const;
+  // Whether rank a's block of this partition and rank b's of `other` share a cell.
+  bool overlaps(int a, const BlockPartition& other, int b) const;
+
+  // The cuts along every axis that give every process coordinate about the same number of
+  // particles, each at least one layer, for the process grid `procs`. InputError when an axis
+  // has fewer layers than processes along it (`where`: the key to change).
+  static BlockPartition balanced(const LayerCounts& per_layer, const IVec<Dim>& procs,
+                                 const std::string& where);
+  // The process grid of `request` for `ranks` processes: slabs; the given shape (InputError
+  // naming the request's key when its product is not `ranks` or it has another number of axes);
+  // or, for "auto", the shape of the smallest halo: among the factorisations of `ranks` into Dim
+  // factors, each at most the layers along its axis, the one whose cuts cross the least area of
+  // the body's box (the span of the occupied layers along each axis), sum over d of
+  // (procs_d - 1) x the box's cross-section normal to d; ties go to more processes along the
+  // later axes (slabs where they cost no more).
+  static IVec<Dim> choose_shape(const LayerCounts& per_layer, int ranks,
+                                const BlockShapeRequest& request);
+  // The particles in each cell layer along each axis (those inside the grid), over all ranks
+  // (collective when comm is distributed; `replicated`: every rank holds every particle, as at
+  // set-up, so no sum).
+  static LayerCounts layer_counts(const Grid<Dim>& grid, const Particles<Dim>& P, const Comm& comm,
+                                  bool replicated);
+  // "slabs along y", "2 x 2 blocks".
+  std::string describe() const;
+};
+
+// "x", "y", "z".
+inline char axis_name(int d) {
+  return "xyz"[d];
+}
 
 // Particle i's fields, its cell of the last evaluation (sim.cell) and its carried basis state
 // (sim.carried) appended to `out` as bytes (Particles::pack, then the cell, then
@@ -60,18 +104,20 @@ void unpack_particles(std::span<const std::byte> in, Particles<Dim>& P,
 // Moves every particle whose owner (part.owner) is another rank there, with its fields and its
 // cell of the last evaluation (sim.cell); the particles that stay keep their order, and those
 // that arrive follow in the order of their source ranks. Collective; starts with comm.check().
-// Messages go to the neighbouring slabs only, unless some particle moves further.
+// Messages go to the neighbouring blocks only, unless some particle moves further.
 // The caller resizes the typed per-particle caches (Stepper::resize_particle_caches). Returns
 // the number of particles this rank sent.
 template <int Dim>
-Index migrate(RunState<Dim>& sim, const SlabPartition<Dim>& part, const Comm& comm);
+Index migrate(RunState<Dim>& sim, const BlockPartition<Dim>& part, const Comm& comm);
 
 // Ghost particles (RunState::ghosts) for a mapping that reads the particles of neighbouring
 // cells: appends to sim.particles copies of the other processes' particles whose cell layer
 // (along the last axis) lies within L layers of those this process's particles occupy, L the
 // largest `reach` of any process rounded up, in rank order and, from one rank, in its particle
 // order; sets sim.ghosts. Only processes whose particles lie within L of each other exchange (a
-// symmetric relation, so each pair agrees). Collective; starts with comm.check().
+// symmetric relation, so each pair agrees). Collective; starts with comm.check(). With blocks
+// the processes side by side along the other axes share their layers, so each receives all of
+// its neighbours' particles in those layers: every ghost the mapping reads, and more.
 template <int Dim>
 void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach);
 // Drops the ghost copies again (nothing when none are appended).
@@ -98,13 +144,14 @@ void localize_tractions(RunState<Dim>& sim);
 template <int Dim>
 double imbalance(const RunState<Dim>& sim, const Comm& comm, Index* most = nullptr);
 
-// Load balance (parallel.rebalance): when the imbalance exceeds `threshold` (> 0), cuts the
-// slabs anew from the particles' current layers (SlabPartition::balanced) and migrates the
-// particles, if the new cuts hold fewer particles on the most loaded process. Every process
-// takes the same decision from the same gathered counts. Collective; true when it re-cut.
+// Load balance (parallel.rebalance): when the imbalance exceeds `threshold` (> 0), moves the
+// blocks' boundaries (the same process grid, cuts anew from the particles' current layers along
+// each axis: BlockPartition::balanced) and migrates the particles, if the new cuts hold fewer
+// particles on the most loaded process (counted over the processes). Every process takes the
+// same decision from the same summed counts. Collective; true when it re-cut.
 // `sent`: adds the particles this rank sent; `measured`: the imbalance before any re-cut.
 template <int Dim>
-bool rebalance_if_due(RunState<Dim>& sim, SlabPartition<Dim>& part, const Comm& comm,
+bool rebalance_if_due(RunState<Dim>& sim, BlockPartition<Dim>& part, const Comm& comm,
                       double threshold, Index& sent, double& measured);
 
 }  // namespace mpm

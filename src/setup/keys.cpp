@@ -500,9 +500,12 @@ std::vector<KeySpec> declare() {
               "write the complete state to checkpoint.bin every N steps, replacing the previous "
               "one, for `mpm run --restart` (0: never)"),
       // Distributed runs (mpirun; parallel/distribution.hpp).
+      choice("parallel.blocks", "slabs", {},
+             "how several processes cut the grid: \"slabs\" (cell layers along the last axis), "
+             "\"auto\" (blocks shaped from the particles) or processes per axis (\"2x2\")"),
       real("parallel.rebalance", "", 0.25, at_least(0),
-           "a run on several processes cuts its slabs anew when the most loaded process holds "
-           "this fraction more particles than the mean (0: never)"),
+           "a run on several processes moves its cuts when the most loaded process holds this "
+           "fraction more particles than the mean (0: never)"),
   };
   // The laws' parameters after the elastic ones.
   const auto after = std::find_if(keys.begin(), keys.end(),

@@ -65,6 +65,10 @@ MappingKind configured_mapping(const MappingKind& chosen, const Config& cfg) {
 
 }  // namespace
 
+BlockShapeRequest blocks_request(const Config& cfg) {
+  return BlockShapeRequest::parse(cfg.get_string("parallel.blocks"), cfg.where("parallel.blocks"));
+}
+
 RunSettings run_settings(const Config& cfg, int dim) {
   RunSettings s;
   MethodSettings& m = s.method;
@@ -152,6 +156,7 @@ RunSettings run_settings(const Config& cfg, int dim) {
   s.output.history_every = cfg.get_int("output.history_every");
   s.output.checkpoint_every = cfg.get_int("output.checkpoint_every");
   s.parallel.rebalance = cfg.get_real("parallel.rebalance");
+  s.parallel.blocks = blocks_request(cfg);
   s.output.csv = cfg.get_bool("output.csv");
   s.output.vtk = cfg.get_bool("output.vtk");
   s.output.vtk_binary = cfg.get_string("output.vtk_format") == "binary";

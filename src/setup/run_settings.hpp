@@ -8,6 +8,7 @@
 
 #include "material/materials.hpp"
 #include "methods/kinds.hpp"
+#include "parallel/distribution.hpp"
 #include "state/simulation.hpp"
 
 namespace mpm {
@@ -54,9 +55,15 @@ struct MethodSettings {
 
 // parallel.*: a run on several processes (RunOptions::comm; parallel/distribution.hpp).
 struct ParallelSettings {
-  // Re-cut the slabs when max particles per process / mean - 1 exceeds this (0: never).
+  // Move the blocks' boundaries when max particles per process / mean - 1 exceeds this (0:
+  // never).
   double rebalance = 0.25;
+  BlockShapeRequest blocks;  // parallel.blocks
 };
+
+// parallel.blocks of a configuration, parsed (InputError at its line when it is none of the
+// decompositions).
+BlockShapeRequest blocks_request(const Config& cfg);
 
 // A law's parameter beyond the elastic ones as configured (material.<name>): a real number, or
 // one of its choices by name (summary.json's "material" object lists them).

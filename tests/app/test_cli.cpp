@@ -536,13 +536,14 @@ TEST(Cli, RerunIntoAnEarlierRunIsRefusedOrReplaces) {
 
 // An output that cannot be written (issue 16, 6 and 10: a full disk gave "internal error",
 // exit 1, and no failed summary). Here the file size limit stops the first particle frame
-// (33 KB; config.toml is 7 KB, the summary 1 KB): ulimit -f 40 is 20 KB in dash's 512-byte
-// blocks, 40 KB in bash's. mpm ignores SIGXFSZ itself (the shell leaves it at its default,
-// which would kill the process), so write(2) fails with EFBIG as it fails with ENOSPC on a full
-// disk. The run stops with exit code 8 and writes its failed summary.
+// (33 KB; config.toml, every key with its description, is 20 KB, the summary 1 KB): ulimit -f 60
+// is 30 KB in the 512-byte blocks of dash (popen's /bin/sh on Debian). mpm ignores SIGXFSZ itself
+// (the shell leaves it at its default, which would kill the process), so write(2) fails with EFBIG
+// as it fails with ENOSPC on a full disk. The run stops with exit code 8 and writes its failed
+// summary.
 TEST(Cli, AnOutputThatCannotBeWrittenFailsWithItsOwnCode) {
   const auto out = temp_dir("efbig");
-  const std::string cmd = "ulimit -f 40; exec " + std::string(MPM_BINARY) + " run " +
+  const std::string cmd = "ulimit -f 60; exec " + std::string(MPM_BINARY) + " run " +
                           src("examples/vibrating_bar_small.toml") +
                           " -q --set output.vtk=false --out " + out.string() + " 2>&1";
   FILE* f = popen(cmd.c_str(), "r");

@@ -1,17 +1,20 @@
 // The particles a process of a distributed run sets up (issue 21, SeedScope in
-// model/problem.hpp): every built-in problem, seeded with a scope that keeps one slab's layers,
-// must give exactly the particles of that slab of the whole problem, in the whole problem's order,
-// bit for bit in every field, with the same ids; the counting pass must count the whole
-// problem's particles per cell layer and store none; the slabs together must hold every particle
+// model/problem.hpp): every built-in problem, seeded with a scope that keeps one block's cells
+// (slabs, and blocks of 2 x 2, 3 x 2, 2 x 2 x 2 and an automatic shape), must give exactly the
+// particles of that block of the whole problem, in the whole problem's order, bit for bit in
+// every field, with the same ids; the counting pass must count the whole problem's particles
+// per cell layer along each axis and store none; the blocks together must hold every particle
 // once; and the loaded points (tractions) must be those of the whole problem on every process,
 // naming their particles by id.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <span>
 #include <string>
 #include <variant>
 #include <vector>
@@ -52,31 +55,43 @@ void expect_same_tractions(const std::vector<Traction<Dim>>& a, const std::vecto
   }
 }
 
-// The whole problem against `ranks` slabs of it, each seeded by its own scope.
+// The whole problem against `ranks` blocks of it (parallel.blocks = `shape`), each seeded by its
+// own scope.
 template <int Dim>
-void check_slabs(const Config& cfg, const Problem<Dim>& whole, int ranks, const std::string& what) {
+void check_blocks(const Config& cfg, const Problem<Dim>& whole, int ranks, const std::string& shape,
+                  const std::string& what) {
   const Particles<Dim>& W = whole.particles;
   ASSERT_GT(W.size(), 0) << what;
   // One process numbers its particles 0, 1, ...: a loaded point's id is its index there.
   for (std::size_t i = 0; i < W.x.size(); ++i) ASSERT_EQ(W.id[i], static_cast<Index>(i)) << what;
 
-  std::vector<double> per_layer;
+  std::vector<std::vector<double>> per_layer;
   SeedScope counting;
   counting.layer_counts = &per_layer;
   const AnyProblem counted = make_problem(cfg, counting);
   const auto& C = std::get<Problem<Dim>>(counted);
   EXPECT_EQ(C.particles.size(), 0) << what << ": the counting pass stores no particle";
   EXPECT_EQ(counting.seeded, W.size()) << what;
-  EXPECT_EQ(per_layer,
-            SlabPartition<Dim>::layer_counts(whole.grid, W, Comm::world(), /*replicated=*/true))
-      << what;
+  using Part = BlockPartition<Dim>;
+  const typename Part::LayerCounts counts =
+      Part::layer_counts(whole.grid, W, Comm::world(), /*replicated=*/true);
+  ASSERT_EQ(per_layer.size(), static_cast<std::size_t>(Dim)) << what;
+  for (std::size_t d = 0; d < Dim; ++d)
+    EXPECT_EQ(per_layer[d], counts[d]) << what << ", axis " << d;
   expect_same_tractions(C.tractions, whole.tractions, what + ", counting pass");
 
-  const SlabPartition<Dim> part = SlabPartition<Dim>::balanced(per_layer, ranks, "grid.cells");
+  const Part part = Part::balanced(
+      counts, Part::choose_shape(counts, ranks, BlockShapeRequest::parse(shape, "test")),
+      "grid.cells");
   Index held = 0;
   for (int r = 0; r < ranks; ++r) {
     SeedScope scope;
-    scope.keep = [&](Index layer) { return (layer < 0 ? 0 : part.owner_of_layer(layer)) == r; };
+    scope.keep = [&](std::span<const Index> cell) {
+      if (cell.empty()) return r == 0;
+      IVec<Dim> c{};
+      std::copy(cell.begin(), cell.end(), c.begin());
+      return part.owner_of_cell(c) == r;
+    };
     const AnyProblem mine = make_problem(cfg, scope);
     const auto& pb = std::get<Problem<Dim>>(mine);
     const std::string where = what + ", process " + std::to_string(r);
@@ -103,15 +118,16 @@ void check_slabs(const Config& cfg, const Problem<Dim>& whole, int ranks, const 
   EXPECT_EQ(held, W.size()) << what;
 }
 
-void check_config(const std::string& example, const std::vector<std::string>& sets, int ranks) {
+void check_config(const std::string& example, const std::vector<std::string>& sets, int ranks,
+                  const std::string& shape = "slabs") {
   const Config cfg = Config::load(std::string(MPM_SOURCE_DIR) + "/examples/" + example, sets);
   const AnyProblem whole = make_problem(cfg);
-  std::string what = example;
+  std::string what = example + " (" + shape + ")";
   for (const auto& s : sets) what += " " + s;
-  std::visit([&](const auto& pb) { check_slabs(cfg, pb, ranks, what); }, whole);
+  std::visit([&](const auto& pb) { check_blocks(cfg, pb, ranks, shape, what); }, whole);
 }
 
-TEST(SeedScope, EveryProcessSetsUpExactlyItsSlabOfTheWholeProblem1D) {
+TEST(SeedScope, EveryProcessSetsUpExactlyItsBlockOfTheWholeProblem1D) {
   check_config("vibrating_bar_crossing.toml", {"grid.cells=40"}, 3);
   check_config("traction_bar.toml", {"grid.cells=20"}, 4);  // a loaded end
   check_config("custom_bar.toml", {}, 2);
@@ -119,8 +135,11 @@ TEST(SeedScope, EveryProcessSetsUpExactlyItsSlabOfTheWholeProblem1D) {
   check_config("mms_1d.toml", {"grid.cells=16"}, 2);
 }
 
-TEST(SeedScope, EveryProcessSetsUpExactlyItsSlabOfTheWholeProblem2D) {
+TEST(SeedScope, EveryProcessSetsUpExactlyItsBlockOfTheWholeProblem2D) {
   check_config("plate_mms_2d.toml", {"grid.cells=8"}, 3);
+  check_config("plate_mms_2d.toml", {"grid.cells=8"}, 4, "2x2");
+  check_config("vortex_2d.toml", {"grid.cells=16"}, 6, "auto");
+  check_config("custom_plate_2d.toml", {}, 6, "3x2");
   check_config("vortex_2d.toml", {"grid.cells=16"}, 4);  // rings (not in layer order)
   check_config("vortex_2d.toml", {"grid.cells=16", "vortex.seeding=\"cells\""}, 3);
   check_config("plate_triangles_2d.toml", {"particles.per_triangle=6"}, 3);
@@ -129,8 +148,9 @@ TEST(SeedScope, EveryProcessSetsUpExactlyItsSlabOfTheWholeProblem2D) {
   check_config("plate_ps_unstructured_2d.toml", {}, 2);  // triangles of a mesh file
 }
 
-TEST(SeedScope, EveryProcessSetsUpExactlyItsSlabOfTheWholeProblem3D) {
+TEST(SeedScope, EveryProcessSetsUpExactlyItsBlockOfTheWholeProblem3D) {
   check_config("cube_mms_3d.toml", {"grid.cells=4"}, 3);
+  check_config("cube_mms_3d.toml", {"grid.cells=4"}, 8, "2x2x2");
   check_config("custom_3d.toml", {}, 3);
 }
 

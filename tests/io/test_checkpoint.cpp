@@ -296,7 +296,7 @@ TEST(Checkpoint, ADistributedCheckpointsPiecesJoinIntoTheWholeState) {
   manifest.particles = io::ParticleArrays{};
   manifest.particles.dim = 1;
   manifest.cells.clear();
-  manifest.distribution = {3, 0, 7, 12, 20};
+  manifest.distribution = {3, 3, 0, 7, 12, 20};  // 3 processes, 3 along x, the cuts
   manifest.layer_counts.assign(20, 12);
   std::vector<std::string> bytes(3);
   for (int r = 0; r < 3; ++r) {

@@ -1,5 +1,7 @@
-// Distributed runs (issue 21), the parts that do not need several processes: the slab cuts
-// balance the particles and give every process a layer, a particle's owner follows its cell,
+// Distributed runs, the parts that do not need several processes: the blocks' cuts balance the
+// particles along each axis and give every process a layer, the process grid is the one asked
+// for (slabs, given, or shaped for the least halo), a particle's owner follows its cell, a
+// block's neighbours are those around it,
 // particles travel between processes as bytes that restore every field, the traction lists
 // follow their particles by id, a process's grid arrays hold the window of its particles' DOFs,
 // and the collective operations are plain copies on one process. The runs on several processes are
@@ -8,6 +10,7 @@
 
 #include <array>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "core/comm.hpp"
@@ -18,39 +21,150 @@ namespace mpm {
 namespace MPM_UNITY_ID {
 namespace {
 
-TEST(SlabPartition, CutsBalanceTheParticles) {
+// Slabs: the process grid (1, ..., 1, N).
+template <int Dim>
+BlockPartition<Dim> slabs(const std::vector<double>& last, int ranks) {
+  typename BlockPartition<Dim>::LayerCounts counts;
+  for (std::size_t d = 0; d + 1 < Dim; ++d) counts[d].assign(4, 1.0);
+  counts[Dim - 1] = last;
+  return BlockPartition<Dim>::balanced(
+      counts, BlockPartition<Dim>::choose_shape(counts, ranks, BlockShapeRequest{}), "grid.cells");
+}
+
+TEST(BlockPartition, SlabCutsBalanceTheParticles) {
   // 10 layers: the body fills layers 2-7 with 100 particles each.
   std::vector<double> per_layer(10, 0.0);
   for (int l = 2; l < 8; ++l) per_layer[static_cast<std::size_t>(l)] = 100.0;
-  const auto p = SlabPartition<2>::balanced(per_layer, 3, "grid.cells");
-  ASSERT_EQ(p.cuts.size(), 4u);
-  EXPECT_EQ(p.cuts.front(), 0);
-  EXPECT_EQ(p.cuts.back(), 10);
+  const auto p = slabs<2>(per_layer, 3);
+  EXPECT_TRUE(p.slabs());
+  EXPECT_EQ(p.procs, (IVec<2>{1, 3}));
+  EXPECT_EQ(p.cuts[0], (std::vector<Index>{0, 4}));
+  ASSERT_EQ(p.cuts[1].size(), 4u);
+  EXPECT_EQ(p.cuts[1].front(), 0);
+  EXPECT_EQ(p.cuts[1].back(), 10);
   std::vector<double> per_rank(3, 0.0);
   for (Index l = 0; l < 10; ++l)
-    per_rank[static_cast<std::size_t>(p.owner_of_layer(l))] +=
+    per_rank[static_cast<std::size_t>(p.owner_of_cell(IVec<2>{0, l}))] +=
         per_layer[static_cast<std::size_t>(l)];
   for (double c : per_rank) EXPECT_EQ(c, 200.0);
 }
 
-TEST(SlabPartition, EveryProcessGetsALayer) {
+TEST(BlockPartition, EveryProcessGetsALayer) {
   // All particles in one layer: the other processes still own one layer each.
   std::vector<double> per_layer(4, 0.0);
   per_layer[3] = 50.0;
-  const auto p = SlabPartition<1>::balanced(per_layer, 4, "grid.cells");
-  EXPECT_EQ(p.cuts, (std::vector<Index>{0, 1, 2, 3, 4}));
-  EXPECT_THROW(SlabPartition<1>::balanced(per_layer, 5, "grid.cells"), InputError);
+  const auto p = slabs<1>(per_layer, 4);
+  EXPECT_EQ(p.cuts[0], (std::vector<Index>{0, 1, 2, 3, 4}));
+  EXPECT_THROW(slabs<1>(per_layer, 5), InputError);
 }
 
-TEST(SlabPartition, OwnerFollowsTheCellAlongTheLastAxis) {
+TEST(BlockPartition, OwnerFollowsTheCell) {
   const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), IVec<2>{4, 4});
-  SlabPartition<2> p;
-  p.cuts = {0, 1, 3, 4};
+  BlockPartition<2> p;
+  p.procs = {1, 3};
+  p.cuts = {std::vector<Index>{0, 4}, std::vector<Index>{0, 1, 3, 4}};
   EXPECT_EQ(p.owner(g, Vec<2>(0.9, 0.1), 2), 0);
   EXPECT_EQ(p.owner(g, Vec<2>(0.1, 0.3), 0), 1);
   EXPECT_EQ(p.owner(g, Vec<2>(0.1, 0.74), 0), 1);
   EXPECT_EQ(p.owner(g, Vec<2>(0.1, 1.0), 0), 2);  // the upper side belongs to the last cell
   EXPECT_EQ(p.owner(g, Vec<2>(0.1, 1.5), 1), 1);  // outside: stays where it is
+  // 2 x 2 blocks: rank = x + 2 y.
+  p.procs = {2, 2};
+  p.cuts = {std::vector<Index>{0, 1, 4}, std::vector<Index>{0, 3, 4}};
+  EXPECT_EQ(p.owner(g, Vec<2>(0.1, 0.1), 3), 0);
+  EXPECT_EQ(p.owner(g, Vec<2>(0.3, 0.1), 3), 1);
+  EXPECT_EQ(p.owner(g, Vec<2>(0.1, 0.9), 3), 2);
+  EXPECT_EQ(p.owner(g, Vec<2>(1.0, 1.0), 0), 3);
+  EXPECT_EQ(p.coords(3), (IVec<2>{1, 1}));
+  EXPECT_EQ(p.rank_at(IVec<2>{0, 1}), 2);
+  EXPECT_EQ(p.span(1, 0), (std::array<Index, 2>{1, 4}));
+  EXPECT_EQ(p.span(1, 1), (std::array<Index, 2>{0, 3}));
+  EXPECT_FALSE(p.slabs());
+  EXPECT_EQ(p.describe(), "2 x 2 blocks");
+}
+
+TEST(BlockPartition, NeighboursAreTheBlocksAroundOne) {
+  BlockPartition<3> p;
+  p.procs = {3, 3, 3};
+  for (auto& c : p.cuts) c = {0, 2, 4, 6};
+  // The centre block touches all 26 others; a corner 7; a slab its two neighbours.
+  std::vector<int> all;
+  for (int r = 0; r < 27; ++r)
+    if (r != 13) all.push_back(r);
+  EXPECT_EQ(p.neighbours(13), all);
+  EXPECT_EQ(p.neighbours(0), (std::vector<int>{1, 3, 4, 9, 10, 12, 13}));
+  BlockPartition<2> s;
+  s.procs = {1, 4};
+  EXPECT_EQ(s.neighbours(0), (std::vector<int>{1}));
+  EXPECT_EQ(s.neighbours(2), (std::vector<int>{1, 3}));
+  // Blocks of two partitions overlap where they share a cell along every axis.
+  BlockPartition<2> a, b;
+  a.procs = {2, 1};
+  a.cuts = {std::vector<Index>{0, 2, 4}, std::vector<Index>{0, 4}};
+  b.procs = {1, 2};
+  b.cuts = {std::vector<Index>{0, 4}, std::vector<Index>{0, 1, 4}};
+  EXPECT_TRUE(a.overlaps(0, b, 0));
+  EXPECT_TRUE(a.overlaps(1, b, 1));
+  a.cuts[1] = {0, 1};  // (only the spans matter)
+  EXPECT_FALSE(a.overlaps(0, b, 1));
+}
+
+TEST(BlockPartition, TheShapeIsAsked) {
+  typename BlockPartition<2>::LayerCounts c2;
+  c2[0].assign(8, 1.0);
+  c2[1].assign(8, 1.0);
+  const auto shape = [&](const std::string& text, int ranks) {
+    return BlockPartition<2>::choose_shape(c2, ranks, BlockShapeRequest::parse(text, "f.toml:3:1"));
+  };
+  EXPECT_EQ(shape("slabs", 4), (IVec<2>{1, 4}));
+  EXPECT_EQ(shape("2x3", 6), (IVec<2>{2, 3}));
+  // Auto: the least cut area through the body's box. A square: 2 x 2 for 4 (cuts of 8 + 8
+  // layers against 24 for slabs), 2 x 3 or 3 x 2 for 6 (more processes along the later axis).
+  EXPECT_EQ(shape("auto", 4), (IVec<2>{2, 2}));
+  EXPECT_EQ(shape("auto", 6), (IVec<2>{2, 3}));
+  EXPECT_EQ(shape("auto", 7), (IVec<2>{1, 7}));  // a prime: slabs
+  // A wide, low body (8 layers along x, 2 along y): cut along x.
+  c2[1] = {1, 1, 0, 0, 0, 0, 0, 0};
+  EXPECT_EQ(shape("auto", 4), (IVec<2>{4, 1}));
+  // At most the layers along an axis.
+  EXPECT_EQ(shape("auto", 16), (IVec<2>{8, 2}));
+  // Refused, naming the line and the valid forms.
+  const auto message = [&](const std::string& text, int ranks) {
+    try {
+      (void)shape(text, ranks);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message("2x2", 6).find("f.toml:3:1: parallel.blocks = \"2x2\" names 4 processes"),
+            std::string::npos);
+  EXPECT_NE(message("2x2x1", 4).find("along 3 axes"), std::string::npos);
+  EXPECT_NE(message("two", 4).find("valid: \"slabs\""), std::string::npos);
+  EXPECT_NE(message("0x4", 4).find("is not a decomposition"), std::string::npos);
+  EXPECT_NE(message("2x", 4).find("is not a decomposition"), std::string::npos);
+  EXPECT_NE(message("auto", 128).find("no blocks of 128 processes"), std::string::npos);
+}
+
+TEST(BlockPartition, BlockCutsBalanceEachAxis) {
+  // A 2D body of 6 x 4 cells with 2 particles each, in a grid of 8 x 8; 2 x 2 blocks: each
+  // process holds 12 cells of the body.
+  typename BlockPartition<2>::LayerCounts c;
+  c[0].assign(8, 0.0);
+  c[1].assign(8, 0.0);
+  for (int x = 1; x < 7; ++x) c[0][static_cast<std::size_t>(x)] = 8.0;
+  for (int y = 0; y < 4; ++y) c[1][static_cast<std::size_t>(y)] = 12.0;
+  const auto p = BlockPartition<2>::balanced(c, IVec<2>{2, 2}, "grid.cells");
+  EXPECT_EQ(p.cuts[0], (std::vector<Index>{0, 4, 8}));
+  EXPECT_EQ(p.cuts[1], (std::vector<Index>{0, 2, 8}));
+  // Too few layers along an axis: refused with the axis named.
+  c[0].resize(1);
+  try {
+    (void)BlockPartition<2>::balanced(c, IVec<2>{2, 2}, "grid.cells");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("1 cell layer(s) along x"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Particles, PackedParticlesRestoreEveryField) {
