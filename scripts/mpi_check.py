@@ -26,8 +26,8 @@ Each frame of a distributed run is a .pvtu over one VTU piece per process, whose
 those of the CSV frame. A run on 2 processes shortened and restarted from its checkpoint on 2
 processes ends in the same bytes as the whole run, and restarted on 4 or 1 in the same answers to
 1e-12; one on 4 restarted on 4 in the same bytes, on 3 to 1e-12; one on 2 x 2 blocks restarted
-on 2 x 2 in the same bytes, on 2 x 3 blocks, 4 slabs and one process to 1e-12, and one of 4 slabs
-on 2 x 2 blocks to 1e-12. Each distributed checkpoint is a
+on 2 x 2 in the same bytes, on 2 x 3 blocks and one process to 1e-12, and one of 4 slabs on 2 x 2
+blocks to 1e-12. Each distributed checkpoint is a
 manifest and one piece per process of its step; a damaged or missing piece stops the restart on
 every process with one message naming it.
 Then a failing distributed run (a body thrown out of the grid; a NaN that one process meets) must
@@ -333,23 +333,17 @@ AGAIN = {"2d_vortex_bspline2_musl", "2d_vortex_tls_neighbour_domains_usl",
 THREE = {"2d_vortex_bspline2_musl", "1d_thrown_bar_bspline2"}
 
 # Blocks (parallel.blocks): cases also run on a Cartesian grid of processes, 2 x 2 and 2 x 3 in
-# 2D, 2 x 2 x 2 in 3D, or the shape chosen from the particles ("auto"), each of a kind of
-# exchange: the grid sums and migrations to the 8 or 26 blocks around one (the vortex, the
-# thrown bodies, whose block boundaries move: parallel.rebalance, the ball on the floor), ghost
-# particles (TLS on triangles), carried corners (CPDI2), DDMPM's lent layer, distributed CG,
-# tractions, frictional walls. (TLS on the grid's cells, MLS and IMLS run on slabs only.)
+# 2D, 2 x 2 x 2 in 3D, or the shape chosen from the particles ("auto": 2 x 2 for the vortex):
+# the grid sums and migrations to the 8 or 26 blocks around one (the vortex, the thrown bodies,
+# whose block boundaries move: parallel.rebalance, the ball rolling on the floor), carried
+# corners (CPDI2), distributed CG. (TLS on the grid's cells, MLS and IMLS run on slabs only.)
 # With --all-blocks every other 2D and 3D case but those of the reconstruction mappings also runs
-# on 2 x 2 or 2 x 2 x 2 (not in CI).
+# on 2 x 2 or 2 x 2 x 2 (not in CI; all as they must be on this machine, 2026-12-07).
 BLOCKS = {
-    "2d_vortex_bspline2_musl": [(4, "2x2"), (6, "2x3")],
-    "2d_vortex_tls_powell_sabin_criss_cross_usl": [(4, "auto")],
+    "2d_vortex_bspline2_musl": [(4, "auto"), (6, "2x3")],
     "2d_vortex_cpdi2_usl": [(4, "2x2")],
-    "2d_vortex_ddmpm_musl": [(6, "2x3")],
     "2d_plate_consistent_cg": [(4, "2x2")],
-    "2d_custom_plate_tractions_bspline2": [(4, "2x2")],
-    "2d_column_frictional_walls": [(4, "2x2")],
     "2d_three_bodies_thrown": [(6, "2x3")],
-    "3d_cube_bspline2": [(8, "2x2x2")],
     "3d_sphere_body_mesh_friction": [(8, "2x2x2")],
 }
 # The block runs made a second time for the same bytes.
@@ -839,8 +833,8 @@ def check_restart(mpm, tmp, failures, label, config, sets, t_short, t_end):
 
 def check_block_restart(mpm, tmp, failures):
     # Checkpoints of a run on 2 x 2 blocks and of one on 4 slabs, against the whole runs: the 2 x
-    # 2 checkpoint restarted on 2 x 2 ends in the same bytes; on 2 x 3 blocks, on 4 slabs and on
-    # one process, and the slabs' checkpoint on 2 x 2 blocks, in the same answers to 1e-12 (each
+    # 2 checkpoint restarted on 2 x 2 ends in the same bytes; on 2 x 3 blocks and on one process,
+    # and the slabs' checkpoint on 2 x 2 blocks, in the same answers to 1e-12 (each
     # process cuts its block from the manifest's particles per layer along each axis and reads
     # the pieces whose blocks overlap it).
     config = "examples/vortex_2d.toml"
@@ -860,8 +854,8 @@ def check_block_restart(mpm, tmp, failures):
         check_pieces_of_checkpoint(f"restart (blocks), the run on 4 {key}", short[key], 4, failures)
     results = []
     # (processes, parallel.blocks, the checkpoint's)
-    for n, shape, of in [(4, "2x2", "2x2"), (6, "2x3", "2x2"), (4, "slabs", "2x2"),
-                         (1, "slabs", "2x2"), (4, "2x2", "slabs")]:
+    for n, shape, of in [(4, "2x2", "2x2"), (6, "2x3", "2x2"), (1, "slabs", "2x2"),
+                         (4, "2x2", "slabs")]:
         d = short[of] + f"_n{n}_{shape}"
         shutil.copytree(short[of], d)
         r = run(restart_cmd(n, mpm, d, t_end, ["output.checkpoint_every=10",
