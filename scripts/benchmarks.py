@@ -382,39 +382,78 @@ def sig(x):
     return f"{x:,.0f}" if x >= 100 else f"{float(f'{x:.3g}'):g}"
 
 
-def model_rows(ns2, ns3):
-    """Predicted parallel efficiency of the slab decomposition (direct mapping, MUSL, quadratic
-    B-splines: p = 2 layers of shared DOFs), per step:
+def model_rows(ns2, ns3, shm):
+    """Predicted parallel efficiency of the decomposition (direct mapping, MUSL, quadratic
+    B-splines: p = 2 layers of shared DOFs), per step, for slabs and for blocks:
       compute      particles per process x one-thread ns per particle-step;
-      halo         two exchanges a step, each to both neighbours (four where a slab is one cell
-                   layer: the stencils reach two slabs each side), alpha a message, the shared
-                   DOFs' 1 + 2 Dim doubles a step over beta;
+      halo         two exchanges a step, alpha a message, the shared DOFs' 1 + 2 Dim doubles a
+                   step over beta. Slabs: both neighbours (four where a slab is one cell layer:
+                   the stencils reach two slabs each side), p (n + p)^(Dim - 1) DOFs each.
+                   Blocks of b cells a side: the 3^Dim - 1 blocks around one, a face p (b + p)^(Dim
+                   - 1) DOFs, an edge p^2 (b + p), a corner p^Dim (the intersections of the DOF
+                   boxes, state/dof_sharing.hpp);
       collectives  14 reductions of a few values on a fixed tree, log2(N) alpha each, one
-                   all-gather of two values a process, log2(N) alpha + 16 N / beta, and the
-                   migration's two messages to each neighbour, alpha each;
-      efficiency   compute / (compute + halo + collectives)."""
+                   all-gather of each process's DOF range and box (2 + 2 Dim values),
+                   log2(N) alpha + 8 (2 + 2 Dim) N / beta, and the migration's message to each
+                   neighbour, alpha each;
+      efficiency   compute / (compute + halo + collectives),
+    with a cluster's alpha and beta (ALPHA, BETA) and with those measured here between two
+    processes over shared memory (`shm`: alpha [s], beta [B/s], from `mpm bench --messages`)."""
     p = 2
-    cases = [("2D, 4,096^2 cells, 9 particles a cell", 2, 4096, 9, ns2, [64, 1024, 4096]),
-             ("3D, 512^3 cells, 8 particles a cell", 3, 512, 8, ns3, [64, 512])]
+    cases = [("2D, 4,096^2 cells, 9 particles a cell", 2, 4096, 9, ns2,
+              [(64, None), (1024, None), (4096, None), (4096, 64), (16384, 128)]),
+             ("3D, 512^3 cells, 8 particles a cell", 3, 512, 8, ns3,
+              [(64, None), (512, None), (512, 8), (4096, 16), (32768, 32)])]
+
+    def cost(dim, n, procs, per_axis, alpha, beta):
+        if per_axis is None:  # slabs
+            layers = n / procs
+            neighbours = 2 if layers >= p else 4
+            dofs = neighbours * p * (n + p) ** (dim - 1)
+        else:
+            b = n // per_axis
+            neighbours = 3 ** dim - 1
+            faces = 2 * dim * p * (b + p) ** (dim - 1)
+            edges = (12 * p * p * (b + p)) if dim == 3 else 0
+            corners = 2 ** dim * p ** dim
+            dofs = faces + edges + corners
+        halo = 2 * neighbours * alpha + 2 * dofs * (1 + 2 * dim) * 8 / beta
+        lg = math.log2(procs)
+        coll = 14 * lg * alpha + (lg * alpha + 8 * (2 + 2 * dim) * procs / beta) + \
+            neighbours * alpha
+        return halo, coll
+
     out = []
     for name, dim, n, per_cell, ns, counts in cases:
         total = n ** dim * per_cell
-        shared = p * (n + p) ** (dim - 1)
-        for i, procs in enumerate(counts):
+        for i, (procs, per_axis) in enumerate(counts):
             compute = total / procs * ns * 1e-9
-            layers = n / procs
-            sides = 2 if layers >= p else 4
-            halo = 2 * sides * ALPHA + 2 * shared * (1 + 2 * dim) * 8 / BETA
-            lg = math.log2(procs)
-            coll = 14 * lg * ALPHA + (lg * ALPHA + 16 * procs / BETA) + 2 * 2 * ALPHA
+            halo, coll = cost(dim, n, procs, per_axis, ALPHA, BETA)
             eff = compute / (compute + halo + coll)
+            h2, c2 = cost(dim, n, procs, per_axis, *shm)
+            eff_shm = compute / (compute + h2 + c2)
             label = f"{name}, {total / 1e6:,.0f} M particles ({ns:,.0f} ns per particle-step)" \
                 if i == 0 else ""
-            out.append([label, f"{procs:,}", f"{total / procs / 1e6:,.3g} M",
+            shape = "slabs" if per_axis is None else \
+                " x ".join([str(per_axis)] * dim) + f" blocks of {n // per_axis}^{dim} cells"
+            out.append([label, f"{procs:,}", shape, f"{total / procs / 1e6:,.3g} M",
                         sig(compute * 1e3), sig(halo * 1e3), sig(coll * 1e3),
-                        f"**{eff:.3f}**"])
-    return table(["problem", "processes", "particles per process", "compute [ms per step]",
-                  "halo [ms]", "collectives [ms]", "predicted efficiency"], out)
+                        f"**{eff:.3f}**", f"{eff_shm:.3f}"])
+    return table(["problem", "processes", "decomposition", "particles per process",
+                  "compute [ms per step]", "halo [ms]", "collectives [ms]",
+                  "predicted efficiency (cluster)", "with this machine's shared memory"], out)
+
+
+def messages(rn):
+    """alpha [s] and beta [B/s] between two processes over shared memory (`mpm bench
+    --messages` under mpirun)."""
+    env = dict(MPIRUN_ENV)
+    env["OMP_NUM_THREADS"] = "1"
+    out = run(["mpirun", "-n", "2", rn.mpm, "bench", "--messages", "--repeats", "5"], env=env)
+    alpha = number(r"alpha = ([0-9.]+) us", out, "alpha of mpm bench --messages") * 1e-6
+    beta = number(r"beta = ([0-9.]+) GB/s", out, "beta of mpm bench --messages") * 1e9
+    rn.log(f"  mpm bench --messages: alpha {alpha * 1e6:.2f} us, beta {beta / 1e9:.2f} GB/s")
+    return alpha, beta
 
 
 def table_processes(rn):
@@ -432,8 +471,10 @@ def table_processes(rn):
     figs = {(i, v): [] for i in range(len(problems)) for v in variants}
     peak = {(i, v): [] for i in range(len(problems)) for v in variants}
     particles = {}
+    costs = []  # (alpha, beta) of each round
     for r in range(rn.rounds):
         rn.log(f"processes: round {r + 1}")
+        costs.append(messages(rn))
         for i, (_, config, sets) in enumerate(problems):
             for procs, threads in variants:
                 ns, summary = rn.mpm_run(config, sets, threads, procs)
@@ -456,7 +497,17 @@ def table_processes(rn):
                       "1 process, 2 threads", "2 processes, 1 thread each",
                       "speed-up of 2 processes", "2 threads / 2 processes",
                       "peak memory per process [MB], 1 / 2 processes"], out)
-    model = model_rows(med(figs[(0, (1, 1))]), med(figs[(1, (1, 1))]))
+    alphas, betas = [c[0] for c in costs], [c[1] for c in costs]
+    shm = (med(alphas), med(betas))
+    model = model_rows(med(figs[(0, (1, 1))]), med(figs[(1, (1, 1))]), shm)
+    model += (f"\n\nThis machine's shared memory, `mpirun -n 2 build/mpm bench --messages "
+              f"--repeats 5` once a round: alpha = {shm[0] * 1e6:.2f} us a message "
+              f"({min(alphas) * 1e6:.2f}-{max(alphas) * 1e6:.2f}), beta = {shm[1] / 1e9:.2f} GB/s "
+              f"({min(betas) / 1e9:.2f}-{max(betas) / 1e9:.2f}), medians of the rounds, with the "
+              f"measured runs' Open MPI settings (`MPIRUN_ENV`: shared memory without a single-"
+              f"copy mechanism, so a large message is copied twice; two processes alone, where "
+              f"many processes of one node share its memory bandwidth). The "
+              f"cluster: alpha = {ALPHA * 1e6:g} us, beta = {BETA / 1e9:g} GB/s.")
     what = (f"2D 40 steps, 3D 20 steps (`ns_per_particle_step` of rank 0's summary.json, the "
             f"first step included), the three variants alternating; {rounds_text(rn)}")
     return measured, what, model

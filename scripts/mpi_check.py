@@ -652,6 +652,7 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures, all_blo
             for c, x in diffs.items():
                 allowed.setdefault(f, {})[c] = max(allowed.get(f, {}).get(c, 0.0), x)
     report = []
+    shared_total = {}
     for n, shape in layouts(name, ranks, all_blocks):
         d = layout_dir(tmp, name, n, shape)
         label = f"-n {n}" + (f" {shape}" if shape else "")
@@ -719,9 +720,14 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures, all_blo
             if blocks is None or (want is not None and blocks != want) or (
                     shape == "auto" and len(blocks) != int(name[0])):
                 failures.append(f"{name} {label}: process grid {blocks}, expected {want}")
+            shared = mpi.get("shared_dofs_per_process", [])
+            if len(shared) != n:
+                failures.append(f"{name} {label}: shared DOFs per process {shared}")
+            shared_total[(n, shape or "")] = sum(shared)
             moved = (f", blocks {blocks}, particles sent per process {sent}, "
                      f"final cuts {mpi.get('cuts')}, "
-                     f"{mpi.get('rebalances')} re-cuts, grid windows {window} of {dofs} DOFs")
+                     f"{mpi.get('rebalances')} re-cuts, grid windows {window} of {dofs} DOFs, "
+                     f"shared DOFs {shared}")
         if again(name, n, shape, ranks):
             # The same rank count again (another start of the program): the same bytes.
             d2 = d + "_again"
@@ -733,6 +739,13 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures, all_blo
                     break
         held = f" ({share:.2f} of its tolerance, one ulp of an input's)" if allowed else ""
         report.append(f"{label}: largest relative difference {worst:.2e}{held}{moved}")
+    # 2 x 2 blocks share their faces, edges and corners (the intersections of the DOF boxes),
+    # fewer DOFs than four slabs' two sides each; sharing by ranges of the numbering alone, a
+    # block would share the whole rows between its first and its last DOF.
+    if (4, "auto") in shared_total and (4, "") in shared_total and \
+            not shared_total[(4, "auto")] < shared_total[(4, "")]:
+        failures.append(f"{name}: 2 x 2 blocks share {shared_total[(4, 'auto')]} DOFs, four "
+                        f"slabs {shared_total[(4, '')]}")
     print(f"{name}: " + "; ".join(report))
 
 
@@ -990,6 +1003,23 @@ def check_failure(mpm, tmp, failures):
     lines = [l for l in r.stderr.splitlines() if "error" in l]
     if r.returncode != 2 or len(lines) != 1 or "only `mpm run`" not in lines[0]:
         failures.append(f"mpm bench under mpirun: exit {r.returncode}, stderr {r.stderr!r}")
+    # `mpm bench --messages`, the model's alpha and beta: on 2 processes a time for each size and
+    # finite, positive alpha and beta; on 3 (no pairs) refused, once; with a step option refused.
+    r = run(["mpirun", "-n", "2", "--oversubscribe", mpm, "bench", "--messages", "--repeats", "1"])
+    m = re.search(r"alpha = ([0-9.]+) us, beta = ([0-9.]+) GB/s", r.stdout)
+    rows = re.findall(r"^ +(\d+) +([0-9.]+) +([0-9.]+) +([0-9.]+)$", r.stdout, re.MULTILINE)
+    if r.returncode != 0 or not m or float(m[1]) <= 0 or float(m[2]) <= 0 or \
+            [int(x[0]) for x in rows] != [8 ** k for k in range(1, 8)]:
+        failures.append(f"mpm bench --messages: exit {r.returncode}, {r.stdout!r} {r.stderr!r}")
+    else:
+        print(f"mpm bench --messages on 2 processes: alpha {m[1]} us, beta {m[2]} GB/s")
+    for n, extra, expect in [(3, [], "an even number of processes"),
+                             (2, ["--dim", "2"], "leave out --dim")]:
+        r = run(["mpirun", "-n", str(n), "--oversubscribe", mpm, "bench", "--messages"] + extra)
+        lines = [l for l in r.stderr.splitlines() if "error" in l]
+        if r.returncode != 2 or len(lines) != 1 or expect not in lines[0]:
+            failures.append(f"mpm bench --messages on {n} {extra}: exit {r.returncode}, "
+                            f"stderr {r.stderr!r}")
     # Not distributable (Gauss-Seidel sweeps through the whole grid; the direct factorisation of
     # the whole consistent matrix; TLS on cells in blocks), or no decomposition of 2 processes:
     # refused before the first step, naming the key.

@@ -191,7 +191,31 @@ int cmd_verify(bool quick, bool long_runs, const std::string& out, int jobs, con
   return WEXITSTATUS(status);
 }
 
+// `mpm bench --messages` (under mpirun): the exchange times and the model's alpha and beta,
+// printed by rank 0.
+int cmd_bench_messages(const mpm::BenchOptions& opt) {
+  const mpm::Comm& comm = mpm::Comm::world();
+  const auto m = mpm::bench_messages(comm, opt.repeats);
+  if (!comm.root()) return 0;
+  std::cout << fmt::format(
+      "messages: {} processes, each pair of ranks (2k, 2k + 1) exchanging at once "
+      "(Comm::exchange, both ways), the slowest pair, best and median of {}\n"
+      "  {:>9}  {:>14}  {:>14}  {:>10}\n",
+      m.processes, opt.repeats, "bytes", "us, best", "us, median", "GB/s");
+  for (const auto& t : m.sizes)
+    std::cout << fmt::format("  {:>9}  {:>14.3f}  {:>14.3f}  {:>10.3f}\n", t.bytes,
+                             t.best_seconds * 1e6, t.median_seconds * 1e6,
+                             static_cast<double>(t.bytes) / t.median_seconds / 1e9);
+  std::cout << fmt::format(
+      "alpha = {:.3f} us, beta = {:.3f} GB/s (alpha: the best time of {} bytes; beta: from {} to "
+      "{} bytes, medians)\n",
+      m.alpha_seconds * 1e6, m.beta_bytes_per_second / 1e9, m.sizes.front().bytes,
+      m.sizes[m.sizes.size() - 2].bytes, m.sizes.back().bytes);
+  return 0;
+}
+
 int cmd_bench(const mpm::BenchOptions& opt) {
+  if (opt.messages) return cmd_bench_messages(opt);
   // (Checked here rather than ignored: the 1D bench has one problem, the vibrating bar.)
   if (opt.dim == 1 && opt.problem != "plate")
     throw mpm::InputError(fmt::format(
@@ -472,6 +496,10 @@ int run_main(int argc, char** argv) {
   bench->add_option("--sort", bopt.sort, "method.sort: auto or never")
       ->check(CLI::IsMember({"auto", "never"}))
       ->capture_default_str();
+  bench->add_flag("--messages", bopt.messages,
+                  "under mpirun with an even number of processes: time the exchange between "
+                  "pairs of processes from 8 bytes to 2 MiB, and print the alpha and beta of the "
+                  "communication model (BENCHMARKS.md, \"Processes\"); takes --repeats only");
 
   mpm::ReconstructOptions ropt;
   auto* rec = app.add_subcommand(
@@ -630,11 +658,17 @@ int run_main(int argc, char** argv) {
     // summary (core/interrupt.hpp); a second one ends the process at once.
     if (*run || *study) mpm::install_interrupt_handlers();
     // Under mpirun every process would run the whole command and write the same files.
-    if (mpm::Comm::world().distributed() && !*run)
-      throw mpm::InputError(fmt::format(
-          "only `mpm run` runs on several processes (this is `mpm {}` under mpirun with {} "
-          "processes); start it without mpirun",
-          app.get_subcommands().front()->get_name(), mpm::Comm::world().size()));
+    if (*bench && bopt.messages)
+      for (const CLI::Option* o : bench->get_options())
+        if (o->count() > 0 && o->get_name() != "--messages" && o->get_name() != "--repeats")
+          throw mpm::InputError(fmt::format(
+              "mpm bench --messages times messages alone; leave out {}", o->get_name()));
+    if (mpm::Comm::world().distributed() && !*run && !(*bench && bopt.messages))
+      throw mpm::InputError(
+          fmt::format("only `mpm run` (and `mpm bench --messages`) runs on several processes (this "
+                      "is `mpm {}` under mpirun with {} "
+                      "processes); start it without mpirun",
+                      app.get_subcommands().front()->get_name(), mpm::Comm::world().size()));
     if (*run && !batch.empty()) {
       if (!config.empty() || !restart.empty() || !sets.empty() || !out.empty())
         throw mpm::InputError(

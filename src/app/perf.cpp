@@ -4,9 +4,12 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
+#include "core/comm.hpp"
 #include "driver/run.hpp"
 #include "grid/grid_state.hpp"
 #include "particles/particles.hpp"
@@ -225,6 +228,45 @@ BenchResult bench_3d(const BenchOptions& opt) {
   r.sort_bytes_per_particle =
       sort_bytes_per_particle<3>(grid_cells * grid_cells * grid_cells, r.particles);
   return r;
+}
+
+MessageBench bench_messages(const Comm& comm, int repeats) {
+  const int n = comm.size();
+  if (n < 2 || n % 2 != 0)
+    throw InputError(fmt::format(
+        "mpm bench --messages times the exchange between pairs of processes: start it under "
+        "mpirun with an even number of processes, 2 or more (this run has {})",
+        n));
+  MessageBench out;
+  out.processes = n;
+  const std::vector<int> peers{comm.rank() ^ 1};
+  for (std::size_t bytes = 8; bytes <= (std::size_t{2} << 20); bytes *= 8) {
+    // About 100 MB a repeat (20 ms at 5 GB/s), 20 to 2,000 exchanges.
+    const int count =
+        static_cast<int>(std::clamp<std::size_t>((std::size_t{100} << 20) / bytes, 20, 2000));
+    std::vector<std::vector<std::byte>> send{std::vector<std::byte>(bytes, std::byte{1})};
+    comm.exchange(peers, send, 7);  // warm-up: the connection and its buffers
+    std::vector<double> t;
+    for (int k = 0; k < repeats; ++k) {
+      comm.check();  // every pair starts together
+      const auto start = std::chrono::steady_clock::now();
+      for (int i = 0; i < count; ++i) {
+        const auto recv = comm.exchange(peers, send, 7);
+        if (recv.size() != 1 || recv[0].size() != bytes)
+          throw RunError(exit_code::kInternal, "mpm bench --messages: a message lost bytes");
+      }
+      const std::chrono::duration<double> wall = std::chrono::steady_clock::now() - start;
+      t.push_back(comm.max(wall.count() / count));
+    }
+    std::sort(t.begin(), t.end());
+    out.sizes.push_back({bytes, t.front(), t[t.size() / 2]});
+  }
+  const auto& a = out.sizes[out.sizes.size() - 2];
+  const auto& b = out.sizes.back();
+  out.alpha_seconds = out.sizes.front().best_seconds;
+  out.beta_bytes_per_second =
+      static_cast<double>(b.bytes - a.bytes) / std::max(b.median_seconds - a.median_seconds, 1e-12);
+  return out;
 }
 
 }  // namespace mpm

@@ -1,6 +1,8 @@
 #pragma once
 // `mpm bench`: time per particle-step and memory per particle of the explicit step.
+#include <cstddef>
 #include <string>
+#include <vector>
 
 #include "core/types.hpp"
 
@@ -26,6 +28,7 @@ struct BenchOptions {
   std::string problem = "plate";
   bool shuffle = false;       // start from the particles in random order (RunOptions::shuffle_seed)
   std::string sort = "auto";  // method.sort
+  bool messages = false;      // time messages between processes instead (bench_messages)
 };
 
 struct BenchResult {
@@ -69,5 +72,24 @@ BenchResult bench_2d(const BenchOptions& opt);
 // cells per side, v = (0.1 sin(2 pi x), -0.1 sin(2 pi y), 0.1 sin(2 pi z)) m/s, no body force,
 // free sides, dt = 1e-6 s.
 BenchResult bench_3d(const BenchOptions& opt);
+
+// `mpm bench --messages` under mpirun: the time of one halo exchange (Comm::exchange, each
+// process of a pair sending and receiving `bytes` at once, every pair of ranks 2k, 2k + 1 at
+// the same time) for message sizes from 8 bytes to 2 MiB (eightfold steps); the slowest pair's
+// time, best and median of `repeats`. alpha: the best time of the smallest message [s]; beta: the
+// bandwidth between the two largest, (bytes_n - bytes_{n-1}) / (t_n - t_{n-1}) of the medians
+// [bytes/s]: the costs of the communication model (BENCHMARKS.md, "Processes").
+struct MessageTiming {
+  std::size_t bytes = 0;
+  double best_seconds = 0.0, median_seconds = 0.0;
+};
+struct MessageBench {
+  int processes = 0;
+  std::vector<MessageTiming> sizes;
+  double alpha_seconds = 0.0, beta_bytes_per_second = 0.0;
+};
+class Comm;
+// InputError unless the run has an even number of processes, two or more.
+MessageBench bench_messages(const Comm& comm, int repeats);
 
 }  // namespace mpm

@@ -131,6 +131,47 @@ inline std::array<Index, 2> dof_bounds(const TensorStencil<Dim, K>& s,
   return {s.dof0, hi};
 }
 
+// The coordinates per direction of DOF `dof` in a layout with strides `stride` (dof_strides, x
+// fastest). Layouts that are one row of DOFs (triangle bases: strides {1, n}) give {dof, 0}.
+template <int Dim>
+inline IVec<Dim> dof_coords(Index dof, const IVec<Dim>& stride) {
+  IVec<Dim> c;
+  for (int d = Dim - 1; d > 0; --d) {
+    c[d] = dof / stride[d];
+    dof -= c[d] * stride[d];
+  }
+  c[0] = dof;
+  return c;
+}
+
+// Extends the box [lo, hi] of DOF coordinates (per direction, both ends held) by a stencil's
+// DOFs: the box a process's stencils touch, whose intersection with a neighbour's is what the
+// two share (state/dof_sharing.hpp).
+template <int Dim, int N>
+inline void extend_dof_box(const Stencil<Dim, N>& s, const std::type_identity_t<IVec<Dim>>& stride,
+                           std::type_identity_t<IVec<Dim>>& lo,
+                           std::type_identity_t<IVec<Dim>>& hi) {
+  for (int a = 0; a < N; ++a) {
+    const IVec<Dim> c = dof_coords<Dim>(s.dof[a], stride);
+    for (int d = 0; d < Dim; ++d) {
+      lo[d] = std::min(lo[d], c[d]);
+      hi[d] = std::max(hi[d], c[d]);
+    }
+  }
+}
+
+template <int Dim, int K>
+inline void extend_dof_box(const TensorStencil<Dim, K>& s,
+                           const std::type_identity_t<IVec<Dim>>& stride,
+                           std::type_identity_t<IVec<Dim>>& lo,
+                           std::type_identity_t<IVec<Dim>>& hi) {
+  const IVec<Dim> c = dof_coords<Dim>(s.dof0, stride);  // the first DOF in every direction
+  for (int d = 0; d < Dim; ++d) {
+    lo[d] = std::min(lo[d], c[d]);
+    hi[d] = std::max(hi[d], c[d] + K - 1);
+  }
+}
+
 // The stencil type a basis caches per particle: its compact CachedStencilT when it has one
 // (tensor-product bases), else the full StencilT (GIMP, CPDI, DDMPM).
 template <class Basis, bool kTensor = Basis::kTensorProduct>

@@ -707,15 +707,24 @@ RunResult MpmRun<Dim>::finish() {
   if (comm_) {
     res.diag.grid_crossings = comm_->sum(res.diag.grid_crossings);
     const auto [window_first, window_end] = sim.nodes.window();
+    // The DOFs this process shared with others at the last exchange of the grid sums.
+    std::vector<Index> shared;
+    if (!sim.shared.lo.empty())
+      for (int r = 0; r < comm_->size(); ++r)
+        if (r != comm_->rank())
+          sim.shared.for_each_shared(comm_->rank(), r, [&](Index i) { shared.push_back(i); });
+    std::sort(shared.begin(), shared.end());
+    shared.erase(std::unique(shared.begin(), shared.end()), shared.end());
     const std::vector<Index> counts = comm_->allgather(std::span<const Index>(
-        std::array<Index, 4>{sim.particles.size(), migrated_, window_end - window_first,
-                             static_cast<Index>(peak_memory)}));
-    std::vector<Index> per_rank, sent, window, memory;
-    for (std::size_t r = 0; r < counts.size(); r += 4) {
+        std::array<Index, 5>{sim.particles.size(), migrated_, window_end - window_first,
+                             static_cast<Index>(peak_memory), static_cast<Index>(shared.size())}));
+    std::vector<Index> per_rank, sent, window, memory, shared_dofs;
+    for (std::size_t r = 0; r < counts.size(); r += 5) {
       per_rank.push_back(counts[r]);
       sent.push_back(counts[r + 1]);
       window.push_back(counts[r + 2]);
       memory.push_back(counts[r + 3]);
+      shared_dofs.push_back(counts[r + 4]);
     }
     peak_memory = static_cast<double>(*std::max_element(memory.begin(), memory.end()));
     nlohmann::ordered_json cuts_json = nlohmann::ordered_json::object();
@@ -734,6 +743,9 @@ RunResult MpmRun<Dim>::finish() {
                 // the basis's DOFs.
                 {"grid_dofs", sim.nodes.size()},
                 {"grid_window_dofs_per_process", window},
+                // The DOFs each shared with other processes at the last exchange of the grid
+                // sums (DofRanges: a slab's two sides; a block's faces, edges and corners).
+                {"shared_dofs_per_process", shared_dofs},
                 {"peak_memory_bytes_per_process", memory}};
   }
   res.wall_seconds = seconds_since(t_start_);

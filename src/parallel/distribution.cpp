@@ -130,9 +130,12 @@ int BlockPartition<Dim>::owner_of_cell(const IVec<Dim>& cell) const {
 
 template <int Dim>
 int BlockPartition<Dim>::owner(const Grid<Dim>& grid, const Vec<Dim>& x, int current) const {
-  if (!grid.inside(x)) return current;
   IVec<Dim> cell{};
-  for (int d = 0; d < Dim; ++d) cell[static_cast<std::size_t>(d)] = grid.cell_of(x[d], d);
+  for (int d = 0; d < Dim; ++d) {
+    const Index c = grid.cell_of(x[d], d);
+    if (c < 0 || c >= grid.cells[d]) return current;  // outside the grid (as Grid::inside)
+    cell[static_cast<std::size_t>(d)] = c;
+  }
   return owner_of_cell(cell);
 }
 

@@ -166,21 +166,59 @@ void throw_particle_failure(const RunState<Dim>& sim) {
 }
 
 namespace {
-// The DOF range [lo, hi] this rank's particle stencils touch: the union of the chunk ranges
-// evaluate_basis recorded and of a reconstruction mapping's quadrature points (empty, lo > hi,
-// without either).
+// The DOFs this rank's sums touch: the range [lo, hi] of their numbers and the box [box_lo,
+// box_hi] of their coordinates (RunState::dof_stride's layout): the particle stencils' (the
+// chunk ranges and the box evaluate_basis recorded) and a reconstruction mapping's quadrature
+// points' (a range, whose box is that of every DOF between its ends). Empty (lo > hi) without
+// either.
 template <int Dim>
-std::array<Index, 2> touched_dofs(const RunState<Dim>& sim) {
-  const auto [lo, hi] = sim.scatter.ranges.span();
+struct TouchedDofs {
+  std::array<Index, 2> range;
+  IVec<Dim> box_lo, box_hi;
+};
+
+template <int Dim>
+TouchedDofs<Dim> touched_dofs(const RunState<Dim>& sim) {
+  TouchedDofs<Dim> t{sim.scatter.ranges.span(), {}, {}};
+  t.box_lo.fill(std::numeric_limits<Index>::max());
+  t.box_hi.fill(-1);
+  const IVec<Dim>& stride = sim.dof_stride;
+  // The DOFs per direction of the layout.
+  IVec<Dim> n;
+  for (int d = 0; d + 1 < Dim; ++d) n[d] = stride[d + 1] / stride[d];
+  n[Dim - 1] = sim.nodes.size() / stride[Dim - 1];
+  // Extends the box by that of the DOFs [a, b]: along the highest direction where a's and b's
+  // coordinates differ, from a's to b's; below it, the whole layout; above it, theirs.
+  const auto add_range = [&](Index a, Index b) {
+    const IVec<Dim> ca = dof_coords<Dim>(a, stride), cb = dof_coords<Dim>(b, stride);
+    bool whole = false;
+    for (int d = Dim - 1; d >= 0; --d) {
+      t.box_lo[d] = std::min(t.box_lo[d], whole ? 0 : ca[d]);
+      t.box_hi[d] = std::max(t.box_hi[d], whole ? n[d] - 1 : cb[d]);
+      whole = whole || ca[d] != cb[d];
+    }
+  };
+  if (sim.stencil_box_particles == sim.own_particles()) {
+    for (int d = 0; d < Dim; ++d) {
+      t.box_lo[d] = sim.stencil_box[0][d];
+      t.box_hi[d] = sim.stencil_box[1][d];
+    }
+  } else if (t.range[0] <= t.range[1]) {
+    add_range(t.range[0], t.range[1]);  // stencils filled some other way
+  }
   const auto& q = sim.quadrature_dofs;
-  if (q[0] > q[1]) return {lo, hi};
-  return {std::min(lo, q[0]), std::max(hi, q[1])};
+  if (q[0] <= q[1]) {
+    t.range = {std::min(t.range[0], q[0]), std::max(t.range[1], q[1])};
+    add_range(q[0], q[1]);
+  }
+  return t;
 }
 
 // The tractions' nodal forces of this step (RunState::face_forces, after_forces): added here
-// where this process's range holds the DOF, else sent to the lowest process whose range holds it
-// (which adds them, in rank order, to its partial sums before they are shared). A DOF no range
-// holds has no mass on any process, so it is inactive and its force unused, as on one process.
+// where this process holds the DOF (DofRanges::holds), else sent to the lowest process that
+// holds it (which adds them, in rank order, to its partial sums before they are shared). A DOF
+// no process holds has no mass on any process, so it is inactive and its force unused, as on one
+// process.
 template <int Dim>
 void place_face_forces(RunState<Dim>& sim) {
   const Comm& comm = *sim.comm;
@@ -190,12 +228,12 @@ void place_face_forces(RunState<Dim>& sim) {
   constexpr std::size_t kRecord = sizeof(Index) + Dim * sizeof(double);
   std::vector<std::vector<std::byte>> send(static_cast<std::size_t>(comm.size()));
   for (const auto& [i, f] : sim.face_forces) {
-    if (sh.lo[static_cast<std::size_t>(me)] <= i && i <= sh.hi[static_cast<std::size_t>(me)]) {
+    if (sh.holds(me, i)) {
       force[static_cast<std::size_t>(i)] += f;
       continue;
     }
     for (int r = 0; r < comm.size(); ++r)
-      if (sh.lo[static_cast<std::size_t>(r)] <= i && i <= sh.hi[static_cast<std::size_t>(r)]) {
+      if (sh.holds(r, i)) {
         auto& out = send[static_cast<std::size_t>(r)];
         const std::size_t at = out.size();
         out.resize(at + kRecord);
@@ -222,7 +260,8 @@ void share_grid_sums(RunState<Dim>& sim, unsigned what) {
   const Comm* comm = sim.comm;
   if (comm == nullptr || !comm->distributed()) return;
   comm->check();  // a rank that failed in this step stops every rank here
-  sim.shared = DofRanges::gather(*comm, touched_dofs(sim));
+  const TouchedDofs<Dim> t = touched_dofs(sim);
+  sim.shared = DofRanges::gather(*comm, t.range, sim.dof_stride, t.box_lo, t.box_hi);
   using namespace grid_sum;
   auto& nd = sim.nodes;
   const bool M = (what & kMass) != 0, Q = (what & kMomentum) != 0, F = (what & kForces) != 0;
@@ -251,7 +290,7 @@ T over_ranks(const Comm* comm, T v) {
 }
 
 // sum over the DOFs of a grid array, each DOF counted once over the ranks of a distributed run
-// (by the lowest rank whose range holds it), combined in rank order. T: double or Vec<Dim>.
+// (by the lowest rank that holds it), combined in rank order. T: double or Vec<Dim>.
 template <int Dim, class T>
 T grid_total(const RunState<Dim>& sim, const DofArray<T>& a, const T& zero) {
   if (sim.comm == nullptr || !sim.comm->distributed())

@@ -85,9 +85,16 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
   std::array<std::uint8_t, K> chunk_outside{}, chunk_unfit{};
   std::array<Index, K> chunk_crossings{};
   auto& ranges = sim.scatter.ranges;
+  // A distributed run: the box of DOF coordinates each chunk's stencils touch (RunState::
+  // stencil_box, for the exchange of the grid sums).
+  const bool boxes = sim.comm != nullptr;
+  std::array<std::array<IVec<Dim>, 2>, K> chunk_box;
   for_each_chunk(P.size(), [&](int chunk, Index b, Index e) {
     const auto ck = static_cast<std::size_t>(chunk);
     Index lo = std::numeric_limits<Index>::max(), hi = -1;
+    auto& [box_lo, box_hi] = chunk_box[ck];
+    box_lo.fill(std::numeric_limits<Index>::max());
+    box_hi.fill(-1);
     for (Index p = b; p < e; ++p) {
       const auto i = static_cast<std::size_t>(p);
       auto& s = sim.stencils[i];
@@ -142,11 +149,26 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
       const auto [sl, sh] = dof_bounds(s, sim.dof_stride);
       lo = std::min(lo, sl);
       hi = std::max(hi, sh);
+      if (boxes) extend_dof_box(s, sim.dof_stride, box_lo, box_hi);
     }
     ranges.lo[ck] = lo;
     ranges.hi[ck] = hi;
   });
   ranges.particles = P.size();
+  if (boxes) {
+    auto& [box_lo, box_hi] = sim.stencil_box;
+    box_lo.fill(std::numeric_limits<Index>::max());
+    box_hi.fill(-1);
+    for (int c = 0; c < ParticleChunks::count(P.size()); ++c)
+      for (int d = 0; d < Dim; ++d) {
+        const auto& [l, h] = chunk_box[static_cast<std::size_t>(c)];
+        box_lo[static_cast<std::size_t>(d)] =
+            std::min(box_lo[static_cast<std::size_t>(d)], l[static_cast<std::size_t>(d)]);
+        box_hi[static_cast<std::size_t>(d)] =
+            std::max(box_hi[static_cast<std::size_t>(d)], h[static_cast<std::size_t>(d)]);
+      }
+    sim.stencil_box_particles = P.size();
+  }
   bool outside = false, unfit = false;
   for (std::size_t c = 0; c < K; ++c) {
     outside = outside || chunk_outside[c];

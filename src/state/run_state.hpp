@@ -140,13 +140,21 @@ struct SolveState {
 template <int Dim>
 struct DistributedState {
   // A distributed run (core/comm.hpp): the processes, each holding the particles of
-  // its slab of the grid (parallel/distribution.hpp) and the grid quantities of the DOFs its
+  // its block of the grid (parallel/distribution.hpp) and the grid quantities of the DOFs its
   // particles touch. Null for a run on one process. After each particle-to-grid sum the ranks
   // add their partial sums on the DOFs they share (stages::share_grid_sums), so every
-  // rank's grid holds the totals on its DOFs; `shared` holds each rank's DOF range [lo, hi] of
-  // the last exchange (for the conservation totals, which count each DOF once).
+  // rank's grid holds the totals on the DOFs it holds; `shared` holds each rank's DOF range
+  // [lo, hi] and box of the last exchange (DofRanges::holds; for the conservation totals, which
+  // count each DOF once). The DOFs of a rank's range outside its box hold its partial sums
+  // alone, which are zero: no particle of it touches them.
   const Comm* comm = nullptr;
   DofRanges shared;
+  // The box of DOF coordinates (per direction of the basis's layout, both ends held) that this
+  // process's particle stencils touch, recorded by evaluate_basis for `stencil_box_particles`
+  // particles (-1: not recorded): what the exchange of the grid sums shares with the processes
+  // whose boxes meet it, so that blocks side by side exchange their faces, not whole rows.
+  std::array<IVec<Dim>, 2> stencil_box{};
+  Index stencil_box_particles = -1;
   // A distributed run: the whole problem's tractions with each loaded point's particle
   // by id; `tractions` holds the points of this process's particles (localize_tractions, after
   // every migration). `face_forces`: the loaded points' nodal forces of this step, (DOF, force),
