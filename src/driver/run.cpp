@@ -169,16 +169,9 @@ AnyProblem make_distributed_problem(const Config& cfg, const Comm& comm, Index& 
         typename Part::LayerCounts counts;
         for (std::size_t d = 0; d < Dim; ++d) counts[d] = per_layer.at(d);
         // (The errors name the key to change; every process meets them alike.)
-        const Part part = Part::balanced(
-            counts, Part::choose_shape(counts, comm.size(), blocks_request(cfg)), "grid.cells");
-        // A particle outside the grid goes to process 0, as BlockPartition::owner sends it.
+        const Part part = Part::cut(counts, comm.size(), blocks_request(cfg));
         const int me = comm.rank();
-        scope.keep = [part, me](std::span<const Index> cell) {
-          if (cell.empty()) return me == 0;
-          IVec<Dim> c{};
-          std::copy(cell.begin(), cell.end(), c.begin());
-          return part.owner_of_cell(c) == me;
-        };
+        scope.keep = [part, me](std::span<const Index> cell) { return part.keeps(me, cell); };
         // The particles this process will hold, for the seeders' reserve: its share of the
         // particles along each axis, as if they were spread evenly over the others (exact for
         // slabs, whose span along the other axes is the whole grid).

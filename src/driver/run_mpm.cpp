@@ -259,8 +259,7 @@ Index restore(const RunOptions& opt, double dt, Stepper<Dim>& stepper, std::stri
     return true;
   };
   const auto cut = [&](const typename BlockPartition<Dim>::LayerCounts& counts) {
-    return BlockPartition<Dim>::balanced(
-        counts, BlockPartition<Dim>::choose_shape(counts, comm->size(), blocks), "grid.cells");
+    return BlockPartition<Dim>::cut(counts, comm->size(), blocks);
   };
   if (pieces) {
     std::vector<bool> take(static_cast<std::size_t>(dist.ranks), !comm);
@@ -562,9 +561,7 @@ MpmRun<Dim>::MpmRun(Problem<Dim>& pb, const RunSettings& settings, const std::st
     // process). The traction points name their particles by id (RunState::all_tractions).
     const auto counts =
         BlockPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm_, /*replicated=*/false);
-    part_ = BlockPartition<Dim>::balanced(
-        counts, BlockPartition<Dim>::choose_shape(counts, comm_->size(), settings.parallel.blocks),
-        "grid.cells");
+    part_ = BlockPartition<Dim>::cut(counts, comm_->size(), settings.parallel.blocks);
     // The mappings that integrate cells (TLS on the grid's cells, MLS, IMLS: kCellQuadrature)
     // integrate those of the layers along the last axis that a process's particles occupy
     // (RunState::own_cells), which only slabs keep apart; TLS on triangles integrates a triangle

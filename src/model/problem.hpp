@@ -210,10 +210,14 @@ class SeedSink {
   void add(const Vec<Dim>& x, double volume) {
     const auto id = static_cast<CompactIndex>(next_++);
     if (scope_.layer_counts || scope_.keep) {
-      const bool inside = grid_->inside(x);
+      // Inside the grid iff every cell coordinate is in [0, cells) (as Grid::inside).
       std::array<Index, Dim> cell{};
-      if (inside)
-        for (int d = 0; d < Dim; ++d) cell[static_cast<std::size_t>(d)] = grid_->cell_of(x[d], d);
+      bool inside = true;
+      for (int d = 0; d < Dim; ++d) {
+        cell[static_cast<std::size_t>(d)] = grid_->cell_of(x[d], d);
+        inside = inside && cell[static_cast<std::size_t>(d)] >= 0 &&
+                 cell[static_cast<std::size_t>(d)] < grid_->cells[d];
+      }
       if (scope_.layer_counts) {
         if (inside)
           for (std::size_t d = 0; d < Dim; ++d)

@@ -171,6 +171,20 @@ bool BlockPartition<Dim>::overlaps(int a, const BlockPartition& other, int b) co
 }
 
 template <int Dim>
+BlockPartition<Dim> BlockPartition<Dim>::cut(const LayerCounts& per_layer, int ranks,
+                                             const BlockShapeRequest& request) {
+  return balanced(per_layer, choose_shape(per_layer, ranks, request), "grid.cells");
+}
+
+template <int Dim>
+bool BlockPartition<Dim>::keeps(int rank, std::span<const Index> cell) const {
+  if (cell.empty()) return rank == 0;
+  IVec<Dim> c{};
+  std::copy(cell.begin(), cell.end(), c.begin());
+  return owner_of_cell(c) == rank;
+}
+
+template <int Dim>
 BlockPartition<Dim> BlockPartition<Dim>::balanced(const LayerCounts& per_layer,
                                                   const IVec<Dim>& procs,
                                                   const std::string& where) {

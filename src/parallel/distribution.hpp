@@ -76,6 +76,15 @@ struct BlockPartition {
   // later axes (slabs where they cost no more).
   static IVec<Dim> choose_shape(const LayerCounts& per_layer, int ranks,
                                 const BlockShapeRequest& request);
+  // The partition of `request` for `ranks` processes: choose_shape's process grid, balanced.
+  // Every process computes the same one from the same counts (the errors name the key to
+  // change: the request's, or grid.cells when an axis has too few layers).
+  static BlockPartition cut(const LayerCounts& per_layer, int ranks,
+                            const BlockShapeRequest& request);
+  // Whether `rank` stores, at set-up, a particle in the cell with coordinates `cell`
+  // (SeedScope::keep): the owner of the cell; a particle outside the grid (empty `cell`) goes to
+  // rank 0 (whose run then stops, naming it).
+  bool keeps(int rank, std::span<const Index> cell) const;
   // The particles in each cell layer along each axis (those inside the grid), over all ranks
   // (collective when comm is distributed; `replicated`: every rank holds every particle, as at
   // set-up, so no sum).

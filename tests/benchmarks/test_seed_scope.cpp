@@ -80,18 +80,11 @@ void check_blocks(const Config& cfg, const Problem<Dim>& whole, int ranks, const
     EXPECT_EQ(per_layer[d], counts[d]) << what << ", axis " << d;
   expect_same_tractions(C.tractions, whole.tractions, what + ", counting pass");
 
-  const Part part = Part::balanced(
-      counts, Part::choose_shape(counts, ranks, BlockShapeRequest::parse(shape, "test")),
-      "grid.cells");
+  const Part part = Part::cut(counts, ranks, BlockShapeRequest::parse(shape, "test"));
   Index held = 0;
   for (int r = 0; r < ranks; ++r) {
     SeedScope scope;
-    scope.keep = [&](std::span<const Index> cell) {
-      if (cell.empty()) return r == 0;
-      IVec<Dim> c{};
-      std::copy(cell.begin(), cell.end(), c.begin());
-      return part.owner_of_cell(c) == r;
-    };
+    scope.keep = [&](std::span<const Index> cell) { return part.keeps(r, cell); };
     const AnyProblem mine = make_problem(cfg, scope);
     const auto& pb = std::get<Problem<Dim>>(mine);
     const std::string where = what + ", process " + std::to_string(r);

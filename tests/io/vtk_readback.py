@@ -4,10 +4,11 @@ is built on: a file that VTK's XML readers refuse is not an output, whatever mes
 parser accepts.
 
 For the grid (1D, 2D, 3D; the triangles of a grid's cells and of a mesh file; `mpm mesh --vtu`),
-the particle frames (binary and ASCII), the series (.pvd: every file it lists) and the frame of a
-run on two processes (.pvtu over its pieces), each file is read with vtkXMLUnstructuredGridReader
-(vtkXMLPUnstructuredGridReader for .pvtu), any error VTK reports fails the check, and the counts
-of points and cells are compared with what the run says it wrote (summary.json, the CSV frame);
+the particle frames (binary and ASCII), the series (.pvd: every file it lists) and the frames of
+runs on two processes and on 2 x 2 blocks (.pvtu over its pieces), each file is read with
+vtkXMLUnstructuredGridReader (vtkXMLPUnstructuredGridReader for .pvtu), any error VTK reports
+fails the check, and the counts of points and cells are compared with what the run says it wrote
+(summary.json, the CSV frame);
 one value per frame (the stress of the particle of id 1) is compared with the CSV frame.
 
 Usage: vtk_readback.py --mpm build/mpm
@@ -205,6 +206,18 @@ def main():
                  "--out", out, "--set", "output.frames=1", "--set", "time.end=5e-3"],
                 env=MPIRUN_ENV)
             for frame in ("particles_00000", "particles_00001"):
+                check_frame(os.path.join(out, frame + ".pvtu"), os.path.join(out, frame + ".csv"),
+                            2, failures, parallel=True, columns=MATERIAL_COLUMNS)
+            # The same on 2 x 2 blocks (parallel.blocks): four pieces a frame, the bodies
+            # crossing the blocks' boundaries along both axes.
+            out = os.path.join(tmp, "mpi_blocks")
+            run(["mpirun", "-n", "4", "--oversubscribe", mpm, "run", TWO_MATERIALS, "--quiet",
+                 "--out", out, "--set", "output.frames=1", "--set", "time.end=5e-3",
+                 "--set", 'parallel.blocks="2x2"'], env=MPIRUN_ENV)
+            for frame in ("particles_00000", "particles_00001"):
+                pieces = [f for f in os.listdir(out) if f.startswith(frame + "_p")]
+                if len(pieces) != 4:
+                    failures.append(f"{frame}.pvtu on 2 x 2 blocks: pieces {sorted(pieces)}")
                 check_frame(os.path.join(out, frame + ".pvtu"), os.path.join(out, frame + ".csv"),
                             2, failures, parallel=True, columns=MATERIAL_COLUMNS)
         else:
