@@ -33,7 +33,9 @@ every process with one message naming it.
 Then a failing distributed run (a body thrown out of the grid; a NaN that one process meets) must
 end every process with one message naming the rank and the particles, the documented exit code
 (4; 3), and no hang; so must an output that cannot be written (8); and a
-feature that does not distribute must be refused before the first step (exit code 2).
+feature that does not distribute must be refused before the first step (exit code 2). The
+blocks of a cube cut 2 x 2 x 2 share the DOFs of their faces, edges and corners alone (a closed
+form), and `mpm bench --messages` times messages on 2 processes and refuses 3.
 
   python3 scripts/mpi_check.py --mpm build/mpm [--ranks 1,2,4] [--quick] [--part cases|restarts]
 """
@@ -1013,6 +1015,24 @@ def check_failure(mpm, tmp, failures):
         failures.append(f"mpm bench --messages: exit {r.returncode}, {r.stdout!r} {r.stderr!r}")
     else:
         print(f"mpm bench --messages on 2 processes: alpha {m[1]} us, beta {m[2]} GB/s")
+    # The DOFs 2 x 2 x 2 blocks share, in closed form: the cube of 32^3 cells filled evenly is
+    # cut at 16 along each axis; a block's quadratic B-splines touch 18^3 DOFs, and those within
+    # two DOFs of a cut (its three faces, three edges and corner towards the other blocks) are
+    # shared: all but 16^3.
+    d = os.path.join(tmp, "cube_blocks")
+    r = run(mpm_cmd(mpm, 8, "examples/cube_mms_3d.toml",
+                    ["grid.cells=32", "time.dt=1e-5", "time.end=2e-5", "output.frames=0",
+                     "output.csv=false", "output.vtk=false", 'parallel.blocks="2x2x2"'], d))
+    mpi = json.load(open(os.path.join(d, "summary.json")))["mpi"] if r.returncode == 0 else {}
+    if mpi.get("cuts") != {a: [0, 16, 32] for a in "xyz"} or \
+            mpi.get("shared_dofs_per_process") != [18 ** 3 - 16 ** 3] * 8:
+        failures.append(f"the cube on 2 x 2 x 2 blocks: exit {r.returncode}, cuts "
+                        f"{mpi.get('cuts')}, shared DOFs {mpi.get('shared_dofs_per_process')} "
+                        f"(18^3 - 16^3 = {18 ** 3 - 16 ** 3} each)")
+    else:
+        print(f"the cube on 2 x 2 x 2 blocks: {18 ** 3 - 16 ** 3} shared DOFs a process "
+              f"(18^3 - 16^3), grid windows {mpi.get('grid_window_dofs_per_process')} of "
+              f"{mpi.get('grid_dofs')} DOFs")
     for n, extra, expect in [(3, [], "an even number of processes"),
                              (2, ["--dim", "2"], "leave out --dim")]:
         r = run(["mpirun", "-n", str(n), "--oversubscribe", mpm, "bench", "--messages"] + extra)
