@@ -19,7 +19,9 @@ checks:
   * the cases of BLOCKS also on a Cartesian grid of processes (parallel.blocks: 2 x 2 and 2 x 3
     in 2D, 2 x 2 x 2 in 3D, or shaped from the particles), with the process grid asked for;
   * particles moved between processes (summary.json "mpi"), in both directions where the case
-    says so, and the slabs were cut anew where it says so (parallel.rebalance).
+    says so, and the slabs were cut anew where it says so (parallel.rebalance); the
+    reconstructions held ghost particles, and TLS on 2 x 2 blocks fewer a process than on four
+    slabs.
 The runs of each process count are made in one start of mpm (`mpm run --batch`, one mpirun),
 the repeats in another; the restart and failure checks start mpm for each run.
 Each frame of a distributed run is a .pvtu over one VTU piece per process, whose particles are
@@ -338,15 +340,20 @@ THREE = {"2d_vortex_bspline2_musl", "1d_thrown_bar_bspline2"}
 # 2D, 2 x 2 x 2 in 3D, or the shape chosen from the particles ("auto": 2 x 2 for the vortex):
 # the grid sums and migrations to the 8 or 26 blocks around one (the vortex, the thrown bodies,
 # whose block boundaries move: parallel.rebalance, the ball rolling on the floor), carried
-# corners (CPDI2), distributed CG. (TLS on the grid's cells, MLS and IMLS run on slabs only.)
-# With --all-blocks every other 2D and 3D case but those of the reconstruction mappings also runs
-# on 2 x 2 or 2 x 2 x 2 (not in CI; all as they must be on this machine, 2026-12-07).
+# corners (CPDI2), distributed CG, and the reconstructions that integrate the cells of a
+# process's block with the ghosts of the blocks around it (TLS with domains and positivity, MLS,
+# IMLS, TLS in 3D). With --all-blocks every other 2D and 3D case also runs on 2 x 2 or 2 x 2 x 2
+# (not in CI).
 BLOCKS = {
     "2d_vortex_bspline2_musl": [(4, "auto"), (6, "2x3")],
     "2d_vortex_cpdi2_usl": [(4, "2x2")],
     "2d_plate_consistent_cg": [(4, "2x2")],
     "2d_three_bodies_thrown": [(6, "2x3")],
     "3d_sphere_body_mesh_friction": [(8, "2x2x2")],
+    "2d_vortex_tls_neighbour_domains_usl": [(4, "2x2")],
+    "2d_vortex_mls_quadratic_musl": [(4, "2x2")],
+    "2d_vortex_imls_conservative_usl": [(4, "2x2")],
+    "3d_cube_tls": [(8, "2x2x2")],
 }
 # The block runs made a second time for the same bytes.
 BLOCKS_AGAIN = {("2d_vortex_bspline2_musl", 4)}
@@ -391,8 +398,7 @@ def layouts(name, ranks, all_blocks=False):
     # case.
     out = [(n, None) for n in counts(name, ranks)]
     blocks = BLOCKS.get(name, [])
-    if all_blocks and not blocks and name[:2] in ("2d", "3d") and not any(
-            m in name for m in ("_tls", "_mls", "_imls")):
+    if all_blocks and not blocks and name[:2] in ("2d", "3d"):
         blocks = [(4, "2x2")] if name.startswith("2d") else [(8, "2x2x2")]
     return out + list(blocks)
 
@@ -654,7 +660,7 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures, all_blo
             for c, x in diffs.items():
                 allowed.setdefault(f, {})[c] = max(allowed.get(f, {}).get(c, 0.0), x)
     report = []
-    shared_total = {}
+    shared_total, most_ghosts = {}, {}
     for n, shape in layouts(name, ranks, all_blocks):
         d = layout_dir(tmp, name, n, shape)
         label = f"-n {n}" + (f" {shape}" if shape else "")
@@ -726,10 +732,15 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures, all_blo
             if len(shared) != n:
                 failures.append(f"{name} {label}: shared DOFs per process {shared}")
             shared_total[(n, shape or "")] = sum(shared)
+            ghosts = mpi.get("ghost_particles_per_process", [])
+            if len(ghosts) != n or (any(m in name for m in ("_tls", "_mls", "_imls"))
+                                    and "triangles" not in name and sum(ghosts) == 0):
+                failures.append(f"{name} {label}: ghost particles per process {ghosts}")
+            most_ghosts[(n, shape or "")] = max(ghosts, default=0)
             moved = (f", blocks {blocks}, particles sent per process {sent}, "
                      f"final cuts {mpi.get('cuts')}, "
                      f"{mpi.get('rebalances')} re-cuts, grid windows {window} of {dofs} DOFs, "
-                     f"shared DOFs {shared}")
+                     f"shared DOFs {shared}" + (f", ghosts {ghosts}" if any(ghosts) else ""))
         if again(name, n, shape, ranks):
             # The same rank count again (another start of the program): the same bytes.
             d2 = d + "_again"
@@ -748,6 +759,14 @@ def check_case(mpm, name, config, sets, both_ways, ranks, tmp, failures, all_blo
             not shared_total[(4, "auto")] < shared_total[(4, "")]:
         failures.append(f"{name}: 2 x 2 blocks share {shared_total[(4, 'auto')]} DOFs, four "
                         f"slabs {shared_total[(4, '')]}")
+    # TLS on 2 x 2 blocks reads the particles within its reach (two cells here) of a block's
+    # box: those of the blocks around it near their shared faces, fewer than a slab's
+    # neighbouring layers across the whole body (ghosts by cell layers along the last axis
+    # would give a block the whole of the block beside it).
+    if (4, "2x2") in most_ghosts and (4, "") in most_ghosts and "_tls" in name and \
+            not most_ghosts[(4, "2x2")] < most_ghosts[(4, "")]:
+        failures.append(f"{name}: a process on 2 x 2 blocks holds up to {most_ghosts[(4, '2x2')]} "
+                        f"ghosts, on four slabs {most_ghosts[(4, '')]}")
     print(f"{name}: " + "; ".join(report))
 
 
@@ -1041,7 +1060,7 @@ def check_failure(mpm, tmp, failures):
             failures.append(f"mpm bench --messages on {n} {extra}: exit {r.returncode}, "
                             f"stderr {r.stderr!r}")
     # Not distributable (Gauss-Seidel sweeps through the whole grid; the direct factorisation of
-    # the whole consistent matrix; TLS on cells in blocks), or no decomposition of 2 processes:
+    # the whole consistent matrix), or no decomposition of 2 processes:
     # refused before the first step, naming the key.
     for k, (config, sets, expect) in enumerate([
             ("examples/plate_mms_2d.toml",
@@ -1049,9 +1068,6 @@ def check_failure(mpm, tmp, failures):
              "method.pmg_smoother"),
             ("examples/plate_ps_unstructured_2d.toml", ["time.end=1e-4"],
              "method.mass_solver"),
-            # TLS on the grid's cells integrates the cells of a process's layers: slabs only.
-            ("examples/vortex_2d.toml", ["grid.cells=16", "time.end=4e-3", "method.mapping=tls",
-                                         'parallel.blocks="2x1"'], "parallel.blocks"),
             # A process grid of another count, and no decomposition at all.
             ("examples/vortex_2d.toml", ["grid.cells=16", "time.end=4e-3",
                                          'parallel.blocks="2x2"'], "names 4 processes"),

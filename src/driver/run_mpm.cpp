@@ -562,19 +562,6 @@ MpmRun<Dim>::MpmRun(Problem<Dim>& pb, const RunSettings& settings, const std::st
     const auto counts =
         BlockPartition<Dim>::layer_counts(pb.grid, pb.particles, *comm_, /*replicated=*/false);
     part_ = BlockPartition<Dim>::cut(counts, comm_->size(), settings.parallel.blocks);
-    // The mappings that integrate cells (TLS on the grid's cells, MLS, IMLS: kCellQuadrature)
-    // integrate those of the layers along the last axis that a process's particles occupy
-    // (RunState::own_cells), which only slabs keep apart; TLS on triangles integrates a triangle
-    // on the process of its lowest particle id, whatever the shape.
-    const bool cell_quadrature = std::visit(
-        [](const auto& m) { return std::decay_t<decltype(m)>::kCellQuadrature; }, method.mapping);
-    if (!part_.slabs() && cell_quadrature && !on_triangles(method.basis))
-      throw InputError(fmt::format(
-          "{}: parallel.blocks = \"{}\" cuts {}, and method.mapping = \"{}\" integrates the "
-          "cells of the layers a process's particles occupy, which blocks side by side share; "
-          "use parallel.blocks = \"slabs\" with it (or the direct mapping)",
-          settings.parallel.blocks.where, settings.parallel.blocks.text, part_.describe(),
-          name_of(method.mapping)));
     const int me = comm_->rank();
     for (const auto& x : pb.particles.x)
       if (part_.owner(pb.grid, x, 0) != me)
@@ -705,23 +692,18 @@ RunResult MpmRun<Dim>::finish() {
     res.diag.grid_crossings = comm_->sum(res.diag.grid_crossings);
     const auto [window_first, window_end] = sim.nodes.window();
     // The DOFs this process shared with others at the last exchange of the grid sums.
-    std::vector<Index> shared;
-    if (!sim.shared.lo.empty())
-      for (int r = 0; r < comm_->size(); ++r)
-        if (r != comm_->rank())
-          sim.shared.for_each_shared(comm_->rank(), r, [&](Index i) { shared.push_back(i); });
-    std::sort(shared.begin(), shared.end());
-    shared.erase(std::unique(shared.begin(), shared.end()), shared.end());
-    const std::vector<Index> counts = comm_->allgather(std::span<const Index>(
-        std::array<Index, 5>{sim.particles.size(), migrated_, window_end - window_first,
-                             static_cast<Index>(peak_memory), static_cast<Index>(shared.size())}));
-    std::vector<Index> per_rank, sent, window, memory, shared_dofs;
-    for (std::size_t r = 0; r < counts.size(); r += 5) {
+    const std::vector<Index> shared = DofRanges::union_of(sim.shared.shared_by_peer(comm_->rank()));
+    const std::vector<Index> counts = comm_->allgather(std::span<const Index>(std::array<Index, 6>{
+        sim.particles.size(), migrated_, window_end - window_first, static_cast<Index>(peak_memory),
+        static_cast<Index>(shared.size()), sim.ghosts.last_count}));
+    std::vector<Index> per_rank, sent, window, memory, shared_dofs, ghosts;
+    for (std::size_t r = 0; r < counts.size(); r += 6) {
       per_rank.push_back(counts[r]);
       sent.push_back(counts[r + 1]);
       window.push_back(counts[r + 2]);
       memory.push_back(counts[r + 3]);
       shared_dofs.push_back(counts[r + 4]);
+      ghosts.push_back(counts[r + 5]);
     }
     peak_memory = static_cast<double>(*std::max_element(memory.begin(), memory.end()));
     nlohmann::ordered_json cuts_json = nlohmann::ordered_json::object();
@@ -743,6 +725,10 @@ RunResult MpmRun<Dim>::finish() {
                 // The DOFs each shared with other processes at the last exchange of the grid
                 // sums (DofRanges: a slab's two sides; a block's faces, edges and corners).
                 {"shared_dofs_per_process", shared_dofs},
+                // The other processes' particles each held as ghosts at its last exchange of
+                // them (a reconstruction's sums, DDMPM's node volumes; 0 without one): those
+                // within the reach of the box of its particles' cells (append_ghosts).
+                {"ghost_particles_per_process", ghosts},
                 {"peak_memory_bytes_per_process", memory}};
   }
   res.wall_seconds = seconds_since(t_start_);

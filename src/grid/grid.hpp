@@ -13,6 +13,42 @@
 
 namespace mpm {
 
+// A box of a grid's cells, [lo[d], hi[d]) along each direction d, in the grid's linear numbering
+// (x fastest) of `cells` per direction. A process of a distributed run integrates the elements
+// of one (RunState::own_cells).
+template <int Dim>
+struct CellBox {
+  IVec<Dim> cells{};  // the grid's cells per direction
+  IVec<Dim> lo{}, hi{};
+
+  bool empty() const {
+    for (int d = 0; d < Dim; ++d)
+      if (hi[d] <= lo[d]) return true;
+    return false;
+  }
+  // [first, end) of the linear numbering from the box's first cell to its last: its cells, and
+  // between its rows others (holds tells them apart). {0, 0} when empty.
+  std::array<Index, 2> span() const {
+    if (empty()) return {0, 0};
+    Index first = 0, last = 0, stride = 1;
+    for (int d = 0; d < Dim; ++d) {
+      first += lo[d] * stride;
+      last += (hi[d] - 1) * stride;
+      stride *= cells[d];
+    }
+    return {first, last + 1};
+  }
+  // Whether cell e (linear index) lies in the box.
+  bool holds(Index e) const {
+    for (int d = 0; d < Dim; ++d) {
+      const Index c = e % cells[d];
+      if (c < lo[d] || c >= hi[d]) return false;
+      e /= cells[d];
+    }
+    return true;
+  }
+};
+
 template <int Dim>
 struct Grid {
   static constexpr int kDim = Dim;
@@ -38,6 +74,23 @@ struct Grid {
     return n;
   }
   double cell_volume() const { return h.prod(); }
+  // Every cell of the grid as a box.
+  CellBox<Dim> all_cells() const {
+    CellBox<Dim> b;
+    b.cells = cells;
+    b.lo.fill(0);
+    b.hi = cells;
+    return b;
+  }
+  // The integer coordinates of cell e (linear index, x fastest).
+  IVec<Dim> cell_coords(Index e) const {
+    IVec<Dim> c;
+    for (int d = 0; d < Dim; ++d) {
+      c[d] = e % cells[d];
+      e /= cells[d];
+    }
+    return c;
+  }
 
   // Cell containing x along direction d; a point on the upper boundary belongs to the last cell.
   // Returns -1 or cells[d] when x lies outside (callers check with inside()).
@@ -94,11 +147,7 @@ struct Grid {
   }
   // The 2^Dim vertices of cell c, lexicographic with x fastest (lower-left first).
   std::array<Index, kCellVertices> cell_vertices(Index c) const {
-    IVec<Dim> ci;
-    for (int d = 0; d < Dim; ++d) {
-      ci[d] = c % cells[d];
-      c /= cells[d];
-    }
+    const IVec<Dim> ci = cell_coords(c);
     std::array<Index, kCellVertices> out{};
     for (int k = 0; k < kCellVertices; ++k) {
       Index v = 0, stride = 1;

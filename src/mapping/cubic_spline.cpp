@@ -221,7 +221,7 @@ void CubicSplineMapping::fit_mass(const RunState<1>& sim, GaussPoints<1>& q) {
   }
   const std::size_t n = rule_.xi.size();
   // A process of a distributed run integrates its own elements (the spline reads all particles).
-  const std::array<Index, 2> own = sim.own_cells();
+  const std::array<Index, 2> own = sim.own_cells().span();  // one dimension: the box is its span
   for (Index e = own[0]; e < own[1]; ++e) {
     if (bins_.count(e) == 0) continue;
     const double lo_e = grid.origin[0] + static_cast<double>(e) * grid.h[0];

@@ -10,7 +10,7 @@
 //                  checkpoints as the bytes the mapping writes of itself
 //   kGhostParticles ghost_reach(sim): the mapping reads the particles of neighbouring cells
 //                  (TLS). A distributed run gives it, for each sum, copies of the other
-//                  processes' particles within ghost_reach(sim) cell layers of its own
+//                  processes' particles within ghost_reach(sim) cells (along every axis) of its own
 //                  (stages::GhostParticles), and the mapping integrates only the elements of
 //                  RunState::own_cells(), so that each element is integrated once.
 //   kStrainRates   strain_rates(sim): the mapping may define the particles' velocity

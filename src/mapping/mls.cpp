@@ -432,15 +432,14 @@ void MlsFamilyMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   const int per_element = ipow(n, Dim);
   const Vec<Dim> half = 0.5 * grid.h;
   // A process of a distributed run integrates its own elements (the fits read the ghosts too).
-  const std::array<Index, 2> own = sim.own_cells();
-  for (Index e = own[0]; e < own[1]; ++e) {
-    if (mls.bins().count(e) == 0) continue;
+  const CellBox<Dim> own = sim.own_cells();
+  const std::array<Index, 2> span = own.span();
+  for (Index e = span[0]; e < span[1]; ++e) {
+    if (mls.bins().count(e) == 0 || !own.holds(e)) continue;
+    const IVec<Dim> cell = grid.cell_coords(e);
     Vec<Dim> centre;
-    Index rem = e;
-    for (int d = 0; d < Dim; ++d) {
-      centre[d] = grid.origin[d] + (static_cast<double>(rem % grid.cells[d]) + 0.5) * grid.h[d];
-      rem /= grid.cells[d];
-    }
+    for (int d = 0; d < Dim; ++d)
+      centre[d] = grid.origin[d] + (static_cast<double>(cell[d]) + 0.5) * grid.h[d];
     for (int k = 0; k < per_element; ++k) {
       Vec<Dim> xg;
       double wg = 1.0;

@@ -877,15 +877,15 @@ void BasicTlsReconstruction<Dim>::build_systems() {
   // The report over the elements of set_focus: partial reports of fixed chunks of elements in
   // parallel, combined in chunk order by accumulate (counts, extremes and the first failed element,
   // the lowest index: the same for any thread count; a serial pass was 1 % of a step).
-  const Index lo = std::max<Index>(0, focus_[0]),
-              span = std::max<Index>(std::min(ne, focus_[1]) - lo, 0);
+  const std::array<Index, 2> range = focus_ ? focus_->span() : std::array<Index, 2>{0, ne};
+  const Index lo = range[0], span = range[1] - range[0];
   std::array<TlsReport, ParticleChunks::kMax> part;
   for_each_chunk(span, [&](int c, Index b, Index end) {
     TlsReport& r = part[static_cast<std::size_t>(c)];
     r = TlsReport{};
     for (Index e = lo + b; e < lo + end; ++e) {
       const TlsElementInfo& info = info_[static_cast<std::size_t>(e)];
-      if (info.points == 0) continue;
+      if (info.points == 0 || (focus_ && !focus_->holds(e))) continue;
       ++r.active;
       if (info.failed) {
         if (r.failed++ == 0) {

@@ -274,10 +274,10 @@ class BasicTlsReconstruction {
   // equally near points (neighbour completion) are broken by particle id, not by index, so that
   // the order of the particles in memory (re-sorting, processes) does not change the fits.
   const TlsReport& set_points(const Grid<Dim>& g, const Particles<Dim>& P);
-  // The elements [first, end) the report counts (default: all): a process of a distributed run
-  // reports only the elements it integrates (RunState::own_cells); every element with points is
-  // still fitted, as the completions of those elements read their neighbours.
-  void set_focus(Index first, Index end) { focus_ = {first, end}; }
+  // The elements the report counts (default: all): a process of a distributed run reports only
+  // the elements it integrates (RunState::own_cells); every element with points is still fitted,
+  // as the completions of those elements read their neighbours.
+  void set_focus(const CellBox<Dim>& own) { focus_ = own; }
 
   // f: one value per point of set_points. integrals: c_e per element; a_1 = c_e / |Omega_e|
   // (D eq. 5.9) whatever the data, which (own and completion points alike) fit a_2.. only, so
@@ -464,7 +464,7 @@ class BasicTlsReconstruction {
   std::vector<Vec<Dim>> x_;  // positions of the current point set [m]
   // The order of the points for ties (particle ids; empty: their indices).
   std::vector<CompactIndex> key_;
-  std::array<Index, 2> focus_{0, std::numeric_limits<Index>::max()};
+  std::optional<CellBox<Dim>> focus_;  // none: every element
   ElementBins<Dim> bins_;
   std::vector<Own> own_;
   std::vector<System> systems_;
@@ -492,7 +492,9 @@ struct TlsMappingState {
   std::vector<Vec<Dim>> xi;            // Gauss points in [-1, 1]^Dim
   std::vector<Vec<Dim>> w;             // their 1D weights per direction (product: the weight)
   std::vector<TaylorVector<Dim>> psi;  // Taylor basis at xi
-  std::vector<Index> gauss_first;      // per element of the last fit_mass's range: its first point
+  // Per element of the last fit_mass's range (the span of RunState::own_cells): its first Gauss
+  // point, -1 for none (an element without particles or outside the box).
+  std::vector<Index> gauss_first;
   std::array<Index, 2> gauss_range{0, 0};  // that range of elements [first, end)
   BasicTlsCoefficients<Dim> coef;
   // The fields fitted together (TlsMapping::fit_momentum, fit_forces): at most the stress
@@ -608,14 +610,15 @@ class TlsMapping {
     if (!st) throw std::logic_error(fmt::format("TlsMapping: no {}D reconstruction yet", Dim));
     return st->recon;
   }
-  // The cell layers of the other processes' particles this mapping reads in a distributed run
-  // (MappingFor's kGhostParticles), for this process's particles: 1, as the completions and the
-  // free-surface test look one element across; with domain_integrals at least 2 ceil(r), r the
-  // largest half-side of a particle's box in cells along the last axis (a particle that far
-  // reaches this process's elements, and its fractions depend on the elements its box overlaps,
-  // as far again). tls_mapping.cpp.
-  // On triangles: every particle of a triangle that holds one of this process's, the most cell
-  // layers a triangle spans (1 on the grid's triangles; a mesh from a file may have larger ones).
+  // The cells around this process's elements whose particles (of the other processes) this
+  // mapping reads in a distributed run (MappingFor's kGhostParticles), along every axis: 1, as
+  // the completions and the free-surface test look one element across; with domain_integrals
+  // at least 2 ceil(r), r the largest half-side of a particle's box in cells along any axis (a
+  // particle that far reaches this process's elements, and its fractions depend on the
+  // elements its box overlaps, as far again). tls_mapping.cpp.
+  // On triangles: every particle of a triangle that holds one of this process's, the most cells
+  // a triangle spans along an axis (1 on the grid's triangles; a mesh from a file may have
+  // larger ones).
   template <class Sim>
   double ghost_reach(const Sim& sim) const {
     if constexpr (Sim::BasisT::kTriangleMesh)
@@ -848,8 +851,10 @@ class TlsMapping {
   template <int Dim, class Store>
   static void gauss_points_of(const TlsMappingState<Dim>& st, Index e, Store&& store) {
     const Index k0 = e - st.gauss_range[0];
-    if (k0 < 0 || e >= st.gauss_range[1] || !st.recon.active(e)) return;
-    const auto g0 = static_cast<std::size_t>(st.gauss_first[static_cast<std::size_t>(k0)]);
+    if (k0 < 0 || e >= st.gauss_range[1]) return;
+    const Index first = st.gauss_first[static_cast<std::size_t>(k0)];
+    if (first < 0) return;
+    const auto g0 = static_cast<std::size_t>(first);
     for (std::size_t k = 0; k < st.psi.size(); ++k) store(g0 + k, k);
   }
 
@@ -866,8 +871,7 @@ class TlsMapping {
   template <int Dim>
   void flag_element(TlsMappingState<Dim>& st, Index e) const;
   template <int Dim>
-  std::array<Index, 2> count_flags(const TlsMappingState<Dim>& st,
-                                   const std::array<Index, 2>& own) const;
+  std::array<Index, 2> count_flags(const TlsMappingState<Dim>& st, const CellBox<Dim>& own) const;
   template <int Dim>
   double reach(const RunState<Dim>& sim) const;
   // reach's value for the step reach_step_ (-1: none yet): one reach for all the ghost exchanges

@@ -58,9 +58,11 @@ void TlsMapping::flag_element(TlsMappingState<Dim>& st, Index e) const {
 
 template <int Dim>
 std::array<Index, 2> TlsMapping::count_flags(const TlsMappingState<Dim>& st,
-                                             const std::array<Index, 2>& own) const {
+                                             const CellBox<Dim>& own) const {
   std::array<Index, 2> flagged{0, 0};
-  for (Index e = own[0]; e < own[1]; ++e) {
+  const std::array<Index, 2> span = own.span();
+  for (Index e = span[0]; e < span[1]; ++e) {
+    if (!own.holds(e)) continue;
     if (settings_.surface_volume) flagged[0] += st.surface[static_cast<std::size_t>(e)];
     if (settings_.positivity) flagged[1] += st.theta[static_cast<std::size_t>(e)] < 1.0;
   }
@@ -76,11 +78,12 @@ double TlsMapping::reach(const RunState<Dim>& sim) const {
   // points as binned, so the ghosts must be the same particles in the same order.
   if (reach_step_ == sim.step) return reach_;
   const auto& g = sim.grid;
-  double r = 0.0;  // the largest half-side in cells along the last axis
-  for (Index p = 0; p < sim.own_particles(); ++p) {
-    const double half = 0.5 * cpgimp_side(g, sim.particles, p, Dim - 1) / g.h[Dim - 1];
-    if (std::isfinite(half)) r = std::max(r, half);
-  }
+  double r = 0.0;  // the largest half-side in cells along any axis
+  for (Index p = 0; p < sim.own_particles(); ++p)
+    for (int d = 0; d < Dim; ++d) {
+      const double half = 0.5 * cpgimp_side(g, sim.particles, p, d) / g.h[d];
+      if (std::isfinite(half)) r = std::max(r, half);
+    }
   reach_step_ = sim.step;
   reach_ = std::max(1.0, 2.0 * std::ceil(r));
   return reach_;
@@ -228,8 +231,8 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   const auto& P = sim.particles;
   // In a distributed run this process reconstructs with the ghost particles but integrates, and
   // reports, only its own elements; the reports of all processes are combined.
-  const std::array<Index, 2> own = sim.own_cells();
-  st.recon.set_focus(own[0], own[1]);
+  const CellBox<Dim> own = sim.own_cells();
+  st.recon.set_focus(own);
   TlsReport rep = st.recon.set_points(sim.grid, P);
   if (sim.comm) rep = over_ranks(*sim.comm, rep);
   accumulate(totals_, rep);
@@ -243,17 +246,20 @@ void TlsMapping::fit_mass(RunState<Dim>& sim, GaussPoints<Dim>& q) {
   const Vec<Dim> hw = st.recon.half_width_vec();
   const std::size_t nk = st.xi.size();
   std::vector<Index>& first = st.gauss_first;
-  first.resize(static_cast<std::size_t>(std::max<Index>(own[1] - own[0], 0)));
+  const std::array<Index, 2> span = own.span();
+  first.resize(static_cast<std::size_t>(span[1] - span[0]));
   std::size_t points = 0;
-  for (Index e = own[0]; e < own[1]; ++e) {
-    first[static_cast<std::size_t>(e - own[0])] = static_cast<Index>(points);
-    if (st.recon.active(e)) points += nk;  // no particles: no reconstruction, no mass
+  for (Index e = span[0]; e < span[1]; ++e) {
+    // No particles: no reconstruction, no mass; outside the box: another process's element.
+    const bool integrated = own.holds(e) && st.recon.active(e);
+    first[static_cast<std::size_t>(e - span[0])] = integrated ? static_cast<Index>(points) : -1;
+    if (integrated) points += nk;
   }
   q.resize(points);
-  st.gauss_range = own;
+  st.gauss_range = span;
   parallel_for(static_cast<Index>(first.size()), [&](Index k0) {
-    const Index e = own[0] + k0;
-    if (!st.recon.active(e)) return;
+    const Index e = span[0] + k0;
+    if (first[static_cast<std::size_t>(k0)] < 0) return;
     const Vec<Dim> c = st.recon.centre_vec(e);
     const auto g0 = static_cast<std::size_t>(first[static_cast<std::size_t>(k0)]);
     for (std::size_t k = 0; k < nk; ++k) {
@@ -493,11 +499,11 @@ template void TlsMapping::flag_element<1>(TlsMappingState<1>&, Index) const;
 template void TlsMapping::flag_element<2>(TlsMappingState<2>&, Index) const;
 template void TlsMapping::flag_element<3>(TlsMappingState<3>&, Index) const;
 template std::array<Index, 2> TlsMapping::count_flags<1>(const TlsMappingState<1>&,
-                                                         const std::array<Index, 2>&) const;
+                                                         const CellBox<1>&) const;
 template std::array<Index, 2> TlsMapping::count_flags<2>(const TlsMappingState<2>&,
-                                                         const std::array<Index, 2>&) const;
+                                                         const CellBox<2>&) const;
 template std::array<Index, 2> TlsMapping::count_flags<3>(const TlsMappingState<3>&,
-                                                         const std::array<Index, 2>&) const;
+                                                         const CellBox<3>&) const;
 template double TlsMapping::reach<1>(const RunState<1>&) const;
 template double TlsMapping::reach<2>(const RunState<2>&) const;
 template double TlsMapping::reach<3>(const RunState<3>&) const;

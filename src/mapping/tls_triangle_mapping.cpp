@@ -156,23 +156,24 @@ void triangle_at_gauss(const TlsTriangleMappingState& st, const GaussPoints<2>& 
 }
 }  // namespace
 
-// A particle in a triangle lies in a cell layer (along y, Grid::cell_of) between those of the
-// triangle's lowest and highest corners, so a process whose particle is in it reaches every other
-// particle of it within that many layers: the ghost reach that gives it every particle of the
-// triangles its own are in (1 on the grid's triangles, whose top corners lie on the next grid line;
-// a mesh from a file may have triangles across more layers).
+// A particle in a triangle lies in a cell (Grid::cell_of) between those of the triangle's corners
+// along each axis, so a process whose particle is in it reaches every other particle of it
+// within that many cells: the ghost reach that gives it every particle of the triangles its own
+// are in (1 on the grid's triangles, whose corners lie on the next grid lines; a mesh from a
+// file may have triangles across more cells).
 double TlsMapping::triangle_reach(const TriangleMesh& mesh, const Grid<2>& grid) const {
   if (triangle_reach_mesh_ == &mesh) return triangle_reach_;
   Index layers = 1;
-  for (Index c = 0; c < mesh.num_cells(); ++c) {
-    Index lo = std::numeric_limits<Index>::max(), hi = std::numeric_limits<Index>::min();
-    for (const Index v : mesh.cell_vertices(c)) {
-      const Index layer = grid.cell_of(mesh.vertex(v)[1], 1);
-      lo = std::min(lo, layer);
-      hi = std::max(hi, layer);
+  for (Index c = 0; c < mesh.num_cells(); ++c)
+    for (int d = 0; d < 2; ++d) {
+      Index lo = std::numeric_limits<Index>::max(), hi = std::numeric_limits<Index>::min();
+      for (const Index v : mesh.cell_vertices(c)) {
+        const Index layer = grid.cell_of(mesh.vertex(v)[d], d);
+        lo = std::min(lo, layer);
+        hi = std::max(hi, layer);
+      }
+      layers = std::max(layers, hi - lo);
     }
-    layers = std::max(layers, hi - lo);
-  }
   triangle_reach_mesh_ = &mesh;
   triangle_reach_ = static_cast<double>(layers);
   return triangle_reach_;

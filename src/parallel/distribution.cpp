@@ -143,7 +143,8 @@ template <int Dim>
 std::vector<int> BlockPartition<Dim>::neighbours(int rank) const {
   const IVec<Dim> c = coords(rank);
   std::vector<int> out;
-  // Every offset in {-1, 0, 1}^Dim, x fastest: the ranks come out ascending.
+  // Every offset in {-1, 0, 1}^Dim, x fastest (the last axis slowest, as in the ranks'
+  // numbering): the ranks come out ascending.
   int offsets = 1;
   for (int d = 0; d < Dim; ++d) offsets *= 3;
   for (int o = 0; o < offsets; ++o) {
@@ -156,7 +157,6 @@ std::vector<int> BlockPartition<Dim>::neighbours(int rank) const {
     }
     if (inside && n != c) out.push_back(rank_at(n));
   }
-  std::sort(out.begin(), out.end());
   return out;
 }
 
@@ -406,48 +406,65 @@ template <int Dim>
 void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
   comm.check();
   remove_ghosts(sim);
-  constexpr int kAxis = Dim - 1;
   auto& P = sim.particles;
   const auto n = static_cast<std::size_t>(P.size());
-  const Index top = sim.grid.cells[kAxis] - 1;
-  std::vector<Index> layer(n);
-  Index lo = std::numeric_limits<Index>::max(), hi = -1;
-  for (std::size_t i = 0; i < n; ++i) {
-    // (A particle outside the grid has stopped the run at the basis evaluation before this.)
-    layer[i] = std::clamp(sim.grid.cell_of(P.x[i][kAxis], kAxis), Index{0}, top);
-    lo = std::min(lo, layer[i]);
-    hi = std::max(hi, layer[i]);
+  const auto& cells = sim.grid.cells;
+  std::vector<IVec<Dim>> cell(n);
+  CellBox<Dim>& box = sim.ghosts.cells;
+  box.cells = cells;
+  box.lo = cells;
+  box.hi.fill(0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < Dim; ++d) {
+      // (A particle outside the grid has stopped the run at the basis evaluation before this.)
+      const Index c = std::clamp(sim.grid.cell_of(P.x[i][d], d), Index{0}, cells[d] - 1);
+      cell[i][d] = c;
+      box.lo[d] = std::min(box.lo[d], c);
+      box.hi[d] = std::max(box.hi[d], c + 1);
+    }
+  // Each process's box and reach in one all-gather (cell indices are exact as doubles).
+  constexpr std::size_t w = 2 * Dim + 1;
+  std::array<double, w> mine{};
+  for (int d = 0; d < Dim; ++d) {
+    mine[2 * static_cast<std::size_t>(d)] = static_cast<double>(box.lo[d]);
+    mine[2 * static_cast<std::size_t>(d) + 1] = static_cast<double>(box.hi[d]);
   }
-  sim.ghosts.layers = {lo, hi};
-  // Each process's layers and reach in one all-gather (layer indices are exact as doubles).
-  const std::array<double, 3> mine{static_cast<double>(lo), static_cast<double>(hi), reach};
-  const std::vector<double> gathered = comm.allgather(std::span<const double>(mine));
-  std::vector<Index> all;
+  mine[w - 1] = reach;
+  const std::vector<double> all = comm.allgather(std::span<const double>(mine));
   double most = 0.0;
-  for (std::size_t k = 0; k < gathered.size(); k += 3) {
-    all.push_back(static_cast<Index>(gathered[k]));
-    all.push_back(static_cast<Index>(gathered[k + 1]));
-    most = std::max(most, gathered[k + 2]);
-  }
+  for (std::size_t k = w - 1; k < all.size(); k += w) most = std::max(most, all[k]);
   const auto layers = static_cast<Index>(std::ceil(most));
   const int me = comm.rank();
   auto& gh = sim.ghosts;
   std::vector<int>& peers = gh.peers;
   std::vector<std::vector<std::byte>> send;
-  if (lo <= hi)
+  if (!box.empty())
     for (int r = 0; r < comm.size(); ++r) {
-      const Index rlo = all[2 * static_cast<std::size_t>(r)],
-                  rhi = all[2 * static_cast<std::size_t>(r) + 1];
-      // The gap between the two processes' layers (1: adjacent), the same seen from either.
-      if (r == me || rlo > rhi || std::max(rlo - hi, lo - rhi) > layers) continue;
+      // Rank r's box widened by `layers` cells in every direction: the cells whose particles
+      // its fits may read. r takes part when its box is not empty and the widened box meets
+      // this one's (the gap between the boxes at most `layers` along every axis, the same seen
+      // from either side).
+      IVec<Dim> lo{}, hi{};
+      bool near = r != me;
+      for (int d = 0; d < Dim && near; ++d) {
+        const std::size_t k = w * static_cast<std::size_t>(r) + 2 * static_cast<std::size_t>(d);
+        const auto rlo = static_cast<Index>(all[k]), rhi = static_cast<Index>(all[k + 1]);
+        lo[d] = rlo - layers;
+        hi[d] = rhi + layers;
+        near = rlo < rhi && lo[d] < box.hi[d] && box.lo[d] < hi[d];
+      }
+      if (!near) continue;
       peers.push_back(r);
       auto& out = send.emplace_back();
       auto& sent = gh.sent.emplace_back();
-      for (std::size_t i = 0; i < n; ++i)
-        if (layer[i] >= rlo - layers && layer[i] <= rhi + layers) {
+      for (std::size_t i = 0; i < n; ++i) {
+        bool inside = true;
+        for (int d = 0; d < Dim; ++d) inside = inside && cell[i][d] >= lo[d] && cell[i][d] < hi[d];
+        if (inside) {
           P.pack(i, out);
           sent.push_back(static_cast<Index>(i));
         }
+      }
     }
   const auto recv = comm.exchange(peers, send, 400);
   gh.owned = static_cast<Index>(n);
@@ -456,6 +473,7 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
     P.unpack_append(buf);
     gh.received.push_back(P.size() - before);
   }
+  gh.last_count = P.size() - gh.owned;
 }
 
 template <int Dim>

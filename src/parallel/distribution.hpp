@@ -120,13 +120,12 @@ template <int Dim>
 Index migrate(RunState<Dim>& sim, const BlockPartition<Dim>& part, const Comm& comm);
 
 // Ghost particles (RunState::ghosts) for a mapping that reads the particles of neighbouring
-// cells: appends to sim.particles copies of the other processes' particles whose cell layer
-// (along the last axis) lies within L layers of those this process's particles occupy, L the
-// largest `reach` of any process rounded up, in rank order and, from one rank, in its particle
-// order; sets sim.ghosts. Only processes whose particles lie within L of each other exchange (a
-// symmetric relation, so each pair agrees). Collective; starts with comm.check(). With blocks
-// the processes side by side along the other axes share their layers, so each receives all of
-// its neighbours' particles in those layers: every ghost the mapping reads, and more.
+// cells: appends to sim.particles copies of the other processes' particles whose cell lies
+// within L cells, along every axis, of the box of cells this process's particles occupy
+// (ghosts.cells, RunState::own_cells), L the largest `reach` of any process rounded up, in rank
+// order and, from one rank, in its particle order; sets sim.ghosts. Only processes whose boxes
+// lie within L of each other exchange (a symmetric relation, so each pair agrees): two slabs
+// and, with blocks, the up to 3^Dim - 1 blocks around one. Collective; starts with comm.check().
 template <int Dim>
 void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach);
 // Drops the ghost copies again (nothing when none are appended).

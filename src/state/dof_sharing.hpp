@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstring>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/comm.hpp"
@@ -90,6 +91,28 @@ struct DofRanges {
         for (Index i = i0; i <= i1; ++i) f(i);
       }
   }
+  // The DOFs `rank` shares with each other rank that shares any: (peer, its DOFs ascending),
+  // peers ascending.
+  std::vector<std::pair<int, std::vector<Index>>> shared_by_peer(int rank) const {
+    std::vector<std::pair<int, std::vector<Index>>> out;
+    for (int r = 0; r < static_cast<int>(lo.size()); ++r) {
+      if (r == rank) continue;
+      std::vector<Index> dofs;
+      for_each_shared(rank, r, [&](Index i) { dofs.push_back(i); });
+      if (!dofs.empty()) out.emplace_back(r, std::move(dofs));
+    }
+    return out;
+  }
+  // Every DOF of `by_peer` (shared_by_peer) once, ascending: with slabs a segment at each end of
+  // a range; with blocks a box's faces, edges and corners.
+  static std::vector<Index> union_of(
+      const std::vector<std::pair<int, std::vector<Index>>>& by_peer) {
+    std::vector<Index> all;
+    for (const auto& [r, dofs] : by_peer) all.insert(all.end(), dofs.begin(), dofs.end());
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    return all;
+  }
   // Every rank's range from its own (collective): `mine` = {lo, hi}.
   static DofRanges gather(const Comm& comm, std::array<Index, 2> mine) {
     return gather(comm, mine, {}, {}, {});
@@ -131,42 +154,28 @@ struct DofRanges {
 template <class Values>
 void sum_over_sharing_ranks(const Comm& comm, const DofRanges& sh, std::size_t width, int tag,
                             Values&& values) {
-  const int me = comm.rank();
-  // The values of the functions both this rank and rank r hold, as doubles, `width` per
-  // function, in DOF order (the same order on both sides).
-  const auto pack = [&](int r) {
-    std::size_t n = 0;
-    sh.for_each_shared(me, r, [&](Index) { ++n; });
-    std::vector<std::byte> out(n * width * sizeof(double));
+  // The functions this rank and each peer both hold, in DOF order (the same order on both
+  // sides); their values travel as doubles, `width` per function.
+  const auto by_peer = sh.shared_by_peer(comm.rank());
+  std::vector<int> peers;
+  std::vector<std::vector<std::byte>> send;
+  for (const auto& [r, dofs] : by_peer) {
+    peers.push_back(r);
+    auto& out = send.emplace_back(dofs.size() * width * sizeof(double));
     std::byte* v = out.data();
-    sh.for_each_shared(me, r, [&](Index i) {
+    for (const Index i : dofs)
       values(i, [&](double& x) {
         std::memcpy(v, &x, sizeof(double));
         v += sizeof(double);
       });
-    });
-    return out;
-  };
-  std::vector<int> peers;
-  std::vector<std::vector<std::byte>> send;
-  for (int r = 0; r < comm.size(); ++r) {
-    if (r == me) continue;
-    auto buf = pack(r);
-    if (buf.empty()) continue;
-    peers.push_back(r);
-    send.push_back(std::move(buf));
   }
   const auto recv = comm.exchange(peers, send, tag);
   if (peers.empty()) return;
   // Only the functions some other rank holds take the sum in rank order: the union of what this
-  // rank shares with each peer (with slabs, a segment at each end of its range; with blocks,
-  // its box's faces, edges and corners). A function no other rank holds keeps its value, which
-  // is its sum (packing, zeroing and adding the whole range would copy it per exchange, and
-  // 0 + x would turn a -0 into +0).
-  std::vector<Index> both;
-  for (int r : peers) sh.for_each_shared(me, r, [&](Index i) { both.push_back(i); });
-  std::sort(both.begin(), both.end());
-  both.erase(std::unique(both.begin(), both.end()), both.end());
+  // rank shares with each peer. A function no other rank holds keeps its value, which is its sum
+  // (packing, zeroing and adding the whole range would copy it per exchange, and 0 + x would
+  // turn a -0 into +0).
+  const std::vector<Index> both = DofRanges::union_of(by_peer);
   std::vector<double> own;
   own.reserve(both.size() * width);
   for (const Index i : both)
@@ -174,24 +183,25 @@ void sum_over_sharing_ranks(const Comm& comm, const DofRanges& sh, std::size_t w
       own.push_back(x);
       x = 0.0;
     });
-  std::size_t next = 0;
-  for (int r = 0; r < comm.size(); ++r) {
-    if (r == me) {
-      const double* v = own.data();
-      for (const Index i : both) values(i, [&](double& x) { x += *v++; });
-      continue;
-    }
-    if (next >= peers.size() || peers[next] != r) continue;
-    const std::byte* v = recv[next++].data();
-    sh.for_each_shared(me, r, [&](Index i) {
+  const int me = comm.rank();
+  bool own_added = false;
+  const auto add_own = [&] {
+    const double* v = own.data();
+    for (const Index i : both) values(i, [&](double& x) { x += *v++; });
+    own_added = true;
+  };
+  for (std::size_t k = 0; k < by_peer.size(); ++k) {
+    if (!own_added && by_peer[k].first > me) add_own();
+    const std::byte* v = recv[k].data();
+    for (const Index i : by_peer[k].second)
       values(i, [&](double& x) {
         double y;
         std::memcpy(&y, v, sizeof(double));
         v += sizeof(double);
         x += y;
       });
-    });
   }
+  if (!own_added) add_own();
 }
 
 }  // namespace mpm

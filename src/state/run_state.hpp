@@ -167,17 +167,19 @@ struct DistributedState {
   // (MappingFor's kGhostParticles: TLS) sees, during each of its particle-to-grid sums, copies of
   // the other processes' particles within a few cell layers of this process's own, appended
   // after them (stages::GhostParticles); `owned` is then this process's particle count (-1: no
-  // ghosts appended). `layers`: the cell layers [lo, hi] along the last axis that this process's
-  // particles occupy at the last exchange (no other process has particles there).
+  // ghosts appended). `cells`: the box of the cells this process's particles occupy at the last
+  // exchange (inside its block, where no other process has particles: migration follows every
+  // step).
   // `peers`, `sent` and `received` (per peer, in rank order): which of this process's particles
   // went to each, and how many ghosts came from each (appended in that order), for sums a
   // mapping makes at the ghosts that belong to their owners (add_ghost_values_to_owners).
   struct Ghosts {
     Index owned = -1;
-    std::array<Index, 2> layers{0, -1};
+    CellBox<Dim> cells;
     std::vector<int> peers;
     std::vector<std::vector<Index>> sent;
     std::vector<Index> received;
+    Index last_count = 0;  // the ghosts appended at the last exchange (summary.json "mpi")
   } ghosts;
   // Per-particle state of the basis that travels with the particles between processes (CPDI2's
   // tracked corners): `carried_width` doubles per particle in particle order, filled by the
@@ -231,15 +233,12 @@ struct RunState : ModelState<Dim>, SolveState<Dim>, DistributedState<Dim> {
   Index own_particles() const {
     return this->ghosts.owned >= 0 ? this->ghosts.owned : this->particles.size();
   }
-  // [first, end) of the cells whose elements this process integrates: all of them on one
-  // process; in a distributed run those of the layers its particles occupy (ghosts.layers), so
-  // that each element is integrated by exactly one process.
-  std::array<Index, 2> own_cells() const {
-    if (this->comm == nullptr) return {0, this->grid.num_cells()};
-    const Index per_layer = this->grid.num_cells() / this->grid.cells[Dim - 1];
-    const auto& l = this->ghosts.layers;
-    if (l[0] > l[1]) return {0, 0};
-    return {l[0] * per_layer, (l[1] + 1) * per_layer};
+  // The cells whose elements this process integrates: all of them on one process; in a
+  // distributed run the box of those its particles occupy (ghosts.cells), so that each element
+  // is integrated by exactly one process, on slabs and on blocks.
+  CellBox<Dim> own_cells() const {
+    if (this->comm == nullptr) return this->grid.all_cells();
+    return this->ghosts.cells;
   }
 };
 

@@ -62,6 +62,37 @@ TEST(Mesh, GridBoundaryVertexSetsByName) {
   EXPECT_EQ(g1.boundary_vertices("x-"), std::vector<Index>{0});
 }
 
+// A box of cells (the elements a process of a distributed run integrates): its span of the
+// linear numbering runs from its first cell to its last, and holds picks its cells out of it,
+// against the cells' coordinates one by one.
+TEST(Mesh, GridCellBoxSpanHoldsItsCellsAlone) {
+  const Grid<3> g(Vec<3>(0.0, 0.0, 0.0), Vec<3>(4.0, 3.0, 5.0), IVec<3>{4, 3, 5});
+  CellBox<3> box = g.all_cells();
+  box.lo = {1, 0, 2};
+  box.hi = {3, 2, 4};
+  const auto span = box.span();
+  EXPECT_EQ(span[0], g.cell_index(IVec<3>{1, 0, 2}));
+  EXPECT_EQ(span[1], g.cell_index(IVec<3>{2, 1, 3}) + 1);
+  Index held = 0;
+  for (Index e = 0; e < g.num_cells(); ++e) {
+    const IVec<3> c = g.cell_coords(e);
+    EXPECT_EQ(g.cell_index(c), e);
+    const bool inside = c[0] >= 1 && c[0] < 3 && c[1] < 2 && c[2] >= 2 && c[2] < 4;
+    EXPECT_EQ(box.holds(e), inside) << e;
+    if (inside) {
+      EXPECT_GE(e, span[0]);
+      EXPECT_LT(e, span[1]);
+    }
+    held += inside;
+  }
+  EXPECT_EQ(held, 8);
+  EXPECT_FALSE(box.empty());
+  EXPECT_EQ(g.all_cells().span(), (std::array<Index, 2>{0, g.num_cells()}));
+  box.hi[1] = 0;  // no cells along y
+  EXPECT_TRUE(box.empty());
+  EXPECT_EQ(box.span(), (std::array<Index, 2>{0, 0}));
+}
+
 }  // namespace
 }  // namespace MPM_UNITY_ID
 }  // namespace mpm

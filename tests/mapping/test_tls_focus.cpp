@@ -7,6 +7,7 @@
 #include <array>
 #include <vector>
 
+#include "grid/grid.hpp"
 #include "mapping/tls.hpp"
 
 namespace mpm {
@@ -81,7 +82,10 @@ TEST(TlsReconstruction, ReportsOnlyTheElementsOfItsFocus) {
   Index active = 0, neighbours = 0;
   for (const std::array<Index, 2> focus : {std::array<Index, 2>{0, 1}, {1, 3}}) {
     TlsReconstruction part(neighbour_settings());
-    part.set_focus(focus[0], focus[1]);
+    CellBox<1> box = L.grid.all_cells();
+    box.lo[0] = focus[0];
+    box.hi[0] = focus[1];
+    part.set_focus(box);
     const TlsReport& rep = part.set_points(L.grid, P);
     EXPECT_EQ(rep.active, focus[1] - focus[0]);
     active += rep.active;
@@ -92,6 +96,39 @@ TEST(TlsReconstruction, ReportsOnlyTheElementsOfItsFocus) {
   EXPECT_EQ(neighbours, whole.with_neighbours);
   // On one process the combination is the report itself.
   EXPECT_EQ(over_ranks(Comm::world(), whole).active, whole.active);
+}
+
+// Four processes on 2 x 2 blocks of a 4 x 4 grid with three points in every element: each
+// reports its block's four elements alone (the linear span of a block holds two elements of the
+// block beside it), and the four reports add up to the whole grid's.
+TEST(TlsReconstruction, ReportsOnlyTheElementsOfABlockFocus) {
+  const Grid<2> grid(Vec<2>(0.0, 0.0), Vec<2>(4.0, 4.0), IVec<2>{4, 4});
+  std::vector<Vec<2>> x;
+  for (Index e = 0; e < grid.num_cells(); ++e) {
+    const IVec<2> c = grid.cell_coords(e);
+    for (const auto& [dx, dy] : {std::array<double, 2>{0.2, 0.7}, {0.5, 0.3}, {0.8, 0.6}})
+      x.emplace_back(static_cast<double>(c[0]) + dx, static_cast<double>(c[1]) + dy);
+  }
+  TlsSettings s;
+  s.terms = 3;
+  TlsReconstruction2D all(s);
+  const TlsReport whole = all.set_points(grid, x);
+  ASSERT_EQ(whole.active, 16);
+  Index active = 0, full = 0;
+  for (Index bx = 0; bx < 2; ++bx)
+    for (Index by = 0; by < 2; ++by) {
+      CellBox<2> box = grid.all_cells();
+      box.lo = {2 * bx, 2 * by};
+      box.hi = {2 * bx + 2, 2 * by + 2};
+      TlsReconstruction2D part(s);
+      part.set_focus(box);
+      const TlsReport& rep = part.set_points(grid, x);
+      EXPECT_EQ(rep.active, 4) << bx << " " << by;
+      active += rep.active;
+      full += rep.full;
+    }
+  EXPECT_EQ(active, whole.active);
+  EXPECT_EQ(full, whole.full);
 }
 
 }  // namespace

@@ -63,6 +63,29 @@ std::vector<std::vector<Index>> check_sharing(const DofRanges& sh, Index count) 
       shared[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] =
           static_cast<Index>(listed.size());
     }
+  // shared_by_peer: the peers that share any DOF, ascending, each with for_each_shared's list;
+  // union_of: the DOFs a rank holds that some other rank holds too, once each, ascending.
+  for (int a = 0; a < ranks; ++a) {
+    const auto by_peer = sh.shared_by_peer(a);
+    std::vector<int> peers;
+    for (const auto& [b, dofs] : by_peer) {
+      peers.push_back(b);
+      EXPECT_EQ(static_cast<Index>(dofs.size()),
+                shared[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)]);
+    }
+    std::vector<int> expected_peers;
+    std::vector<Index> expected_union;
+    for (int b = 0; b < ranks; ++b)
+      if (b != a && shared[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] > 0)
+        expected_peers.push_back(b);
+    for (Index i = 0; i < count; ++i) {
+      bool other = false;
+      for (int b = 0; b < ranks; ++b) other = other || (b != a && sh.holds(b, i));
+      if (sh.holds(a, i) && other) expected_union.push_back(i);
+    }
+    EXPECT_EQ(peers, expected_peers) << "rank " << a;
+    EXPECT_EQ(DofRanges::union_of(by_peer), expected_union) << "rank " << a;
+  }
   for (Index i = 0; i < count; ++i) {
     int owners = 0, lowest = -1;
     for (int r = ranks - 1; r >= 0; --r)
