@@ -189,6 +189,11 @@ CASES = [
     ("2d_vortex_ddmpm_musl", "examples/vortex_2d.toml",
      ["grid.cells=16", "time.end=0.2", "time.dt=2e-3", "method.basis=ddmpm",
       "output.frames=1"], "both"),
+    # DDMPM's integrals by Gauss points over the cells that hold particles, whose node volumes
+    # read the ghosts' cells too.
+    ("2d_vortex_ddmpm_quadrature_usl", "examples/vortex_2d.toml",
+     ["grid.cells=16", "time.end=0.2", "time.dt=2e-3", "method.basis=ddmpm",
+      "method.ddmpm_integrals=quadrature", "method.scheme=usl", "output.frames=1"], "both"),
     ("1d_ddmpm_tls_usl", "examples/vibrating_bar_crossing.toml",
      ["grid.cells=60", "time.end=2e-3", "method.basis=ddmpm", "method.mapping=tls",
       "method.scheme=usl", "output.frames=1"], "any"),
@@ -342,8 +347,8 @@ THREE = {"2d_vortex_bspline2_musl", "1d_thrown_bar_bspline2"}
 # whose block boundaries move: parallel.rebalance, the ball rolling on the floor), carried
 # corners (CPDI2), distributed CG, and the reconstructions that integrate the cells of a
 # process's block with the ghosts of the blocks around it (TLS with domains and positivity, MLS,
-# IMLS, TLS in 3D). With --all-blocks every other 2D and 3D case also runs on 2 x 2 or 2 x 2 x 2
-# (not in CI).
+# IMLS, TLS in 3D), DDMPM's node volumes by quadrature. With --all-blocks every other 2D and 3D
+# case also runs on 2 x 2 or 2 x 2 x 2 (not in CI).
 BLOCKS = {
     "2d_vortex_bspline2_musl": [(4, "auto"), (6, "2x3")],
     "2d_vortex_cpdi2_usl": [(4, "2x2")],
@@ -354,6 +359,7 @@ BLOCKS = {
     "2d_vortex_mls_quadratic_musl": [(4, "2x2")],
     "2d_vortex_imls_conservative_usl": [(4, "2x2")],
     "3d_cube_tls": [(8, "2x2x2")],
+    "2d_vortex_ddmpm_quadrature_usl": [(4, "2x2")],
 }
 # The block runs made a second time for the same bytes.
 BLOCKS_AGAIN = {("2d_vortex_bspline2_musl", 4)}

@@ -158,7 +158,7 @@ std::vector<double> sample_2d(const Expression& f, const std::string& text,
 // Calls fn(x, w) at the n x n Gauss points of element e (weights include the Jacobian).
 template <class Fn>
 void for_each_gauss_point(const Grid<2>& g, Index e, const GaussRule& rule, Fn&& fn) {
-  const Index i = e % g.cells[0], j = e / g.cells[0];
+  const auto [i, j] = g.cell_coords(e);
   const Vec<2> hw = 0.5 * g.h;
   const Vec<2> c(g.origin[0] + (static_cast<double>(i) + 0.5) * g.h[0],
                  g.origin[1] + (static_cast<double>(j) + 0.5) * g.h[1]);

@@ -127,12 +127,7 @@ class DdmpmBasis {
       double cell_volume = 1.0;
       for (int d = 0; d < Dim; ++d) cell_volume *= g.h[d];
       for (const Index c : cells) {
-        IVec<Dim> cx;
-        Index rest = c;
-        for (int d = 0; d < Dim; ++d) {  // x fastest (Grid::cell_index)
-          cx[d] = rest % g.cells[d];
-          rest /= g.cells[d];
-        }
+        const IVec<Dim> cx = g.cell_coords(c);
         for (int q = 0; q < ipow(2, Dim); ++q) {
           Vec<Dim> x;
           double w = cell_volume;

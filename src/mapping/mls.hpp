@@ -351,11 +351,12 @@ class MlsFamilyMapping {
   static constexpr bool kFusedScatter = false, kRunTotals = true, kGhostParticles = true,
                         kStrainRates = false, kCellQuadrature = true;
 
-  // The cell layers of the other processes' particles this mapping reads in a distributed run
-  // (MappingFor's kGhostParticles): the quadratic-spline weight's support, 1.5 a cells (a the
-  // dilation), from the Gauss points in this process's elements, plus one for the layer the
-  // support starts in; IMLS's nodal rows sit at the DOFs of those elements' stencils, up to
-  // `per_dim` cells further (the stencil's nodes per direction).
+  // The cells (along every axis) around this process's elements whose particles of the other
+  // processes this mapping reads in a distributed run (MappingFor's kGhostParticles): the
+  // quadratic-spline weight's support, 1.5 a cells (a the dilation), from the Gauss points in
+  // this process's elements, plus one for the cell the support starts in; IMLS's nodal rows sit at
+  // the DOFs of those elements' stencils, up to `per_dim` cells further (the stencil's nodes per
+  // direction).
   template <class Sim>
   double ghost_reach(const Sim&) const {
     constexpr int kSize = Sim::BasisT::StencilT::kSize;

@@ -302,8 +302,7 @@ void Otm<Dim>::add_tractions() {
         const double p = tr.pressure ? tr.pressure(st_.time) : 0.0;
         for (std::size_t k = 0; k < tr.particles.size(); ++k) {
           const auto i = static_cast<std::size_t>(tr.particles[k]);
-          fn(Vec<Dim>(P.x0[i] + tr.offset[k]), i,
-             Vec<Dim>((tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k]));
+          fn(Vec<Dim>(P.x0[i] + tr.offset[k]), i, tr.point_force(k, tau, p));
         }
       }
     };

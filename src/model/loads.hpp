@@ -1,6 +1,7 @@
 #pragma once
 // The loads of a problem: body forces and face tractions (model layer; the stages of
 // scheme/stages.hpp apply them).
+#include <cstddef>
 #include <functional>
 #include <vector>
 
@@ -47,6 +48,12 @@ struct Traction {
   Vec<Dim> patch = Vec<Dim>::Zero();
   std::function<Vec<Dim>(double t)> value;   // tau(t) [Pa], evaluated once per step
   std::function<double(double t)> pressure;  // p(t) [Pa] along -n_k; empty: in `value` or none
+
+  // Point k's force (tau - p n_k) A_k [N per unit thickness in 2D], from the step's tau =
+  // value(t) and p = pressure(t) (anything without a pressure).
+  Vec<Dim> point_force(std::size_t k, const Vec<Dim>& tau, double p) const {
+    return (pressure ? Vec<Dim>(tau - p * normal[k]) : tau) * area[k];
+  }
 };
 
 }  // namespace mpm

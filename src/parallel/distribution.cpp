@@ -409,7 +409,9 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
   auto& P = sim.particles;
   const auto n = static_cast<std::size_t>(P.size());
   const auto& cells = sim.grid.cells;
-  std::vector<IVec<Dim>> cell(n);
+  // Each particle's cell coordinates, a CompactIndex each (a run's cells are numbered in one:
+  // BasisState's check).
+  std::vector<std::array<CompactIndex, Dim>> cell(n);
   CellBox<Dim>& box = sim.ghosts.cells;
   box.cells = cells;
   box.lo = cells;
@@ -418,7 +420,7 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
     for (int d = 0; d < Dim; ++d) {
       // (A particle outside the grid has stopped the run at the basis evaluation before this.)
       const Index c = std::clamp(sim.grid.cell_of(P.x[i][d], d), Index{0}, cells[d] - 1);
-      cell[i][d] = c;
+      cell[i][static_cast<std::size_t>(d)] = static_cast<CompactIndex>(c);
       box.lo[d] = std::min(box.lo[d], c);
       box.hi[d] = std::max(box.hi[d], c + 1);
     }
@@ -459,7 +461,10 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
       auto& sent = gh.sent.emplace_back();
       for (std::size_t i = 0; i < n; ++i) {
         bool inside = true;
-        for (int d = 0; d < Dim; ++d) inside = inside && cell[i][d] >= lo[d] && cell[i][d] < hi[d];
+        for (int d = 0; d < Dim; ++d) {
+          const Index c = cell[i][static_cast<std::size_t>(d)];
+          inside = inside && c >= lo[d] && c < hi[d];
+        }
         if (inside) {
           P.pack(i, out);
           sent.push_back(static_cast<Index>(i));

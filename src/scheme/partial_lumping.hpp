@@ -94,12 +94,7 @@ void setup_partial_lumping(BasisState<Dim, B>& sim, double below) {
       int points = 1;
       for (int d = 0; d < Dim; ++d) points *= 3;
       for (Index c = 0; c < g.num_cells(); ++c) {
-        IVec<Dim> cx;
-        Index rest = c;
-        for (int d = 0; d < Dim; ++d) {  // x fastest (Grid::cell_index)
-          cx[d] = rest % g.cells[d];
-          rest /= g.cells[d];
-        }
+        const IVec<Dim> cx = g.cell_coords(c);
         for (int q = 0; q < points; ++q) {
           Vec<Dim> x;
           double w = volume;

@@ -72,7 +72,7 @@ void evaluate_basis(BasisState<Dim, B>& sim) {
   // first.
   if constexpr (B::kPrepare) {
     // A node's sums (DDMPM) read the particles of the cells around it: in a distributed run the
-    // other processes' particles of the next cell layer are lent for them.
+    // other processes' particles within a cell are lent for them.
     if constexpr (B::kNodalSums)
       if (sim.comm) append_ghosts(sim, *sim.comm, 1.0);
     basis.prepare(P);
@@ -249,7 +249,7 @@ void after_forces(BasisState<Dim, B>& sim, int gauss = 1) {
       else
         centre += P.F[i] * tr.offset[k];
       // A_p = 1 in 1D: tau * 1.0 is exact, so the 1D forces are those of the end traction.
-      const Vec<Dim> load = (tr.pressure ? Vec<Dim>(tau - p * tr.normal[k]) : tau) * tr.area[k];
+      const Vec<Dim> load = tr.point_force(k, tau, p);
       for (int q = 0; q < points; ++q) {
         Vec<Dim> x_face = centre;
         Vec<Dim> f = load;
@@ -288,9 +288,10 @@ void after_forces(BasisState<Dim, B>& sim, int gauss = 1) {
 
 // For the sums of a mapping that reads the particles of neighbouring cells (kGhostParticles:
 // TLS's completions, free-surface test and domain integrals) in a distributed run: the other
-// processes' particles within the mapping's reach (ghost_reach, in cell layers, the largest of
-// any process) are appended to this process's while the object lives (parallel/distribution.hpp).
-// Fresh copies for every sum: the particles' velocities and stresses change between them.
+// processes' particles within the mapping's reach (ghost_reach, in cells along every axis, the
+// largest of any process) are appended to this process's while the object lives
+// (parallel/distribution.hpp). Fresh copies for every sum: the particles' velocities and stresses
+// change between them.
 template <class Sim>
 class GhostParticles {
  public:

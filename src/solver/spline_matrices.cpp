@@ -24,12 +24,7 @@ PointSet<Dim> tensor_points(const Grid<Dim>& g, const std::vector<double>& t,
   out.x.reserve(static_cast<std::size_t>(nc) * per_cell);
   out.w.reserve(static_cast<std::size_t>(nc) * per_cell);
   for (Index c = 0; c < nc; ++c) {
-    Index rem = c;
-    IVec<Dim> cell;
-    for (int d = 0; d < Dim; ++d) {
-      cell[d] = rem % g.cells[d];
-      rem /= g.cells[d];
-    }
+    const IVec<Dim> cell = g.cell_coords(c);
     for (std::size_t k = 0; k < per_cell; ++k) {
       std::size_t kk = k;
       Vec<Dim> x;

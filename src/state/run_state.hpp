@@ -165,7 +165,7 @@ struct DistributedState {
 
   // Ghost particles: a mapping that reads the particles of neighbouring cells
   // (MappingFor's kGhostParticles: TLS) sees, during each of its particle-to-grid sums, copies of
-  // the other processes' particles within a few cell layers of this process's own, appended
+  // the other processes' particles within a few cells of this process's own, appended
   // after them (stages::GhostParticles); `owned` is then this process's particle count (-1: no
   // ghosts appended). `cells`: the box of the cells this process's particles occupy at the last
   // exchange (inside its block, where no other process has particles: migration follows every
