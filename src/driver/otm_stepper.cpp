@@ -5,6 +5,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "basis/powell_sabin.hpp"
@@ -69,22 +71,21 @@ std::unique_ptr<Stepper<Dim>> make_otm_stepper(const StepperInput<Dim>& in) {
   {
     const MethodSettings& m = in.method;
     OtmSettings s;
-    if (const auto* k = std::get_if<MaxEntKind>(&m.basis)) {
-      s.basis = OtmBasis::MaxEnt;
-      s.maxent = k->settings;
-    }
-    if (const auto* k = std::get_if<PowellSabinKind>(&m.basis)) {
-      s.basis = OtmBasis::PowellSabin;
-      s.triangles = k->pattern;
-      s.mesh = in.problem.mesh;
-    }
-    if (m.solver == Solver::Unified) {
-      s.unified = true;
-      if (s.basis != OtmBasis::PowellSabin) {
-        s.basis = OtmBasis::BSpline;
-        s.degree = basis_degree(m.basis);
-      }
-    }
+    s.unified = m.solver == Solver::Unified;
+    // The basis on the advected nodes, as its kind declares it (methods/kinds.hpp); run_settings
+    // has refused the kinds that are neither OTM's nor the unified approach's.
+    std::visit(
+        [&](const auto& k) {
+          using K = std::decay_t<decltype(k)>;
+          if constexpr (K::kOtmNodes || K::kUnified)
+            if (s.unified ? K::kUnified : K::kOtmNodes) {
+              k.configure_otm(s, in.problem.mesh);
+              return;
+            }
+          throw std::logic_error(
+              fmt::format("make_otm_stepper: basis \"{}\" for this solver", K::kName));
+        },
+        m.basis);
     s.mass = m.mass;
     s.mass_tolerance = m.mass_tolerance;
     s.mass_solver = m.mass_solver;

@@ -27,6 +27,7 @@
 #include "mapping/direct.hpp"
 #include "mapping/mls.hpp"
 #include "mapping/tls.hpp"
+#include "methods/otm_settings.hpp"
 #include "scheme/schemes.hpp"
 
 namespace mpm {
@@ -95,6 +96,10 @@ struct LinearKind {
   int boundary_cells() const { return 1; }
   template <int Dim>
   using type = LinearBasis<Dim>;
+  // OTM's basis on the advected nodes.
+  void configure_otm(OtmSettings& s, const std::shared_ptr<const TriangleMesh>&) const {
+    s.basis = OtmBasis::Linear;
+  }
 };
 
 // One kind per B-spline degree (method.degree selects it); the degree is a template parameter so
@@ -117,6 +122,11 @@ struct BSplineKind {
   int boundary_cells() const { return P; }
   template <int Dim>
   using type = BSplineBasis<Dim, P>;
+  // The unified approach's isoparametric map on advected control points.
+  void configure_otm(OtmSettings& s, const std::shared_ptr<const TriangleMesh>&) const {
+    s.basis = OtmBasis::BSpline;
+    s.degree = P;
+  }
 };
 
 // The kind carries its settings (method.ddmpm_integrals, method.ddmpm_weight), which make_basis
@@ -241,6 +251,11 @@ struct MaxEntKind {
   int boundary_cells() const { return static_cast<int>(std::ceil(settings.dmax)); }
   template <int Dim>
   using type = MaxEntBasis<Dim>;
+  // OTM's basis on the advected nodes, d_i from these settings.
+  void configure_otm(OtmSettings& s, const std::shared_ptr<const TriangleMesh>&) const {
+    s.basis = OtmBasis::MaxEnt;
+    s.maxent = settings;
+  }
   MaxEntSettings settings;
 };
 
@@ -268,6 +283,13 @@ struct PowellSabinKind {
   int boundary_cells() const { return 1; }
   template <int Dim>
   using type = PowellSabinGridBasis<Dim>;
+  // The unified approach's map on the body's triangles: the pattern's on the grid, or the
+  // problem's mesh (grid.mesh, which is then the body).
+  void configure_otm(OtmSettings& s, const std::shared_ptr<const TriangleMesh>& body_mesh) const {
+    s.basis = OtmBasis::PowellSabin;
+    s.triangles = pattern;
+    s.mesh = body_mesh;
+  }
   TrianglePattern pattern = TrianglePattern::right;
 };
 
@@ -324,7 +346,11 @@ concept BasisKindTraits = requires(const K& k, int dim) {
      { k.pattern } -> std::convertible_to<TrianglePattern>;
      { k.altitude_factor() } -> std::convertible_to<double>;
    }) &&
-    (!K::kVertexDofs || K::kOnTriangles);
+    (!K::kVertexDofs || K::kOnTriangles) &&
+    (!(K::kOtmNodes || K::kUnified) ||
+     requires(const K& k, OtmSettings& s, const std::shared_ptr<const TriangleMesh>& mesh) {
+       k.configure_otm(s, mesh);
+     });
 
 // Whether a basis kind runs with a mapping (the kind's runs_with; checked by run_settings with
 // an input error naming the keys; the steppers of refused pairs are not compiled).

@@ -40,30 +40,14 @@
 
 #include "basis/maxent_settings.hpp"
 #include "grid/triangle_mesh.hpp"
+#include "methods/otm_settings.hpp"
 #include "model/problem.hpp"
 #include "state/simulation.hpp"
 
 namespace mpm {
 
-enum class OtmBasis { Linear, MaxEnt, BSpline, PowellSabin };
-
 template <int Dim>
 class PowellSabinGridBasis;  // basis/powell_sabin.hpp
-
-struct OtmSettings {
-  bool unified = false;  // D Algorithm 4 (B-splines, USL particle velocity) instead of OTM
-  OtmBasis basis = OtmBasis::Linear;
-  int degree = 0;         // OtmBasis::BSpline: 1-5
-  MaxEntSettings maxent;  // with OtmBasis::MaxEnt: d_i = d_max times node i's nearest distance
-  // OtmBasis::PowellSabin: the body's triangles, a structured triangulation of the body's part
-  // of the grid (method.triangles), or `mesh` (grid.mesh: the mesh is the body).
-  TrianglePattern triangles = TrianglePattern::right;
-  std::shared_ptr<const TriangleMesh> mesh;
-  MassType mass = MassType::Consistent;
-  double mass_tolerance = 1e-10;
-  MassSolverSettings mass_solver;  // direct or cg (pmg needs a B-spline basis on the grid)
-  double conservation_limit = 0.5;
-};
 
 // OTM (1D and 2D: P1, max-ent) and the unified approach (1D and 2D, tensor-product B-splines;
 // 2D, Powell-Sabin splines).
