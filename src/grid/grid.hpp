@@ -13,6 +13,27 @@
 
 namespace mpm {
 
+// The linear index of the integer coordinates c in a layout of n[d] entries per direction (x
+// fastest), and the coordinates of linear index e: the numbering of a grid's cells.
+template <int Dim>
+Index linear_index(const IVec<Dim>& c, const IVec<Dim>& n) {
+  Index idx = 0, stride = 1;
+  for (int d = 0; d < Dim; ++d) {
+    idx += c[d] * stride;
+    stride *= n[d];
+  }
+  return idx;
+}
+template <int Dim>
+IVec<Dim> linear_coords(Index e, const IVec<Dim>& n) {
+  IVec<Dim> c;
+  for (int d = 0; d < Dim; ++d) {
+    c[d] = e % n[d];
+    e /= n[d];
+  }
+  return c;
+}
+
 // A box of a grid's cells, [lo[d], hi[d]) along each direction d, in the grid's linear numbering
 // (x fastest) of `cells` per direction. A process of a distributed run integrates the elements
 // of one (RunState::own_cells).
@@ -30,21 +51,15 @@ struct CellBox {
   // between its rows others (holds tells them apart). {0, 0} when empty.
   std::array<Index, 2> span() const {
     if (empty()) return {0, 0};
-    Index first = 0, last = 0, stride = 1;
-    for (int d = 0; d < Dim; ++d) {
-      first += lo[d] * stride;
-      last += (hi[d] - 1) * stride;
-      stride *= cells[d];
-    }
-    return {first, last + 1};
+    IVec<Dim> last = hi;
+    for (int d = 0; d < Dim; ++d) --last[d];
+    return {linear_index<Dim>(lo, cells), linear_index<Dim>(last, cells) + 1};
   }
   // Whether cell e (linear index) lies in the box.
   bool holds(Index e) const {
-    for (int d = 0; d < Dim; ++d) {
-      const Index c = e % cells[d];
-      if (c < lo[d] || c >= hi[d]) return false;
-      e /= cells[d];
-    }
+    const IVec<Dim> c = linear_coords<Dim>(e, cells);
+    for (int d = 0; d < Dim; ++d)
+      if (c[d] < lo[d] || c[d] >= hi[d]) return false;
     return true;
   }
 };
@@ -83,14 +98,7 @@ struct Grid {
     return b;
   }
   // The integer coordinates of cell e (linear index, x fastest).
-  IVec<Dim> cell_coords(Index e) const {
-    IVec<Dim> c;
-    for (int d = 0; d < Dim; ++d) {
-      c[d] = e % cells[d];
-      e /= cells[d];
-    }
-    return c;
-  }
+  IVec<Dim> cell_coords(Index e) const { return linear_coords<Dim>(e, cells); }
 
   // Cell containing x along direction d; a point on the upper boundary belongs to the last cell.
   // Returns -1 or cells[d] when x lies outside (callers check with inside()).
@@ -116,14 +124,7 @@ struct Grid {
   }
   // Linear index of the cell with integer coordinates c (x fastest), and whether c is a cell of
   // the grid.
-  Index cell_index(const IVec<Dim>& c) const {
-    Index idx = 0, stride = 1;
-    for (int d = 0; d < Dim; ++d) {
-      idx += c[d] * stride;
-      stride *= cells[d];
-    }
-    return idx;
-  }
+  Index cell_index(const IVec<Dim>& c) const { return linear_index<Dim>(c, cells); }
   bool has_cell(const IVec<Dim>& c) const {
     for (int d = 0; d < Dim; ++d)
       if (c[d] < 0 || c[d] >= cells[d]) return false;

@@ -437,6 +437,34 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
   for (std::size_t k = w - 1; k < all.size(); k += w) most = std::max(most, all[k]);
   const auto layers = static_cast<Index>(std::ceil(most));
   const int me = comm.rank();
+  // The processes' particles are in their own blocks at every exchange (migration follows each
+  // step), so the boxes do not overlap, and a peer's widened box reaches at most `layers` cells
+  // into this one: only the particles of that fringe of the box can be any peer's ghosts. One
+  // pass collects them (ascending, so each peer's list keeps the particles' order); each peer's
+  // pass then reads the fringe alone, not every particle.
+  for (int r = 0; r < comm.size() && !box.empty(); ++r) {
+    bool overlaps = r != me;
+    for (int d = 0; d < Dim && overlaps; ++d) {
+      const std::size_t k = w * static_cast<std::size_t>(r) + 2 * static_cast<std::size_t>(d);
+      overlaps = all[k] < all[k + 1] && static_cast<Index>(all[k]) < box.hi[d] &&
+                 box.lo[d] < static_cast<Index>(all[k + 1]);
+    }
+    if (overlaps)
+      throw std::logic_error(fmt::format(
+          "append_ghosts: the particles of processes {} and {} occupy overlapping boxes of "
+          "cells (a particle outside its block)",
+          me, r));
+  }
+  std::vector<std::size_t> fringe;
+  if (!box.empty())
+    for (std::size_t i = 0; i < n; ++i) {
+      bool near = false;
+      for (int d = 0; d < Dim; ++d) {
+        const Index c = cell[i][static_cast<std::size_t>(d)];
+        near = near || c < box.lo[d] + layers || c >= box.hi[d] - layers;
+      }
+      if (near) fringe.push_back(i);
+    }
   auto& gh = sim.ghosts;
   std::vector<int>& peers = gh.peers;
   std::vector<std::vector<std::byte>> send;
@@ -459,7 +487,7 @@ void append_ghosts(RunState<Dim>& sim, const Comm& comm, double reach) {
       peers.push_back(r);
       auto& out = send.emplace_back();
       auto& sent = gh.sent.emplace_back();
-      for (std::size_t i = 0; i < n; ++i) {
+      for (const std::size_t i : fringe) {
         bool inside = true;
         for (int d = 0; d < Dim; ++d) {
           const Index c = cell[i][static_cast<std::size_t>(d)];
