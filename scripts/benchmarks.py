@@ -50,7 +50,7 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 REFKERNEL_2D = ROOT.parent / "shared" / "tools" / "refkernel.cpp"
 REFKERNEL_3D = ROOT / "scripts" / "refkernel3d.cpp"
-TABLES = ("steps", "threads", "processes", "memory", "tls")
+TABLES = ("steps", "stages", "threads", "processes", "memory", "tls")
 
 # Open MPI on one machine as scripts/mpi_check.py runs it (root allowed, shared memory).
 MPIRUN_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
@@ -100,6 +100,13 @@ def parse_bench(out):
     r["peak_bytes"] = float(m.group(2)) if m else None
     m = re.search(r"(\d+) sort\(s\) per run[^;\n]*; sort buffers ([0-9.]+) bytes per particle", out)
     r["sorts"], r["sort_bytes"] = (int(m.group(1)), float(m.group(2))) if m else (None, None)
+    # --stages: each stage's mean ns per particle-step, the rest and the whole step.
+    m = re.search(r"stages \[ns per particle-step, mean of every step\]: basis ([0-9.]+), "
+                  r"particles to grid ([0-9.]+), grid ([0-9.]+), grid to particles ([0-9.]+), "
+                  r"other (-?[0-9.]+) \(of ([0-9.]+)\); the material laws ([0-9.]+)", out)
+    r["stages"] = None if not m else dict(zip(
+        ("basis", "to_grid", "grid", "to_particles", "other", "step", "material"),
+        (float(g) for g in m.groups())))
     return r
 
 
@@ -321,6 +328,53 @@ def table_steps(rn):
                   "ns per particle-step", "/ yardstick"], out), \
         (f"one thread, {steps} steps a run (the {steps - 1} after the first timed), each row's "
          f"run right after one of its yardstick; {rounds_text(rn)}")
+
+
+def table_stages(rn):
+    """One thread, MUSL, lumped mass: where the step's time goes (`mpm bench --stages`), each
+    stage's mean ns per particle-step over every step of the run, median over the rounds."""
+    q = rn.quick
+    n2, n3 = (40000, 13824) if q else (1000000, 262144)
+    steps = 4 if q else 6
+    common = ["--threads", 1, "--steps", steps, "--repeats", 1, "--scheme", "musl", "--stages"]
+    b2 = ["--basis", "bspline", "--degree", 2]
+    rows = [
+        ("2D refkernel problem", "B-spline 2", ["--dim", 2, "--particles", n2, "--problem",
+                                                "refkernel"] + b2),
+        ("2D plate", "B-spline 2", ["--dim", 2, "--particles", n2] + b2),
+        ("2D plate", "linear", ["--dim", 2, "--particles", n2, "--basis", "linear"]),
+        ("3D refkernel problem", "B-spline 2", ["--dim", 3, "--particles", n3, "--problem",
+                                                "refkernel"] + b2),
+        ("3D cube", "B-spline 2", ["--dim", 3, "--particles", n3] + b2),
+    ]
+    keys = ("basis", "to_grid", "grid", "gather", "material", "other", "step")
+    got = {i: {k: [] for k in keys} for i in range(len(rows))}
+    particles = {}
+    for r in range(rn.rounds):
+        rn.log(f"stages: round {r + 1}")
+        for i, (_, _, opts) in enumerate(rows):
+            b = rn.bench(opts + common)
+            st = b["stages"]
+            if st is None:
+                raise Failure("mpm bench --stages printed no stages line")
+            particles[i] = b["particles"]
+            st["gather"] = st["to_particles"] - st["material"]
+            for k in keys:
+                got[i][k].append(st[k])
+    out = []
+    for i, (problem, basis, _) in enumerate(rows):
+        # The stages' medians; the step's range over the rounds shows the machine's spread.
+        cells = [f"{med(got[i][k]):,.1f}" for k in keys[:-1]] + [fmt_ns(got[i]["step"])]
+        step = med(got[i]["step"])
+        share = (f"{100 * med(got[i]['to_grid']) / step:.0f} / "
+                 f"{100 * (med(got[i]['gather']) + med(got[i]['material'])) / step:.0f} %")
+        out.append([problem, basis, f"{particles[i]:,}"] + cells[:-1] + [f"**{cells[-1]}**",
+                                                                         share])
+    return table(["problem", "basis", "particles", "basis (stencils)", "particles to grid",
+                  "grid", "grid to particles", "material laws", "other", "step",
+                  "to grid / to particles"], out), \
+        (f"one thread, {steps} steps a run (every step timed, the first included); "
+         f"{rounds_text(rn)}")
 
 
 def table_threads(rn):
@@ -592,7 +646,8 @@ def table_tls(rn):
 
 def render(name, rn):
     with Measured() as m:
-        result = {"steps": table_steps, "threads": table_threads, "processes": table_processes,
+        result = {"steps": table_steps, "stages": table_stages, "threads": table_threads,
+                  "processes": table_processes,
                   "memory": table_memory, "tls": table_tls}[name](rn)
     text = result[0] + "\n\n" + m.line(rn, result[1])
     # The 1-minute load average counts this table's own runs (one thread, or two): above the

@@ -263,6 +263,24 @@ int cmd_bench(const mpm::BenchOptions& opt) {
       opt.shuffle ? "shuffled" : "in seeded order", opt.sort, r.sorts,
       r.sorts > 0 ? fmt::format(", {:.1f} ns per particle per sort", r.ns_per_particle_sort) : "",
       r.sort_bytes_per_particle);
+  if (opt.stages) {
+    // Where the step's time goes (core/stage_clock.hpp): the material laws are part of the
+    // grid-to-particle updates; "other" is the rest of the step (re-sorting, the body force,
+    // the run's checks and records).
+    using mpm::Stage;
+    const auto at = [&](Stage s) { return r.stage_ns[static_cast<std::size_t>(s)]; };
+    double timed = 0.0;
+    for (const Stage s : {Stage::kBasis, Stage::kToGrid, Stage::kGrid, Stage::kToParticles})
+      timed += at(s);
+    std::string line;
+    for (const Stage s : {Stage::kBasis, Stage::kToGrid, Stage::kGrid, Stage::kToParticles})
+      line += fmt::format("{} {:.2f}, ", mpm::kStageNames[static_cast<std::size_t>(s)], at(s));
+    std::cout << fmt::format(
+        "  stages [ns per particle-step, mean of every step]: {}other {:.2f} (of {:.2f}); "
+        "the material laws {:.2f} of the grid-to-particle updates\n",
+        line, r.mean_ns_per_particle_step - timed, r.mean_ns_per_particle_step,
+        at(Stage::kMaterial));
+  }
   return 0;
 }
 
@@ -493,6 +511,9 @@ int run_main(int argc, char** argv) {
       ->capture_default_str();
   bench->add_flag("--shuffle", bopt.shuffle,
                   "start from the particles in random order (to measure method.sort)");
+  bench->add_flag("--stages", bopt.stages,
+                  "also time the step's stages (basis, particles to grid, grid, grid to "
+                  "particles, the material laws among them); with --threads 1");
   bench->add_option("--sort", bopt.sort, "method.sort: auto or never")
       ->check(CLI::IsMember({"auto", "never"}))
       ->capture_default_str();

@@ -78,8 +78,16 @@ void time_runs(const Config& cfg, const BenchOptions& opt, BenchResult& r) {
     RunOptions ro;
     ro.quiet = true;
     ro.shuffle_seed = opt.shuffle ? 1 : 0;
+    ro.stage_times = opt.stages;
     const RunResult res = run(cfg, ro);
     ns.push_back(res.ns_per_particle_step);
+    // Per particle-step of this run, averaged over the repeats below.
+    const double per = 1e9 / (static_cast<double>(res.particles) *
+                              static_cast<double>(std::max<Index>(res.steps, 1)) *
+                              static_cast<double>(opt.repeats));
+    for (std::size_t s = 0; s < r.stage_ns.size(); ++s)
+      r.stage_ns[s] += res.stages.seconds[s] * per;
+    r.mean_ns_per_particle_step += res.ns_per_particle_step / static_cast<double>(opt.repeats);
     // The run's step time split into its first step and the rest (RunResult::first_step_seconds).
     const double n = static_cast<double>(res.particles);
     const double total = res.ns_per_particle_step * static_cast<double>(res.steps) * n;  // [ns]

@@ -1,9 +1,11 @@
 #pragma once
 // `mpm bench`: time per particle-step and memory per particle of the explicit step.
+#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
 
+#include "core/stage_clock.hpp"
 #include "core/types.hpp"
 
 namespace mpm {
@@ -29,6 +31,7 @@ struct BenchOptions {
   bool shuffle = false;       // start from the particles in random order (RunOptions::shuffle_seed)
   std::string sort = "auto";  // method.sort
   bool messages = false;      // time messages between processes instead (bench_messages)
+  bool stages = false;        // time the step's stages too (RunOptions::stage_times; one thread)
 };
 
 struct BenchResult {
@@ -51,6 +54,10 @@ struct BenchResult {
   Index sorts = 0;
   double ns_per_particle_sort = 0.0;
   double sort_bytes_per_particle = 0.0;
+  // With BenchOptions::stages: each stage's wall time (core/stage_clock.hpp) and the whole step's,
+  // over every step of every repeat [ns per particle-step].
+  std::array<double, static_cast<std::size_t>(Stage::kCount)> stage_ns{};
+  double mean_ns_per_particle_step = 0.0;
 };
 
 // 1D vibrating bar (D Table 3.1 set 2 material) with the given scheme, basis and mapping,

@@ -299,6 +299,11 @@ driver::Session::Session(const Config& given, const RunOptions& given_options)
   const int available =
       std::max(1, omp_get_max_threads() / (opt.comm ? opt.comm->local_size() : 1));
   threads_ = run_threads(opt.threads, particles / ranks, dim, available);
+  if (opt.stage_times && threads_ != 1)
+    throw InputError(fmt::format(
+        "the stage times are taken on one thread (the material laws are timed inside the "
+        "particle loop), and this run has {}: run it with one thread (mpm bench --threads 1)",
+        threads_));
   dim_ = dim;
   const ScopedThreads threads(threads_);
   settings_ = run_settings(cfg, dim);

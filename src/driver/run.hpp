@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/comm.hpp"
+#include "core/stage_clock.hpp"
 #include "core/types.hpp"
 #include "state/simulation.hpp"
 
@@ -46,6 +47,9 @@ struct RunOptions {
   // The FNV-1a hash of the mesh file's bytes (grid.mesh; 0 without one), which checkpoints
   // store; run() sets it.
   std::uint64_t mesh_hash = 0;
+  // Time the step's stages (RunResult::stages; `mpm bench --stages`): one thread only, since the
+  // material laws are timed inside the particle loop.
+  bool stage_times = false;
 };
 
 // Below this many particles per thread a second thread costs more than it saves: measured with
@@ -94,6 +98,7 @@ struct RunResult {
   double first_step_seconds = 0.0;
   Index sorts = 0;            // re-sorts by cell over the run (state/sort.hpp; MPM only)
   double sort_seconds = 0.0;  // their wall time, part of ns_per_particle_step [s]
+  StageClock stages;          // the stages' wall times over the run (RunOptions::stage_times)
   ErrorNorms errors;
   Diagnostics diag;
   nlohmann::ordered_json summary;     // what summary.json holds

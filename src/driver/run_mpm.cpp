@@ -578,6 +578,7 @@ MpmRun<Dim>::MpmRun(Problem<Dim>& pb, const RunSettings& settings, const std::st
     stepper_ = make_stepper<Dim>(basis, {pb, method, !opt.restart, comm_});
   });
   RunState<Dim>& sim = stepper_->state();
+  if (opt.stage_times) sim.clock = &res_.stages;  // one thread (driver/run.cpp)
   // The stepper's own warnings (its checks of the basis against the particles), shown as the
   // problem's were (driver/run.cpp).
   if (!opt.quiet)

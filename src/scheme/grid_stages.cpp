@@ -795,6 +795,7 @@ void apply_wall_friction(RunState<Dim>& sim, double dt) {
 // the walls' contact and friction, and with the reactions where asked.
 template <int Dim>
 void solve_acceleration(RunState<Dim>& sim, double dt) {
+  const StageTimer timer(sim.clock, Stage::kGrid);
   if (sim.local_damping > 0.0) damp_forces(sim);
   solve_grid(sim, sim.nodes.force, sim.nodes.accel);
   if (!sim.walls.empty()) apply_wall_friction(sim, dt);
@@ -806,6 +807,7 @@ void solve_acceleration(RunState<Dim>& sim, double dt) {
 // conditions (wall_conditions: a particle never crosses a wall).
 template <int Dim>
 void solve_velocity(RunState<Dim>& sim) {
+  const StageTimer timer(sim.clock, Stage::kGrid);
   auto& nd = sim.nodes;
   solve_grid(sim, nd.momentum, nd.velocity);
   for (const auto& [i, v] : nd.prescribed) {
@@ -823,6 +825,7 @@ void solve_velocity(RunState<Dim>& sim) {
 // Euler-Cromer on the grid: v_i^{s+1} = v_i^s + dt a_i^s (D eq. 2.36; USL, USF).
 template <int Dim>
 void advance_grid_velocity(RunState<Dim>& sim, double dt) {
+  const StageTimer timer(sim.clock, Stage::kGrid);
   auto& nd = sim.nodes;
   const auto [first, end] = sim.dof_window();
   const Index offset = first;

@@ -66,6 +66,7 @@ inline constexpr Index kDeformBlock = 128;
 // particle has left the grid, and counts grid crossings.
 template <int Dim, class B>
 void evaluate_basis(BasisState<Dim, B>& sim) {
+  const StageTimer timer(sim.clock, Stage::kBasis);
   auto& P = sim.particles;
   auto& basis = sim.basis;
   // Bases built from the particle distribution (DDMPM node volumes, CPDI2 corners) refresh it
@@ -316,6 +317,7 @@ class GhostParticles {
 template <unsigned What, class Sim>
 void map_to_grid(Sim& sim) {
   using namespace grid_sum;
+  const StageTimer timer(sim.clock, Stage::kToGrid);
   if constexpr (Sim::MappingT::kFusedScatter) {
     sim.mapping.template map_fused<What>(sim);
   } else {
@@ -379,6 +381,7 @@ void advance_grid_velocity(RunState<Dim>& sim, double dt);
 template <unsigned What, int Dim, class B>
 void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
   using namespace particle_update;
+  const StageTimer timer(sim.clock, Stage::kToParticles);
   auto& P = sim.particles;
   const auto a = sim.nodes.accel.view();
   const auto v = sim.nodes.velocity.view();
@@ -419,6 +422,7 @@ void update_particles(BasisState<Dim, B>& sim, double dt, double stress_dt) {
       for (Index p = b; p < e; ++p)
         gather(static_cast<std::size_t>(p),
                mapped != nullptr ? nullptr : &Ls[static_cast<std::size_t>(p - b)]);
+      const StageTimer material(sim.clock, Stage::kMaterial);  // one thread (StageClock)
       return deform_particles(P, sim.materials, b, e, mapped != nullptr ? mapped + b : Ls.data(),
                               stress_dt);
     });
@@ -472,6 +476,8 @@ template <class Sim>
 void update_velocity_map_momentum(Sim& sim, double dt) {
   using namespace grid_sum;
   if constexpr (Sim::MappingT::kFusedScatter) {
+    // (The two stages of the other branch time themselves.)
+    const StageTimer timer(sim.clock, Stage::kToGrid);
     sim.mapping.template map_fused<kMomentum | kVelocityFirst>(sim, dt);
     if (sim.comm) share_grid_sums(sim, kMomentum);
     after_momentum(sim);

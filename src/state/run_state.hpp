@@ -15,6 +15,7 @@
 
 #include "core/comm.hpp"
 #include "core/parallel.hpp"
+#include "core/stage_clock.hpp"
 #include "grid/grid.hpp"
 #include "grid/grid_state.hpp"
 #include "material/material_set.hpp"
@@ -199,6 +200,9 @@ struct RunState : ModelState<Dim>, SolveState<Dim>, DistributedState<Dim> {
 
   RunState(const Grid<Dim>& g, Particles<Dim> p, Materials mat)
       : ModelState<Dim>(g, std::move(p), std::move(mat)) {}
+
+  // The stages' wall times (`mpm bench --stages`, one thread only), or null: not timed.
+  StageClock* clock = nullptr;
 
   // Adds the constrained directions range(c) (c symmetric positive semi-definite) to those of
   // `dofs`: each DOF's constrained subspace is the span of all its conditions (two rollers

@@ -749,6 +749,33 @@ TEST(Cli, BenchRunsAShortCaseIn1D2DAnd3D) {
       << three.out;
 }
 
+// `mpm bench --stages`: the stages' times split the step (each stage took time, the material laws
+// are part of the grid-to-particle updates, and the stages add up to at most the step), on one
+// thread only.
+TEST(Cli, BenchStagesSplitTheStep) {
+  auto r =
+      sh("bench --dim 2 --particles 2000 --steps 4 --repeats 1 --threads 1 --basis bspline "
+         "--degree 2 --stages");
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(
+      r.out, m,
+      std::regex(R"(stages \[ns per particle-step, mean of every step\]: basis ([0-9.]+), )"
+                 R"(particles to grid ([0-9.]+), grid ([0-9.]+), grid to particles ([0-9.]+), )"
+                 R"(other (-?[0-9.]+) \(of ([0-9.]+)\); the material laws ([0-9.]+) of)")))
+      << r.out;
+  const double basis = std::stod(m[1]), to_grid = std::stod(m[2]), grid = std::stod(m[3]),
+               to_particles = std::stod(m[4]), other = std::stod(m[5]), step = std::stod(m[6]),
+               material = std::stod(m[7]);
+  for (const double t : {basis, to_grid, grid, to_particles, material}) EXPECT_GT(t, 0.0) << r.out;
+  EXPECT_LT(material, to_particles) << r.out;
+  EXPECT_GE(other, -0.01) << r.out;  // the stages are timed inside the step
+  EXPECT_NEAR(basis + to_grid + grid + to_particles + other, step, 0.05) << r.out;
+  const auto two = sh("bench --dim 2 --particles 2000 --steps 1 --repeats 1 --threads 2 --stages");
+  EXPECT_NE(two.code, 0) << two.out;
+  EXPECT_NE(two.out.find("one thread"), std::string::npos) << two.out;
+}
+
 // `mpm mesh`: the Gmsh square's summary (counts and boundaries computed here from the mesh read
 // by the library), the binary .vtu read back by meshio, a generated mesh, and the refusals.
 TEST(Cli, MeshCommandSummarisesAndWritesTheMesh) {
