@@ -15,6 +15,19 @@ each into its own output tree, and compares the outputs bitwise:
     spelling (the echo of the effective configuration then differs on every run while the
     results must not).
 
+With --rtol R the numbers in the outputs are compared to round-off instead of bitwise, for a
+change that may alter the last bits (another instruction set, a vector kernel, a reordered
+sum): every other character of a text (CSV, summary.json, .pvd, stdout, stderr, ASCII VTU) and
+every integer array of a binary VTU must still match exactly, and two numbers a, b agree when
+|a - b| <= R x scale or both are at most --atol in magnitude (default 1e-12: quantities that
+are round-off themselves, such as conservation errors). The scale is the largest magnitude of
+the field (CSV: the columns of one field's components, stress_11 ... stress_22, together) or of
+the array (binary VTU), else of the pair (summary.json, an ASCII VTU, any other text). Each case
+that agrees prints its largest relative difference and where it is. Some outputs move by more
+than round-off under any such change, and differ here: the place of a maximum among equal
+candidates (mls.worst_x), sums that cancel to round-off (a symmetric body's total momentum; set
+--atol above them), and the states of runs that fail.
+
 The configurations: every examples/*.toml (long ones shortened by a time.end override that is a
 whole multiple of their time.dt); a 1D (mms_1d) and a 2D (plate_mms_2d, 8 x 8 cells) matrix of
 every basis x mapping x scheme with lumped mass, plus consistent mass on a subset; further
@@ -24,7 +37,7 @@ chains. --quick runs a reduced set (one scheme per basis x mapping) in well unde
 Usage (from anywhere; paths printed are relative to the work tree):
 
     /usr/bin/python3 scripts/compare_runs.py --before OLD/mpm --after NEW/mpm \
-        [--work DIR] [--jobs N] [--quick] [--checkpoints] [--skip-config]
+        [--work DIR] [--jobs N] [--quick] [--checkpoints] [--skip-config] [--rtol R [--atol A]]
 
 Each executable runs with OMP_NUM_THREADS=1, OMP_WAIT_POLICY=passive, argv[0] = "mpm" and its
 working directory at WORK/before or WORK/after, which hold identical copies of examples/, so
@@ -35,10 +48,13 @@ DIR, DIR/before and DIR/after are replaced. Prints one line per case and a closi
 """
 
 import argparse
+import array
 import concurrent.futures
 import decimal
 import json
+import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -363,30 +379,160 @@ def load_summary(data):
                       parse_constant=lambda s: ("num", s))
 
 
-def first_json_difference(a, b, path=""):
+def first_json_difference(a, b, path="", agree=None):
     if isinstance(a, tuple) and isinstance(b, tuple) and a[0] == b[0] == "{}":
         ka, kb = [k for k, _ in a[1]], [k for k, _ in b[1]]
         if ka != kb:
             return f"{path or 'top level'}: keys {ka} | {kb}"
         for (k, va), (_, vb) in zip(a[1], b[1]):
-            d = first_json_difference(va, vb, f"{path}.{k}" if path else k)
+            d = first_json_difference(va, vb, f"{path}.{k}" if path else k, agree)
             if d:
                 return d
         return None
     if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
         for i, (va, vb) in enumerate(zip(a, b)):
-            d = first_json_difference(va, vb, f"{path}[{i}]")
+            d = first_json_difference(va, vb, f"{path}[{i}]", agree)
             if d:
                 return d
         return None
+    if (agree is not None and isinstance(a, tuple) and isinstance(b, tuple)
+            and a[0] == b[0] == "num"):
+        u, v = float(a[1]), float(b[1])
+        return agree.check(u, v, max(abs(u), abs(v)), path)
+    if isinstance(a, str) and isinstance(b, str) and agree is not None:
+        return text_within(path, a.encode(), b.encode(), agree)
     if a != b:
         fmt = lambda v: v[1] if isinstance(v, tuple) and v[0] == "num" else json.dumps(v)
         return f"{path}: before {short(fmt(a))} | after {short(fmt(b))}"
     return None
 
 
-def compare_file(rel, a, b):
-    """None if the files match, else a description of the first difference."""
+# --rtol / --atol (None: bitwise), and per case the largest relative difference accepted.
+RTOL = None
+ATOL = 1e-12
+NUMBER = re.compile(rb"[-+]?(?:(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?|inf|nan)")
+
+
+class Agreement:
+    """The largest relative difference accepted so far, and where."""
+
+    def __init__(self):
+        self.largest, self.where = 0.0, ""
+
+    def check(self, a, b, scale, where):
+        """None when a and b agree to RTOL x scale (or are both at round-off level), else a
+        description."""
+        if a == b or (math.isnan(a) and math.isnan(b)):
+            return None
+        if max(abs(a), abs(b)) <= ATOL:
+            return None
+        rel = abs(a - b) / scale if scale > 0 and math.isfinite(scale) else math.inf
+        if not rel <= RTOL:
+            return f"{where}: before {a!r} | after {b!r} (relative difference {rel:.3g} > {RTOL:g})"
+        if rel > self.largest:
+            self.largest, self.where = rel, where
+        return None
+
+
+def split_numbers(text):
+    """The text with every number replaced by a mark, and the numbers."""
+    nums = []
+
+    def take(m):
+        nums.append(float(m.group(0)))
+        return b"\x01"
+    return NUMBER.sub(take, text), nums
+
+
+def text_within(rel, a, b, agree, csv=False):
+    """Texts that differ in their numbers only, by at most RTOL: the numbers of a CSV column
+    against the column's largest magnitude, the others against the pair's."""
+    la, lb = a.split(b"\n"), b.split(b"\n")
+    if len(la) != len(lb):
+        return f"{rel}: {len(la)} | {len(lb)} lines"
+    rows = []
+    for k, (x, y) in enumerate(zip(la, lb)):
+        fx, fy = (x.split(b","), y.split(b",")) if csv and k > 0 else ([x], [y])
+        if len(fx) != len(fy):
+            return f"{rel}: line {k + 1}: {len(fx)} | {len(fy)} fields"
+        row = []
+        for c, (u, v) in enumerate(zip(fx, fy)):
+            tu, nu = split_numbers(u)
+            tv, nv = split_numbers(v)
+            if tu != tv or len(nu) != len(nv):
+                return f"{rel}: line {k + 1}: {excerpts(x, y)}"
+            row.append((c, nu, nv))
+        rows.append((k, row))
+    # A CSV column's scale: the components of one field (stress_11 ... stress_22, u_1, u_2)
+    # share the field's largest magnitude, since a component that is zero by symmetry differs
+    # at the round-off of the others.
+    field = []
+    if csv:
+        field = [re.sub(r"_\d+$", "", n.decode("utf-8", "replace")) for n in la[0].split(b",")]
+    field_of = lambda c: field[c] if c < len(field) else str(c)
+    scale = {}
+    if csv:
+        for _, row in rows[1:]:
+            for c, nu, nv in row:
+                f = field_of(c)
+                scale[f] = max([scale.get(f, 0.0)] + [abs(t) for t in nu + nv if math.isfinite(t)])
+    for k, row in rows:
+        for c, nu, nv in row:
+            for u, v in zip(nu, nv):
+                sc = scale[field_of(c)] if csv and k > 0 else max(abs(u), abs(v))
+                col = f", column {field_of(c)}" + (f" ({la[0].split(b',')[c].decode()})"
+                                                   if c < len(field) else "") if csv else ""
+                d = agree.check(u, v, sc, f"{rel}: line {k + 1}{col}")
+                if d:
+                    return d
+    return None
+
+
+VTU_ARRAY = re.compile(rb'<DataArray type="(\w+)" Name="([^"]*)"[^>]*format="appended" offset="(\d+)"')
+VTU_TYPES = {b"Float64": "d", b"Int64": "q", b"UInt8": "B"}
+
+
+def vtu_within(rel, a, b, agree):
+    """Binary VTU files (raw appended data, UInt64 headers: io/output.cpp): the same XML, the
+    same integer arrays, and each Float64 array within RTOL of its largest magnitude."""
+    marker = b'<AppendedData encoding="raw">\n   _'
+    ia, ib = a.find(marker), b.find(marker)
+    if ia < 0 or ib < 0:
+        return text_within(rel, a, b, agree)
+    d = text_within(rel, a[:ia], b[:ib], agree)
+    if d:
+        return d
+    ra, rb = a[ia + len(marker):], b[ib + len(marker):]
+    for m in VTU_ARRAY.finditer(a[:ia]):
+        kind, name, off = m.group(1), m.group(2).decode(), int(m.group(3))
+        code = VTU_TYPES.get(kind)
+        if code is None:
+            return f"{rel}: array {name} of type {kind.decode()} (not compared numerically)"
+        values = []
+        for raw in (ra, rb):
+            n = int.from_bytes(raw[off:off + 8], "little")
+            v = array.array(code)
+            v.frombytes(raw[off + 8:off + 8 + n])
+            values.append(v)
+        va, vb = values
+        if len(va) != len(vb):
+            return f"{rel}: array {name}: {len(va)} | {len(vb)} values"
+        if code != "d":
+            if va != vb:
+                return f"{rel}: integer array {name} differs"
+            continue
+        scale = max([abs(t) for t in va if math.isfinite(t)] +
+                    [abs(t) for t in vb if math.isfinite(t)] + [0.0])
+        for k, (u, v) in enumerate(zip(va, vb)):
+            d = agree.check(u, v, scale, f"{rel}: array {name}, value {k}")
+            if d:
+                return d
+    return None
+
+
+def compare_file(rel, a, b, agree=None):
+    """None if the files match (bitwise, or to RTOL when set), else a description of the
+    first difference."""
     name = rel.name
     if name == "summary.json":
         try:
@@ -395,12 +541,18 @@ def compare_file(rel, a, b):
             ja = jb = None
         if ja is not None and ja[0] == jb[0] == "{}":
             strip = lambda j: ("{}", [(k, v) for k, v in j[1] if k not in TIMING_FIELDS])
-            d = first_json_difference(strip(ja), strip(jb))
+            d = first_json_difference(strip(ja), strip(jb), agree=agree)
             return None if d is None else f"{rel}: {d}"
     if a == b:
         return None
-    if name in CHECKPOINT_FILES or b"\0" in a[:4096] or b"\0" in b[:4096]:
+    if name in CHECKPOINT_FILES:
         return f"{rel}: {bytes_difference(a, b)}"
+    if agree is not None and name.endswith(".vtu"):
+        return vtu_within(rel, a, b, agree)
+    if b"\0" in a[:4096] or b"\0" in b[:4096]:
+        return f"{rel}: {bytes_difference(a, b)}"
+    if agree is not None:
+        return text_within(rel, a, b, agree, csv=name.endswith(".csv"))
     return f"{rel}: {first_line_difference(a, b, csv=name.endswith('.csv'))}"
 
 
@@ -412,7 +564,7 @@ def file_order(rel):
 SKIP_CONFIG = False  # --skip-config
 
 
-def compare_trees(before, after, rel_root, checkpoints):
+def compare_trees(before, after, rel_root, checkpoints, agree=None):
     def files(root):
         if not root.is_dir():
             return set()
@@ -431,24 +583,30 @@ def compare_trees(before, after, rel_root, checkpoints):
             continue
         if SKIP_CONFIG and rel.name == "config.toml":
             continue
-        d = compare_file(rel_root / rel, (before / rel).read_bytes(), (after / rel).read_bytes())
+        d = compare_file(rel_root / rel, (before / rel).read_bytes(), (after / rel).read_bytes(),
+                         agree)
         if d:
             return d
     return None
 
 
-def compare_case(case, ob, oa, work, checkpoints):
-    """None if the case is the same, else the first difference."""
+def compare_case(case, ob, oa, work, checkpoints, agree=None):
+    """None if the case is the same (bitwise, or to RTOL with `agree`), else the first
+    difference."""
     for k, ((rb, sob, seb), (ra, soa, sea)) in enumerate(zip(ob.results, oa.results), 1):
         step = f" (invocation {k})" if len(ob.results) > 1 else ""
         if rb != ra:
             return f"exit code {rb} | {ra}{step}; stderr before {short(seb)} | after {short(sea)}"
-        if seb != sea:
-            return f"stderr{step}: {first_line_difference(seb, sea)}"
-        if sob != soa:
-            return f"stdout{step}: {first_line_difference(sob, soa)}"
+        for what, x, y in (("stderr", seb, sea), ("stdout", sob, soa)):
+            if x == y:
+                continue
+            if agree is None:
+                return f"{what}{step}: {first_line_difference(x, y)}"
+            d = text_within(f"{what}{step}", x, y, agree)
+            if d:
+                return d
     return compare_trees(work / "before" / case.name, work / "after" / case.name,
-                         Path(case.name), checkpoints)
+                         Path(case.name), checkpoints, agree)
 
 
 def exit_summary(outcome):
@@ -466,7 +624,7 @@ def executable(parser, path):
 def main():
     parser = argparse.ArgumentParser(
         description="Run the same configurations with two mpm executables and compare the "
-        "outputs bitwise (timings in summary.json excepted).")
+        "outputs bitwise, or their numbers to --rtol (timings in summary.json excepted).")
     parser.add_argument("--before", required=True, help="reference mpm executable")
     parser.add_argument("--after", required=True, help="mpm executable under test")
     parser.add_argument("--work", help="work directory (default: a new temporary directory)")
@@ -477,11 +635,22 @@ def main():
                         help="also compare checkpoint.bin files bytewise")
     parser.add_argument("--skip-config", action="store_true",
                         help="do not compare config.toml (a change that adds keys)")
+    parser.add_argument("--rtol", type=float,
+                        help="compare the numbers to this relative tolerance instead of bitwise "
+                        "(the rest of every text exactly)")
+    parser.add_argument("--atol", type=float, default=1e-12,
+                        help="with --rtol: numbers both at most this in magnitude agree "
+                        "(default 1e-12)")
     args = parser.parse_args()
-    global SKIP_CONFIG
+    global SKIP_CONFIG, RTOL, ATOL
     SKIP_CONFIG = args.skip_config
     if args.jobs < 1:
         parser.error("--jobs must be at least 1")
+    if args.rtol is not None and not 0.0 < args.rtol < 1.0:
+        parser.error("--rtol must lie in (0, 1)")
+    if args.atol < 0.0:
+        parser.error("--atol must not be negative")
+    RTOL, ATOL = args.rtol, args.atol
     before = executable(parser, args.before)
     after = executable(parser, args.after)
 
@@ -514,10 +683,14 @@ def main():
         for case, fb, fa in futures:
             ob, oa = fb.result(), fa.result()
             slowest = max(slowest, (max(ob.seconds, oa.seconds), case.name))
-            diff = compare_case(case, ob, oa, work, args.checkpoints)
+            agree = Agreement() if RTOL is not None else None
+            diff = compare_case(case, ob, oa, work, args.checkpoints, agree)
             if diff is None:
                 same += 1
-                print(f"same     {case.name} ({exit_summary(ob)})", flush=True)
+                close = ""
+                if agree is not None and agree.largest > 0.0:
+                    close = f"; largest relative difference {agree.largest:.2g} at {agree.where}"
+                print(f"same     {case.name} ({exit_summary(ob)}{close})", flush=True)
             else:
                 differ += 1
                 print(f"DIFFERS  {case.name}: {diff}", flush=True)
